@@ -1,0 +1,49 @@
+//! Typed errors of the `gnss` crate. Every error names the file (and the line or epoch where
+//! that applies) and says what the user can do about it.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong while reading GNSS files or positioning.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// The file could not be opened or read.
+    #[error("{path}: cannot read: {source}; check that the path exists and is readable")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A line of the file does not follow the format.
+    #[error("{path}:{line}: {what}")]
+    Parse {
+        path: PathBuf,
+        line: usize,
+        what: String,
+    },
+    /// The file as a whole is not what was asked for (wrong kind, unknown version, empty …).
+    #[error("{path}: {what}")]
+    Input { path: PathBuf, what: String },
+    /// Inputs that are each fine but cannot be used together, or leave nothing to compute.
+    #[error("{0}")]
+    NoData(String),
+}
+
+/// Result alias of the `gnss` crate.
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    pub(crate) fn parse(path: &std::path::Path, line: usize, what: impl Into<String>) -> Self {
+        Error::Parse {
+            path: path.to_path_buf(),
+            line,
+            what: what.into(),
+        }
+    }
+    pub(crate) fn input(path: &std::path::Path, what: impl Into<String>) -> Self {
+        Error::Input {
+            path: path.to_path_buf(),
+            what: what.into(),
+        }
+    }
+}

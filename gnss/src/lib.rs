@@ -1,0 +1,25 @@
+//! # gnss — the GNSS half of ppkat
+//!
+//! - [`rinex`]: observation files (RINEX 2/3/4, Hatanaka, gzip) streamed into GPST epochs with
+//!   every event record kept; navigation files into ephemeris records.
+//! - [`orbit`]: satellite positions and clocks from broadcast ephemerides (GPS, Galileo,
+//!   BeiDou, QZSS, GLONASS) or SP3 precise orbits.
+//! - [`model`], [`signal`]: troposphere, ionosphere, frequencies.
+//! - [`frame`], [`tmerc`]: ECEF, geodetic, ENU and transverse Mercator coordinates.
+//! - [`spp`]: single-point positioning; [`solution`]: the RTKLIB-compatible `.pos` writer.
+//!
+//! Every epoch is a `hifitime::Epoch` in GPST; angles are radians; lengths metres.
+
+pub mod error;
+pub mod frame;
+pub mod model;
+pub mod orbit;
+pub mod rinex;
+pub mod signal;
+pub mod solution;
+pub mod spp;
+pub mod sv;
+pub mod time;
+pub mod tmerc;
+
+pub use error::{Error, Result};

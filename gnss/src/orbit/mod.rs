@@ -1,0 +1,226 @@
+//! Satellite orbits and clocks: our own broadcast-ephemeris computation on records read from
+//! RINEX navigation files (Keplerian systems and GLONASS), an ephemeris index with correct
+//! selection, and SP3 precise orbits as an alternative source.
+
+pub mod glonass;
+pub mod kepler;
+pub mod sp3;
+
+pub use glonass::GlonassEph;
+pub use kepler::{GalMessage, KeplerEph, SatPosClock, C};
+pub use sp3::Sp3;
+
+use crate::rinex::nav::{Klobuchar, NavFile, NavKind};
+use crate::sv::{Constellation, Sv};
+use hifitime::Epoch;
+use std::collections::BTreeMap;
+
+/// One broadcast ephemeris of any system.
+#[derive(Clone, Debug)]
+pub enum Eph {
+    Kepler(KeplerEph),
+    Glonass(GlonassEph),
+}
+
+impl Eph {
+    pub fn toe(&self) -> Epoch {
+        match self {
+            Eph::Kepler(k) => k.toe,
+            Eph::Glonass(g) => g.toe,
+        }
+    }
+    pub fn healthy(&self) -> bool {
+        match self {
+            Eph::Kepler(k) => k.healthy(),
+            Eph::Glonass(g) => g.healthy(),
+        }
+    }
+    /// Largest |t − toe| for which the ephemeris is used.
+    pub fn max_age(&self) -> f64 {
+        match self {
+            Eph::Kepler(k) => k.max_age,
+            Eph::Glonass(_) => 1800.0,
+        }
+    }
+    pub fn compute(&self, t: Epoch) -> SatPosClock {
+        match self {
+            Eph::Kepler(k) => k.compute(t),
+            Eph::Glonass(g) => g.compute(t),
+        }
+    }
+    pub fn group_delay(&self, band: u8) -> f64 {
+        match self {
+            Eph::Kepler(k) => k.group_delay(band),
+            Eph::Glonass(_) => 0.0,
+        }
+    }
+    fn preference(&self) -> u8 {
+        match self {
+            Eph::Kepler(KeplerEph {
+                gal: Some(GalMessage::FNav),
+                ..
+            }) => 1,
+            _ => 0,
+        }
+    }
+}
+
+/// What happened to the navigation records.
+#[derive(Clone, Debug, Default)]
+pub struct EphStats {
+    pub records: usize,
+    pub unhealthy: usize,
+    /// Records of messages ppkat does not use (SBAS, CNAV …).
+    pub unused: usize,
+    /// Records that could not be read or were incomplete (file, line, why).
+    pub skipped: Vec<String>,
+}
+
+/// All broadcast ephemerides, indexed per satellite and sorted by toe.
+#[derive(Clone, Debug, Default)]
+pub struct Ephemerides {
+    by_sv: BTreeMap<Sv, Vec<Eph>>,
+    pub gps_iono: Option<Klobuchar>,
+    pub bds_iono: Option<Klobuchar>,
+    pub stats: EphStats,
+}
+
+impl Ephemerides {
+    pub fn from_nav(navs: &[NavFile]) -> Self {
+        let mut e = Ephemerides::default();
+        for nav in navs {
+            e.gps_iono = e.gps_iono.or(nav.gps_iono);
+            e.bds_iono = e.bds_iono.or(nav.bds_iono);
+            for (line, what) in &nav.skipped {
+                e.stats
+                    .skipped
+                    .push(format!("{}:{line}: {what}", nav.path.display()));
+            }
+            for r in &nav.records {
+                e.stats.records += 1;
+                let eph = match r.kind {
+                    NavKind::Kepler => KeplerEph::from_record(r).map(Eph::Kepler),
+                    NavKind::Glonass => GlonassEph::from_record(r).map(Eph::Glonass),
+                    NavKind::Sbas | NavKind::Other => {
+                        e.stats.unused += 1;
+                        continue;
+                    }
+                };
+                let Some(eph) = eph else {
+                    e.stats.skipped.push(format!(
+                        "{}:{}: incomplete record of {}",
+                        nav.path.display(),
+                        r.line,
+                        r.sv
+                    ));
+                    continue;
+                };
+                if !eph.healthy() {
+                    e.stats.unhealthy += 1;
+                }
+                e.by_sv.entry(r.sv).or_default().push(eph);
+            }
+        }
+        for v in e.by_sv.values_mut() {
+            v.sort_by(|a, b| {
+                a.toe()
+                    .partial_cmp(&b.toe())
+                    .unwrap_or(std::cmp::Ordering::Equal)
+                    .then(a.preference().cmp(&b.preference()))
+            });
+            // Keep the last of exact duplicates (same toe and message): files often repeat them.
+            v.dedup_by(|b, a| a.toe() == b.toe() && a.preference() == b.preference());
+        }
+        e
+    }
+
+    /// Satellites with at least one ephemeris.
+    pub fn satellites(&self) -> impl Iterator<Item = &Sv> {
+        self.by_sv.keys()
+    }
+
+    /// All ephemerides of a satellite.
+    pub fn of(&self, sv: Sv) -> &[Eph] {
+        self.by_sv.get(&sv).map(|v| v.as_slice()).unwrap_or(&[])
+    }
+
+    /// The ephemeris to use at `t`: healthy, within its validity, toe nearest to `t`;
+    /// for Galileo I/NAV is preferred over F/NAV.
+    pub fn select(&self, sv: Sv, t: Epoch) -> Option<&Eph> {
+        let v = self.by_sv.get(&sv)?;
+        let i = v.partition_point(|e| e.toe() <= t);
+        let lo = i.saturating_sub(4);
+        let hi = (i + 4).min(v.len());
+        v[lo..hi]
+            .iter()
+            .filter(|e| e.healthy())
+            .map(|e| (e, (t - e.toe()).to_seconds().abs()))
+            .filter(|(e, d)| *d <= e.max_age())
+            .min_by(|(a, da), (b, db)| {
+                a.preference()
+                    .cmp(&b.preference())
+                    .then(da.partial_cmp(db).unwrap_or(std::cmp::Ordering::Equal))
+            })
+            .map(|(e, _)| e)
+    }
+
+    /// First and last toe over all satellites.
+    pub fn span(&self) -> Option<(Epoch, Epoch)> {
+        let mut it = self.by_sv.values().flatten().map(|e| e.toe());
+        let first = it.next()?;
+        Some(it.fold((first, first), |(a, b), t| (a.min(t), b.max(t))))
+    }
+
+    /// GLONASS frequency channel broadcast for a slot.
+    pub fn glonass_channel(&self, slot: u8) -> Option<i8> {
+        let sv = Sv::new(Constellation::Glonass, slot);
+        self.by_sv.get(&sv)?.iter().find_map(|e| match e {
+            Eph::Glonass(g) => Some(g.channel),
+            _ => None,
+        })
+    }
+}
+
+/// Where satellite positions and clocks come from.
+#[derive(Clone, Debug)]
+pub struct Orbits {
+    pub broadcast: Ephemerides,
+    pub precise: Option<Sp3>,
+}
+
+/// A satellite at its transmission time, ready for a range model.
+#[derive(Clone, Copy, Debug)]
+pub struct SatInfo {
+    pub pv: SatPosClock,
+    /// Group delay (s) to subtract from the clock for the band asked.
+    pub group_delay: f64,
+}
+
+impl Orbits {
+    pub fn broadcast(e: Ephemerides) -> Self {
+        Orbits {
+            broadcast: e,
+            precise: None,
+        }
+    }
+
+    /// Position and clock of `sv` at GPST transmission time `t`, with the group delay of `band`.
+    pub fn sat(&self, sv: Sv, t: Epoch, band: u8) -> Option<SatInfo> {
+        let eph = self.broadcast.select(sv, t);
+        if let Some(sp3) = &self.precise {
+            let pv = sp3.compute(sv, t)?;
+            if pv.clock.is_nan() {
+                return None;
+            }
+            return Some(SatInfo {
+                pv,
+                group_delay: eph.map(|e| e.group_delay(band)).unwrap_or(0.0),
+            });
+        }
+        let eph = eph?;
+        Some(SatInfo {
+            pv: eph.compute(t),
+            group_delay: eph.group_delay(band),
+        })
+    }
+}

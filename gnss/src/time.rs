@@ -1,0 +1,61 @@
+//! Time helpers on `hifitime`: every epoch inside ppkat is a GPST [`Epoch`].
+
+use hifitime::{Duration, Epoch, TimeScale};
+
+/// Seconds in a GPS week.
+pub const WEEK_SECONDS: f64 = 604_800.0;
+/// BeiDou time is GPST − 14 s.
+pub const BDT_MINUS_GPST_S: f64 = -14.0;
+
+/// A GPST epoch from calendar fields; `nanos` is the sub-second part in nanoseconds.
+pub fn gpst(year: i32, month: u8, day: u8, hour: u8, minute: u8, second: u8, nanos: u32) -> Epoch {
+    Epoch::from_gregorian(year, month, day, hour, minute, second, nanos, TimeScale::GPST)
+}
+
+/// Express any epoch in GPST (the scale used everywhere inside).
+pub fn to_gpst(e: Epoch) -> Epoch {
+    e.to_time_scale(TimeScale::GPST)
+}
+
+/// GPS week and seconds of week of an epoch.
+pub fn week_tow(e: Epoch) -> (u32, f64) {
+    let s = to_gpst(e).to_gpst_seconds();
+    let week = (s / WEEK_SECONDS).floor();
+    (week as u32, s - week * WEEK_SECONDS)
+}
+
+/// The GPST epoch of a GPS week and seconds of week.
+pub fn from_week_tow(week: u32, tow: f64) -> Epoch {
+    Epoch::from_gpst_seconds(week as f64 * WEEK_SECONDS) + Duration::from_seconds(tow)
+}
+
+/// `a − b` in seconds.
+pub fn diff_s(a: Epoch, b: Epoch) -> f64 {
+    (a - b).to_seconds()
+}
+
+/// Calendar string `yyyy/mm/dd hh:mm:ss.sss` in GPST, as RTKLIB writes it.
+pub fn format_ymdhms(e: Epoch) -> String {
+    // Round to the millisecond first so that 59.9996 s does not print as 60.000.
+    let e = to_gpst(e);
+    let ms = (e.to_gpst_seconds() * 1000.0).round() / 1000.0;
+    let r = Epoch::from_gpst_seconds(ms);
+    let (y, mo, d, h, mi, s, ns) = r.to_gregorian(TimeScale::GPST);
+    let ms_part = ((ns as f64) / 1.0e6).round() as u32;
+    let (s, ms_part) = if ms_part >= 1000 { (s + 1, 0) } else { (s, ms_part) };
+    format!("{y:04}/{mo:02}/{d:02} {h:02}:{mi:02}:{s:02}.{ms_part:03}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    #[test]
+    fn week_and_tow_round_trip() {
+        let e = gpst(2020, 6, 25, 12, 0, 0, 0);
+        let (w, tow) = week_tow(e);
+        assert_eq!(w, 2111);
+        assert!((tow - (4.0 * 86400.0 + 12.0 * 3600.0)).abs() < 1e-9);
+        assert_eq!(from_week_tow(w, tow), e);
+        assert_eq!(format_ymdhms(e), "2020/06/25 12:00:00.000");
+    }
+}

@@ -1,0 +1,65 @@
+//! Benchmarks run by `ppkat bench`: throughput and peak memory of the stages.
+
+use gnss::error::Result;
+use gnss::rinex::{ObsReader, Record};
+use std::path::Path;
+use std::time::Instant;
+
+/// Result of an ingest benchmark.
+#[derive(Clone, Debug)]
+pub struct IngestBench {
+    pub bytes: u64,
+    pub seconds: f64,
+    pub epochs: usize,
+    pub sat_records: usize,
+    pub peak_rss_kib: Option<u64>,
+}
+
+impl std::fmt::Display for IngestBench {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "ingest: {:.1} MB of RINEX text, {} epochs, {} satellite records in {:.3} s = {:.0} MB/s",
+            self.bytes as f64 / 1e6,
+            self.epochs,
+            self.sat_records,
+            self.seconds,
+            self.bytes as f64 / 1e6 / self.seconds
+        )?;
+        match self.peak_rss_kib {
+            Some(k) => writeln!(f, "peak RSS: {:.1} MiB", k as f64 / 1024.0),
+            None => writeln!(f, "peak RSS: unknown"),
+        }
+    }
+}
+
+/// Peak resident set size of this process (Linux), KiB.
+pub fn peak_rss_kib() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    s.lines()
+        .find(|l| l.starts_with("VmHWM:"))
+        .and_then(|l| l.split_whitespace().nth(1))
+        .and_then(|v| v.parse().ok())
+}
+
+/// Stream an observation file through the parser, keeping nothing (the pure parse cost).
+pub fn ingest(path: &Path) -> Result<IngestBench> {
+    let t = Instant::now();
+    let mut r = ObsReader::open(path)?;
+    let mut epochs = 0;
+    let mut sat_records = 0;
+    while let Some(rec) = r.next_record()? {
+        if let Record::Epoch(e) = rec {
+            epochs += 1;
+            sat_records += e.sats.len();
+        }
+    }
+    let seconds = t.elapsed().as_secs_f64();
+    Ok(IngestBench {
+        bytes: r.stats().bytes,
+        seconds,
+        epochs,
+        sat_records,
+        peak_rss_kib: peak_rss_kib(),
+    })
+}

@@ -1,0 +1,11 @@
+//! # integration — where the GNSS and photogrammetric halves meet
+//!
+//! Exposures, lever arm, the joint GNSS-supported adjustment, project files, reports and the
+//! flight simulator (later issues). Today: [`pipeline`], the whole-stage runs the `ppkat`
+//! binary calls. It uses `gnss` and `photo`; the binary uses it.
+
+pub mod bench;
+pub mod pipeline;
+
+pub use gnss;
+pub use photo;

@@ -1,0 +1,178 @@
+//! Whole-stage runs used by the command line: read inputs, check they fit together, process,
+//! write outputs atomically, and return a report of what was done and what was rejected.
+
+use gnss::error::{Error, Result};
+use gnss::orbit::{Ephemerides, Orbits, Sp3};
+use gnss::rinex::nav::NavFile;
+use gnss::rinex::ObsFile;
+use gnss::solution::{write_pos, PosFormat, PosRecord, Quality};
+use gnss::spp::{SppOptions, SppRun};
+use gnss::time::format_ymdhms;
+use hifitime::Epoch;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// Inputs of a single-point run.
+#[derive(Clone, Debug)]
+pub struct SppJob {
+    pub obs: PathBuf,
+    pub nav: Vec<PathBuf>,
+    pub sp3: Option<PathBuf>,
+    pub options: SppOptions,
+    pub format: PosFormat,
+    pub out: PathBuf,
+}
+
+/// What a single-point run did.
+#[derive(Clone, Debug)]
+pub struct SppReport {
+    pub epochs: usize,
+    pub solved: usize,
+    pub run: SppRun,
+    pub warnings: Vec<String>,
+    pub out: PathBuf,
+}
+
+/// Read navigation files (and SP3) into an orbit source.
+pub fn load_orbits(nav: &[PathBuf], sp3: Option<&Path>) -> Result<(Orbits, Vec<String>)> {
+    let mut navs = Vec::with_capacity(nav.len());
+    for p in nav {
+        navs.push(NavFile::read(p)?);
+    }
+    let eph = Ephemerides::from_nav(&navs);
+    let mut warnings: Vec<String> = eph.stats.skipped.clone();
+    if eph.stats.unhealthy > 0 {
+        warnings.push(format!("{} ephemerides flagged unhealthy were not used", eph.stats.unhealthy));
+    }
+    if eph.stats.unused > 0 {
+        warnings.push(format!("{} navigation records of unused message types (SBAS, CNAV …) ignored", eph.stats.unused));
+    }
+    if eph.gps_iono.is_none() {
+        warnings.push("no Klobuchar ionosphere parameters in the navigation files: ionosphere not modelled, code weights lowered".into());
+    }
+    let precise = match sp3 {
+        Some(p) => Some(Sp3::read(p)?),
+        None => None,
+    };
+    Ok((
+        Orbits {
+            broadcast: eph,
+            precise,
+        },
+        warnings,
+    ))
+}
+
+/// Check that observations and orbits overlap in time; error naming both files if not.
+pub fn check_overlap(obs: &ObsFile, orbits: &Orbits, nav: &[PathBuf]) -> Result<()> {
+    let (Some(a), Some(b)) = (obs.epochs.first(), obs.epochs.last()) else {
+        return Ok(());
+    };
+    let (lo, hi) = match (&orbits.precise, orbits.broadcast.span()) {
+        (Some(s), _) => s.span().unwrap_or((a.time, b.time)),
+        (None, Some(span)) => span,
+        (None, None) => return Err(Error::NoData("the navigation files hold no usable ephemeris".into())),
+    };
+    let margin = hifitime::Duration::from_seconds(4.0 * 3600.0);
+    if b.time < lo - margin || a.time > hi + margin {
+        let names: Vec<String> = nav.iter().map(|p| p.display().to_string()).collect();
+        return Err(Error::NoData(format!(
+            "{}: observations ({} – {}) do not overlap the orbits of {} ({} – {}); give navigation data for the observation days",
+            obs.path.display(),
+            format_ymdhms(a.time),
+            format_ymdhms(b.time),
+            names.join(", "),
+            format_ymdhms(lo),
+            format_ymdhms(hi)
+        )));
+    }
+    Ok(())
+}
+
+/// Run single-point positioning over a file and write the `.pos` output.
+pub fn spp(job: &SppJob) -> Result<SppReport> {
+    let obs = ObsFile::read(&job.obs)?;
+    let (orbits, mut warnings) = load_orbits(&job.nav, job.sp3.as_deref())?;
+    check_overlap(&obs, &orbits, &job.nav)?;
+    for w in &obs.warnings {
+        warnings.push(format!("{}:{}: {}", obs.path.display(), w.line, w.what));
+    }
+    let run = gnss::spp::run(&obs.epochs, &obs.header, &orbits, &job.options);
+    let records: Vec<PosRecord> = run
+        .solutions
+        .iter()
+        .map(|s| PosRecord {
+            time: s.time,
+            pos: s.pos,
+            quality: Quality::Single,
+            nsat: s.nsat,
+            cov: s.cov,
+            age: 0.0,
+            ratio: 0.0,
+        })
+        .collect();
+    let systems: String = job.options.systems.iter().map(|s| s.letter()).collect();
+    let header = vec![
+        format!("program   : ppkat {} (single point)", env!("CARGO_PKG_VERSION")),
+        format!("inp file  : {}", job.obs.display()),
+        format!("elev mask : {:.1} deg", job.options.elev_mask.to_degrees()),
+        format!("systems   : {systems}"),
+        format!("epochs    : {} read, {} solved", obs.epochs.len(), records.len()),
+    ];
+    let mut header = header;
+    for n in &job.nav {
+        header.insert(2, format!("inp file  : {}", n.display()));
+    }
+    write_pos(&job.out, &header, &records, job.format)?;
+    Ok(SppReport {
+        epochs: obs.epochs.len(),
+        solved: records.len(),
+        run,
+        warnings,
+        out: job.out.clone(),
+    })
+}
+
+impl fmt::Display for SppReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "single point: {} of {} epochs solved → {}",
+            self.solved,
+            self.epochs,
+            self.out.display()
+        )?;
+        let mut reasons: std::collections::BTreeMap<String, (usize, Option<Epoch>)> = Default::default();
+        for (t, why) in &self.run.failures {
+            let e = reasons.entry(why_key(why)).or_insert((0, Some(*t)));
+            e.0 += 1;
+        }
+        for (why, (n, first)) in reasons {
+            writeln!(
+                f,
+                "  {n} epochs unsolved: {why} (first at {})",
+                first.map(format_ymdhms).unwrap_or_default()
+            )?;
+        }
+        for (r, n) in &self.run.rejections {
+            writeln!(f, "  satellite-epochs rejected, {r}: {n}")?;
+        }
+        for w in self.warnings.iter().take(20) {
+            writeln!(f, "  warning: {w}")?;
+        }
+        if self.warnings.len() > 20 {
+            writeln!(f, "  … {} more warnings", self.warnings.len() - 20)?;
+        }
+        Ok(())
+    }
+}
+
+fn why_key(f: &gnss::spp::SppFailure) -> String {
+    use gnss::spp::SppFailure::*;
+    match f {
+        TooFewSatellites { .. } => "too few satellites".into(),
+        NoConvergence => "no convergence".into(),
+        Inconsistent { .. } => "inconsistent residuals".into(),
+        PoorGeometry { .. } => "poor geometry".into(),
+    }
+}
