@@ -53,8 +53,9 @@ pub struct KeplerEph {
     pub tgd2: f64,
     /// Galileo message (None for other systems).
     pub gal: Option<GalMessage>,
-    /// Half the fit interval, seconds: the ephemeris is never used further than this from toe.
-    pub max_age: f64,
+    /// Validity window around toe, seconds: used only for toe − before ≤ t ≤ toe + after.
+    pub valid_before: f64,
+    pub valid_after: f64,
     pub line: usize,
 }
 
@@ -108,12 +109,15 @@ impl KeplerEph {
         } else {
             4.0
         };
-        let max_age = match sys {
-            Constellation::Gps => fit_hours * 1800.0,
-            Constellation::Qzss => 7200.0,
-            Constellation::Galileo => 3.0 * 3600.0,
-            Constellation::BeiDou => 4.0 * 3600.0,
-            _ => 7200.0,
+        // GPS: toe sits in the middle of the fit interval. Galileo: the fit runs forward from
+        // about toe (measured against precise orbits: 0.9 m RMS up to toe + 3 h, 6 m already at
+        // toe − 1.5 h). BeiDou: hourly uploads, used within an hour.
+        let (valid_before, valid_after) = match sys {
+            Constellation::Gps => (fit_hours * 1800.0, fit_hours * 1800.0),
+            Constellation::Qzss => (3600.0, 3600.0),
+            Constellation::Galileo => (1800.0, 3.5 * 3600.0),
+            Constellation::BeiDou => (3600.0, 3600.0),
+            _ => (7200.0, 7200.0),
         };
         Some(KeplerEph {
             sys,
@@ -141,7 +145,8 @@ impl KeplerEph {
             tgd1: o[22],
             tgd2: o[23],
             gal,
-            max_age,
+            valid_before,
+            valid_after,
             line: r.line,
         })
     }

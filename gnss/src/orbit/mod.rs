@@ -35,11 +35,12 @@ impl Eph {
             Eph::Glonass(g) => g.healthy(),
         }
     }
-    /// Largest |t − toe| for which the ephemeris is used.
-    pub fn max_age(&self) -> f64 {
+    /// Whether the ephemeris may be used at `t` (inside its fit / validity window).
+    pub fn valid_at(&self, t: Epoch) -> bool {
+        let dt = (t - self.toe()).to_seconds();
         match self {
-            Eph::Kepler(k) => k.max_age,
-            Eph::Glonass(_) => 1800.0,
+            Eph::Kepler(k) => -k.valid_before <= dt && dt <= k.valid_after,
+            Eph::Glonass(_) => dt.abs() <= 1800.0,
         }
     }
     pub fn compute(&self, t: Epoch) -> SatPosClock {
@@ -153,9 +154,8 @@ impl Ephemerides {
         let hi = (i + 4).min(v.len());
         v[lo..hi]
             .iter()
-            .filter(|e| e.healthy())
+            .filter(|e| e.healthy() && e.valid_at(t))
             .map(|e| (e, (t - e.toe()).to_seconds().abs()))
-            .filter(|(e, d)| *d <= e.max_age())
             .min_by(|(a, da), (b, db)| {
                 a.preference()
                     .cmp(&b.preference())
