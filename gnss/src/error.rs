@@ -11,7 +11,6 @@ pub enum Error {
     #[error("{path}: cannot read: {source}; check that the path exists and is readable")]
     Io {
         path: PathBuf,
-        #[source]
         source: std::io::Error,
     },
     /// A line of the file does not follow the format.

@@ -85,7 +85,8 @@ mod tests {
         let z = troposphere(&g, PI / 2.0);
         assert!((2.3..2.6).contains(&z), "{z}");
         let low = troposphere(&g, 15f64.to_radians());
-        assert!((low / z - 1.0 / 15f64.to_radians().sin()).abs() < 0.05);
+        // Curvature makes a real mapping function fall short of 1/sin(15°) = 3.86 (Niell ≈ 3.80).
+        assert!((3.75..3.86).contains(&(low / z)), "{}", low / z);
     }
 
     #[test]

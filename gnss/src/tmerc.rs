@@ -64,8 +64,13 @@ fn series() -> Series {
 impl TransverseMercator {
     /// UTM zone `zone` (1–60), northern or southern hemisphere.
     pub fn utm(zone: u8, north: bool) -> Self {
+        Self::utm_const(zone, north)
+    }
+
+    /// [`Self::utm`] usable in constants.
+    pub const fn utm_const(zone: u8, north: bool) -> Self {
         TransverseMercator {
-            lon0: ((zone as f64) * 6.0 - 183.0).to_radians(),
+            lon0: ((zone as f64) * 6.0 - 183.0) * (std::f64::consts::PI / 180.0),
             k0: 0.9996,
             false_easting: 500_000.0,
             false_northing: if north { 0.0 } else { 10_000_000.0 },
@@ -81,8 +86,13 @@ impl TransverseMercator {
 
     /// Gauss–Krüger with the given central meridian (degrees), scale 1 and 500 km false easting.
     pub fn gauss_kruger(central_meridian_deg: f64) -> Self {
+        Self::gauss_kruger_const(central_meridian_deg)
+    }
+
+    /// [`Self::gauss_kruger`] usable in constants.
+    pub const fn gauss_kruger_const(central_meridian_deg: f64) -> Self {
         TransverseMercator {
-            lon0: central_meridian_deg.to_radians(),
+            lon0: central_meridian_deg * (std::f64::consts::PI / 180.0),
             k0: 1.0,
             false_easting: 500_000.0,
             false_northing: 0.0,
@@ -152,4 +162,49 @@ fn wrap_pi(a: f64) -> f64 {
         a += 2.0 * std::f64::consts::PI;
     }
     a
+}
+
+#[cfg(test)]
+mod tests {
+    use super::TransverseMercator as TM;
+    use crate::frame::Geodetic;
+
+    /// Reference values computed independently with PROJ 9 (pyproj 3.7, `+proj=utm` and
+    /// `+proj=tmerc`, Poder/Engsager algorithm), printed to 0.1 mm.
+    const REFERENCE: [(TM, f64, f64, f64, f64); 15] = [
+        (TM::utm_const(32, true), 55.49356277, 8.45682139, 465681.6649, 6149850.8851),
+        (TM::utm_const(32, true), 0.0, 9.0, 500000.0000, 0.0000),
+        (TM::utm_const(32, true), 10.0, 3.5, -103652.8838, 1110455.2103),
+        (TM::utm_const(32, true), 45.0, 14.9, 965010.3065, 4999910.1601),
+        (TM::utm_const(32, true), 60.0, 12.0, 667294.8211, 6655205.4836),
+        (TM::utm_const(32, true), 80.0, 5.0, 422516.2711, 8884250.5657),
+        (TM::utm_const(32, true), 30.0, 9.0001, 500009.6448, 3318785.3526),
+        (TM::utm_const(32, true), -0.0001, 8.0, 388719.3491, -11.0547),
+        (TM::utm_const(60, false), -36.41144502, 174.63075195, 287561.9708, 5967806.6795),
+        (TM::utm_const(60, false), -45.0, 171.5, 66515.6820, 5002314.9477),
+        (TM::utm_const(60, false), -10.0, 179.9, 817955.4277, 8893189.3429),
+        (TM::gauss_kruger_const(117.0), 30.5, 114.3, 240756.0382, 3378643.3668),
+        (TM::gauss_kruger_const(117.0), 39.9, 116.4, 448688.8557, 4418598.0014),
+        (TM::gauss_kruger_const(117.0), 23.1, 113.2, 110502.9466, 2560684.6288),
+        (TM::gauss_kruger_const(117.0), 45.75, 123.0, 966846.1437, 5085839.8159),
+    ];
+
+    #[test]
+    fn matches_proj_to_a_millimetre_within_six_degrees() {
+        for (tm, lat, lon, e, n) in REFERENCE {
+            let g = Geodetic::from_degrees(lat, lon, 0.0);
+            let p = tm.forward(&g);
+            assert!(
+                (p.easting - e).abs() < 1e-3 && (p.northing - n).abs() < 1e-3,
+                "{lat} {lon}: {} {} vs {e} {n}",
+                p.easting,
+                p.northing
+            );
+            let back = tm.inverse(&p, 0.0);
+            assert!((back.lat.to_degrees() - lat).abs() < 1e-10, "{lat}");
+            assert!((back.lon.to_degrees() - lon).abs() < 1e-10, "{lon}");
+        }
+        assert_eq!(TM::utm_zone_of(8.45f64.to_radians()), 32);
+        assert_eq!(TM::utm(32, true), TM::utm_const(32, true));
+    }
 }
