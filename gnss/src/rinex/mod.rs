@@ -250,3 +250,49 @@ impl ObsFile {
             .collect()
     }
 }
+
+/// Write the plain RINEX text of an observation file (gunzipped, Hatanaka-decompressed) to `w`.
+pub fn write_plain_text(path: &Path, w: &mut dyn std::io::Write) -> Result<()> {
+    let io = |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut src = Lines::open(path)?;
+    let first = match src.next_line()? {
+        Some(l) => l.to_vec(),
+        None => return Err(Error::input(path, "the file is empty")),
+    };
+    if lines::label(&first) != b"CRINEX VERS   / TYPE" {
+        w.write_all(&first).map_err(io)?;
+        w.write_all(b"\n").map_err(io)?;
+        while let Some(l) = src.next_line()? {
+            w.write_all(l).map_err(io)?;
+            w.write_all(b"\n").map_err(io)?;
+        }
+        return Ok(());
+    }
+    // CRINEX: copy the header (after the two CRINEX lines), then decode the body.
+    src.next_line()?;
+    let mut header_text = Vec::new();
+    loop {
+        let Some(l) = src.next_line()? else {
+            return Err(Error::input(path, "the header has no END OF HEADER line"));
+        };
+        header_text.extend_from_slice(l);
+        header_text.push(b'\n');
+        if lines::label(l) == b"END OF HEADER" {
+            break;
+        }
+    }
+    w.write_all(&header_text).map_err(io)?;
+    let mut hsrc = Lines::from_reader(path, std::io::Cursor::new(header_text));
+    let header = header::read_header(&mut hsrc, Some(3.0))?;
+    let mut crx = crx::Crx::new(src, &header);
+    let mut buf = Vec::new();
+    let mut warnings = Vec::new();
+    while crx.next_line(&mut buf, &mut warnings)?.is_some() {
+        w.write_all(&buf).map_err(io)?;
+        w.write_all(b"\n").map_err(io)?;
+    }
+    Ok(())
+}
