@@ -11,7 +11,11 @@ use integration::pipeline;
 use std::path::PathBuf;
 
 #[derive(Parser)]
-#[command(name = "ppkat", version, about = "Flight GNSS post-processing and GNSS-supported aerial triangulation")]
+#[command(
+    name = "ppkat",
+    version,
+    about = "Flight GNSS post-processing and GNSS-supported aerial triangulation"
+)]
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,

@@ -27,11 +27,15 @@ fn tmp(name: &str) -> PathBuf {
 }
 
 fn fixture(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures").join(name)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures")
+        .join(name)
 }
 
 fn shared(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data").join(rel);
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/data")
+        .join(rel);
     if p.exists() {
         return Some(p);
     }
@@ -46,7 +50,12 @@ fn shared(rel: &str) -> Option<PathBuf> {
 
 fn fails_with(o: &Output, needles: &[&str]) {
     let t = text(o);
-    assert_eq!(o.status.code(), Some(1), "expected a clean failure, got {:?}: {t}", o.status);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "expected a clean failure, got {:?}: {t}",
+        o.status
+    );
     for n in needles {
         assert!(t.contains(n), "message lacks '{n}': {t}");
     }
@@ -66,13 +75,21 @@ fn empty_file() {
 #[test]
 fn missing_file() {
     let f = tmp("does-not-exist.obs");
-    fails_with(&ppkat(&["info", p(&f)]), &["does-not-exist.obs", "cannot read"]);
+    fails_with(
+        &ppkat(&["info", p(&f)]),
+        &["does-not-exist.obs", "cannot read"],
+    );
 }
 
 #[test]
 fn navigation_file_given_as_observations() {
-    let Some(nav) = shared("gnss/geonet-2005/07590920.05n") else { return };
-    fails_with(&ppkat(&["info", p(&nav)]), &["07590920.05n", "navigation file", "--nav"]);
+    let Some(nav) = shared("gnss/geonet-2005/07590920.05n") else {
+        return;
+    };
+    fails_with(
+        &ppkat(&["info", p(&nav)]),
+        &["07590920.05n", "navigation file", "--nav"],
+    );
 }
 
 #[test]
@@ -80,7 +97,10 @@ fn unknown_rinex_version() {
     let src = std::fs::read_to_string(fixture("events_v304.rnx")).unwrap();
     let f = tmp("v9.obs");
     std::fs::write(&f, src.replacen("     3.04", "     9.01", 1)).unwrap();
-    fails_with(&ppkat(&["info", p(&f)]), &["v9.obs", "version 9.01", "not supported"]);
+    fails_with(
+        &ppkat(&["info", p(&f)]),
+        &["v9.obs", "version 9.01", "not supported"],
+    );
 }
 
 #[test]
@@ -93,23 +113,40 @@ fn truncated_last_epoch_keeps_the_data() {
     let o = ppkat(&["info", p(&f)]);
     let t = text(&o);
     assert_eq!(o.status.code(), Some(0), "{t}");
-    assert!(t.contains("truncated") && t.contains("1 of 2 satellites"), "{t}");
-    assert!(t.lines().any(|l| l.starts_with("epochs") && l.trim_end().ends_with('3')), "{t}");
+    assert!(
+        t.contains("truncated") && t.contains("1 of 2 satellites"),
+        "{t}"
+    );
+    assert!(
+        t.lines()
+            .any(|l| l.starts_with("epochs") && l.trim_end().ends_with('3')),
+        "{t}"
+    );
 }
 
 #[test]
 fn garbage_line_mid_file_is_skipped_with_its_line_number() {
     let src = std::fs::read_to_string(fixture("events_v304.rnx")).unwrap();
     let mut lines: Vec<&str> = src.lines().collect();
-    let at = lines.iter().position(|l| l.starts_with("> 2024 03 10 12 00 01.0000000")).unwrap();
+    let at = lines
+        .iter()
+        .position(|l| l.starts_with("> 2024 03 10 12 00 01.0000000"))
+        .unwrap();
     lines.insert(at, "#### this line is garbage ####");
     let f = tmp("garbage.obs");
     std::fs::write(&f, lines.join("\n") + "\n").unwrap();
     let o = ppkat(&["info", p(&f)]);
     let t = text(&o);
     assert_eq!(o.status.code(), Some(0), "{t}");
-    assert!(t.contains(&format!("line {}", at + 1)) && t.contains("garbage"), "{t}");
-    assert!(t.lines().any(|l| l.starts_with("epochs") && l.trim_end().ends_with('3')), "{t}");
+    assert!(
+        t.contains(&format!("line {}", at + 1)) && t.contains("garbage"),
+        "{t}"
+    );
+    assert!(
+        t.lines()
+            .any(|l| l.starts_with("epochs") && l.trim_end().ends_with('3')),
+        "{t}"
+    );
 }
 
 #[test]
@@ -133,7 +170,14 @@ fn observations_and_navigation_without_time_overlap() {
     };
     let out = tmp("nooverlap.pos");
     let o = ppkat(&["spp", "--obs", p(&obs), "--nav", p(&nav), "-o", p(&out)]);
-    fails_with(&o, &["07590920.05o", "do not overlap", "ESBC00DNK_R_20201770000_01D_MN.rnx.gz"]);
+    fails_with(
+        &o,
+        &[
+            "07590920.05o",
+            "do not overlap",
+            "ESBC00DNK_R_20201770000_01D_MN.rnx.gz",
+        ],
+    );
     assert!(!out.exists(), "no output on failure");
 }
 
@@ -147,7 +191,17 @@ fn spp_writes_an_rtklib_pos_file() {
     };
     for (fmt, cols) in [("llh", "latitude(deg)"), ("xyz", "x-ecef(m)")] {
         let out = tmp(&format!("geonet-{fmt}.pos"));
-        let o = ppkat(&["spp", "--obs", p(&obs), "--nav", p(&nav), "--format", fmt, "-o", p(&out)]);
+        let o = ppkat(&[
+            "spp",
+            "--obs",
+            p(&obs),
+            "--nav",
+            p(&nav),
+            "--format",
+            fmt,
+            "-o",
+            p(&out),
+        ]);
         assert_eq!(o.status.code(), Some(0), "{}", text(&o));
         let pos = std::fs::read_to_string(&out).unwrap();
         assert!(pos.lines().any(|l| l.starts_with('%') && l.contains(cols)));

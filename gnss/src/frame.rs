@@ -107,17 +107,7 @@ impl Geodetic {
 pub fn enu_rotation(g: &Geodetic) -> Matrix3<f64> {
     let (sl, cl) = g.lat.sin_cos();
     let (so, co) = g.lon.sin_cos();
-    Matrix3::new(
-        -so,
-        co,
-        0.0,
-        -sl * co,
-        -sl * so,
-        cl,
-        cl * co,
-        cl * so,
-        sl,
-    )
+    Matrix3::new(-so, co, 0.0, -sl * co, -sl * so, cl, cl * co, cl * so, sl)
 }
 
 impl Enu {
@@ -169,7 +159,11 @@ mod tests {
         let q = g.to_ecef();
         assert!((p.0 - q.0).norm() < 1e-6);
         // ESBC lies at about 55.49 N, 8.46 E.
-        assert!((g.lat.to_degrees() - 55.4927).abs() < 1e-3, "{}", g.lat.to_degrees());
+        assert!(
+            (g.lat.to_degrees() - 55.4927).abs() < 1e-3,
+            "{}",
+            g.lat.to_degrees()
+        );
         assert!((g.lon.to_degrees() - 8.4569).abs() < 1e-3);
         let up = Geodetic { h: g.h + 10.0, ..g }.to_ecef();
         let enu = up.enu_from(&p);

@@ -50,12 +50,18 @@ fn sqvar(v: f64) -> f64 {
 }
 
 /// Write `path` atomically: to a temporary file beside it, then renamed over it.
-pub fn write_atomic(path: &Path, f: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<()> {
+pub fn write_atomic(
+    path: &Path,
+    f: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<()> {
     let io = |source| Error::Io {
         path: path.to_path_buf(),
         source,
     };
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -131,7 +137,12 @@ pub fn column_header(format: PosFormat) -> &'static str {
 }
 
 /// Write a `.pos` file: `%` header lines (given, then the column names), then one line per record.
-pub fn write_pos(path: &Path, header: &[String], records: &[PosRecord], format: PosFormat) -> Result<()> {
+pub fn write_pos(
+    path: &Path,
+    header: &[String],
+    records: &[PosRecord],
+    format: PosFormat,
+) -> Result<()> {
     write_atomic(path, |w| {
         for h in header {
             writeln!(w, "% {h}")?;

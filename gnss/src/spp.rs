@@ -79,11 +79,19 @@ impl std::fmt::Display for Rejection {
 /// Why an epoch has no solution.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SppFailure {
-    TooFewSatellites { usable: usize, needed: usize },
+    TooFewSatellites {
+        usable: usize,
+        needed: usize,
+    },
     NoConvergence,
     /// The solution failed the chi-square test and no exclusion repaired it.
-    Inconsistent { chi2: f64, threshold: f64 },
-    PoorGeometry { gdop: f64 },
+    Inconsistent {
+        chi2: f64,
+        threshold: f64,
+    },
+    PoorGeometry {
+        gdop: f64,
+    },
 }
 
 impl std::fmt::Display for SppFailure {
@@ -136,7 +144,8 @@ fn variance(sys: Constellation, el: f64, iono: f64, tropo: f64) -> f64 {
         _ => 1.0,
     };
     let s = el.sin().max(0.05);
-    efact * (0.3f64.powi(2) + 0.3f64.powi(2) / s) + 0.3f64.powi(2)
+    efact * (0.3f64.powi(2) + 0.3f64.powi(2) / s)
+        + 0.3f64.powi(2)
         + (0.5 * iono).powi(2)
         + (0.3 / (s + 0.1)).powi(2) * (tropo > 0.0) as u8 as f64
 }
@@ -151,7 +160,6 @@ pub fn chi2_999(dof: usize) -> f64 {
 struct Meas {
     sv: Sv,
     pr: f64,
-    band: u8,
     freq: f64,
     sat: Ecef,
     sat_clock: f64,
@@ -205,7 +213,6 @@ pub fn solve_epoch(
         meas.push(Meas {
             sv: s.sv,
             pr,
-            band,
             freq,
             sat: si.pv.pos,
             sat_clock: si.pv.clock - si.group_delay,
@@ -220,10 +227,15 @@ pub fn solve_epoch(
     let mut best = match first {
         Ok(s) => s,
         Err(f) => {
-            return Err((f, merge(rejected, &meas, &[])));
+            rejected.sort();
+            return Err((f, rejected));
         }
     };
-    rejected.extend(best.masked.iter().map(|&i| (meas[i].sv, Rejection::BelowMask)));
+    rejected.extend(
+        best.masked
+            .iter()
+            .map(|&i| (meas[i].sv, Rejection::BelowMask)),
+    );
     let threshold = |s: &Lsq| chi2_999(s.used.len() - s.nx);
     if opts.fde {
         let mut excluded: Vec<usize> = Vec::new();
@@ -238,7 +250,10 @@ pub fn solve_epoch(
                 if let Ok(s) = lsq(&meas, &subset, best.x, epoch.time, orbits, opts) {
                     let better = match &cand {
                         None => true,
-                        Some((_, c)) => s.chi2 / ((s.used.len() - s.nx).max(1) as f64) < c.chi2 / ((c.used.len() - c.nx).max(1) as f64),
+                        Some((_, c)) => {
+                            s.chi2 / ((s.used.len() - s.nx).max(1) as f64)
+                                < c.chi2 / ((c.used.len() - c.nx).max(1) as f64)
+                        }
                     };
                     if better {
                         cand = Some((i, s));
@@ -265,7 +280,12 @@ pub fn solve_epoch(
         ));
     }
     if best.dop.gdop > opts.max_gdop || !best.dop.gdop.is_finite() {
-        return Err((SppFailure::PoorGeometry { gdop: best.dop.gdop }, rejected));
+        return Err((
+            SppFailure::PoorGeometry {
+                gdop: best.dop.gdop,
+            },
+            rejected,
+        ));
     }
     let n = best.used.len();
     Ok(SppSolution {
@@ -279,11 +299,6 @@ pub fn solve_epoch(
         used: best.used.iter().map(|&i| meas[i].sv).collect(),
         rejected,
     })
-}
-
-fn merge(mut r: Vec<(Sv, Rejection)>, _m: &[Meas], _u: &[usize]) -> Vec<(Sv, Rejection)> {
-    r.sort();
-    r
 }
 
 struct Lsq {
@@ -352,15 +367,15 @@ fn lsq(
                                 model::klobuchar_gps(&k, &g, az, el, tow) * (f1 / m.freq).powi(2)
                             })
                         }),
-                    _ => orbits.broadcast.gps_iono.map(|k| {
-                        model::klobuchar_gps(&k, &g, az, el, tow) * (f1 / m.freq).powi(2)
-                    }),
+                    _ => orbits
+                        .broadcast
+                        .gps_iono
+                        .map(|k| model::klobuchar_gps(&k, &g, az, el, tow) * (f1 / m.freq).powi(2)),
                 };
                 (ion.unwrap_or(0.0), model::troposphere(&g, el))
             } else {
                 (0.0, 0.0)
             };
-            let _ = m.band;
             let dtr = *clk.get(&m.sv.sys).unwrap_or(&0.0);
             let pred = rho + dtr - C * m.sat_clock + iono + tropo;
             let var = variance(m.sv.sys, el, iono, tropo)
@@ -406,7 +421,9 @@ fn lsq(
         }
         let nmat = &htw * &h;
         let Some(q) = nmat.clone().try_inverse() else {
-            return Err(SppFailure::PoorGeometry { gdop: f64::INFINITY });
+            return Err(SppFailure::PoorGeometry {
+                gdop: f64::INFINITY,
+            });
         };
         let dx = &q * (&htw * &v);
         x += Vector3::new(dx[0], dx[1], dx[2]);
@@ -470,12 +487,7 @@ pub struct SppRun {
 }
 
 /// Solve every epoch in order, each starting from the previous solution.
-pub fn run(
-    epochs: &[ObsEpoch],
-    header: &ObsHeader,
-    orbits: &Orbits,
-    opts: &SppOptions,
-) -> SppRun {
+pub fn run(epochs: &[ObsEpoch], header: &ObsHeader, orbits: &Orbits, opts: &SppOptions) -> SppRun {
     let mut out = SppRun::default();
     let mut prior = header.approx_position;
     for e in epochs {

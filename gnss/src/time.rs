@@ -9,7 +9,16 @@ pub const BDT_MINUS_GPST_S: f64 = -14.0;
 
 /// A GPST epoch from calendar fields; `nanos` is the sub-second part in nanoseconds.
 pub fn gpst(year: i32, month: u8, day: u8, hour: u8, minute: u8, second: u8, nanos: u32) -> Epoch {
-    Epoch::from_gregorian(year, month, day, hour, minute, second, nanos, TimeScale::GPST)
+    Epoch::from_gregorian(
+        year,
+        month,
+        day,
+        hour,
+        minute,
+        second,
+        nanos,
+        TimeScale::GPST,
+    )
 }
 
 /// Express any epoch in GPST (the scale used everywhere inside).
@@ -42,7 +51,11 @@ pub fn format_ymdhms(e: Epoch) -> String {
     let r = Epoch::from_gpst_seconds(ms);
     let (y, mo, d, h, mi, s, ns) = r.to_gregorian(TimeScale::GPST);
     let ms_part = ((ns as f64) / 1.0e6).round() as u32;
-    let (s, ms_part) = if ms_part >= 1000 { (s + 1, 0) } else { (s, ms_part) };
+    let (s, ms_part) = if ms_part >= 1000 {
+        (s + 1, 0)
+    } else {
+        (s, ms_part)
+    };
     format!("{y:04}/{mo:02}/{d:02} {h:02}:{mi:02}:{s:02}.{ms_part:03}")
 }
 

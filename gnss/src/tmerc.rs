@@ -138,7 +138,8 @@ impl TransverseMercator {
         for _ in 0..6 {
             let sigma = (s.e * (s.e * tau / (1.0 + tau * tau).sqrt()).atanh()).sinh();
             let tau_i = tau * (1.0 + sigma * sigma).sqrt() - sigma * (1.0 + tau * tau).sqrt();
-            let dtau = (tau_p - tau_i) / (1.0 + tau_i * tau_i).sqrt() * (1.0 + (1.0 - e2) * tau * tau)
+            let dtau = (tau_p - tau_i) / (1.0 + tau_i * tau_i).sqrt()
+                * (1.0 + (1.0 - e2) * tau * tau)
                 / ((1.0 - e2) * (1.0 + tau * tau).sqrt());
             tau += dtau;
             if dtau.abs() < 1e-14 {
@@ -172,21 +173,99 @@ mod tests {
     /// Reference values computed independently with PROJ 9 (pyproj 3.7, `+proj=utm` and
     /// `+proj=tmerc`, Poder/Engsager algorithm), printed to 0.1 mm.
     const REFERENCE: [(TM, f64, f64, f64, f64); 15] = [
-        (TM::utm_const(32, true), 55.49356277, 8.45682139, 465681.6649, 6149850.8851),
+        (
+            TM::utm_const(32, true),
+            55.49356277,
+            8.45682139,
+            465681.6649,
+            6149850.8851,
+        ),
         (TM::utm_const(32, true), 0.0, 9.0, 500000.0000, 0.0000),
-        (TM::utm_const(32, true), 10.0, 3.5, -103652.8838, 1110455.2103),
-        (TM::utm_const(32, true), 45.0, 14.9, 965010.3065, 4999910.1601),
-        (TM::utm_const(32, true), 60.0, 12.0, 667294.8211, 6655205.4836),
-        (TM::utm_const(32, true), 80.0, 5.0, 422516.2711, 8884250.5657),
-        (TM::utm_const(32, true), 30.0, 9.0001, 500009.6448, 3318785.3526),
+        (
+            TM::utm_const(32, true),
+            10.0,
+            3.5,
+            -103652.8838,
+            1110455.2103,
+        ),
+        (
+            TM::utm_const(32, true),
+            45.0,
+            14.9,
+            965010.3065,
+            4999910.1601,
+        ),
+        (
+            TM::utm_const(32, true),
+            60.0,
+            12.0,
+            667294.8211,
+            6655205.4836,
+        ),
+        (
+            TM::utm_const(32, true),
+            80.0,
+            5.0,
+            422516.2711,
+            8884250.5657,
+        ),
+        (
+            TM::utm_const(32, true),
+            30.0,
+            9.0001,
+            500009.6448,
+            3318785.3526,
+        ),
         (TM::utm_const(32, true), -0.0001, 8.0, 388719.3491, -11.0547),
-        (TM::utm_const(60, false), -36.41144502, 174.63075195, 287561.9708, 5967806.6795),
-        (TM::utm_const(60, false), -45.0, 171.5, 66515.6820, 5002314.9477),
-        (TM::utm_const(60, false), -10.0, 179.9, 817955.4277, 8893189.3429),
-        (TM::gauss_kruger_const(117.0), 30.5, 114.3, 240756.0382, 3378643.3668),
-        (TM::gauss_kruger_const(117.0), 39.9, 116.4, 448688.8557, 4418598.0014),
-        (TM::gauss_kruger_const(117.0), 23.1, 113.2, 110502.9466, 2560684.6288),
-        (TM::gauss_kruger_const(117.0), 45.75, 123.0, 966846.1437, 5085839.8159),
+        (
+            TM::utm_const(60, false),
+            -36.41144502,
+            174.63075195,
+            287561.9708,
+            5967806.6795,
+        ),
+        (
+            TM::utm_const(60, false),
+            -45.0,
+            171.5,
+            66515.6820,
+            5002314.9477,
+        ),
+        (
+            TM::utm_const(60, false),
+            -10.0,
+            179.9,
+            817955.4277,
+            8893189.3429,
+        ),
+        (
+            TM::gauss_kruger_const(117.0),
+            30.5,
+            114.3,
+            240756.0382,
+            3378643.3668,
+        ),
+        (
+            TM::gauss_kruger_const(117.0),
+            39.9,
+            116.4,
+            448688.8557,
+            4418598.0014,
+        ),
+        (
+            TM::gauss_kruger_const(117.0),
+            23.1,
+            113.2,
+            110502.9466,
+            2560684.6288,
+        ),
+        (
+            TM::gauss_kruger_const(117.0),
+            45.75,
+            123.0,
+            966846.1437,
+            5085839.8159,
+        ),
     ];
 
     #[test]

@@ -13,7 +13,10 @@ pub fn data(rel: &str) -> Option<PathBuf> {
         return Some(p);
     }
     if std::env::var("CI").map(|v| v == "true").unwrap_or(false) {
-        panic!("{} is missing on CI: the shared data must be present", p.display());
+        panic!(
+            "{} is missing on CI: the shared data must be present",
+            p.display()
+        );
     }
     eprintln!("skipped: {} not found (shared data absent)", p.display());
     None

@@ -7,7 +7,9 @@ use gnss::time::gpst;
 use std::path::PathBuf;
 
 fn fixture(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fixtures").join(name)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../fixtures")
+        .join(name)
 }
 
 fn check(name: &str) {
@@ -21,7 +23,11 @@ fn check(name: &str) {
     ];
     assert_eq!(ev.len(), 3, "{name}");
     for (e, w) in ev.iter().zip(want) {
-        assert_eq!(e.time, Some(w), "{name}: event time exact to the nanosecond");
+        assert_eq!(
+            e.time,
+            Some(w),
+            "{name}: event time exact to the nanosecond"
+        );
     }
     // Two events within one second, one followed by its special record.
     assert_eq!(ev[1].records.len(), 1);

@@ -11,7 +11,9 @@ use std::collections::BTreeMap;
 
 #[test]
 fn broadcast_orbits_match_precise_orbits() {
-    let Some(dir) = common::data("gnss/esbc-2020-177") else { return };
+    let Some(dir) = common::data("gnss/esbc-2020-177") else {
+        return;
+    };
     let nav = NavFile::read(&dir.join("ESBC00DNK_R_20201770000_01D_MN.rnx.gz")).unwrap();
     let sp3 = Sp3::read(&dir.join("GRG0MGXFIN_20201770000_01D_15M_ORB.SP3.gz")).unwrap();
     let eph = Ephemerides::from_nav(&[nav]);
@@ -67,7 +69,9 @@ fn broadcast_orbits_match_precise_orbits() {
 /// Earth-fixed frame (inclined GEOs drift by tens of m/s; a wrong rotation gives km/s).
 #[test]
 fn beidou_ephemerides_agree_with_their_successors() {
-    let Some(dir) = common::data("gnss/esbc-2020-177") else { return };
+    let Some(dir) = common::data("gnss/esbc-2020-177") else {
+        return;
+    };
     let nav = NavFile::read(&dir.join("ESBC00DNK_R_20201770000_01D_MN.rnx.gz")).unwrap();
     let eph = Ephemerides::from_nav(&[nav]);
     let mut d_meo = Vec::new();
@@ -86,7 +90,11 @@ fn beidou_ephemerides_agree_with_their_successors() {
                 let s = w[1].compute(t);
                 let r = s.pos.0.norm();
                 assert!((r - 42_164_000.0).abs() < 100_000.0, "{sv} radius {r}");
-                assert!(s.vel.norm() < 200.0, "{sv} GEO moves at {} m/s in ECEF", s.vel.norm());
+                assert!(
+                    s.vel.norm() < 200.0,
+                    "{sv} GEO moves at {} m/s in ECEF",
+                    s.vel.norm()
+                );
             } else {
                 d_meo.push(d);
             }
@@ -100,6 +108,10 @@ fn beidou_ephemerides_agree_with_their_successors() {
         common::rms(&d_geo)
     );
     assert!(d_meo.len() > 100 && d_geo.len() > 20);
-    assert!(common::rms(&d_meo) < 3.0, "MEO/IGSO {}", common::rms(&d_meo));
+    assert!(
+        common::rms(&d_meo) < 3.0,
+        "MEO/IGSO {}",
+        common::rms(&d_meo)
+    );
     assert!(common::rms(&d_geo) < 10.0, "GEO {}", common::rms(&d_geo));
 }

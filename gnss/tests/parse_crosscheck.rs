@@ -21,9 +21,15 @@ const FILES: [&str; 8] = [
 #[test]
 fn all_observation_files_agree_with_an_independent_parser() {
     for rel in FILES {
-        let Some(path) = common::data(rel) else { return };
+        let Some(path) = common::data(rel) else {
+            return;
+        };
         let ours = ObsFile::read(&path).unwrap_or_else(|e| panic!("{rel}: {e}"));
-        assert!(ours.warnings.is_empty(), "{rel}: {:?}", &ours.warnings[..ours.warnings.len().min(3)]);
+        assert!(
+            ours.warnings.is_empty(),
+            "{rel}: {:?}",
+            &ours.warnings[..ours.warnings.len().min(3)]
+        );
         let theirs = if rel.ends_with(".gz") {
             rinex::Rinex::from_gzip_file(&path)
         } else {
@@ -39,7 +45,12 @@ fn all_observation_files_agree_with_an_independent_parser() {
         let mut values = 0usize;
         for (e, (k, o)) in ours.epochs.iter().zip(theirs.iter()) {
             let dt = (e.time - k.epoch.to_time_scale(hifitime::TimeScale::GPST)).to_seconds();
-            assert!(dt.abs() < 1e-6, "{rel}: epoch time {} vs {}", e.time, k.epoch);
+            assert!(
+                dt.abs() < 1e-6,
+                "{rel}: epoch time {} vs {}",
+                e.time,
+                k.epoch
+            );
             let our_svs: BTreeSet<String> = e
                 .sats
                 .iter()
@@ -52,7 +63,11 @@ fn all_observation_files_agree_with_an_independent_parser() {
                 .iter()
                 .map(|s| {
                     let n = s.sv.to_string();
-                    if n.len() == 3 { n } else { format!("S{:02}", s.sv.prn) }
+                    if n.len() == 3 {
+                        n
+                    } else {
+                        format!("S{:02}", s.sv.prn)
+                    }
                 })
                 .collect();
             assert_eq!(our_svs, their_svs, "{rel}: satellites at {}", e.time);
@@ -63,10 +78,19 @@ fn all_observation_files_agree_with_an_independent_parser() {
                 .filter(|o| o.is_present())
                 .map(|o| o.value)
                 .collect();
-            assert_eq!(ours_vals.len(), o.signals.len(), "{rel}: values at {}", e.time);
+            assert_eq!(
+                ours_vals.len(),
+                o.signals.len(),
+                "{rel}: values at {}",
+                e.time
+            );
             let a: f64 = ours_vals.iter().sum();
             let b: f64 = o.signals.iter().map(|s| s.value).sum();
-            assert!((a - b).abs() <= 1e-6 * a.abs().max(1.0), "{rel}: value sum at {}: {a} vs {b}", e.time);
+            assert!(
+                (a - b).abs() <= 1e-6 * a.abs().max(1.0),
+                "{rel}: value sum at {}: {a} vs {b}",
+                e.time
+            );
             values += ours_vals.len();
         }
         eprintln!("{rel}: {} epochs, {values} values agree", ours.epochs.len());

@@ -21,7 +21,9 @@ fn errors(run: &spp::SppRun, truth: Ecef) -> (Vec<f64>, Vec<f64>) {
 
 #[test]
 fn esbc_day_multi_gnss() {
-    let Some(dir) = common::data("gnss/esbc-2020-177") else { return };
+    let Some(dir) = common::data("gnss/esbc-2020-177") else {
+        return;
+    };
     let obs = ObsFile::read(&dir.join("ESBC00DNK_R_20201770000_01D_30S_MO.crx.gz")).unwrap();
     let nav = NavFile::read(&dir.join("ESBC00DNK_R_20201770000_01D_MN.rnx.gz")).unwrap();
     let orbits = Orbits::broadcast(Ephemerides::from_nav(&[nav]));
@@ -50,7 +52,9 @@ fn esbc_day_multi_gnss() {
 
 #[test]
 fn geonet_rover_gps_only() {
-    let Some(dir) = common::data("gnss/geonet-2005") else { return };
+    let Some(dir) = common::data("gnss/geonet-2005") else {
+        return;
+    };
     let obs = ObsFile::read(&dir.join("07590920.05o")).unwrap();
     let nav = NavFile::read(&dir.join("07590920.05n")).unwrap();
     let orbits = Orbits::broadcast(Ephemerides::from_nav(&[nav]));

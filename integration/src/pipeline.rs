@@ -42,10 +42,16 @@ pub fn load_orbits(nav: &[PathBuf], sp3: Option<&Path>) -> Result<(Orbits, Vec<S
     let eph = Ephemerides::from_nav(&navs);
     let mut warnings: Vec<String> = eph.stats.skipped.clone();
     if eph.stats.unhealthy > 0 {
-        warnings.push(format!("{} ephemerides flagged unhealthy were not used", eph.stats.unhealthy));
+        warnings.push(format!(
+            "{} ephemerides flagged unhealthy were not used",
+            eph.stats.unhealthy
+        ));
     }
     if eph.stats.unused > 0 {
-        warnings.push(format!("{} navigation records of unused message types (SBAS, CNAV …) ignored", eph.stats.unused));
+        warnings.push(format!(
+            "{} navigation records of unused message types (SBAS, CNAV …) ignored",
+            eph.stats.unused
+        ));
     }
     if eph.gps_iono.is_none() {
         warnings.push("no Klobuchar ionosphere parameters in the navigation files: ionosphere not modelled, code weights lowered".into());
@@ -71,7 +77,11 @@ pub fn check_overlap(obs: &ObsFile, orbits: &Orbits, nav: &[PathBuf]) -> Result<
     let (lo, hi) = match (&orbits.precise, orbits.broadcast.span()) {
         (Some(s), _) => s.span().unwrap_or((a.time, b.time)),
         (None, Some(span)) => span,
-        (None, None) => return Err(Error::NoData("the navigation files hold no usable ephemeris".into())),
+        (None, None) => {
+            return Err(Error::NoData(
+                "the navigation files hold no usable ephemeris".into(),
+            ))
+        }
     };
     let margin = hifitime::Duration::from_seconds(4.0 * 3600.0);
     if b.time < lo - margin || a.time > hi + margin {
@@ -113,11 +123,18 @@ pub fn spp(job: &SppJob) -> Result<SppReport> {
         .collect();
     let systems: String = job.options.systems.iter().map(|s| s.letter()).collect();
     let header = vec![
-        format!("program   : ppkat {} (single point)", env!("CARGO_PKG_VERSION")),
+        format!(
+            "program   : ppkat {} (single point)",
+            env!("CARGO_PKG_VERSION")
+        ),
         format!("inp file  : {}", job.obs.display()),
         format!("elev mask : {:.1} deg", job.options.elev_mask.to_degrees()),
         format!("systems   : {systems}"),
-        format!("epochs    : {} read, {} solved", obs.epochs.len(), records.len()),
+        format!(
+            "epochs    : {} read, {} solved",
+            obs.epochs.len(),
+            records.len()
+        ),
     ];
     let mut header = header;
     for n in &job.nav {
@@ -142,7 +159,8 @@ impl fmt::Display for SppReport {
             self.epochs,
             self.out.display()
         )?;
-        let mut reasons: std::collections::BTreeMap<String, (usize, Option<Epoch>)> = Default::default();
+        let mut reasons: std::collections::BTreeMap<String, (usize, Option<Epoch>)> =
+            Default::default();
         for (t, why) in &self.run.failures {
             let e = reasons.entry(why_key(why)).or_insert((0, Some(*t)));
             e.0 += 1;

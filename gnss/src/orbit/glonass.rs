@@ -96,7 +96,11 @@ impl GlonassEph {
         ];
         let mut left = dt;
         while left.abs() > 1e-9 {
-            let h = if left.abs() < STEP { left } else { STEP.copysign(left) };
+            let h = if left.abs() < STEP {
+                left
+            } else {
+                STEP.copysign(left)
+            };
             self.rk4(&mut x, h);
             left -= h;
         }

@@ -29,8 +29,12 @@ impl Sp3 {
             .next_line()?
             .ok_or_else(|| Error::input(path, "the file is empty"))?
             .to_vec();
-        if first.first() != Some(&b'#') || !matches!(first.get(1), Some(b'c' | b'd' | b'a' | b'b')) {
-            return Err(Error::input(path, "not an SP3 file (first line does not start with #c or #d)"));
+        if first.first() != Some(&b'#') || !matches!(first.get(1), Some(b'c' | b'd' | b'a' | b'b'))
+        {
+            return Err(Error::input(
+                path,
+                "not an SP3 file (first line does not start with #c or #d)",
+            ));
         }
         let mut sp3 = Sp3::default();
         let mut scale = TimeScale::GPST;
@@ -50,7 +54,15 @@ impl Sp3 {
                 Some(b'*') => {
                     let g = |a, b| parse_int(cols(line, a, b)).ok().flatten();
                     let e = (|| {
-                        make_epoch(g(3, 7)?, g(8, 10)?, g(11, 13)?, g(14, 16)?, g(17, 19)?, cols(line, 20, 31), scale)
+                        make_epoch(
+                            g(3, 7)?,
+                            g(8, 10)?,
+                            g(11, 13)?,
+                            g(14, 16)?,
+                            g(17, 19)?,
+                            cols(line, 20, 31),
+                            scale,
+                        )
                     })()
                     .ok_or_else(|| Error::parse(path, ln, "unreadable SP3 epoch line"))?;
                     sp3.epochs.push(e);
@@ -60,12 +72,17 @@ impl Sp3 {
                     }
                 }
                 Some(b'P') if !sp3.epochs.is_empty() => {
-                    let Some(sv) = Sv::parse(cols(line, 1, 4)) else { continue };
+                    let Some(sv) = Sv::parse(cols(line, 1, 4)) else {
+                        continue;
+                    };
                     let f = |a| parse_real(cols(line, a, a + 14)).ok().flatten();
                     let (Some(x), Some(y), Some(z)) = (f(4), f(18), f(32)) else {
                         return Err(Error::parse(path, ln, "unreadable SP3 position"));
                     };
-                    let clk = f(46).filter(|c| c.abs() < 999_999.0).map(|c| c * 1e-6).unwrap_or(f64::NAN);
+                    let clk = f(46)
+                        .filter(|c| c.abs() < 999_999.0)
+                        .map(|c| c * 1e-6)
+                        .unwrap_or(f64::NAN);
                     let pos = if x == 0.0 && y == 0.0 && z == 0.0 {
                         Vector3::repeat(f64::NAN)
                     } else {
@@ -84,7 +101,10 @@ impl Sp3 {
             }
         }
         if sp3.epochs.len() < NPTS {
-            return Err(Error::input(path, format!("only {} epochs: too few to interpolate", sp3.epochs.len())));
+            return Err(Error::input(
+                path,
+                format!("only {} epochs: too few to interpolate", sp3.epochs.len()),
+            ));
         }
         Ok(sp3)
     }
@@ -107,7 +127,10 @@ impl Sp3 {
         let i = (x.floor() as usize).min(n - 1);
         let start = (i + 1).saturating_sub(NPTS / 2).min(n - NPTS);
         let idx = start..start + NPTS;
-        let ts: Vec<f64> = idx.clone().map(|k| (self.epochs[k] - t).to_seconds()).collect();
+        let ts: Vec<f64> = idx
+            .clone()
+            .map(|k| (self.epochs[k] - t).to_seconds())
+            .collect();
         let ps: Vec<Vector3<f64>> = idx.clone().map(|k| samples[k].0).collect();
         if ps.iter().any(|p| p.x.is_nan()) {
             return None;

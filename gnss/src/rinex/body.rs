@@ -93,7 +93,9 @@ impl Body {
             };
             let Some(head) = head else {
                 self.stats.skipped_lines += 1;
-                let txt = String::from_utf8_lossy(&self.line_buf).trim_end().to_string();
+                let txt = String::from_utf8_lossy(&self.line_buf)
+                    .trim_end()
+                    .to_string();
                 self.warn(
                     line_no,
                     format!("expected an epoch line, found '{txt}': line skipped"),
@@ -228,7 +230,10 @@ impl Body {
             if bad {
                 self.stats.dropped_sat_records += 1;
                 let txt = String::from_utf8_lossy(line).trim_end().to_string();
-                self.warn(ln, format!("unreadable number in '{txt}': satellite {sv} dropped from this epoch"));
+                self.warn(
+                    ln,
+                    format!("unreadable number in '{txt}': satellite {sv} dropped from this epoch"),
+                );
                 continue;
             }
             sats.push(SatObs { sv, obs });
@@ -263,10 +268,12 @@ impl Body {
                     break;
                 }
                 let a = 32 + 3 * k;
-                svs.push(Sv::parse(cols(line, a, a + 3)).map(|sv| match h.file_system {
-                    Some(sys) if cols(line, a, a + 1) == b" " => Sv::new(sys, sv.prn),
-                    _ => sv,
-                }));
+                svs.push(
+                    Sv::parse(cols(line, a, a + 3)).map(|sv| match h.file_system {
+                        Some(sys) if cols(line, a, a + 1) == b" " => Sv::new(sys, sv.prn),
+                        _ => sv,
+                    }),
+                );
             }
         }
         let ntypes = h.types_of(Constellation::Gps).len();
@@ -304,7 +311,9 @@ impl Body {
                 _ => {
                     self.stats.dropped_sat_records += 1;
                     let what = match sv {
-                        Some(sv) => format!("unreadable number: satellite {sv} dropped from this epoch"),
+                        Some(sv) => {
+                            format!("unreadable number: satellite {sv} dropped from this epoch")
+                        }
                         None => "unreadable satellite identifier: record dropped".to_string(),
                     };
                     self.warn(first_ln, what);
@@ -431,7 +440,13 @@ pub(crate) fn parse_epoch_v2(line: &[u8], ts: TimeScale) -> Option<EpochHead> {
         None
     } else {
         let yy = int(line, 0, 3)?;
-        let y = if yy < 80 { 2000 + yy } else if yy < 100 { 1900 + yy } else { yy };
+        let y = if yy < 80 {
+            2000 + yy
+        } else if yy < 100 {
+            1900 + yy
+        } else {
+            yy
+        };
         Some(make_epoch(
             y,
             int(line, 3, 6)?,

@@ -160,7 +160,11 @@ impl Crx {
     }
 
     /// The next decompressed RINEX line into `out`, with the compressed line number of its epoch.
-    pub fn next_line(&mut self, out: &mut Vec<u8>, warnings: &mut Vec<Warning>) -> Result<Option<usize>> {
+    pub fn next_line(
+        &mut self,
+        out: &mut Vec<u8>,
+        warnings: &mut Vec<Warning>,
+    ) -> Result<Option<usize>> {
         loop {
             if self.qpos < self.queue.len() {
                 out.clear();
@@ -256,11 +260,9 @@ impl Crx {
         let svs: Vec<Option<Sv>> = (0..nsat)
             .map(|i| {
                 let a = sat_a + 3 * i;
-                Sv::parse(super::lines::cols(&et, a, a + 3)).map(|sv| {
-                    match self.file_system {
-                        Some(sys) if et.get(a) == Some(&b' ') => Sv::new(sys, sv.prn),
-                        _ => sv,
-                    }
+                Sv::parse(super::lines::cols(&et, a, a + 3)).map(|sv| match self.file_system {
+                    Some(sys) if et.get(a) == Some(&b' ') => Sv::new(sys, sv.prn),
+                    _ => sv,
                 })
             })
             .collect();
@@ -329,9 +331,17 @@ impl Crx {
                 let end = if pos >= data.len() {
                     data.len()
                 } else {
-                    data[pos..].iter().position(|&c| c == b' ').map(|p| pos + p).unwrap_or(data.len())
+                    data[pos..]
+                        .iter()
+                        .position(|&c| c == b' ')
+                        .map(|p| pos + p)
+                        .unwrap_or(data.len())
                 };
-                let f = if pos < data.len() { &data[pos..end] } else { &[][..] };
+                let f = if pos < data.len() {
+                    &data[pos..end]
+                } else {
+                    &[][..]
+                };
                 pos = end + 1;
                 let v = if f.is_empty() {
                     st.fields[k].live = false;
@@ -347,7 +357,10 @@ impl Crx {
                             st.fields[k].live = false;
                             warnings.push(Warning {
                                 line: self.src.line_no,
-                                what: format!("CRINEX value '{}' of {sv} cannot be decoded: left missing", String::from_utf8_lossy(f)),
+                                what: format!(
+                                    "CRINEX value '{}' of {sv} cannot be decoded: left missing",
+                                    String::from_utf8_lossy(f)
+                                ),
                             });
                             None
                         }
@@ -403,7 +416,9 @@ mod tests {
     use super::*;
     #[test]
     fn differences_of_third_order_reconstruct_a_cubic() {
-        let ys: Vec<i64> = (0..8).map(|t: i64| 5 + 3 * t - 2 * t * t + t * t * t).collect();
+        let ys: Vec<i64> = (0..8)
+            .map(|t: i64| 5 + 3 * t - 2 * t * t + t * t * t)
+            .collect();
         let mut d = Diff::default();
         d.init(3, ys[0]);
         // The encoder's k-th order differences with ramp-up.

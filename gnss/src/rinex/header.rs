@@ -49,7 +49,10 @@ pub struct ObsHeader {
 impl ObsHeader {
     /// Observation types of a satellite's system.
     pub fn types_of(&self, sys: Constellation) -> &[ObsCode] {
-        self.obs_types.get(&sys).map(|v| v.as_slice()).unwrap_or(&[])
+        self.obs_types
+            .get(&sys)
+            .map(|v| v.as_slice())
+            .unwrap_or(&[])
     }
     pub fn is_v2(&self) -> bool {
         self.version < 3.0
@@ -123,7 +126,16 @@ pub(crate) fn read_header(src: &mut Lines, crinex: Option<f64>) -> Result<ObsHea
             ));
         };
         let lab = label(line);
-        let bad = |what: &str| Error::parse(&path, line_no, format!("{what} in header line '{}'", String::from_utf8_lossy(line).trim_end()));
+        let bad = |what: &str| {
+            Error::parse(
+                &path,
+                line_no,
+                format!(
+                    "{what} in header line '{}'",
+                    String::from_utf8_lossy(line).trim_end()
+                ),
+            )
+        };
         if !saw_version {
             if lab != b"RINEX VERSION / TYPE" {
                 return Err(Error::input(
@@ -181,7 +193,12 @@ pub(crate) fn read_header(src: &mut Lines, crinex: Option<f64>) -> Result<ObsHea
                 }
             }
             b"ANTENNA: DELTA H/E/N" => {
-                let f = |a| parse_real(cols(line, a, a + 14)).ok().flatten().unwrap_or(0.0);
+                let f = |a| {
+                    parse_real(cols(line, a, a + 14))
+                        .ok()
+                        .flatten()
+                        .unwrap_or(0.0)
+                };
                 h.antenna_delta = AntennaDelta {
                     up: f(0),
                     east: f(14),
@@ -205,7 +222,8 @@ pub(crate) fn read_header(src: &mut Lines, crinex: Option<f64>) -> Result<ObsHea
                     v2_count = parse_int(cols(line, 0, 6))
                         .ok()
                         .flatten()
-                        .ok_or_else(|| bad("missing count"))? as usize;
+                        .ok_or_else(|| bad("missing count"))?
+                        as usize;
                 }
                 for k in 0..9 {
                     let t = cols(line, 10 + 6 * k, 12 + 6 * k);

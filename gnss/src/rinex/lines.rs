@@ -128,7 +128,13 @@ pub fn parse_real(field: &[u8]) -> std::result::Result<Option<f64>, ()> {
     }
     let txt: String = s
         .iter()
-        .map(|&c| if c == b'D' || c == b'd' { 'E' } else { c as char })
+        .map(|&c| {
+            if c == b'D' || c == b'd' {
+                'E'
+            } else {
+                c as char
+            }
+        })
         .collect();
     txt.parse::<f64>().map(Some).map_err(|_| ())
 }
@@ -158,8 +164,8 @@ fn parse_fixed(s: &[u8]) -> Option<f64> {
         }
     }
     const P10: [f64; 19] = [
-        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
-        1e16, 1e17, 1e18,
+        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+        1e17, 1e18,
     ];
     let v = mant as f64 / P10[frac_digits.max(0) as usize];
     Some(if neg { -v } else { v })
@@ -198,11 +204,13 @@ mod tests {
     fn reals() {
         assert_eq!(parse_real(b"  23619095.450"), Ok(Some(23619095.45)));
         assert_eq!(parse_real(b" -.123"), Ok(Some(-0.123)));
-        assert_eq!(parse_real(b"-1.234567890123D-04"), Ok(Some(-1.234567890123e-4)));
+        assert_eq!(
+            parse_real(b"-1.234567890123D-04"),
+            Ok(Some(-1.234567890123e-4))
+        );
         assert_eq!(parse_real(b"  .5E+01"), Ok(Some(5.0)));
         assert_eq!(parse_real(b"      "), Ok(None));
         assert_eq!(parse_real(b"  1.2x"), Err(()));
         assert_eq!(parse_int(b"  12"), Ok(Some(12)));
     }
 }
-

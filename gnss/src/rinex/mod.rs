@@ -232,7 +232,9 @@ impl ObsFile {
 
     /// Camera exposures: the flag-5 events that carry a time.
     pub fn exposure_events(&self) -> impl Iterator<Item = &Event> {
-        self.events.iter().filter(|e| e.flag == 5 && e.time.is_some())
+        self.events
+            .iter()
+            .filter(|e| e.flag == 5 && e.time.is_some())
     }
 
     /// Systems seen in the epochs.

@@ -124,7 +124,10 @@ impl NavFile {
             b'E' => Constellation::Galileo,
             _ => Constellation::Gps,
         };
-        if !matches!(kind, b'N' | b'G' | b'H' | b'E' | b'C' | b'J' | b'I' | b'L' | b'M' | b'B') {
+        if !matches!(
+            kind,
+            b'N' | b'G' | b'H' | b'E' | b'C' | b'J' | b'I' | b'L' | b'M' | b'B'
+        ) {
             return Err(Error::input(
                 path,
                 "not a navigation file (type in column 21 is not N, G, H …)",
@@ -183,7 +186,15 @@ impl NavFile {
                     let yy = super::lines::parse_int(cols(&line, 2, 5)).ok()??;
                     let y = if yy < 80 { 2000 + yy } else { 1900 + yy };
                     let g = |a, b| super::lines::parse_int(cols(&line, a, b)).ok().flatten();
-                    let toc = make_epoch(y, g(5, 8)?, g(8, 11)?, g(11, 14)?, g(14, 17)?, cols(&line, 17, 22), toc_scale(sv.sys))?;
+                    let toc = make_epoch(
+                        y,
+                        g(5, 8)?,
+                        g(8, 11)?,
+                        g(11, 14)?,
+                        g(14, 17)?,
+                        cols(&line, 17, 22),
+                        toc_scale(sv.sys),
+                    )?;
                     let mut clock = Vec::with_capacity(3);
                     for k in 0..3 {
                         let a = 22 + 19 * k;
@@ -288,7 +299,8 @@ impl NavFile {
                 }
             }
             let Some(sv) = Sv::parse(cols(&line, 0, 3)) else {
-                nav.skipped.push((ln, "unreadable satellite identifier".into()));
+                nav.skipped
+                    .push((ln, "unreadable satellite identifier".into()));
                 continue;
             };
             let g = |a, b| super::lines::parse_int(cols(&line, a, b)).ok().flatten();

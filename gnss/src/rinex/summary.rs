@@ -23,11 +23,19 @@ impl ObsSummary {
         push(
             "format",
             match h.crinex {
-                Some(c) => format!("RINEX {:.2} observation, Hatanaka-compressed (CRINEX {c:.1})", h.version),
+                Some(c) => format!(
+                    "RINEX {:.2} observation, Hatanaka-compressed (CRINEX {c:.1})",
+                    h.version
+                ),
                 None => format!("RINEX {:.2} observation", h.version),
             },
         );
-        push("marker", format!("{} {}", h.marker, h.marker_number).trim().to_string());
+        push(
+            "marker",
+            format!("{} {}", h.marker, h.marker_number)
+                .trim()
+                .to_string(),
+        );
         push("receiver", h.receiver.clone());
         push("antenna", h.antenna.clone());
         push(
@@ -70,9 +78,14 @@ impl ObsSummary {
         // Interval: the most common spacing.
         let mut gaps: BTreeMap<i64, usize> = BTreeMap::new();
         for w in f.epochs.windows(2) {
-            *gaps.entry((diff_s(w[1].time, w[0].time) * 1000.0).round() as i64).or_default() += 1;
+            *gaps
+                .entry((diff_s(w[1].time, w[0].time) * 1000.0).round() as i64)
+                .or_default() += 1;
         }
-        let modal = gaps.iter().max_by_key(|(_, n)| **n).map(|(g, _)| *g as f64 / 1000.0);
+        let modal = gaps
+            .iter()
+            .max_by_key(|(_, n)| **n)
+            .map(|(g, _)| *g as f64 / 1000.0);
         push(
             "interval",
             match (h.interval, modal) {
@@ -90,7 +103,9 @@ impl ObsSummary {
                 .sum();
             if big > 0 {
                 let longest = gaps.keys().next_back().copied().unwrap_or(0) as f64 / 1000.0;
-                warnings.push(format!("{big} gaps longer than 1.5 intervals (longest {longest} s)"));
+                warnings.push(format!(
+                    "{big} gaps longer than 1.5 intervals (longest {longest} s)"
+                ));
             }
         }
         push("epochs", f.epochs.len().to_string());
@@ -125,13 +140,22 @@ impl ObsSummary {
         }
         let s = &f.stats;
         if s.power_failures > 0 {
-            warnings.push(format!("{} epochs flagged as following a power failure (flag 1)", s.power_failures));
+            warnings.push(format!(
+                "{} epochs flagged as following a power failure (flag 1)",
+                s.power_failures
+            ));
         }
         if s.cycle_slip_records > 0 {
-            warnings.push(format!("{} cycle-slip records (flag 6) not used", s.cycle_slip_records));
+            warnings.push(format!(
+                "{} cycle-slip records (flag 6) not used",
+                s.cycle_slip_records
+            ));
         }
         if s.non_increasing > 0 {
-            warnings.push(format!("{} epochs not after their predecessor", s.non_increasing));
+            warnings.push(format!(
+                "{} epochs not after their predecessor",
+                s.non_increasing
+            ));
         }
         if s.skipped_lines > 0 || s.dropped_sat_records > 0 {
             warnings.push(format!(
