@@ -61,3 +61,34 @@ fn rinex_211_events() {
     // The loss-of-lock indicator of G09 L1 survives.
     assert_eq!(f.epochs[0].sats[1].obs[1].lli, 1);
 }
+
+/// A hand-made CRINEX 1 file of the same data (written to the format of Hatanaka 2008:
+/// `&` initialises an epoch line, `n&value` a difference of order n, event epochs and their
+/// special records pass uncompressed), plus one more epoch sent as a text difference.
+#[test]
+fn crinex_1_events_and_differences() {
+    let f = ObsFile::read(&fixture("events_v211.crx")).unwrap();
+    assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+    assert_eq!(f.header.crinex, Some(1.0));
+    let plain = ObsFile::read(&fixture("events_v211.rnx")).unwrap();
+    let times = |o: &ObsFile| {
+        o.events
+            .iter()
+            .map(|e| (e.flag, e.time))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(times(&f), times(&plain));
+    assert_eq!(f.epochs.len(), 4);
+    for (k, e) in f.epochs.iter().enumerate() {
+        assert_eq!(e.time, gpst(2024, 3, 10, 12, 0, k as u8, 0));
+        if let Some(p) = plain.epochs.get(k) {
+            for (a, b) in e.sats.iter().zip(&p.sats) {
+                assert_eq!(a.sv, b.sv);
+                assert_eq!(a.obs, b.obs, "epoch {k} {}", a.sv);
+            }
+        }
+    }
+    // The fourth epoch continues the linear trend through second and third differences.
+    assert!((f.epochs[3].sats[1].obs[3].value - (90086963.0 + 300.0)).abs() < 1e-6);
+    assert_eq!(f.epochs[3].sats[1].obs[1].lli, 1);
+}
