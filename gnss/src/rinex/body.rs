@@ -422,92 +422,98 @@ fn int(line: &[u8], a: usize, b: usize) -> Option<i64> {
     parse_int(cols(line, a, b)).ok().flatten()
 }
 
-/// RINEX 2 epoch line: ` yy mm dd hh mm ss.sssssss  f nnn` + satellites + clock (cols 69–80).
-pub(crate) fn parse_epoch_v2(line: &[u8], ts: TimeScale) -> Option<EpochHead> {
-    if line.len() < 29 {
-        return None;
+/// Two-digit RINEX 2 years: 80–99 → 1980–1999, 00–79 → 2000–2079.
+pub(crate) fn full_year(yy: i64) -> i64 {
+    match yy {
+        0..=79 => 2000 + yy,
+        80..=99 => 1900 + yy,
+        _ => yy,
     }
-    let flag = int(line, 26, 29).unwrap_or(0);
-    if !(0..=6).contains(&flag) {
-        return None;
-    }
-    let nsat = parse_int(cols(line, 29, 32)).ok()?.unwrap_or(0);
-    if !(0..=999).contains(&nsat) {
-        return None;
-    }
-    let date_blank = cols(line, 0, 26).iter().all(|&c| c == b' ');
-    let time = if date_blank {
-        None
-    } else {
-        let yy = int(line, 0, 3)?;
-        let y = if yy < 80 {
-            2000 + yy
-        } else if yy < 100 {
-            1900 + yy
-        } else {
-            yy
-        };
-        Some(make_epoch(
-            y,
-            int(line, 3, 6)?,
-            int(line, 6, 9)?,
-            int(line, 9, 12)?,
-            int(line, 12, 15)?,
-            cols(line, 15, 26),
-            ts,
-        )?)
-    };
-    if time.is_none() && flag < 2 {
-        return None;
-    }
-    // Flag 0/1 lines must list satellites where they say they do.
-    if flag < 2 && nsat > 0 && Sv::parse(cols(line, 32, 35)).is_none() {
-        return None;
-    }
-    let clock = parse_real(cols(line, 68, 80)).ok().flatten();
-    Some(EpochHead {
-        time,
-        flag: flag as u8,
-        nsat: nsat as usize,
-        clock,
-    })
 }
 
+/// Column ranges (0-based, end exclusive) of an epoch line.
+struct EpochCols {
+    /// Year, month, day, hour, minute.
+    ymdhm: [(usize, usize); 5],
+    sec: (usize, usize),
+    flag: (usize, usize),
+    nsat: (usize, usize),
+    clock: (usize, usize),
+    /// Where a blank date means "no time" (allowed for special records).
+    date: (usize, usize),
+    /// First satellite identifier on the line (RINEX 2 lists satellites on the epoch line).
+    first_sat: Option<(usize, usize)>,
+}
+
+/// RINEX 2 epoch line: ` yy mm dd hh mm ss.sssssss  f nnn` + satellites + clock (cols 69–80).
+const V2: EpochCols = EpochCols {
+    ymdhm: [(0, 3), (3, 6), (6, 9), (9, 12), (12, 15)],
+    sec: (15, 26),
+    flag: (26, 29),
+    nsat: (29, 32),
+    clock: (68, 80),
+    date: (0, 26),
+    first_sat: Some((32, 35)),
+};
+
 /// RINEX 3/4 epoch line: `> yyyy mm dd hh mm ss.sssssss  f nnn      clock`.
+const V3: EpochCols = EpochCols {
+    ymdhm: [(2, 6), (7, 9), (10, 12), (13, 15), (16, 18)],
+    sec: (18, 29),
+    flag: (31, 32),
+    nsat: (32, 35),
+    clock: (41, 56),
+    date: (1, 29),
+    first_sat: None,
+};
+
+pub(crate) fn parse_epoch_v2(line: &[u8], ts: TimeScale) -> Option<EpochHead> {
+    parse_epoch(line, &V2, ts)
+}
+
 pub(crate) fn parse_epoch_v3(line: &[u8], ts: TimeScale) -> Option<EpochHead> {
-    if line.first() != Some(&b'>') || line.len() < 32 {
+    if line.first() != Some(&b'>') {
         return None;
     }
-    let flag = int(line, 31, 32)?;
-    if !(0..=6).contains(&flag) {
+    parse_epoch(line, &V3, ts)
+}
+
+fn parse_epoch(line: &[u8], c: &EpochCols, ts: TimeScale) -> Option<EpochHead> {
+    if line.len() < c.flag.1 {
         return None;
     }
-    let nsat = int(line, 32, 35).unwrap_or(0);
-    if !(0..=999).contains(&nsat) {
+    let flag = int(line, c.flag.0, c.flag.1).unwrap_or(0);
+    let nsat = parse_int(cols(line, c.nsat.0, c.nsat.1)).ok()?.unwrap_or(0);
+    if !(0..=6).contains(&flag) || !(0..=999).contains(&nsat) {
         return None;
     }
-    let date_blank = cols(line, 1, 29).iter().all(|&c| c == b' ');
-    let time = if date_blank {
+    let time = if cols(line, c.date.0, c.date.1).iter().all(|&b| b == b' ') {
         None
     } else {
+        let f = |k: usize| int(line, c.ymdhm[k].0, c.ymdhm[k].1);
         Some(make_epoch(
-            int(line, 2, 6)?,
-            int(line, 7, 9)?,
-            int(line, 10, 12)?,
-            int(line, 13, 15)?,
-            int(line, 16, 18)?,
-            cols(line, 18, 29),
+            full_year(f(0)?),
+            f(1)?,
+            f(2)?,
+            f(3)?,
+            f(4)?,
+            cols(line, c.sec.0, c.sec.1),
             ts,
         )?)
     };
     if time.is_none() && flag < 2 {
         return None;
     }
-    let clock = parse_real(cols(line, 41, 56)).ok().flatten();
+    // Flag 0/1 lines of RINEX 2 must list satellites where they say they do.
+    if let Some((a, b)) = c.first_sat {
+        if flag < 2 && nsat > 0 && Sv::parse(cols(line, a, b)).is_none() {
+            return None;
+        }
+    }
     Some(EpochHead {
         time,
         flag: flag as u8,
         nsat: nsat as usize,
-        clock,
+        clock: parse_real(cols(line, c.clock.0, c.clock.1)).ok().flatten(),
     })
 }

@@ -184,7 +184,7 @@ impl NavFile {
                     let prn = prn.filter(|p| (1..=255).contains(p))?;
                     let sv = Sv::new(v2_sys, prn as u8);
                     let yy = super::lines::parse_int(cols(&line, 2, 5)).ok()??;
-                    let y = if yy < 80 { 2000 + yy } else { 1900 + yy };
+                    let y = super::body::full_year(yy);
                     let g = |a, b| super::lines::parse_int(cols(&line, a, b)).ok().flatten();
                     let toc = make_epoch(
                         y,
