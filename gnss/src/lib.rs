@@ -14,6 +14,7 @@ pub mod error;
 pub mod frame;
 pub mod model;
 pub mod orbit;
+pub mod ppk;
 pub mod rinex;
 pub mod signal;
 pub mod solution;

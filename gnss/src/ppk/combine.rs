@@ -1,0 +1,63 @@
+//! Combination of the forward and backward passes (covariance-weighted smoothing).
+//!
+//! An epoch is fixed when at least one pass fixed it and the other pass agrees with that fix:
+//! two fixes within 4σ and 5 cm of each other, or a fix inside the 4σ ellipsoid of the other
+//! pass's float solution. Otherwise it is float (covariance-weighted mean of the two).
+
+use super::filter::EpochSol;
+use crate::frame::Ecef;
+use crate::solution::Quality;
+use nalgebra::Matrix3;
+
+fn weighted(a: &EpochSol, b: &EpochSol) -> Option<(nalgebra::Vector3<f64>, Matrix3<f64>)> {
+    let ia = a.cov.try_inverse()?;
+    let ib = b.cov.try_inverse()?;
+    let p = (ia + ib).try_inverse()?;
+    Some((p * (ia * a.pos.0 + ib * b.pos.0), p))
+}
+
+fn mahalanobis2(d: &nalgebra::Vector3<f64>, cov: &Matrix3<f64>) -> f64 {
+    cov.try_inverse().map(|i| (d.transpose() * i * d)[0]).unwrap_or(f64::INFINITY)
+}
+
+/// Combine the two passes' solutions of one epoch.
+pub fn combine(f: Option<&EpochSol>, b: Option<&EpochSol>) -> Option<EpochSol> {
+    let (f, b) = match (f, b) {
+        (Some(f), Some(b)) => (f, b),
+        (Some(x), None) | (None, Some(x)) => return Some(x.clone()),
+        (None, None) => return None,
+    };
+    let d = f.pos.0 - b.pos.0;
+    let fixed = |s: &EpochSol| s.quality == Quality::Fixed;
+    let mut out = f.clone();
+    out.nsat = f.nsat.max(b.nsat);
+    out.ratio = f.ratio.max(b.ratio);
+    match (fixed(f), fixed(b)) {
+        (true, true) => {
+            let (x, p) = weighted(f, b).unwrap_or((f.pos.0, f.cov));
+            let agree = d.norm() < 0.05 && mahalanobis2(&d, &(f.cov + b.cov)) < 16.0 * 3.0;
+            out.pos = Ecef(x);
+            out.cov = p;
+            out.quality = if agree { Quality::Fixed } else { Quality::Float };
+        }
+        (true, false) | (false, true) => {
+            let (fx, fl) = if fixed(f) { (f, b) } else { (b, f) };
+            if mahalanobis2(&d, &(fl.cov + fx.cov)) < 16.0 * 3.0 {
+                out = fx.clone();
+                out.nsat = f.nsat.max(b.nsat);
+            } else {
+                let (x, p) = weighted(f, b).unwrap_or((f.pos.0, f.cov));
+                out.pos = Ecef(x);
+                out.cov = p;
+                out.quality = Quality::Float;
+            }
+        }
+        (false, false) => {
+            let (x, p) = weighted(f, b).unwrap_or((f.pos.0, f.cov));
+            out.pos = Ecef(x);
+            out.cov = p;
+            out.quality = f.quality.min(b.quality);
+        }
+    }
+    Some(out)
+}

@@ -1,0 +1,308 @@
+//! Carrier-phase kinematic positioning of a rover against a base of known position: forward,
+//! backward and combined passes of a double-difference Kalman filter with integer ambiguity
+//! resolution.
+
+mod ar;
+pub mod combine;
+mod filter;
+mod geometry;
+pub mod lambda;
+pub mod obs;
+pub mod slip;
+
+pub use filter::{EpochSol, PassStats};
+
+use crate::error::{Error, Result};
+use crate::frame::{enu_rotation, Ecef};
+use crate::orbit::Orbits;
+use crate::rinex::{ObsFile, ObsHeader};
+use crate::spp::{self, SppOptions};
+use crate::sv::Constellation;
+use hifitime::Epoch;
+use nalgebra::Vector3;
+use obs::{extract, SatMeas, SignalPlan};
+
+/// Integer ambiguity resolution mode.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ArMode {
+    /// Float ambiguities only.
+    Off,
+    /// Resolve every epoch; the filter keeps float ambiguities.
+    Continuous,
+    /// Resolve every epoch from that epoch's data alone.
+    Instantaneous,
+    /// Resolve, then constrain the filter to the fixed integers.
+    FixAndHold,
+}
+
+/// Which passes to run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FilterMode {
+    Forward,
+    Backward,
+    Combined,
+}
+
+/// Options of the carrier-phase engine.
+#[derive(Clone, Debug)]
+pub struct PpkOptions {
+    pub elev_mask: f64,
+    pub systems: Vec<Constellation>,
+    /// Frequency slots used (1–3).
+    pub nf: usize,
+    pub ar: ArMode,
+    pub filter: FilterMode,
+    pub ratio_threshold: f64,
+    /// Largest base-rover time difference, seconds.
+    pub max_age: f64,
+    /// Gap after which an ambiguity is reset, seconds (None: five rover intervals).
+    pub max_gap: f64,
+    /// Undifferenced phase sigma a + b/sin(el), metres.
+    pub phase_sigma: (f64, f64),
+    pub code_phase_ratio: f64,
+    /// Ambiguity random walk, cycles/√s.
+    pub amb_process_noise: f64,
+    /// Initial ambiguity sigma, cycles.
+    pub amb_init_sigma: f64,
+    /// Innovation gate, metres.
+    pub max_innovation: f64,
+    /// Post-fit phase residual that resets an ambiguity, metres.
+    pub max_phase_residual: f64,
+    pub min_lock: usize,
+    /// Lock count below which a satellite counts as newly risen for partial fixing.
+    pub mature_lock: usize,
+    pub ar_elev_mask: f64,
+    pub max_partial_drops: usize,
+    pub min_fix_ambiguities: usize,
+    /// Variance of the fix-and-hold constraint, cycles².
+    pub hold_variance: f64,
+}
+
+impl Default for PpkOptions {
+    fn default() -> Self {
+        PpkOptions {
+            elev_mask: 15f64.to_radians(),
+            systems: vec![Constellation::Gps, Constellation::Galileo, Constellation::BeiDou, Constellation::Qzss],
+            nf: 2,
+            ar: ArMode::FixAndHold,
+            filter: FilterMode::Combined,
+            ratio_threshold: 3.0,
+            max_age: 30.0,
+            max_gap: 0.0,
+            phase_sigma: (0.003, 0.003),
+            code_phase_ratio: 100.0,
+            amb_process_noise: 1e-4,
+            amb_init_sigma: 30.0,
+            max_innovation: 30.0,
+            max_phase_residual: 0.1,
+            min_lock: 1,
+            mature_lock: 5,
+            ar_elev_mask: 15f64.to_radians(),
+            max_partial_drops: 6,
+            min_fix_ambiguities: 4,
+            hold_variance: 0.001,
+        }
+    }
+}
+
+/// Where the base antenna is.
+#[derive(Clone, Copy, Debug)]
+pub enum BasePosition {
+    /// Given by the user (marker, ECEF).
+    Given(Ecef),
+    /// The header's approximate position (warned about loudly).
+    Header,
+}
+
+/// Output of a carrier-phase run.
+#[derive(Clone, Debug)]
+pub struct PpkResult {
+    /// Final solutions (of the chosen filter mode), rover marker positions.
+    pub solutions: Vec<EpochSol>,
+    pub forward: Option<PassStats>,
+    pub backward: Option<PassStats>,
+    /// Rover epochs without a solution and why.
+    pub unsolved: Vec<(Epoch, String)>,
+    pub rover_epochs: usize,
+    pub base_marker: Ecef,
+    pub warnings: Vec<String>,
+}
+
+impl PpkResult {
+    pub fn fixed(&self) -> usize {
+        self.solutions.iter().filter(|s| s.quality == crate::solution::Quality::Fixed).count()
+    }
+}
+
+/// ENU antenna offset (header H/E/N) as an ECEF vector at `at`.
+fn arp_offset(h: &ObsHeader, at: &Ecef) -> Vector3<f64> {
+    let d = h.antenna_delta;
+    let r = enu_rotation(&at.to_geodetic());
+    r.transpose() * Vector3::new(d.east, d.north, d.up)
+}
+
+/// Median spacing of epochs, seconds.
+fn interval(f: &ObsFile) -> f64 {
+    let mut d: Vec<f64> = f.epochs.windows(2).map(|w| (w[1].time - w[0].time).to_seconds()).filter(|x| *x > 0.0).collect();
+    d.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+    d.get(d.len() / 2).copied().unwrap_or(1.0)
+}
+
+/// Run the carrier-phase engine.
+pub fn process(
+    rover: &ObsFile,
+    base: &ObsFile,
+    base_pos: BasePosition,
+    orbits: &Orbits,
+    opts: &PpkOptions,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<PpkResult> {
+    let mut warnings = Vec::new();
+    let has_phase = |f: &ObsFile| f.header.obs_types.values().any(|t| t.iter().any(|c| c.kind() == b'L'));
+    if !has_phase(rover) {
+        return Err(Error::input(&rover.path, "the rover file has no carrier-phase observations: PPK needs phase (use `ppkat spp` for code only)"));
+    }
+    if !has_phase(base) {
+        return Err(Error::input(&base.path, "the base file has no carrier-phase observations"));
+    }
+    let base_marker = match base_pos {
+        BasePosition::Given(p) => p,
+        BasePosition::Header => {
+            let p = base.header.approx_position.ok_or_else(|| {
+                Error::input(&base.path, "no base position: give --base-pos X,Y,Z or --base-llh LAT,LON,H (the header has none either)")
+            })?;
+            warnings.push(format!(
+                "BASE POSITION TAKEN FROM THE HEADER of {} ({:.3} {:.3} {:.3}): its error goes straight into every rover position; give --base-pos or --base-llh",
+                base.path.display(),
+                p.0.x,
+                p.0.y,
+                p.0.z
+            ));
+            p
+        }
+    };
+    let base_arp = Ecef(base_marker.0 + arp_offset(&base.header, &base_marker));
+    // Base epoch nearest each rover epoch, within the age limit.
+    let mut opts = opts.clone();
+    if opts.max_gap <= 0.0 {
+        opts.max_gap = (5.0 * interval(rover)).max(5.0);
+    }
+    let bt: Vec<Epoch> = base.epochs.iter().map(|e| e.time).collect();
+    let matched: Vec<Option<usize>> = rover
+        .epochs
+        .iter()
+        .map(|e| {
+            let i = bt.partition_point(|t| *t <= e.time);
+            [i.checked_sub(1), (i < bt.len()).then_some(i)]
+                .into_iter()
+                .flatten()
+                .min_by(|&a, &b| {
+                    let da = (bt[a] - e.time).to_seconds().abs();
+                    let db = (bt[b] - e.time).to_seconds().abs();
+                    da.partial_cmp(&db).unwrap_or(std::cmp::Ordering::Equal)
+                })
+                .filter(|&j| (bt[j] - e.time).to_seconds().abs() <= opts.max_age)
+        })
+        .collect();
+    if matched.iter().all(|m| m.is_none()) {
+        return Err(Error::NoData(format!(
+            "{} and {}: no rover epoch has a base epoch within {} s: the files do not cover a common time",
+            rover.path.display(),
+            base.path.display(),
+            opts.max_age
+        )));
+    }
+    let eph = &orbits.broadcast;
+    let rplan = SignalPlan::new(&rover.header);
+    let bplan = SignalPlan::new(&base.header);
+    let rmeas: Vec<Vec<SatMeas>> = rover
+        .epochs
+        .iter()
+        .map(|e| extract(e, &rover.header, &rplan, &opts.systems, opts.nf, eph))
+        .collect();
+    let bmeas: Vec<Vec<SatMeas>> = base
+        .epochs
+        .iter()
+        .map(|e| extract(e, &base.header, &bplan, &opts.systems, opts.nf, eph))
+        .collect();
+    // Single-point start values.
+    let sopts = SppOptions {
+        elev_mask: opts.elev_mask,
+        systems: opts.systems.clone(),
+        ..SppOptions::default()
+    };
+    let mut starts: Vec<Option<Ecef>> = Vec::with_capacity(rover.epochs.len());
+    let mut prior = rover.header.approx_position;
+    for e in &rover.epochs {
+        match spp::solve_epoch(e, &rover.header, orbits, &sopts, prior) {
+            Ok(s) => {
+                prior = Some(s.pos);
+                starts.push(Some(s.pos));
+            }
+            Err(_) => starts.push(None),
+        }
+    }
+    let n = rover.epochs.len();
+    let run = |backward: bool| -> (Vec<Option<EpochSol>>, PassStats) {
+        let mut f = filter::Filter::new(&opts, orbits, base_arp, backward);
+        let mut out: Vec<Option<EpochSol>> = vec![None; n];
+        let order: Box<dyn Iterator<Item = usize>> = if backward { Box::new((0..n).rev()) } else { Box::new(0..n) };
+        let mut last: Option<Ecef> = None;
+        for (count, i) in order.enumerate() {
+            if count % 500 == 0 {
+                progress(500.min(n - count));
+            }
+            let (Some(j), Some(start)) = (matched[i], starts[i].or(last)) else { continue };
+            let sol = f.step(rover.epochs[i].time, &rmeas[i], base.epochs[j].time, &bmeas[j], start);
+            if let Some(s) = &sol {
+                last = Some(s.pos);
+            }
+            out[i] = sol;
+        }
+        (out, f.stats)
+    };
+    let (fw, bw) = match opts.filter {
+        FilterMode::Forward => (Some(run(false)), None),
+        FilterMode::Backward => (None, Some(run(true))),
+        FilterMode::Combined => {
+            let (a, b) = rayon::join(|| run(false), || run(true));
+            (Some(a), Some(b))
+        }
+    };
+    let merged: Vec<Option<EpochSol>> = match (&fw, &bw) {
+        (Some((f, _)), Some((b, _))) => f.iter().zip(b).map(|(a, b)| combine::combine(a.as_ref(), b.as_ref())).collect(),
+        (Some((f, _)), None) => f.clone(),
+        (None, Some((b, _))) => b.clone(),
+        (None, None) => Vec::new(),
+    };
+    let mut solutions = Vec::with_capacity(n);
+    let mut unsolved = Vec::new();
+    for (i, s) in merged.into_iter().enumerate() {
+        match s {
+            Some(mut s) => {
+                // Rover marker = antenna reference point − header offset.
+                s.pos = Ecef(s.pos.0 - arp_offset(&rover.header, &s.pos));
+                solutions.push(s);
+            }
+            None => {
+                let why = if matched[i].is_none() {
+                    format!("no base epoch within {} s", opts.max_age)
+                } else if starts[i].is_none() {
+                    "no single-point start and no previous solution".to_string()
+                } else {
+                    "fewer than two satellites common to rover and base above the mask".to_string()
+                };
+                unsolved.push((rover.epochs[i].time, why));
+            }
+        }
+    }
+    Ok(PpkResult {
+        solutions,
+        forward: fw.map(|x| x.1),
+        backward: bw.map(|x| x.1),
+        unsolved,
+        rover_epochs: n,
+        base_marker,
+        warnings,
+    })
+}

@@ -1,0 +1,142 @@
+//! Observations for carrier-phase processing: which signal of each system fills each frequency
+//! slot, and per-epoch satellite measurements in cycles and metres.
+
+use crate::orbit::Ephemerides;
+use crate::rinex::{ObsCode, ObsEpoch, ObsHeader};
+use crate::signal::frequency;
+use crate::sv::{Constellation, Sv};
+
+/// Number of frequency slots (L1-like, L2-like, L5-like).
+pub const NF: usize = 3;
+
+/// Band and preferred attributes per slot, best first.
+fn slots(sys: Constellation) -> [(u8, &'static [u8]); NF] {
+    match sys {
+        Constellation::Gps => [(b'1', b"CWPXLS"), (b'2', b"WLXSCPD"), (b'5', b"QXI")],
+        Constellation::Qzss => [(b'1', b"CXLS"), (b'2', b"LXS"), (b'5', b"QXI")],
+        Constellation::Galileo => [(b'1', b"CXB"), (b'5', b"QXI"), (b'7', b"QXI")],
+        Constellation::BeiDou => [(b'2', b"IXQ"), (b'6', b"IXQ"), (b'7', b"IXQ")],
+        Constellation::Glonass => [(b'1', b"CP"), (b'2', b"CP"), (0, b"")],
+        _ => [(0, b""), (0, b""), (0, b"")],
+    }
+}
+
+/// Column indices of the phase, code and Doppler used for one slot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SlotCols {
+    pub band: u8,
+    pub phase: usize,
+    pub code: Option<usize>,
+    pub doppler: Option<usize>,
+    pub phase_code: ObsCode,
+}
+
+/// Which columns of a file feed each system's slots.
+#[derive(Clone, Debug, Default)]
+pub struct SignalPlan {
+    pub cols: std::collections::BTreeMap<Constellation, [Option<SlotCols>; NF]>,
+}
+
+impl SignalPlan {
+    pub fn new(h: &ObsHeader) -> Self {
+        let mut plan = SignalPlan::default();
+        for (&sys, types) in &h.obs_types {
+            let mut row = [None; NF];
+            for (k, (band, attrs)) in slots(sys).iter().enumerate() {
+                if *band == 0 {
+                    continue;
+                }
+                let find = |kind: u8, attr: u8| types.iter().position(|t| t.0 == [kind, *band, attr]);
+                let Some((phase, attr)) = attrs.iter().find_map(|&a| find(b'L', a).map(|i| (i, a))) else {
+                    continue;
+                };
+                let code = find(b'C', attr).or_else(|| attrs.iter().find_map(|&a| find(b'C', a)));
+                let doppler = find(b'D', attr).or_else(|| attrs.iter().find_map(|&a| find(b'D', a)));
+                row[k] = Some(SlotCols {
+                    band: *band,
+                    phase,
+                    code,
+                    doppler,
+                    phase_code: types[phase],
+                });
+            }
+            plan.cols.insert(sys, row);
+        }
+        plan
+    }
+}
+
+/// One satellite's measurements in one epoch; NaN where absent.
+#[derive(Clone, Debug)]
+pub struct SatMeas {
+    pub sv: Sv,
+    /// Carrier frequency (Hz) per slot, NaN when the slot is unused.
+    pub freq: [f64; NF],
+    /// Carrier phase, cycles.
+    pub l: [f64; NF],
+    /// Pseudorange, metres.
+    pub p: [f64; NF],
+    /// Doppler, Hz.
+    pub d: [f64; NF],
+    pub lli: [u8; NF],
+}
+
+impl SatMeas {
+    pub fn wavelength(&self, f: usize) -> f64 {
+        crate::orbit::C / self.freq[f]
+    }
+}
+
+/// Extract the measurements of the selected systems and slots.
+pub fn extract(
+    e: &ObsEpoch,
+    h: &ObsHeader,
+    plan: &SignalPlan,
+    systems: &[Constellation],
+    nf: usize,
+    eph: &Ephemerides,
+) -> Vec<SatMeas> {
+    let mut out = Vec::with_capacity(e.sats.len());
+    for s in &e.sats {
+        if !systems.contains(&s.sv.sys) {
+            continue;
+        }
+        let Some(row) = plan.cols.get(&s.sv.sys) else { continue };
+        let chan = h
+            .glonass_channel(s.sv)
+            .or_else(|| eph.glonass_channel(s.sv.prn));
+        let mut m = SatMeas {
+            sv: s.sv,
+            freq: [f64::NAN; NF],
+            l: [f64::NAN; NF],
+            p: [f64::NAN; NF],
+            d: [f64::NAN; NF],
+            lli: [0; NF],
+        };
+        let mut any = false;
+        for (k, c) in row.iter().enumerate().take(nf) {
+            let Some(c) = c else { continue };
+            let Some(f) = frequency(s.sv.sys, c.band, chan) else { continue };
+            m.freq[k] = f;
+            let l = s.obs[c.phase];
+            if l.is_present() && l.value != 0.0 {
+                m.l[k] = l.value;
+                m.lli[k] = l.lli;
+                any = true;
+            }
+            if let Some(ci) = c.code {
+                let p = s.obs[ci].value;
+                if p.is_finite() && p > 1.0e7 {
+                    m.p[k] = p;
+                }
+            }
+            if let Some(di) = c.doppler {
+                m.d[k] = s.obs[di].value;
+            }
+        }
+        if any {
+            out.push(m);
+        }
+    }
+    out
+}
