@@ -84,3 +84,64 @@ fn geonet_series() {
         eprintln!("{} {:?} ns={} nfix={} ratio={:.1} e={:+.3} n={:+.3} u={:+.3}", gnss::time::format_ymdhms(s.time), s.quality, s.nsat, s.nfix, s.ratio, e.east(), e.north(), e.up());
     }
 }
+
+/// Truth of the dynamic Spirent rover at 10 Hz, by GPS time of week (0.1 s resolution).
+fn spirent_truth(dir: &Path) -> std::collections::HashMap<i64, Ecef> {
+    let text = std::fs::read_to_string(dir.join("Rover-dynamic_PVA_Spirent.csv")).unwrap();
+    text.lines()
+        .skip(1)
+        .filter_map(|l| {
+            let f: Vec<f64> = l.split(',').map(|x| x.trim().parse().unwrap_or(f64::NAN)).collect();
+            (f.len() >= 7).then(|| ((f[3] * 10.0).round() as i64, Ecef::new(f[4], f[5], f[6])))
+        })
+        .collect()
+}
+
+#[test]
+fn spirent_dynamic_and_static_rovers() {
+    let Some(dir) = common::data("gnss/spirent-rose-2023") else { return };
+    let base = Ecef::new(4157177.06580187, 671230.476590636, 4774767.03105544);
+    let navs = ["RINEX_GN_Spirent.23N", "RINEX_EN_Spirent.23L"];
+    let opts = PpkOptions::default();
+    let truth = spirent_truth(&dir);
+    let r = run(&dir, "Rover-dynamic_MO_Spirent.obs", "Base-static_MO_Spirent.obs", &navs, base, &opts);
+    let s = stats(&r, |s| truth.get(&((gnss::time::week_tow(s.time).1 * 10.0).round() as i64)).copied());
+    let d3 = (s.h_rms.powi(2) + s.v_rms.powi(2)).sqrt();
+    eprintln!(
+        "Spirent dynamic: {} solved of {}, fixed {:.1} %, 3D RMS {:.2} mm, worst fixed {:.1} mm",
+        r.solutions.len(),
+        r.rover_epochs,
+        s.fixed_pct,
+        d3 * 1000.0,
+        s.max_fixed_err * 1000.0
+    );
+    let st = Ecef::new(4156857.1195929, 673209.028774142, 4774767.03105544);
+    let r2 = run(&dir, "Rover-static-2km-east_MO_Spirent.obs", "Base-static_MO_Spirent.obs", &navs, base, &opts);
+    let s2 = stats(&r2, |_| Some(st));
+    let d3s = (s2.h_rms.powi(2) + s2.v_rms.powi(2)).sqrt();
+    eprintln!(
+        "Spirent static 2 km: {} solved, fixed {:.1} %, 3D RMS {:.2} mm",
+        r2.solutions.len(),
+        s2.fixed_pct,
+        d3s * 1000.0
+    );
+}
+
+#[test]
+fn cssrlib_car() {
+    let Some(dir) = common::data("gnss/cssrlib-2021-265") else { return };
+    let base = Ecef::new(-3959400.631, 3385704.533, 3667523.111);
+    let start = gnss::frame::Geodetic::from_degrees(35.342058098, 139.521986657, 47.5515).to_ecef();
+    let r = run(&dir, "SEPT265G.21O", "3034265G.21O", &["SEPT2650.21P"], base, &PpkOptions::default());
+    let t0 = r.solutions.first().map(|s| s.time).unwrap();
+    let s = stats(&r, |s| ((s.time - t0).to_seconds() < 35.0).then_some(start));
+    eprintln!(
+        "cssrlib car: {} solved of {}, fixed {:.1} %, first 35 s H RMS {:.2} cm V RMS {:.2} cm; fw {:?}",
+        r.solutions.len(),
+        r.rover_epochs,
+        s.fixed_pct,
+        s.h_rms * 100.0,
+        s.v_rms * 100.0,
+        r.forward
+    );
+}

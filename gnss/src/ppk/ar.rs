@@ -17,7 +17,7 @@ impl Filter<'_> {
         // Candidates: (state index, satellite, slot, elevation, lock).
         let mut cands: Vec<(usize, Sv, usize, f64, usize)> = Vec::new();
         for (k, a) in self.ambs.iter().enumerate() {
-            if a.sv.sys == Constellation::Glonass || a.lock < o.min_lock {
+            if a.f == super::filter::IONO || a.sv.sys == Constellation::Glonass || a.lock < o.min_lock {
                 continue;
             }
             let Some(p) = pairs

@@ -80,6 +80,19 @@ pub struct Filter<'a> {
     pub(super) last_ratio: Option<f64>,
 }
 
+/// Slot number of the ionosphere state of a satellite (after the frequency slots).
+pub(super) const IONO: usize = NF;
+
+/// Whether a pair observes a state's quantity: phase of slot `f` on both receivers, or for the
+/// ionosphere state any phase.
+fn observed(p: &Pair, f: usize) -> bool {
+    if f == IONO {
+        (0..NF).any(|k| p.r.l[k].is_finite() && p.b.l[k].is_finite())
+    } else {
+        p.r.l[f].is_finite() && p.b.l[f].is_finite()
+    }
+}
+
 fn var_phase(el: f64, o: &PpkOptions) -> f64 {
     let s = el.sin().max(0.05);
     o.phase_sigma.0.powi(2) + (o.phase_sigma.1 / s).powi(2)
@@ -191,12 +204,16 @@ impl<'a> Filter<'a> {
         for j in 0..3 {
             self.p[(j, j)] = 30.0f64.powi(2);
         }
+        // Ionosphere: single-difference slant delay per satellite, constrained by the baseline.
+        let bl_km = (start.0 - self.base.0).norm() / 1000.0;
+        let iono_sigma0 = (o.iono_sigma_per_km * bl_km).max(0.002);
+        let iono_q = (o.iono_process_noise_per_km * bl_km).max(1e-5);
         // Ambiguity bookkeeping: resets for slips, outliers, gaps; instantaneous mode resets all.
         let mut k = 0;
         while k < self.ambs.len() {
             let a = self.ambs[k].clone();
-            let rs = rover_slips.get(&a.sv).and_then(|s| s[a.f]);
-            let bs = self.base_slips.get(&a.sv).and_then(|s| s[a.f]);
+            let rs = rover_slips.get(&a.sv).and_then(|s| s.get(a.f).copied().flatten());
+            let bs = self.base_slips.get(&a.sv).and_then(|s| s.get(a.f).copied().flatten());
             let gap = (t - a.last).to_seconds().abs() > o.max_gap;
             let pending = self.pending_reset.contains(&(a.sv, a.f));
             if o.ar == ArMode::Instantaneous || rs.is_some() || bs.is_some() || gap || pending {
@@ -208,7 +225,8 @@ impl<'a> Filter<'a> {
                 self.remove_state(3 + k);
             } else {
                 let i = 3 + k;
-                self.p[(i, i)] += o.amb_process_noise.powi(2) * dt;
+                let q = if a.f == IONO { iono_q } else { o.amb_process_noise };
+                self.p[(i, i)] += q.powi(2) * dt;
                 k += 1;
             }
         }
@@ -239,6 +257,19 @@ impl<'a> Filter<'a> {
                 );
             }
         }
+        if o.estimate_iono {
+            for pr in &pairs {
+                if observed(pr, IONO) && self.idx(pr.r.sv, IONO).is_none() {
+                    let a = Amb {
+                        sv: pr.r.sv,
+                        f: IONO,
+                        lock: 0,
+                        last: t,
+                    };
+                    self.add_state(a, 0.0, iono_sigma0.powi(2));
+                }
+            }
+        }
         // Measurement update (iterated).
         let x0 = self.x.clone();
         let p0 = self.p.clone();
@@ -267,7 +298,7 @@ impl<'a> Filter<'a> {
             }
         }
         for a in self.ambs.iter_mut() {
-            if pairs.iter().any(|p| p.r.sv == a.sv && p.r.l[a.f].is_finite() && p.b.l[a.f].is_finite()) {
+            if pairs.iter().any(|p| p.r.sv == a.sv && observed(p, a.f)) {
                 a.lock += 1;
                 a.last = t;
             }
@@ -370,11 +401,16 @@ impl Filter<'_> {
                     };
                     let fac = if phase { 1.0 } else { o.code_phase_ratio.powi(2) };
                     let sd_var = |i: usize| 2.0 * fac * var_phase(pairs[i].el, o);
+                    // Ionosphere scale of this slot relative to the first (delays code, advances phase).
+                    let mu = |i: usize| (pairs[i].r.freq[0] / pairs[i].r.freq[f]).powi(2) * if phase { -1.0 } else { 1.0 };
                     let model_sd = |s: &Self, i: usize| -> f64 {
                         let mut m = pre[i].sd_model;
                         if phase {
                             let k = s.idx(pairs[i].r.sv, f).unwrap_or(0);
                             m += pairs[i].r.wavelength(f) * x[k];
+                        }
+                        if let Some(k) = s.idx(pairs[i].r.sv, IONO) {
+                            m += mu(i) * x[k];
                         }
                         m
                     };
@@ -394,6 +430,10 @@ impl Filter<'_> {
                         hr[0] = de.x;
                         hr[1] = de.y;
                         hr[2] = de.z;
+                        if let (Some(ki), Some(kr)) = (self.idx(pairs[i].r.sv, IONO), self.idx(pairs[refi].r.sv, IONO)) {
+                            hr[ki] = mu(i);
+                            hr[kr] = -mu(refi);
+                        }
                         if phase {
                             let ki = self.idx(pairs[i].r.sv, f)?;
                             let kr = self.idx(pairs[refi].r.sv, f)?;

@@ -76,6 +76,12 @@ pub struct PpkOptions {
     pub min_fix_ambiguities: usize,
     /// Variance of the fix-and-hold constraint, cycles².
     pub hold_variance: f64,
+    /// Estimate a single-difference slant ionosphere per satellite (ionosphere-weighted model).
+    pub estimate_iono: bool,
+    /// Prior sigma of that delay per km of baseline, metres.
+    pub iono_sigma_per_km: f64,
+    /// Its random walk per km of baseline, m/√s.
+    pub iono_process_noise_per_km: f64,
 }
 
 impl Default for PpkOptions {
@@ -101,6 +107,9 @@ impl Default for PpkOptions {
             max_partial_drops: 6,
             min_fix_ambiguities: 4,
             hold_variance: 0.001,
+            estimate_iono: false,
+            iono_sigma_per_km: 0.001,
+            iono_process_noise_per_km: 1e-4,
         }
     }
 }
@@ -231,15 +240,17 @@ pub fn process(
         systems: opts.systems.clone(),
         ..SppOptions::default()
     };
-    let mut starts: Vec<Option<Ecef>> = Vec::with_capacity(rover.epochs.len());
+    // As in RTKLIB, an epoch whose code solution fails (too few satellites, GDOP > 30,
+    // inconsistent) gets no carrier-phase solution either: its geometry cannot be trusted.
+    let mut starts: Vec<std::result::Result<Ecef, String>> = Vec::with_capacity(rover.epochs.len());
     let mut prior = rover.header.approx_position;
     for e in &rover.epochs {
         match spp::solve_epoch(e, &rover.header, orbits, &sopts, prior) {
             Ok(s) => {
                 prior = Some(s.pos);
-                starts.push(Some(s.pos));
+                starts.push(Ok(s.pos));
             }
-            Err(_) => starts.push(None),
+            Err((why, _)) => starts.push(Err(why.to_string())),
         }
     }
     let n = rover.epochs.len();
@@ -247,17 +258,12 @@ pub fn process(
         let mut f = filter::Filter::new(&opts, orbits, base_arp, backward);
         let mut out: Vec<Option<EpochSol>> = vec![None; n];
         let order: Box<dyn Iterator<Item = usize>> = if backward { Box::new((0..n).rev()) } else { Box::new(0..n) };
-        let mut last: Option<Ecef> = None;
         for (count, i) in order.enumerate() {
             if count % 500 == 0 {
                 progress(500.min(n - count));
             }
-            let (Some(j), Some(start)) = (matched[i], starts[i].or(last)) else { continue };
-            let sol = f.step(rover.epochs[i].time, &rmeas[i], base.epochs[j].time, &bmeas[j], start);
-            if let Some(s) = &sol {
-                last = Some(s.pos);
-            }
-            out[i] = sol;
+            let (Some(j), Ok(start)) = (matched[i], &starts[i]) else { continue };
+            out[i] = f.step(rover.epochs[i].time, &rmeas[i], base.epochs[j].time, &bmeas[j], *start);
         }
         (out, f.stats)
     };
@@ -287,8 +293,8 @@ pub fn process(
             None => {
                 let why = if matched[i].is_none() {
                     format!("no base epoch within {} s", opts.max_age)
-                } else if starts[i].is_none() {
-                    "no single-point start and no previous solution".to_string()
+                } else if let Err(why) = &starts[i] {
+                    format!("no single-point solution: {why}")
                 } else {
                     "fewer than two satellites common to rover and base above the mask".to_string()
                 };
