@@ -27,6 +27,34 @@ enum Format {
     Xyz,
 }
 
+#[derive(Clone, Copy, ValueEnum)]
+enum FilterArg {
+    Forward,
+    Backward,
+    Combined,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ArArg {
+    Continuous,
+    Instantaneous,
+    FixAndHold,
+    Off,
+}
+
+/// Three comma-separated numbers.
+fn triple(what: &str, s: &str) -> Result<[f64; 3]> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<std::result::Result<_, _>>()
+        .with_context(|| format!("{what} '{s}': give three numbers separated by commas"))?;
+    if v.len() != 3 || v.iter().any(|x| !x.is_finite()) {
+        bail!("{what} '{s}': give exactly three numbers separated by commas");
+    }
+    Ok([v[0], v[1], v[2]])
+}
+
 #[derive(Subcommand)]
 enum Cmd {
     /// Describe an observation file: version, span, interval, systems, signals, events, problems.
@@ -46,6 +74,35 @@ enum Cmd {
         elev_mask: f64,
         /// Systems to use, e.g. G,E,C,J,R.
         #[arg(long, default_value = "G,E,C,J,R")]
+        systems: String,
+        #[arg(long, value_enum, default_value = "llh")]
+        format: Format,
+        #[arg(short = 'o', long)]
+        out: PathBuf,
+    },
+    /// Carrier-phase kinematic positioning of a rover against a base (double differences,
+    /// integer ambiguities), written as an RTKLIB-compatible .pos file.
+    Ppk {
+        #[arg(long)]
+        rover: PathBuf,
+        #[arg(long)]
+        base: PathBuf,
+        #[arg(long, required = true)]
+        nav: Vec<PathBuf>,
+        /// Base marker position, ECEF metres: X,Y,Z.
+        #[arg(long, allow_hyphen_values = true, conflicts_with = "base_llh")]
+        base_pos: Option<String>,
+        /// Base marker position: latitude,longitude (degrees), ellipsoidal height (m).
+        #[arg(long, allow_hyphen_values = true)]
+        base_llh: Option<String>,
+        #[arg(long, value_enum, default_value = "combined")]
+        filter: FilterArg,
+        #[arg(long, value_enum, default_value = "fix-and-hold")]
+        ar: ArArg,
+        #[arg(long, default_value_t = 15.0)]
+        elev_mask: f64,
+        /// Systems, e.g. G,E,C,J (R adds GLONASS as float only).
+        #[arg(long, default_value = "G,E,C,J")]
         systems: String,
         #[arg(long, value_enum, default_value = "llh")]
         format: Format,
@@ -111,6 +168,86 @@ fn run(cli: Cli) -> Result<()> {
             };
             let report = pipeline::spp(&job).context("single-point positioning failed")?;
             print!("{report}");
+        }
+        Cmd::Ppk {
+            rover,
+            base,
+            nav,
+            base_pos,
+            base_llh,
+            filter,
+            ar,
+            elev_mask,
+            systems,
+            format,
+            out,
+        } => {
+            use integration::gnss::frame::{Ecef, Geodetic};
+            use integration::gnss::ppk::{ArMode, BasePosition, FilterMode, PpkOptions};
+            let base_position = match (base_pos, base_llh) {
+                (Some(p), _) => {
+                    let [x, y, z] = triple("--base-pos", &p)?;
+                    if Ecef::new(x, y, z).0.norm() < 6.0e6 {
+                        bail!(
+                            "--base-pos {p}: not an ECEF position on the Earth (metres expected)"
+                        );
+                    }
+                    BasePosition::Given(Ecef::new(x, y, z))
+                }
+                (None, Some(l)) => {
+                    let [lat, lon, h] = triple("--base-llh", &l)?;
+                    if lat.abs() > 90.0 || lon.abs() > 360.0 {
+                        bail!("--base-llh {l}: latitude and longitude in degrees expected");
+                    }
+                    BasePosition::Given(Geodetic::from_degrees(lat, lon, h).to_ecef())
+                }
+                (None, None) => BasePosition::Header,
+            };
+            let Some(systems) = Constellation::parse_list(&systems) else {
+                bail!("--systems '{systems}': use letters among G,E,C,J,R separated by commas");
+            };
+            if !(0.0..90.0).contains(&elev_mask) {
+                bail!("--elev-mask {elev_mask}: give an angle in degrees between 0 and 90");
+            }
+            let options = PpkOptions {
+                elev_mask: elev_mask.to_radians(),
+                ar_elev_mask: elev_mask.to_radians(),
+                systems,
+                filter: match filter {
+                    FilterArg::Forward => FilterMode::Forward,
+                    FilterArg::Backward => FilterMode::Backward,
+                    FilterArg::Combined => FilterMode::Combined,
+                },
+                ar: match ar {
+                    ArArg::Continuous => ArMode::Continuous,
+                    ArArg::Instantaneous => ArMode::Instantaneous,
+                    ArArg::FixAndHold => ArMode::FixAndHold,
+                    ArArg::Off => ArMode::Off,
+                },
+                ..PpkOptions::default()
+            };
+            let job = pipeline::PpkJob {
+                rover,
+                base,
+                nav,
+                base_position,
+                options,
+                format: match format {
+                    Format::Llh => PosFormat::Llh,
+                    Format::Xyz => PosFormat::Xyz,
+                },
+                out,
+            };
+            let bar = indicatif::ProgressBar::new_spinner();
+            bar.set_style(
+                indicatif::ProgressStyle::with_template(
+                    "{spinner} {pos} epoch-passes processed ({per_sec})",
+                )
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+            );
+            let report = pipeline::ppk(&job, &|n| bar.inc(n as u64));
+            bar.finish_and_clear();
+            print!("{}", report.context("carrier-phase positioning failed")?);
         }
         Cmd::Bench { what } => match what {
             BenchCmd::Ingest { file } => {

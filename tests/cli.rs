@@ -218,3 +218,260 @@ fn spp_writes_an_rtklib_pos_file() {
         }
     }
 }
+
+const GEONET_BASE_POS: &str = "--base-pos=-3978241.958,3382840.234,3649900.853";
+
+#[test]
+fn ppk_geonet_writes_fixed_solutions_with_quality_columns() {
+    let (Some(rover), Some(base), Some(nav)) = (
+        shared("gnss/geonet-2005/07590920.05o"),
+        shared("gnss/geonet-2005/30400920.05o"),
+        shared("gnss/geonet-2005/07590920.05n"),
+    ) else {
+        return;
+    };
+    let out = tmp("geonet-ppk.pos");
+    let o = ppkat(&[
+        "ppk",
+        "--rover",
+        p(&rover),
+        "--base",
+        p(&base),
+        "--nav",
+        p(&nav),
+        GEONET_BASE_POS,
+        "-o",
+        p(&out),
+    ]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(t.contains("115 fixed (100.0 % of solved)"), "{t}");
+    assert!(
+        t.contains("no single-point solution"),
+        "unsolved epochs say why: {t}"
+    );
+    let pos = std::fs::read_to_string(&out).unwrap();
+    let rows: Vec<Vec<&str>> = pos
+        .lines()
+        .filter(|l| !l.starts_with('%'))
+        .map(|l| l.split_whitespace().collect())
+        .collect();
+    assert_eq!(rows.len(), 115);
+    for r in &rows {
+        assert_eq!(r[5], "1", "Q = 1 fixed");
+        let sdu: f64 = r[9].parse().unwrap();
+        assert!(sdu > 0.001 && sdu < 0.1, "a real vertical sigma: {sdu}");
+        let ratio: f64 = r[14].parse().unwrap();
+        assert!(ratio >= 3.0);
+    }
+}
+
+#[test]
+fn ppk_without_common_epochs() {
+    let (Some(rover), Some(base), Some(nav)) = (
+        shared("gnss/geonet-2005/07590920.05o"),
+        shared("gnss/spirent-rose-2023/Base-static_MO_Spirent.obs"),
+        shared("gnss/geonet-2005/07590920.05n"),
+    ) else {
+        return;
+    };
+    let out = tmp("nocommon.pos");
+    let o = ppkat(&[
+        "ppk",
+        "--rover",
+        p(&rover),
+        "--base",
+        p(&base),
+        "--nav",
+        p(&nav),
+        GEONET_BASE_POS,
+        "-o",
+        p(&out),
+    ]);
+    fails_with(
+        &o,
+        &[
+            "07590920.05o",
+            "Base-static_MO_Spirent.obs",
+            "no rover epoch has a base epoch",
+        ],
+    );
+}
+
+#[test]
+fn ppk_rover_without_phase() {
+    let src = std::fs::read_to_string(fixture("events_v304.rnx")).unwrap();
+    let f = tmp("codeonly.obs");
+    std::fs::write(
+        &f,
+        src.replace("G    4 C1C L1C C2W L2W", "G    4 C1C D1C C2W D2W")
+            .replace("E    2 C1C L1C", "E    2 C1C D1C"),
+    )
+    .unwrap();
+    let base = fixture("events_v304.rnx");
+    let out = tmp("codeonly.pos");
+    let o = ppkat(&[
+        "ppk",
+        "--rover",
+        p(&f),
+        "--base",
+        p(&base),
+        "--nav",
+        p(&base),
+        "-o",
+        p(&out),
+    ]);
+    fails_with(&o, &["codeonly.obs", "no carrier-phase"]);
+}
+
+#[test]
+fn ppk_without_any_base_position() {
+    let (Some(rover), Some(base), Some(nav)) = (
+        shared("gnss/geonet-2005/07590920.05o"),
+        shared("gnss/geonet-2005/30400920.05o"),
+        shared("gnss/geonet-2005/07590920.05n"),
+    ) else {
+        return;
+    };
+    let src = std::fs::read_to_string(&base).unwrap();
+    let nopos: String = src
+        .lines()
+        .filter(|l| !l.contains("APPROX POSITION XYZ"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let f = tmp("base-nopos.05o");
+    std::fs::write(&f, nopos).unwrap();
+    let out = tmp("nopos.pos");
+    let o = ppkat(&[
+        "ppk",
+        "--rover",
+        p(&rover),
+        "--base",
+        p(&f),
+        "--nav",
+        p(&nav),
+        "-o",
+        p(&out),
+    ]);
+    fails_with(&o, &["base-nopos.05o", "--base-pos", "--base-llh"]);
+    // With the header position only: solved, with a loud warning.
+    let o = ppkat(&[
+        "ppk",
+        "--rover",
+        p(&rover),
+        "--base",
+        p(&base),
+        "--nav",
+        p(&nav),
+        "-o",
+        p(&out),
+    ]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(t.contains("BASE POSITION TAKEN FROM THE HEADER"), "{t}");
+}
+
+#[test]
+fn ppk_navigation_not_covering_the_span() {
+    let (Some(rover), Some(base), Some(nav)) = (
+        shared("gnss/geonet-2005/07590920.05o"),
+        shared("gnss/geonet-2005/30400920.05o"),
+        shared("gnss/cssrlib-2021-265/SEPT2650.21P"),
+    ) else {
+        return;
+    };
+    let out = tmp("navspan.pos");
+    let o = ppkat(&[
+        "ppk",
+        "--rover",
+        p(&rover),
+        "--base",
+        p(&base),
+        "--nav",
+        p(&nav),
+        GEONET_BASE_POS,
+        "-o",
+        p(&out),
+    ]);
+    fails_with(&o, &["07590920.05o", "do not overlap", "SEPT2650.21P"]);
+}
+
+/// A 1 Hz rover against a 30 s base (the base file decimated): every rover epoch is solved
+/// against the nearest base epoch within 30 s, and the age of that base epoch is reported.
+#[test]
+fn ppk_high_rate_rover_against_a_30_s_base() {
+    let (Some(rover), Some(base), Some(gn), Some(en)) = (
+        shared("gnss/spirent-rose-2023/Rover-static-2km-east_MO_Spirent.obs"),
+        shared("gnss/spirent-rose-2023/Base-static_MO_Spirent.obs"),
+        shared("gnss/spirent-rose-2023/RINEX_GN_Spirent.23N"),
+        shared("gnss/spirent-rose-2023/RINEX_EN_Spirent.23L"),
+    ) else {
+        return;
+    };
+    let src = std::fs::read_to_string(&base).unwrap();
+    let mut keep = true;
+    let mut dec = String::new();
+    for l in src.lines() {
+        if l.starts_with('>') {
+            let sec: f64 = l[18..29].trim().parse().unwrap();
+            keep = sec == 0.0 || sec == 30.0;
+        }
+        if keep {
+            dec.push_str(l);
+            dec.push('\n');
+        }
+    }
+    let b30 = tmp("base-30s.obs");
+    std::fs::write(&b30, dec).unwrap();
+    let out = tmp("rate.pos");
+    let o = ppkat(&[
+        "ppk",
+        "--rover",
+        p(&rover),
+        "--base",
+        p(&b30),
+        "--nav",
+        p(&gn),
+        "--nav",
+        p(&en),
+        "--base-pos=4157177.06580187,671230.476590636,4774767.03105544",
+        "--format",
+        "xyz",
+        "-o",
+        p(&out),
+    ]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    let rows: Vec<Vec<f64>> = std::fs::read_to_string(&out)
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with('%'))
+        .map(|l| {
+            l.split_whitespace()
+                .skip(2)
+                .map(|x| x.parse().unwrap())
+                .collect()
+        })
+        .collect();
+    assert_eq!(rows.len(), 601, "{t}");
+    let max_age = rows.iter().map(|r| r[11].abs()).fold(0.0, f64::max);
+    assert!(
+        (14.0..=15.0).contains(&max_age),
+        "age of the base epoch reported: {max_age}"
+    );
+    let truth = [4156857.1195929, 673209.028774142, 4774767.03105544];
+    let fixed: Vec<&Vec<f64>> = rows.iter().filter(|r| r[3] == 1.0).collect();
+    assert!(
+        fixed.len() as f64 >= 0.95 * rows.len() as f64,
+        "{} fixed",
+        fixed.len()
+    );
+    let worst = fixed
+        .iter()
+        .map(|r| {
+            ((r[0] - truth[0]).powi(2) + (r[1] - truth[1]).powi(2) + (r[2] - truth[2]).powi(2))
+                .sqrt()
+        })
+        .fold(0.0, f64::max);
+    assert!(worst < 0.02, "worst fixed error with a 30 s base: {worst}");
+}

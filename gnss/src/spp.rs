@@ -94,6 +94,18 @@ pub enum SppFailure {
     },
 }
 
+impl SppFailure {
+    /// The kind of failure without its numbers (for grouping in reports).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            SppFailure::TooFewSatellites { .. } => "too few satellites",
+            SppFailure::NoConvergence => "no convergence",
+            SppFailure::Inconsistent { .. } => "inconsistent residuals",
+            SppFailure::PoorGeometry { .. } => "poor geometry (GDOP > 30)",
+        }
+    }
+}
+
 impl std::fmt::Display for SppFailure {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {

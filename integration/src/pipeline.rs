@@ -162,7 +162,9 @@ impl fmt::Display for SppReport {
         let mut reasons: std::collections::BTreeMap<String, (usize, Option<Epoch>)> =
             Default::default();
         for (t, why) in &self.run.failures {
-            let e = reasons.entry(why_key(why)).or_insert((0, Some(*t)));
+            let e = reasons
+                .entry(why.kind().to_string())
+                .or_insert((0, Some(*t)));
             e.0 += 1;
         }
         for (why, (n, first)) in reasons {
@@ -185,12 +187,143 @@ impl fmt::Display for SppReport {
     }
 }
 
-fn why_key(f: &gnss::spp::SppFailure) -> String {
-    use gnss::spp::SppFailure::*;
-    match f {
-        TooFewSatellites { .. } => "too few satellites".into(),
-        NoConvergence => "no convergence".into(),
-        Inconsistent { .. } => "inconsistent residuals".into(),
-        PoorGeometry { .. } => "poor geometry".into(),
+/// Inputs of a carrier-phase run.
+#[derive(Clone, Debug)]
+pub struct PpkJob {
+    pub rover: PathBuf,
+    pub base: PathBuf,
+    pub nav: Vec<PathBuf>,
+    pub base_position: gnss::ppk::BasePosition,
+    pub options: gnss::ppk::PpkOptions,
+    pub format: PosFormat,
+    pub out: PathBuf,
+}
+
+/// What a carrier-phase run did.
+#[derive(Clone, Debug)]
+pub struct PpkReport {
+    pub result: gnss::ppk::PpkResult,
+    pub out: PathBuf,
+    pub warnings: Vec<String>,
+    pub seconds: f64,
+}
+
+/// Run PPK and write the `.pos` output. `progress(n)` is called as epochs are processed.
+pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport> {
+    let t0 = std::time::Instant::now();
+    let rover = ObsFile::read(&job.rover)?;
+    let base = ObsFile::read(&job.base)?;
+    gnss::ppk::require_phase(&rover, "rover")?;
+    gnss::ppk::require_phase(&base, "base")?;
+    let (orbits, mut warnings) = load_orbits(&job.nav, None)?;
+    check_overlap(&rover, &orbits, &job.nav)?;
+    for f in [&rover, &base] {
+        for w in &f.warnings {
+            warnings.push(format!("{}:{}: {}", f.path.display(), w.line, w.what));
+        }
+    }
+    let result = gnss::ppk::process(
+        &rover,
+        &base,
+        job.base_position,
+        &orbits,
+        &job.options,
+        progress,
+    )?;
+    warnings.extend(result.warnings.iter().cloned());
+    let records: Vec<PosRecord> = result
+        .solutions
+        .iter()
+        .map(|s| PosRecord {
+            time: s.time,
+            pos: s.pos,
+            quality: s.quality,
+            nsat: s.nsat,
+            cov: s.cov,
+            age: s.age,
+            ratio: s.ratio,
+        })
+        .collect();
+    let o = &job.options;
+    let b = result.base_marker;
+    let header = vec![
+        format!(
+            "program   : ppkat {} (carrier-phase kinematic)",
+            env!("CARGO_PKG_VERSION")
+        ),
+        format!("inp file  : {}", job.rover.display()),
+        format!("inp file  : {}", job.base.display()),
+        format!(
+            "pos mode  : kinematic, filter {:?}, ambiguities {:?}, ratio {:.1}",
+            o.filter, o.ar, o.ratio_threshold
+        ),
+        format!("elev mask : {:.1} deg", o.elev_mask.to_degrees()),
+        format!(
+            "systems   : {}",
+            o.systems.iter().map(|s| s.letter()).collect::<String>()
+        ),
+        format!(
+            "ref pos   : {:.4} {:.4} {:.4} (ECEF, base marker)",
+            b.0.x, b.0.y, b.0.z
+        ),
+        format!(
+            "epochs    : {} rover, {} solved, {} fixed",
+            result.rover_epochs,
+            result.solutions.len(),
+            result.fixed()
+        ),
+    ];
+    write_pos(&job.out, &header, &records, job.format)?;
+    Ok(PpkReport {
+        result,
+        out: job.out.clone(),
+        warnings,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+impl fmt::Display for PpkReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let r = &self.result;
+        let solved = r.solutions.len();
+        writeln!(
+            f,
+            "ppk: {} rover epochs, {} solved, {} fixed ({:.1} % of solved) in {:.2} s → {}",
+            r.rover_epochs,
+            solved,
+            r.fixed(),
+            100.0 * r.fixed() as f64 / solved.max(1) as f64,
+            self.seconds,
+            self.out.display()
+        )?;
+        let mut reasons: std::collections::BTreeMap<&str, (usize, Epoch)> = Default::default();
+        for (t, why) in &r.unsolved {
+            reasons.entry(why.as_str()).or_insert((0, *t)).0 += 1;
+        }
+        for (why, (n, first)) in reasons {
+            writeln!(
+                f,
+                "  {n} epochs unsolved: {why} (first at {})",
+                format_ymdhms(first)
+            )?;
+        }
+        for (name, s) in [("forward", &r.forward), ("backward", &r.backward)] {
+            let Some(s) = s else { continue };
+            let slips: Vec<String> = s.slips.iter().map(|(c, n)| format!("{c:?} {n}")).collect();
+            writeln!(
+                f,
+                "  {name}: ambiguity resets {} [{}], post-fit outliers {}, innovations rejected {}, satellite-epochs below mask {}, without orbit {}",
+                s.slips.values().sum::<usize>(),
+                slips.join(", "),
+                s.outlier_resets,
+                s.rejected_innovations,
+                s.below_mask,
+                s.no_orbit
+            )?;
+        }
+        for w in self.warnings.iter().take(20) {
+            writeln!(f, "  warning: {w}")?;
+        }
+        Ok(())
     }
 }

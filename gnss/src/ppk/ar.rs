@@ -9,15 +9,28 @@ use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 /// A fixed solution: position, covariance, ratio, number of fixed ambiguities, and the
 /// difference operator and integers (for holding).
-pub(super) type Fix = (Vector3<f64>, Matrix3<f64>, f64, usize, DMatrix<f64>, DVector<f64>);
+/// An ambiguity candidate: state index, satellite, slot, elevation, lock count.
+type Cand = (usize, Sv, usize, f64, usize);
+
+pub(super) type Fix = (
+    Vector3<f64>,
+    Matrix3<f64>,
+    f64,
+    usize,
+    DMatrix<f64>,
+    DVector<f64>,
+);
 
 impl Filter<'_> {
     pub(super) fn resolve(&mut self, pairs: &[Pair]) -> Option<Fix> {
         let o = self.opts;
         // Candidates: (state index, satellite, slot, elevation, lock).
-        let mut cands: Vec<(usize, Sv, usize, f64, usize)> = Vec::new();
+        let mut cands: Vec<Cand> = Vec::new();
         for (k, a) in self.ambs.iter().enumerate() {
-            if a.f == super::filter::IONO || a.sv.sys == Constellation::Glonass || a.lock < o.min_lock {
+            if a.f == super::filter::IONO
+                || a.sv.sys == Constellation::Glonass
+                || a.lock < o.min_lock
+            {
                 continue;
             }
             let Some(p) = pairs
@@ -37,7 +50,7 @@ impl Filter<'_> {
         for _attempt in 0..=o.max_partial_drops {
             // Difference operator.
             let mut rows: Vec<(usize, usize)> = Vec::new();
-            let mut groups: std::collections::BTreeMap<(Constellation, usize), Vec<&(usize, Sv, usize, f64, usize)>> =
+            let mut groups: std::collections::BTreeMap<(Constellation, usize), Vec<&Cand>> =
                 Default::default();
             for c in cands.iter().filter(|c| !excluded.contains(&c.1)) {
                 groups.entry((c.1.sys, c.2)).or_default().push(c);
@@ -104,7 +117,8 @@ impl Filter<'_> {
     /// Fix-and-hold: constrain the float ambiguities to the fixed integers.
     pub(super) fn hold(&mut self, d: &DMatrix<f64>, fix: &DVector<f64>) {
         let v = fix - d * &self.x;
-        let s = d * &self.p * d.transpose() + DMatrix::identity(d.nrows(), d.nrows()) * self.opts.hold_variance;
+        let s = d * &self.p * d.transpose()
+            + DMatrix::identity(d.nrows(), d.nrows()) * self.opts.hold_variance;
         let Some(ch) = s.cholesky() else { return };
         let k = &self.p * d.transpose() * ch.inverse();
         self.x += &k * v;

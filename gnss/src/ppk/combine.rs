@@ -17,7 +17,9 @@ fn weighted(a: &EpochSol, b: &EpochSol) -> Option<(nalgebra::Vector3<f64>, Matri
 }
 
 fn mahalanobis2(d: &nalgebra::Vector3<f64>, cov: &Matrix3<f64>) -> f64 {
-    cov.try_inverse().map(|i| (d.transpose() * i * d)[0]).unwrap_or(f64::INFINITY)
+    cov.try_inverse()
+        .map(|i| (d.transpose() * i * d)[0])
+        .unwrap_or(f64::INFINITY)
 }
 
 /// Combine the two passes' solutions of one epoch.
@@ -38,7 +40,11 @@ pub fn combine(f: Option<&EpochSol>, b: Option<&EpochSol>) -> Option<EpochSol> {
             let agree = d.norm() < 0.05 && mahalanobis2(&d, &(f.cov + b.cov)) < 16.0 * 3.0;
             out.pos = Ecef(x);
             out.cov = p;
-            out.quality = if agree { Quality::Fixed } else { Quality::Float };
+            out.quality = if agree {
+                Quality::Fixed
+            } else {
+                Quality::Float
+            };
         }
         (true, false) | (false, true) => {
             let (fx, fl) = if fixed(f) { (f, b) } else { (b, f) };

@@ -120,7 +120,10 @@ impl<'a> Filter<'a> {
     }
 
     pub(super) fn idx(&self, sv: Sv, f: usize) -> Option<usize> {
-        self.ambs.iter().position(|a| a.sv == sv && a.f == f).map(|i| 3 + i)
+        self.ambs
+            .iter()
+            .position(|a| a.sv == sv && a.f == f)
+            .map(|i| 3 + i)
     }
 
     fn remove_state(&mut self, k: usize) {
@@ -155,7 +158,10 @@ impl<'a> Filter<'a> {
         start: Ecef,
     ) -> Option<EpochSol> {
         let o = self.opts;
-        let dt = self.last_time.map(|l| (t - l).to_seconds().abs()).unwrap_or(0.0);
+        let dt = self
+            .last_time
+            .map(|l| (t - l).to_seconds().abs())
+            .unwrap_or(0.0);
         self.last_time = Some(t);
         // Base slips only when the base epoch changes (a 1 Hz base serves many 10 Hz epochs).
         if self.last_base_time != Some(tb) {
@@ -171,8 +177,13 @@ impl<'a> Filter<'a> {
         let mut rover_slips: BTreeMap<Sv, [Option<SlipCause>; NF]> = BTreeMap::new();
         for r in rover {
             rover_slips.insert(r.sv, self.rover_slip.check(t, r));
-            let Some(b) = base.iter().find(|b| b.sv == r.sv) else { continue };
-            let (Some(vr), Some(vb)) = (SatView::at(self.orbits, r, t), SatView::at(self.orbits, b, tb)) else {
+            let Some(b) = base.iter().find(|b| b.sv == r.sv) else {
+                continue;
+            };
+            let (Some(vr), Some(vb)) = (
+                SatView::at(self.orbits, r, t),
+                SatView::at(self.orbits, b, tb),
+            ) else {
                 self.stats.no_orbit += 1;
                 continue;
             };
@@ -212,8 +223,13 @@ impl<'a> Filter<'a> {
         let mut k = 0;
         while k < self.ambs.len() {
             let a = self.ambs[k].clone();
-            let rs = rover_slips.get(&a.sv).and_then(|s| s.get(a.f).copied().flatten());
-            let bs = self.base_slips.get(&a.sv).and_then(|s| s.get(a.f).copied().flatten());
+            let rs = rover_slips
+                .get(&a.sv)
+                .and_then(|s| s.get(a.f).copied().flatten());
+            let bs = self
+                .base_slips
+                .get(&a.sv)
+                .and_then(|s| s.get(a.f).copied().flatten());
             let gap = (t - a.last).to_seconds().abs() > o.max_gap;
             let pending = self.pending_reset.contains(&(a.sv, a.f));
             if o.ar == ArMode::Instantaneous || rs.is_some() || bs.is_some() || gap || pending {
@@ -225,7 +241,11 @@ impl<'a> Filter<'a> {
                 self.remove_state(3 + k);
             } else {
                 let i = 3 + k;
-                let q = if a.f == IONO { iono_q } else { o.amb_process_noise };
+                let q = if a.f == IONO {
+                    iono_q
+                } else {
+                    o.amb_process_noise
+                };
                 self.p[(i, i)] += q.powi(2) * dt;
                 k += 1;
             }
@@ -357,7 +377,11 @@ impl Filter<'_> {
             .iter()
             .map(|p| {
                 let (rho_r, e) = p.vr.range(&rx);
-                let tr = if rg.h > -500.0 && rg.h < 2.0e4 { tropo(&rg, p.el) } else { 0.0 };
+                let tr = if rg.h > -500.0 && rg.h < 2.0e4 {
+                    tropo(&rg, p.el)
+                } else {
+                    0.0
+                };
                 Pre {
                     e,
                     sd_model: (rho_r - p.rho_b) - C * (p.vr.clock - p.vb.clock) + (tr - p.tropo_b),
@@ -379,7 +403,9 @@ impl Filter<'_> {
                             let p = &pairs[i];
                             p.r.sv.sys == sys
                                 && if phase {
-                                    p.r.l[f].is_finite() && p.b.l[f].is_finite() && self.idx(p.r.sv, f).is_some()
+                                    p.r.l[f].is_finite()
+                                        && p.b.l[f].is_finite()
+                                        && self.idx(p.r.sv, f).is_some()
                                 } else {
                                     p.r.p[f].is_finite() && p.b.p[f].is_finite()
                                 }
@@ -388,9 +414,12 @@ impl Filter<'_> {
                     if cand.len() < 2 {
                         continue;
                     }
-                    let refi = *cand
-                        .iter()
-                        .max_by(|&&a, &&b| pairs[a].el.partial_cmp(&pairs[b].el).unwrap_or(std::cmp::Ordering::Equal))?;
+                    let refi = *cand.iter().max_by(|&&a, &&b| {
+                        pairs[a]
+                            .el
+                            .partial_cmp(&pairs[b].el)
+                            .unwrap_or(std::cmp::Ordering::Equal)
+                    })?;
                     let obs_sd = |i: usize| -> f64 {
                         let p = &pairs[i];
                         if phase {
@@ -399,10 +428,17 @@ impl Filter<'_> {
                             p.r.p[f] - p.b.p[f]
                         }
                     };
-                    let fac = if phase { 1.0 } else { o.code_phase_ratio.powi(2) };
+                    let fac = if phase {
+                        1.0
+                    } else {
+                        o.code_phase_ratio.powi(2)
+                    };
                     let sd_var = |i: usize| 2.0 * fac * var_phase(pairs[i].el, o);
                     // Ionosphere scale of this slot relative to the first (delays code, advances phase).
-                    let mu = |i: usize| (pairs[i].r.freq[0] / pairs[i].r.freq[f]).powi(2) * if phase { -1.0 } else { 1.0 };
+                    let mu = |i: usize| {
+                        (pairs[i].r.freq[0] / pairs[i].r.freq[f]).powi(2)
+                            * if phase { -1.0 } else { 1.0 }
+                    };
                     let model_sd = |s: &Self, i: usize| -> f64 {
                         let mut m = pre[i].sd_model;
                         if phase {
@@ -430,7 +466,10 @@ impl Filter<'_> {
                         hr[0] = de.x;
                         hr[1] = de.y;
                         hr[2] = de.z;
-                        if let (Some(ki), Some(kr)) = (self.idx(pairs[i].r.sv, IONO), self.idx(pairs[refi].r.sv, IONO)) {
+                        if let (Some(ki), Some(kr)) = (
+                            self.idx(pairs[i].r.sv, IONO),
+                            self.idx(pairs[refi].r.sv, IONO),
+                        ) {
                             hr[ki] = mu(i);
                             hr[kr] = -mu(refi);
                         }

@@ -23,7 +23,11 @@ pub struct SatView {
 impl SatView {
     /// Satellite seen from `t_rx` with pseudorange `p` (approximate if NaN).
     pub fn at(orbits: &Orbits, m: &SatMeas, t_rx: Epoch) -> Option<SatView> {
-        let p = m.p.iter().copied().find(|v| v.is_finite()).unwrap_or(0.075 * C);
+        let p =
+            m.p.iter()
+                .copied()
+                .find(|v| v.is_finite())
+                .unwrap_or(0.075 * C);
         let t0 = t_rx - Duration::from_seconds(p / C);
         let first = orbits.sat(m.sv, t0, b'1')?;
         let t = t0 - Duration::from_seconds(first.pv.clock);

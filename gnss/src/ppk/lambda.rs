@@ -117,7 +117,13 @@ fn reduction(n: usize, l: &mut [f64], d: &mut [f64], z: &mut [f64]) {
     }
 }
 
-fn search(n: usize, m: usize, l: &[f64], d: &[f64], zs: &[f64]) -> Option<(Vec<Vec<f64>>, Vec<f64>)> {
+fn search(
+    n: usize,
+    m: usize,
+    l: &[f64],
+    d: &[f64],
+    zs: &[f64],
+) -> Option<(Vec<Vec<f64>>, Vec<f64>)> {
     let mut s_mat = vec![0.0; n * n];
     let mut dist = vec![0.0; n];
     let mut zb = vec![0.0; n];
@@ -140,7 +146,8 @@ fn search(n: usize, m: usize, l: &[f64], d: &[f64], zs: &[f64]) -> Option<(Vec<V
                 k -= 1;
                 dist[k] = newdist;
                 for i in 0..=k {
-                    s_mat[k + i * n] = s_mat[k + 1 + i * n] + (z[k + 1] - zb[k + 1]) * l[k + 1 + i * n];
+                    s_mat[k + i * n] =
+                        s_mat[k + 1 + i * n] + (z[k + 1] - zb[k + 1]) * l[k + 1 + i * n];
                 }
                 zb[k] = zs[k] + s_mat[k + k * n];
                 z[k] = round(zb[k]);
@@ -185,7 +192,10 @@ fn search(n: usize, m: usize, l: &[f64], d: &[f64], zs: &[f64]) -> Option<(Vec<V
     }
     let mut idx: Vec<usize> = (0..zn.len()).collect();
     idx.sort_by(|&a, &b| s[a].partial_cmp(&s[b]).unwrap_or(std::cmp::Ordering::Equal));
-    Some((idx.iter().map(|&i| zn[i].clone()).collect(), idx.iter().map(|&i| s[i]).collect()))
+    Some((
+        idx.iter().map(|&i| zn[i].clone()).collect(),
+        idx.iter().map(|&i| s[i]).collect(),
+    ))
 }
 
 /// Integer least squares: the `m` best integer vectors for float `a` with covariance `q`
@@ -237,12 +247,15 @@ mod tests {
         let a = [5.45, 3.10, 2.97];
         let c = lambda(&a, &q, 2).unwrap();
         // Brute force over a box for the reference answer.
-        let qi = nalgebra::Matrix3::from_column_slice(&q).try_inverse().unwrap();
+        let qi = nalgebra::Matrix3::from_column_slice(&q)
+            .try_inverse()
+            .unwrap();
         let mut best = (f64::INFINITY, [0.0; 3]);
         for i in -5..15 {
             for j in -5..15 {
                 for k in -5..15 {
-                    let d = nalgebra::Vector3::new(a[0] - i as f64, a[1] - j as f64, a[2] - k as f64);
+                    let d =
+                        nalgebra::Vector3::new(a[0] - i as f64, a[1] - j as f64, a[2] - k as f64);
                     let s = (d.transpose() * qi * d)[0];
                     if s < best.0 {
                         best = (s, [i as f64, j as f64, k as f64]);

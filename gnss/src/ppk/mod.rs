@@ -88,7 +88,12 @@ impl Default for PpkOptions {
     fn default() -> Self {
         PpkOptions {
             elev_mask: 15f64.to_radians(),
-            systems: vec![Constellation::Gps, Constellation::Galileo, Constellation::BeiDou, Constellation::Qzss],
+            systems: vec![
+                Constellation::Gps,
+                Constellation::Galileo,
+                Constellation::BeiDou,
+                Constellation::Qzss,
+            ],
             nf: 2,
             ar: ArMode::FixAndHold,
             filter: FilterMode::Combined,
@@ -139,7 +144,10 @@ pub struct PpkResult {
 
 impl PpkResult {
     pub fn fixed(&self) -> usize {
-        self.solutions.iter().filter(|s| s.quality == crate::solution::Quality::Fixed).count()
+        self.solutions
+            .iter()
+            .filter(|s| s.quality == crate::solution::Quality::Fixed)
+            .count()
     }
 }
 
@@ -152,9 +160,35 @@ fn arp_offset(h: &ObsHeader, at: &Ecef) -> Vector3<f64> {
 
 /// Median spacing of epochs, seconds.
 fn interval(f: &ObsFile) -> f64 {
-    let mut d: Vec<f64> = f.epochs.windows(2).map(|w| (w[1].time - w[0].time).to_seconds()).filter(|x| *x > 0.0).collect();
+    let mut d: Vec<f64> = f
+        .epochs
+        .windows(2)
+        .map(|w| (w[1].time - w[0].time).to_seconds())
+        .filter(|x| *x > 0.0)
+        .collect();
     d.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
     d.get(d.len() / 2).copied().unwrap_or(1.0)
+}
+
+/// Error unless the file holds carrier-phase observations.
+pub fn require_phase(f: &ObsFile, role: &str) -> Result<()> {
+    let any = f.epochs.iter().take(100).any(|e| {
+        e.sats.iter().any(|s| {
+            f.header
+                .types_of(s.sv.sys)
+                .iter()
+                .zip(&s.obs)
+                .any(|(c, o)| c.kind() == b'L' && o.is_present())
+        })
+    });
+    if any {
+        Ok(())
+    } else {
+        Err(Error::input(
+            &f.path,
+            format!("the {role} file has no carrier-phase observations: PPK needs phase (`ppkat spp` works with code only)"),
+        ))
+    }
 }
 
 /// Run the carrier-phase engine.
@@ -167,13 +201,8 @@ pub fn process(
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<PpkResult> {
     let mut warnings = Vec::new();
-    let has_phase = |f: &ObsFile| f.header.obs_types.values().any(|t| t.iter().any(|c| c.kind() == b'L'));
-    if !has_phase(rover) {
-        return Err(Error::input(&rover.path, "the rover file has no carrier-phase observations: PPK needs phase (use `ppkat spp` for code only)"));
-    }
-    if !has_phase(base) {
-        return Err(Error::input(&base.path, "the base file has no carrier-phase observations"));
-    }
+    require_phase(rover, "rover")?;
+    require_phase(base, "base")?;
     let base_marker = match base_pos {
         BasePosition::Given(p) => p,
         BasePosition::Header => {
@@ -250,20 +279,32 @@ pub fn process(
                 prior = Some(s.pos);
                 starts.push(Ok(s.pos));
             }
-            Err((why, _)) => starts.push(Err(why.to_string())),
+            Err((why, _)) => starts.push(Err(why.kind().to_string())),
         }
     }
     let n = rover.epochs.len();
     let run = |backward: bool| -> (Vec<Option<EpochSol>>, PassStats) {
         let mut f = filter::Filter::new(&opts, orbits, base_arp, backward);
         let mut out: Vec<Option<EpochSol>> = vec![None; n];
-        let order: Box<dyn Iterator<Item = usize>> = if backward { Box::new((0..n).rev()) } else { Box::new(0..n) };
+        let order: Box<dyn Iterator<Item = usize>> = if backward {
+            Box::new((0..n).rev())
+        } else {
+            Box::new(0..n)
+        };
         for (count, i) in order.enumerate() {
             if count % 500 == 0 {
                 progress(500.min(n - count));
             }
-            let (Some(j), Ok(start)) = (matched[i], &starts[i]) else { continue };
-            out[i] = f.step(rover.epochs[i].time, &rmeas[i], base.epochs[j].time, &bmeas[j], *start);
+            let (Some(j), Ok(start)) = (matched[i], &starts[i]) else {
+                continue;
+            };
+            out[i] = f.step(
+                rover.epochs[i].time,
+                &rmeas[i],
+                base.epochs[j].time,
+                &bmeas[j],
+                *start,
+            );
         }
         (out, f.stats)
     };
@@ -276,7 +317,11 @@ pub fn process(
         }
     };
     let merged: Vec<Option<EpochSol>> = match (&fw, &bw) {
-        (Some((f, _)), Some((b, _))) => f.iter().zip(b).map(|(a, b)| combine::combine(a.as_ref(), b.as_ref())).collect(),
+        (Some((f, _)), Some((b, _))) => f
+            .iter()
+            .zip(b)
+            .map(|(a, b)| combine::combine(a.as_ref(), b.as_ref()))
+            .collect(),
         (Some((f, _)), None) => f.clone(),
         (None, Some((b, _))) => b.clone(),
         (None, None) => Vec::new(),

@@ -46,12 +46,15 @@ impl SignalPlan {
                 if *band == 0 {
                     continue;
                 }
-                let find = |kind: u8, attr: u8| types.iter().position(|t| t.0 == [kind, *band, attr]);
-                let Some((phase, attr)) = attrs.iter().find_map(|&a| find(b'L', a).map(|i| (i, a))) else {
+                let find =
+                    |kind: u8, attr: u8| types.iter().position(|t| t.0 == [kind, *band, attr]);
+                let Some((phase, attr)) = attrs.iter().find_map(|&a| find(b'L', a).map(|i| (i, a)))
+                else {
                     continue;
                 };
                 let code = find(b'C', attr).or_else(|| attrs.iter().find_map(|&a| find(b'C', a)));
-                let doppler = find(b'D', attr).or_else(|| attrs.iter().find_map(|&a| find(b'D', a)));
+                let doppler =
+                    find(b'D', attr).or_else(|| attrs.iter().find_map(|&a| find(b'D', a)));
                 row[k] = Some(SlotCols {
                     band: *band,
                     phase,
@@ -101,7 +104,9 @@ pub fn extract(
         if !systems.contains(&s.sv.sys) {
             continue;
         }
-        let Some(row) = plan.cols.get(&s.sv.sys) else { continue };
+        let Some(row) = plan.cols.get(&s.sv.sys) else {
+            continue;
+        };
         let chan = h
             .glonass_channel(s.sv)
             .or_else(|| eph.glonass_channel(s.sv.prn));
@@ -116,7 +121,9 @@ pub fn extract(
         let mut any = false;
         for (k, c) in row.iter().enumerate().take(nf) {
             let Some(c) = c else { continue };
-            let Some(f) = frequency(s.sv.sys, c.band, chan) else { continue };
+            let Some(f) = frequency(s.sv.sys, c.band, chan) else {
+                continue;
+            };
             m.freq[k] = f;
             let l = s.obs[c.phase];
             if l.is_present() && l.value != 0.0 {

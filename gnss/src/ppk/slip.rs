@@ -57,13 +57,15 @@ impl SlipDetector {
         } else {
             f64::NAN
         };
-        let mw = if m.l[0].is_finite() && m.l[1].is_finite() && m.p[0].is_finite() && m.p[1].is_finite() {
-            let (f1, f2) = (m.freq[0], m.freq[1]);
-            let lw = C / (f1 - f2);
-            (m.l[0] - m.l[1]) - (f1 * m.p[0] + f2 * m.p[1]) / ((f1 + f2) * lw)
-        } else {
-            f64::NAN
-        };
+        let mw =
+            if m.l[0].is_finite() && m.l[1].is_finite() && m.p[0].is_finite() && m.p[1].is_finite()
+            {
+                let (f1, f2) = (m.freq[0], m.freq[1]);
+                let lw = C / (f1 - f2);
+                (m.l[0] - m.l[1]) - (f1 * m.p[0] + f2 * m.p[1]) / ((f1 + f2) * lw)
+            } else {
+                f64::NAN
+            };
         match self.hist.get(&m.sv) {
             None => {}
             Some(h) => {
