@@ -175,6 +175,7 @@ impl<'a> Filter<'a> {
         // Pairs of satellites seen by both receivers.
         let mut pairs: Vec<Pair> = Vec::new();
         let mut rover_slips: BTreeMap<Sv, [Option<SlipCause>; NF]> = BTreeMap::new();
+        let start_geo = start.to_geodetic();
         for r in rover {
             rover_slips.insert(r.sv, self.rover_slip.check(t, r));
             let Some(b) = base.iter().find(|b| b.sv == r.sv) else {
@@ -187,7 +188,9 @@ impl<'a> Filter<'a> {
                 self.stats.no_orbit += 1;
                 continue;
             };
-            let (_, el) = vb.az_el(&self.base, &self.base_geo);
+            // Mask and weights from the rover's view (an aircraft sees more sky than its base).
+            let (_, el) = vr.az_el(&start, &start_geo);
+            let (_, el_b) = vb.az_el(&self.base, &self.base_geo);
             if el < o.elev_mask {
                 self.stats.below_mask += 1;
                 continue;
@@ -199,7 +202,7 @@ impl<'a> Filter<'a> {
                 vr,
                 vb,
                 rho_b,
-                tropo_b: tropo(&self.base_geo, el),
+                tropo_b: tropo(&self.base_geo, el_b),
                 el,
             });
         }
