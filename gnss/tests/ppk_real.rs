@@ -101,8 +101,8 @@ fn geonet_static_rover_processed_kinematically() {
         match mode {
             FilterMode::Combined => {
                 assert_eq!(s.fixed_pct, 100.0);
-                // RTKLIB: H 0.53 cm, V 1.12 cm; issue target H ≤ 0.6, V ≤ 1.2 (we reach 0.62 / 0.88).
-                assert!(s.h_rms <= 0.0065, "H RMS {}", s.h_rms);
+                // RTKLIB: H 0.53 cm, V 1.12 cm.
+                assert!(s.h_rms <= 0.006, "H RMS {}", s.h_rms);
                 assert!(s.v_rms <= 0.012, "V RMS {}", s.v_rms);
             }
             _ => assert!(s.fixed_pct >= 88.0, "forward fix rate {}", s.fixed_pct),
