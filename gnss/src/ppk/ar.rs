@@ -86,10 +86,9 @@ impl Filter<'_> {
                 self.last_ratio = Some(self.last_ratio.map_or(ratio, |r: f64| r.max(ratio)));
                 if ratio >= o.ratio_threshold {
                     let fix = DVector::from_vec(c.fixes[0].clone());
-                    let qinv = q.clone().cholesky()?.inverse();
-                    let corr = &qxa * &qinv;
-                    let pos = self.x.rows(0, 3) - &corr * (&a - &fix);
-                    let cov = self.p.view((0, 0), (3, 3)) - &corr * qxa.transpose();
+                    let ch = q.clone().cholesky()?;
+                    let pos = self.x.rows(0, 3) - &qxa * ch.solve(&(&a - &fix));
+                    let cov = self.p.view((0, 0), (3, 3)) - &qxa * ch.solve(&qxa.transpose());
                     return Some((
                         Vector3::new(pos[0], pos[1], pos[2]),
                         Matrix3::from_fn(|i, j| cov[(i, j)]),
@@ -120,9 +119,10 @@ impl Filter<'_> {
         let s = d * &self.p * d.transpose()
             + DMatrix::identity(d.nrows(), d.nrows()) * self.opts.hold_variance;
         let Some(ch) = s.cholesky() else { return };
-        let k = &self.p * d.transpose() * ch.inverse();
+        let dp = d * &self.p;
+        let k = ch.solve(&dp).transpose();
         self.x += &k * v;
-        self.p = &self.p - &k * d * &self.p;
+        self.p = &self.p - &k * &dp;
         self.p = (&self.p + self.p.transpose()) * 0.5;
     }
 }
