@@ -101,6 +101,9 @@ enum Cmd {
         ar: ArArg,
         #[arg(long, default_value_t = 15.0)]
         elev_mask: f64,
+        /// Receiver antenna calibrations (ANTEX) for the header antenna types.
+        #[arg(long)]
+        antex: Option<PathBuf>,
         /// Systems, e.g. G,E,C,J (R adds GLONASS as float only).
         #[arg(long, default_value = "G,E,C,J")]
         systems: String,
@@ -178,6 +181,7 @@ fn run(cli: Cli) -> Result<()> {
             filter,
             ar,
             elev_mask,
+            antex,
             systems,
             format,
             out,
@@ -223,6 +227,12 @@ fn run(cli: Cli) -> Result<()> {
                     ArArg::Instantaneous => ArMode::Instantaneous,
                     ArArg::FixAndHold => ArMode::FixAndHold,
                     ArArg::Off => ArMode::Off,
+                },
+                antex: match antex {
+                    Some(p) => Some(std::sync::Arc::new(
+                        integration::gnss::model::antex::Antex::read(&p)?,
+                    )),
+                    None => None,
                 },
                 ..PpkOptions::default()
             };

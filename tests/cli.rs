@@ -475,3 +475,52 @@ fn ppk_high_rate_rover_against_a_30_s_base() {
         .fold(0.0, f64::max);
     assert!(worst < 0.02, "worst fixed error with a 30 s base: {worst}");
 }
+
+/// With an ANTEX calibration putting the rover's phase centre 10 cm above its reference point,
+/// the reported rover (reference point) is 10 cm lower than without it.
+#[test]
+fn ppk_applies_antex_phase_centre_offsets() {
+    let (Some(rover), Some(base), Some(nav)) = (
+        shared("gnss/geonet-2005/07590920.05o"),
+        shared("gnss/geonet-2005/30400920.05o"),
+        shared("gnss/geonet-2005/07590920.05n"),
+    ) else {
+        return;
+    };
+    let src = std::fs::read_to_string(&rover).unwrap();
+    let renamed = src.replacen("TRM29659.00         ", "PPKATTEST           ", 1);
+    assert_ne!(src, renamed);
+    let r2 = tmp("rover-testant.05o");
+    std::fs::write(&r2, renamed).unwrap();
+    let heights = |extra: &[&str]| -> Vec<f64> {
+        let out = tmp(&format!("antex-{}.pos", extra.len()));
+        let mut args = vec![
+            "ppk",
+            "--rover",
+            p(&r2),
+            "--base",
+            p(&base),
+            "--nav",
+            p(&nav),
+            GEONET_BASE_POS,
+            "-o",
+            p(&out),
+        ];
+        args.extend_from_slice(extra);
+        let o = ppkat(&args);
+        assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+        std::fs::read_to_string(&out)
+            .unwrap()
+            .lines()
+            .filter(|l| !l.starts_with('%'))
+            .map(|l| l.split_whitespace().nth(4).unwrap().parse().unwrap())
+            .collect()
+    };
+    let atx = fixture("test.atx");
+    let without = heights(&[]);
+    let with = heights(&["--antex", p(&atx)]);
+    assert_eq!(without.len(), with.len());
+    for (a, b) in without.iter().zip(&with) {
+        assert!((a - b - 0.10).abs() < 0.003, "height change {}", a - b);
+    }
+}

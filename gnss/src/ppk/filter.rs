@@ -8,6 +8,7 @@ use super::obs::{SatMeas, NF};
 use super::slip::{SlipCause, SlipDetector};
 use super::{ArMode, PpkOptions};
 use crate::frame::{Ecef, Geodetic};
+use crate::model::antex::AntennaPcv;
 use crate::orbit::{Orbits, C};
 use crate::solution::Quality;
 use crate::sv::{Constellation, Sv};
@@ -34,6 +35,8 @@ pub(super) struct Pair {
     pub(super) rho_b: f64,
     pub(super) tropo_b: f64,
     pub(super) el: f64,
+    /// Antenna phase-centre correction per slot, rover minus base, metres.
+    pub(super) ant: [f64; NF],
 }
 
 /// Result of one epoch of one pass.
@@ -78,6 +81,8 @@ pub struct Filter<'a> {
     pub(super) last_time: Option<Epoch>,
     pub stats: PassStats,
     pub(super) last_ratio: Option<f64>,
+    rover_ant: Option<AntennaPcv>,
+    base_ant: Option<AntennaPcv>,
 }
 
 /// Slot number of the ionosphere state of a satellite (after the frequency slots).
@@ -99,7 +104,13 @@ fn var_phase(el: f64, o: &PpkOptions) -> f64 {
 }
 
 impl<'a> Filter<'a> {
-    pub fn new(opts: &'a PpkOptions, orbits: &'a Orbits, base: Ecef, backward: bool) -> Self {
+    pub fn new(
+        opts: &'a PpkOptions,
+        orbits: &'a Orbits,
+        base: Ecef,
+        backward: bool,
+        antennas: (Option<AntennaPcv>, Option<AntennaPcv>),
+    ) -> Self {
         Filter {
             opts,
             orbits,
@@ -116,6 +127,8 @@ impl<'a> Filter<'a> {
             last_time: None,
             stats: PassStats::default(),
             last_ratio: None,
+            rover_ant: antennas.0,
+            base_ant: antennas.1,
         }
     }
 
@@ -189,8 +202,8 @@ impl<'a> Filter<'a> {
                 continue;
             };
             // Mask and weights from the rover's view (an aircraft sees more sky than its base).
-            let (_, el) = vr.az_el(&start, &start_geo);
-            let (_, el_b) = vb.az_el(&self.base, &self.base_geo);
+            let (az, el) = vr.az_el(&start, &start_geo);
+            let (az_b, el_b) = vb.az_el(&self.base, &self.base_geo);
             if el < o.elev_mask {
                 self.stats.below_mask += 1;
                 continue;
@@ -204,6 +217,14 @@ impl<'a> Filter<'a> {
                 rho_b,
                 tropo_b: tropo(&self.base_geo, el_b),
                 el,
+                ant: std::array::from_fn(|f| {
+                    let band = super::obs::slot_band(r.sv.sys, f);
+                    let c = |a: &Option<AntennaPcv>, az, el| {
+                        a.as_ref()
+                            .map_or(0.0, |a| a.correction(r.sv.sys, band, az, el))
+                    };
+                    c(&self.rover_ant, az, el) - c(&self.base_ant, az_b, el_b)
+                }),
             });
         }
         // Prediction: position from the start value with a wide variance (no dynamics model).
@@ -446,7 +467,7 @@ impl Filter<'_> {
                             * if phase { -1.0 } else { 1.0 }
                     };
                     let model_sd = |s: &Self, i: usize| -> f64 {
-                        let mut m = pre[i].sd_model;
+                        let mut m = pre[i].sd_model + pairs[i].ant[f];
                         if phase {
                             let k = s.idx(pairs[i].r.sv, f).unwrap_or(0);
                             m += pairs[i].r.wavelength(f) * x[k];

@@ -82,6 +82,8 @@ pub struct PpkOptions {
     pub iono_sigma_per_km: f64,
     /// Its random walk per km of baseline, m/√s.
     pub iono_process_noise_per_km: f64,
+    /// Receiver antenna calibrations (ANTEX); the header antenna types are looked up in it.
+    pub antex: Option<std::sync::Arc<crate::model::antex::Antex>>,
 }
 
 impl Default for PpkOptions {
@@ -115,6 +117,7 @@ impl Default for PpkOptions {
             estimate_iono: false,
             iono_sigma_per_km: 0.001,
             iono_process_noise_per_km: 1e-4,
+            antex: None,
         }
     }
 }
@@ -220,6 +223,27 @@ pub fn process(
         }
     };
     let base_arp = Ecef(base_marker.0 + arp_offset(&base.header, &base_marker));
+    let antennas = match &opts.antex {
+        None => (None, None),
+        Some(atx) => {
+            let mut pick = |f: &ObsFile, role: &str| {
+                let name = f.header.antenna.trim().to_string();
+                match atx.find(&name) {
+                    Some((a, fallback)) => {
+                        if fallback {
+                            warnings.push(format!("{role} antenna '{name}': no calibration with this radome, using '{}'", a.name));
+                        }
+                        Some(a.clone())
+                    }
+                    None => {
+                        warnings.push(format!("{role} antenna '{name}' is not in the ANTEX file: no phase-centre correction for it"));
+                        None
+                    }
+                }
+            };
+            (pick(rover, "rover"), pick(base, "base"))
+        }
+    };
     // Base epoch nearest each rover epoch, within the age limit.
     let mut opts = opts.clone();
     if opts.max_gap <= 0.0 {
@@ -284,7 +308,7 @@ pub fn process(
     }
     let n = rover.epochs.len();
     let run = |backward: bool| -> (Vec<Option<EpochSol>>, PassStats) {
-        let mut f = filter::Filter::new(&opts, orbits, base_arp, backward);
+        let mut f = filter::Filter::new(&opts, orbits, base_arp, backward, antennas.clone());
         let mut out: Vec<Option<EpochSol>> = vec![None; n];
         let order: Box<dyn Iterator<Item = usize>> = if backward {
             Box::new((0..n).rev())

@@ -21,6 +21,11 @@ fn slots(sys: Constellation) -> [(u8, &'static [u8]); NF] {
     }
 }
 
+/// Band digit of a slot of a system (0 when unused).
+pub fn slot_band(sys: Constellation, slot: usize) -> u8 {
+    slots(sys).get(slot).map(|s| s.0).unwrap_or(0)
+}
+
 /// Column indices of the phase, code and Doppler used for one slot.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SlotCols {

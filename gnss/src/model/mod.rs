@@ -1,6 +1,8 @@
 //! Propagation models: Saastamoinen troposphere with a mapping function; Klobuchar ionosphere
 //! for GPS/QZSS/Galileo users and the BeiDou variant.
 
+pub mod antex;
+
 use crate::frame::Geodetic;
 use crate::orbit::C;
 use crate::rinex::nav::Klobuchar;

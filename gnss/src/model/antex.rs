@@ -1,0 +1,211 @@
+//! Receiver antenna phase-centre offsets and variations from ANTEX 1.4 files.
+
+use crate::error::{Error, Result};
+use crate::rinex::lines::{cols, label, parse_real, Lines};
+use crate::sv::Constellation;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Offset and elevation-dependent variation of one frequency.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FreqPcv {
+    /// Phase-centre offset north, east, up from the antenna reference point, metres.
+    pub neu: [f64; 3],
+    /// First zenith angle, step (degrees) and the non-azimuthal variations (metres).
+    pub zen1: f64,
+    pub dzen: f64,
+    pub noazi: Vec<f64>,
+}
+
+impl FreqPcv {
+    /// Variation at zenith angle `z` (degrees), linearly interpolated.
+    pub fn pcv(&self, z: f64) -> f64 {
+        if self.noazi.is_empty() || self.dzen <= 0.0 {
+            return 0.0;
+        }
+        let x = ((z - self.zen1) / self.dzen).max(0.0);
+        let i = (x.floor() as usize).min(self.noazi.len() - 1);
+        let j = (i + 1).min(self.noazi.len() - 1);
+        let f = (x - i as f64).clamp(0.0, 1.0);
+        self.noazi[i] * (1.0 - f) + self.noazi[j] * f
+    }
+}
+
+/// One receiver antenna (type and radome, as in ANTEX columns 1–20).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AntennaPcv {
+    pub name: String,
+    /// By ANTEX frequency code, e.g. `G01`.
+    pub freqs: BTreeMap<String, FreqPcv>,
+}
+
+impl AntennaPcv {
+    /// Range correction (m) to add to the geometric range to the reference point, for a
+    /// signal of `sys` on `band` seen at azimuth `az` and elevation `el` (radians):
+    /// −(offset · line of sight) + variation. Frequencies missing for a system fall back to
+    /// the GPS frequency of the same band, as is usual.
+    pub fn correction(&self, sys: Constellation, band: u8, az: f64, el: f64) -> f64 {
+        let code = format!("{}0{}", sys.letter(), band as char);
+        let gps = format!("G0{}", band as char);
+        let Some(f) = self.freqs.get(&code).or_else(|| self.freqs.get(&gps)) else {
+            return 0.0;
+        };
+        let (se, ce) = el.sin_cos();
+        let (sa, ca) = az.sin_cos();
+        let los = [ce * ca, ce * sa, se]; // north, east, up
+        let off = f.neu[0] * los[0] + f.neu[1] * los[1] + f.neu[2] * los[2];
+        -off + f.pcv(90.0 - el.to_degrees())
+    }
+}
+
+/// The receiver antennas of an ANTEX file (satellite antennas are skipped).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Antex {
+    pub antennas: Vec<AntennaPcv>,
+}
+
+impl Antex {
+    pub fn read(path: &Path) -> Result<Antex> {
+        let mut src = Lines::open(path)?;
+        let mut out = Antex::default();
+        let mut cur: Option<AntennaPcv> = None;
+        let mut satellite = false;
+        let mut freq: Option<(String, FreqPcv)> = None;
+        let (mut zen1, mut dzen) = (0.0, 5.0);
+        let mut saw_version = false;
+        loop {
+            let ln = src.line_no + 1;
+            let Some(line) = src.next_line()? else { break };
+            let lab = label(line);
+            let bad = |what: &str| Error::parse(path, ln, what.to_string());
+            match lab {
+                b"ANTEX VERSION / SYST" => saw_version = true,
+                b"START OF ANTENNA" => {
+                    cur = Some(AntennaPcv {
+                        name: String::new(),
+                        freqs: BTreeMap::new(),
+                    });
+                    satellite = false;
+                }
+                b"TYPE / SERIAL NO" => {
+                    if let Some(a) = cur.as_mut() {
+                        a.name = String::from_utf8_lossy(cols(line, 0, 20))
+                            .trim_end()
+                            .to_string();
+                        // Satellite antennas carry a satellite code in columns 21–23.
+                        let serial = cols(line, 20, 23);
+                        satellite = serial.len() == 3
+                            && serial[1].is_ascii_digit()
+                            && serial[0].is_ascii_uppercase();
+                    }
+                }
+                b"ZEN1 / ZEN2 / DZEN" => {
+                    zen1 = parse_real(cols(line, 2, 8)).ok().flatten().unwrap_or(0.0);
+                    dzen = parse_real(cols(line, 14, 20)).ok().flatten().unwrap_or(5.0);
+                }
+                b"START OF FREQUENCY" => {
+                    let code = String::from_utf8_lossy(cols(line, 3, 6)).trim().to_string();
+                    freq = Some((
+                        code,
+                        FreqPcv {
+                            neu: [0.0; 3],
+                            zen1,
+                            dzen,
+                            noazi: Vec::new(),
+                        },
+                    ));
+                }
+                b"NORTH / EAST / UP" => {
+                    if let Some((_, f)) = freq.as_mut() {
+                        for (k, v) in f.neu.iter_mut().enumerate() {
+                            *v = parse_real(cols(line, 10 * k, 10 * k + 10))
+                                .ok()
+                                .flatten()
+                                .ok_or_else(|| bad("unreadable NORTH / EAST / UP"))?
+                                / 1000.0;
+                        }
+                    }
+                }
+                b"END OF FREQUENCY" => {
+                    if let (Some((code, f)), Some(a)) = (freq.take(), cur.as_mut()) {
+                        a.freqs.insert(code, f);
+                    }
+                }
+                b"END OF ANTENNA" => {
+                    if let Some(a) = cur.take() {
+                        if !satellite && !a.name.is_empty() {
+                            out.antennas.push(a);
+                        }
+                    }
+                }
+                _ => {
+                    if let Some((_, f)) = freq.as_mut() {
+                        if cols(line, 3, 8) == b"NOAZI" {
+                            let txt = String::from_utf8_lossy(cols(line, 8, line.len()));
+                            f.noazi = txt
+                                .split_whitespace()
+                                .map(|t| t.parse::<f64>().map(|v| v / 1000.0))
+                                .collect::<std::result::Result<_, _>>()
+                                .map_err(|_| bad("unreadable NOAZI values"))?;
+                        }
+                    }
+                }
+            }
+        }
+        if !saw_version {
+            return Err(Error::input(
+                path,
+                "not an ANTEX file (no 'ANTEX VERSION / SYST' line)",
+            ));
+        }
+        Ok(out)
+    }
+
+    /// The antenna of a RINEX header type (type + radome); a missing radome entry falls back
+    /// to the same type with radome NONE. Returns the entry and whether it was a fallback.
+    pub fn find(&self, rinex_type: &str) -> Option<(&AntennaPcv, bool)> {
+        let norm = |s: &str| s.split_whitespace().collect::<Vec<_>>().join(" ");
+        let want = norm(rinex_type);
+        if let Some(a) = self.antennas.iter().find(|a| norm(&a.name) == want) {
+            return Some((a, false));
+        }
+        let bare = want.split(' ').next().unwrap_or("");
+        self.antennas
+            .iter()
+            .find(|a| norm(&a.name) == format!("{bare} NONE") || norm(&a.name) == bare)
+            .map(|a| (a, true))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_receiver_antennas_and_corrects_ranges() {
+        let path =
+            std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fixtures/test.atx");
+        let atx = Antex::read(&path).unwrap();
+        assert_eq!(atx.antennas.len(), 1, "the satellite antenna is skipped");
+        let (a, fallback) = atx.find("PPKATTEST").unwrap();
+        assert!(fallback, "no radome given: the NONE entry is used");
+        assert_eq!(a.freqs["G01"].neu, [0.0, 0.0, 0.1]);
+        // A phase centre 10 cm up shortens the range to a zenith satellite by 10 cm, and by
+        // 10 cm·sin(30°) at 30° elevation.
+        let z = a.correction(Constellation::Gps, b'1', 0.0, std::f64::consts::FRAC_PI_2);
+        assert!((z + 0.1).abs() < 1e-12);
+        let low = a.correction(Constellation::Galileo, b'1', 1.0, 30f64.to_radians());
+        assert!(
+            (low + 0.05).abs() < 1e-12,
+            "Galileo falls back to G01: {low}"
+        );
+        let f = FreqPcv {
+            neu: [0.0; 3],
+            zen1: 0.0,
+            dzen: 5.0,
+            noazi: vec![0.0, 0.002, 0.004],
+        };
+        assert!((f.pcv(7.5) - 0.003).abs() < 1e-12);
+        assert!((f.pcv(30.0) - 0.004).abs() < 1e-12);
+    }
+}
