@@ -179,18 +179,18 @@ impl<'a> Filter<'a> {
         // Base slips only when the base epoch changes (a 1 Hz base serves many 10 Hz epochs).
         if self.last_base_time != Some(tb) {
             self.last_base_time = Some(tb);
-            self.base_slips.clear();
-            for m in base {
-                let s = self.base_slip.check(tb, m);
-                self.base_slips.insert(m.sv, s);
-            }
+            let s = self.base_slip.check_epoch(tb, base);
+            self.base_slips = base.iter().map(|m| m.sv).zip(s).collect();
         }
         // Pairs of satellites seen by both receivers.
         let mut pairs: Vec<Pair> = Vec::new();
-        let mut rover_slips: BTreeMap<Sv, [Option<SlipCause>; NF]> = BTreeMap::new();
+        let rover_slips: BTreeMap<Sv, [Option<SlipCause>; NF]> = rover
+            .iter()
+            .map(|m| m.sv)
+            .zip(self.rover_slip.check_epoch(t, rover))
+            .collect();
         let start_geo = start.to_geodetic();
         for r in rover {
-            rover_slips.insert(r.sv, self.rover_slip.check(t, r));
             let Some(b) = base.iter().find(|b| b.sv == r.sv) else {
                 continue;
             };

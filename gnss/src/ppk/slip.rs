@@ -13,12 +13,16 @@ pub enum SlipCause {
     LossOfLock,
     GeometryFree,
     MelbourneWubbena,
+    /// Phase change disagrees with the integrated Doppler (after removing the common clock part).
+    Doppler,
     Gap,
 }
 
 #[derive(Clone, Debug)]
 struct Hist {
     t: Epoch,
+    l: [f64; NF],
+    d: [f64; NF],
     gf: f64,
     mw_mean: f64,
     mw_n: usize,
@@ -35,6 +39,8 @@ pub struct SlipDetector {
     pub mw_threshold: f64,
     /// Longest tolerated gap, seconds.
     pub max_gap: f64,
+    /// Doppler-versus-phase threshold, cycles (plus 0.5 cycle per second of interval).
+    pub doppler_threshold: f64,
     pub backward: bool,
 }
 
@@ -45,8 +51,63 @@ impl SlipDetector {
             gf_threshold: 0.05,
             mw_threshold: 4.0,
             max_gap,
+            doppler_threshold: 3.0,
             backward,
         }
+    }
+
+    /// Slips of every satellite of an epoch: [`Self::check`] per satellite, plus the
+    /// Doppler test, which needs the whole epoch to remove a receiver clock jump (common to all
+    /// satellites) before comparing each phase change with its integrated Doppler.
+    pub fn check_epoch(&mut self, t: Epoch, sats: &[SatMeas]) -> Vec<[Option<SlipCause>; NF]> {
+        // Doppler misfits (metres) against the previous epoch, before the history moves on.
+        let mut misfit: Vec<[f64; NF]> = vec![[f64::NAN; NF]; sats.len()];
+        let mut dt_all = f64::NAN;
+        for (k, m) in sats.iter().enumerate() {
+            let Some(h) = self.hist.get(&m.sv) else {
+                continue;
+            };
+            let dt = (t - h.t).to_seconds();
+            if dt == 0.0 || dt.abs() > self.max_gap {
+                continue;
+            }
+            dt_all = dt.abs();
+            for f in 0..NF {
+                if m.l[f].is_finite()
+                    && h.l[f].is_finite()
+                    && m.d[f].is_finite()
+                    && h.d[f].is_finite()
+                {
+                    // Phase (cycles) shrinks with the range, Doppler is positive when approaching.
+                    let predicted = -0.5 * (m.d[f] + h.d[f]) * dt;
+                    misfit[k][f] = (m.l[f] - h.l[f] - predicted) * m.wavelength(f);
+                }
+            }
+        }
+        let mut all: Vec<f64> = misfit
+            .iter()
+            .flatten()
+            .copied()
+            .filter(|v| v.is_finite())
+            .collect();
+        all.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+        let common = if all.len() >= 3 {
+            all[all.len() / 2]
+        } else {
+            f64::NAN
+        };
+        let mut out: Vec<[Option<SlipCause>; NF]> = sats.iter().map(|m| self.check(t, m)).collect();
+        if common.is_finite() {
+            for (k, m) in sats.iter().enumerate() {
+                for f in 0..NF {
+                    let cycles = (misfit[k][f] - common) / m.wavelength(f);
+                    if cycles.abs() > self.doppler_threshold + 0.5 * dt_all {
+                        out[k][f] = out[k][f].or(Some(SlipCause::Doppler));
+                    }
+                }
+            }
+        }
+        out
     }
 
     /// Slips per frequency slot of `m` at `t` (None = no slip), and update the history.
@@ -93,12 +154,16 @@ impl SlipDetector {
         let reset_mw = out[0].is_some() || out[1].is_some();
         let h = self.hist.entry(m.sv).or_insert(Hist {
             t,
+            l: m.l,
+            d: m.d,
             gf,
             mw_mean: 0.0,
             mw_n: 0,
             lli: m.lli,
         });
         h.t = t;
+        h.l = m.l;
+        h.d = m.d;
         h.gf = gf;
         h.lli = m.lli;
         if reset_mw || !mw.is_finite() {
@@ -110,5 +175,51 @@ impl SlipDetector {
             h.mw_mean += (mw - h.mw_mean) / h.mw_n as f64;
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sv::{Constellation, Sv};
+    use hifitime::Duration;
+
+    fn sat(prn: u8, t: f64, rate: f64, clock_m: f64) -> SatMeas {
+        let f = 1575.42e6;
+        let lam = C / f;
+        let range = 2.2e7 + rate * t;
+        SatMeas {
+            sv: Sv::new(Constellation::Gps, prn),
+            freq: [f, f64::NAN, f64::NAN],
+            l: [(range + clock_m) / lam, f64::NAN, f64::NAN],
+            p: [range + clock_m, f64::NAN, f64::NAN],
+            d: [-rate / lam, f64::NAN, f64::NAN],
+            lli: [0; NF],
+        }
+    }
+
+    #[test]
+    fn doppler_test_finds_a_single_frequency_slip_and_ignores_a_clock_jump() {
+        let t0 = crate::time::gpst(2024, 1, 1, 0, 0, 0, 0);
+        let rates = [-600.0, -150.0, 80.0, 420.0, 700.0];
+        let mut det = SlipDetector::new(10.0, false);
+        for k in 0..4 {
+            let t = t0 + Duration::from_seconds(k as f64);
+            // A 1 ms receiver clock jump at epoch 2, common to all satellites.
+            let clock = if k >= 2 { 299_792.458 } else { 0.0 };
+            let mut sats: Vec<SatMeas> = rates
+                .iter()
+                .enumerate()
+                .map(|(i, r)| sat(i as u8 + 1, k as f64, *r, clock))
+                .collect();
+            if k >= 3 {
+                sats[2].l[0] += 7.0; // a 7-cycle slip on one satellite
+            }
+            let out = det.check_epoch(t, &sats);
+            for (i, o) in out.iter().enumerate() {
+                let want = (k == 3 && i == 2).then_some(SlipCause::Doppler);
+                assert_eq!(o[0], want, "epoch {k} satellite {i}");
+            }
+        }
     }
 }
