@@ -72,7 +72,7 @@ impl SlipDetector {
                 continue;
             }
             dt_all = dt.abs();
-            for f in 0..NF {
+            for (f, mis) in misfit[k].iter_mut().enumerate() {
                 if m.l[f].is_finite()
                     && h.l[f].is_finite()
                     && m.d[f].is_finite()
@@ -80,7 +80,7 @@ impl SlipDetector {
                 {
                     // Phase (cycles) shrinks with the range, Doppler is positive when approaching.
                     let predicted = -0.5 * (m.d[f] + h.d[f]) * dt;
-                    misfit[k][f] = (m.l[f] - h.l[f] - predicted) * m.wavelength(f);
+                    *mis = (m.l[f] - h.l[f] - predicted) * m.wavelength(f);
                 }
             }
         }
