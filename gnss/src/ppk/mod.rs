@@ -295,13 +295,15 @@ pub fn process(
     };
     // As in RTKLIB, an epoch whose code solution fails (too few satellites, GDOP > 30,
     // inconsistent) gets no carrier-phase solution either: its geometry cannot be trusted.
-    let mut starts: Vec<std::result::Result<Ecef, String>> = Vec::with_capacity(rover.epochs.len());
+    // Start position and receiver clock offset (s) per epoch.
+    let mut starts: Vec<std::result::Result<(Ecef, f64), String>> = Vec::with_capacity(rover.epochs.len());
     let mut prior = rover.header.approx_position;
     for e in &rover.epochs {
         match spp::solve_epoch(e, &rover.header, orbits, &sopts, prior) {
             Ok(s) => {
                 prior = Some(s.pos);
-                starts.push(Ok(s.pos));
+                let clock = s.clocks.values().next().copied().unwrap_or(0.0) / crate::orbit::C;
+                starts.push(Ok((s.pos, clock)));
             }
             Err((why, _)) => starts.push(Err(why.kind().to_string())),
         }
@@ -319,7 +321,7 @@ pub fn process(
             if count % 500 == 0 {
                 progress(500.min(n - count));
             }
-            let (Some(j), Ok(start)) = (matched[i], &starts[i]) else {
+            let (Some(j), Ok((start, _))) = (matched[i], &starts[i]) else {
                 continue;
             };
             out[i] = f.step(
@@ -357,6 +359,12 @@ pub fn process(
             Some(mut s) => {
                 // Rover marker = antenna reference point − header offset.
                 s.pos = Ecef(s.pos.0 - arp_offset(&rover.header, &s.pos));
+                // The position belongs to the true reception time: the receiver's time tag
+                // minus its clock offset (as RTKLIB reports it). A moving rover at 60 m/s
+                // moves 6 cm in a millisecond of clock offset.
+                if let Ok((_, clock)) = &starts[i] {
+                    s.time = s.time - hifitime::Duration::from_seconds(*clock);
+                }
                 solutions.push(s);
             }
             None => {
