@@ -112,6 +112,23 @@ enum Cmd {
         #[arg(short = 'o', long)]
         out: PathBuf,
     },
+    /// Simulate a survey flight with exact truth: base and rover RINEX with camera events, a
+    /// navigation file, truth trajectory, exposures, ground points and image observations.
+    Simulate {
+        /// Scenario file (TOML).
+        #[arg(long, conflicts_with = "builtin")]
+        scenario: Option<PathBuf>,
+        /// Built-in scenario: demo, block20 or long.
+        #[arg(long)]
+        builtin: Option<String>,
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// The whole chain on a built-in simulated flight, with an accuracy summary against truth.
+    Demo {
+        #[arg(long, default_value = "ppkat-demo")]
+        out: PathBuf,
+    },
     /// Benchmarks: `ppkat bench ingest FILE` measures observation parsing speed and memory.
     Bench {
         #[command(subcommand)]
@@ -258,6 +275,35 @@ fn run(cli: Cli) -> Result<()> {
             let report = pipeline::ppk(&job, &|n| bar.inc(n as u64));
             bar.finish_and_clear();
             print!("{}", report.context("carrier-phase positioning failed")?);
+        }
+        Cmd::Simulate {
+            scenario,
+            builtin,
+            out,
+        } => {
+            use integration::simulate;
+            let s = match (scenario, builtin) {
+                (Some(p), _) => {
+                    let text = std::fs::read_to_string(&p)
+                        .with_context(|| format!("{}: cannot read the scenario", p.display()))?;
+                    simulate::Scenario::from_toml(&text)
+                        .with_context(|| format!("{}", p.display()))?
+                }
+                (None, Some(name)) => simulate::builtin(&name).with_context(|| {
+                    format!(
+                        "no built-in scenario '{name}' (there are: {})",
+                        simulate::BUILTINS.join(", ")
+                    )
+                })?,
+                (None, None) => bail!(
+                    "give --scenario FILE.toml or --builtin NAME ({})",
+                    simulate::BUILTINS.join(", ")
+                ),
+            };
+            print!("{}", simulate::run(&s, &out)?);
+        }
+        Cmd::Demo { out } => {
+            print!("{}", integration::demo::run(&out)?);
         }
         Cmd::Bench { what } => match what {
             BenchCmd::Ingest { file } => {

@@ -5,7 +5,9 @@
 //! binary calls. It uses `gnss` and `photo`; the binary uses it.
 
 pub mod bench;
+pub mod demo;
 pub mod pipeline;
+pub mod simulate;
 
 pub use gnss;
 pub use photo;

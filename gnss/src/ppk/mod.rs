@@ -296,7 +296,8 @@ pub fn process(
     // As in RTKLIB, an epoch whose code solution fails (too few satellites, GDOP > 30,
     // inconsistent) gets no carrier-phase solution either: its geometry cannot be trusted.
     // Start position and receiver clock offset (s) per epoch.
-    let mut starts: Vec<std::result::Result<(Ecef, f64), String>> = Vec::with_capacity(rover.epochs.len());
+    let mut starts: Vec<std::result::Result<(Ecef, f64), String>> =
+        Vec::with_capacity(rover.epochs.len());
     let mut prior = rover.header.approx_position;
     for e in &rover.epochs {
         match spp::solve_epoch(e, &rover.header, orbits, &sopts, prior) {
@@ -363,7 +364,7 @@ pub fn process(
                 // minus its clock offset (as RTKLIB reports it). A moving rover at 60 m/s
                 // moves 6 cm in a millisecond of clock offset.
                 if let Ok((_, clock)) = &starts[i] {
-                    s.time = s.time - hifitime::Duration::from_seconds(*clock);
+                    s.time -= hifitime::Duration::from_seconds(*clock);
                 }
                 solutions.push(s);
             }

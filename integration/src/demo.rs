@@ -1,0 +1,212 @@
+//! `ppkat demo`: simulate a short built-in flight, run every stage that exists (single point,
+//! carrier phase), and compare with the exact truth.
+
+use crate::simulate::{self, SimError, SimReport};
+use gnss::frame::Ecef;
+use gnss::orbit::{Ephemerides, Orbits};
+use gnss::ppk::{self, BasePosition, PpkOptions};
+use gnss::rinex::nav::NavFile;
+use gnss::rinex::ObsFile;
+use gnss::solution::{write_pos, PosFormat, PosRecord, Quality};
+use gnss::spp::{self, SppOptions};
+use nalgebra::Vector3;
+use std::fmt;
+use std::path::Path;
+
+/// Errors of a whole-chain run.
+#[derive(Debug, thiserror::Error)]
+pub enum ChainError {
+    #[error(transparent)]
+    Sim(#[from] SimError),
+    #[error(transparent)]
+    Gnss(#[from] gnss::Error),
+    #[error("{path}: {what}")]
+    Truth { path: String, what: String },
+}
+
+/// A truth trajectory sample: GPST seconds, ECEF position and velocity.
+#[derive(Clone, Copy, Debug)]
+pub struct TruthSample {
+    pub t: f64,
+    pub pos: Vector3<f64>,
+    pub vel: Vector3<f64>,
+}
+
+/// Read `truth_trajectory.csv` of the simulator.
+pub fn read_truth(path: &Path) -> Result<Vec<TruthSample>, ChainError> {
+    let text = std::fs::read_to_string(path).map_err(|e| ChainError::Truth {
+        path: path.display().to_string(),
+        what: e.to_string(),
+    })?;
+    let mut out = Vec::new();
+    for (i, l) in text.lines().enumerate() {
+        if l.starts_with('#') || l.starts_with("week") || l.trim().is_empty() {
+            continue;
+        }
+        let f: Vec<f64> = l
+            .split(',')
+            .map(|x| x.trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| ChainError::Truth {
+                path: path.display().to_string(),
+                what: format!("line {}: not numbers", i + 1),
+            })?;
+        if f.len() < 8 {
+            return Err(ChainError::Truth {
+                path: path.display().to_string(),
+                what: format!("line {}: too few columns", i + 1),
+            });
+        }
+        out.push(TruthSample {
+            t: f[0] * gnss::time::WEEK_SECONDS + f[1],
+            pos: Vector3::new(f[2], f[3], f[4]),
+            vel: Vector3::new(f[5], f[6], f[7]),
+        });
+    }
+    Ok(out)
+}
+
+/// Truth at GPST seconds `t` by cubic Hermite interpolation with the velocities.
+pub fn truth_at(truth: &[TruthSample], t: f64) -> Option<Vector3<f64>> {
+    if truth.len() < 2 {
+        return None;
+    }
+    let i = truth
+        .partition_point(|s| s.t <= t)
+        .clamp(1, truth.len() - 1);
+    let (a, b) = (&truth[i - 1], &truth[i]);
+    let h = b.t - a.t;
+    let s = (t - a.t) / h;
+    // Up to one sample beyond either end (receiver clock offsets put epochs just outside).
+    if !(-1.0..=2.0).contains(&s) {
+        return None;
+    }
+    let (h00, h10, h01, h11) = (
+        2.0 * s.powi(3) - 3.0 * s * s + 1.0,
+        s.powi(3) - 2.0 * s * s + s,
+        -2.0 * s.powi(3) + 3.0 * s * s,
+        s.powi(3) - s * s,
+    );
+    Some(a.pos * h00 + a.vel * (h10 * h) + b.pos * h01 + b.vel * (h11 * h))
+}
+
+/// What the demo measured.
+#[derive(Clone, Debug)]
+pub struct DemoReport {
+    pub sim: SimReport,
+    pub spp_epochs: usize,
+    pub spp_h_rms: f64,
+    pub spp_v_rms: f64,
+    pub ppk_epochs: usize,
+    pub ppk_fixed: usize,
+    pub ppk_3d_rms_fixed: f64,
+    pub ppk_max_fixed: f64,
+    pub seconds: f64,
+}
+
+impl fmt::Display for DemoReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.sim)?;
+        writeln!(
+            f,
+            "single point: {} epochs, horizontal RMS {:.2} m, vertical RMS {:.2} m vs truth",
+            self.spp_epochs, self.spp_h_rms, self.spp_v_rms
+        )?;
+        writeln!(
+            f,
+            "carrier phase: {} epochs, {} fixed ({:.1} %), fixed 3D RMS {:.1} mm, worst {:.1} mm vs truth",
+            self.ppk_epochs,
+            self.ppk_fixed,
+            100.0 * self.ppk_fixed as f64 / self.ppk_epochs.max(1) as f64,
+            self.ppk_3d_rms_fixed * 1000.0,
+            self.ppk_max_fixed * 1000.0
+        )?;
+        writeln!(
+            f,
+            "(exposures, lever arm and the joint adjustment join the demo with their issues)"
+        )?;
+        writeln!(
+            f,
+            "demo finished in {:.1} s; outputs in {}",
+            self.seconds,
+            self.sim.dir.display()
+        )
+    }
+}
+
+fn rms(v: &[f64]) -> f64 {
+    (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
+}
+
+/// Run the demo into `out`.
+pub fn run(out: &Path) -> Result<DemoReport, ChainError> {
+    let t0 = std::time::Instant::now();
+    let scenario = simulate::builtin("demo").expect("the demo scenario exists");
+    let sim = simulate::run(&scenario, out)?;
+    let truth = read_truth(&out.join("truth_trajectory.csv"))?;
+    let rover = ObsFile::read(&sim.rover)?;
+    let base = ObsFile::read(&sim.base)?;
+    let orbits = Orbits::broadcast(Ephemerides::from_nav(&[NavFile::read(&sim.nav)?]));
+    let t_of = |t: hifitime::Epoch| t.to_gpst_seconds();
+    // Single point.
+    let sppr = spp::run(
+        &rover.epochs,
+        &rover.header,
+        &orbits,
+        &SppOptions::default(),
+    );
+    let (mut h, mut v) = (Vec::new(), Vec::new());
+    for s in &sppr.solutions {
+        let clock = s.clocks.values().next().copied().unwrap_or(0.0) / gnss::orbit::C;
+        if let Some(p) = truth_at(&truth, t_of(s.time) - clock) {
+            let e = s.pos.enu_from(&Ecef(p));
+            h.push(e.horizontal());
+            v.push(e.up());
+        }
+    }
+    // Carrier phase.
+    let res = ppk::process(
+        &rover,
+        &base,
+        BasePosition::Given(sim.base_position),
+        &orbits,
+        &PpkOptions::default(),
+        &|_| {},
+    )?;
+    let mut d = Vec::new();
+    for s in res.solutions.iter().filter(|s| s.quality == Quality::Fixed) {
+        if let Some(p) = truth_at(&truth, t_of(s.time)) {
+            d.push((s.pos.0 - p).norm());
+        }
+    }
+    let records: Vec<PosRecord> = res
+        .solutions
+        .iter()
+        .map(|s| PosRecord {
+            time: s.time,
+            pos: s.pos,
+            quality: s.quality,
+            nsat: s.nsat,
+            cov: s.cov,
+            age: s.age,
+            ratio: s.ratio,
+        })
+        .collect();
+    write_pos(
+        &out.join("rover_ppk.pos"),
+        &["program   : ppkat demo (carrier-phase kinematic)".to_string()],
+        &records,
+        PosFormat::Llh,
+    )?;
+    Ok(DemoReport {
+        spp_epochs: sppr.solutions.len(),
+        spp_h_rms: rms(&h),
+        spp_v_rms: rms(&v),
+        ppk_epochs: res.solutions.len(),
+        ppk_fixed: res.fixed(),
+        ppk_3d_rms_fixed: rms(&d),
+        ppk_max_fixed: d.iter().copied().fold(0.0, f64::max),
+        seconds: t0.elapsed().as_secs_f64(),
+        sim,
+    })
+}

@@ -1,0 +1,235 @@
+//! The photogrammetric side of a simulated flight: exposure times at a forward overlap,
+//! camera attitude and projection centres (lever arm X_A = X_S + R·(u, v, w)), ground points
+//! and noisy image observations with optional blunders.
+
+use super::flight::{Flight, FlightState};
+use super::rng::Rng;
+use nalgebra::{Matrix3, Vector3};
+
+/// Camera of the simulation (pinhole, principal point at the image centre).
+#[derive(Clone, Debug)]
+pub struct CameraSpec {
+    pub focal: f64,
+    /// Image size in pixels: x along the flight direction, y across it.
+    pub width_px: usize,
+    pub height_px: usize,
+    pub pixel: f64,
+    /// Antenna phase centre in the camera frame, metres.
+    pub lever: Vector3<f64>,
+}
+
+/// One simulated exposure (true values, local ENU frame of the site).
+#[derive(Clone, Debug)]
+pub struct Exposure {
+    pub id: usize,
+    pub strip: usize,
+    /// Seconds from the start of the flight (true GPST).
+    pub t: f64,
+    pub state: FlightState,
+    /// Rotation camera → ENU.
+    pub r: Matrix3<f64>,
+    pub centre: Vector3<f64>,
+}
+
+/// Kind of a ground point.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PointKind {
+    Gcp,
+    Check,
+    Tie,
+}
+
+impl PointKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            PointKind::Gcp => "gcp",
+            PointKind::Check => "check",
+            PointKind::Tie => "tie",
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct GroundPoint {
+    pub id: String,
+    pub kind: PointKind,
+    pub enu: Vector3<f64>,
+}
+
+/// An image measurement (pixels, x right/along track, y down).
+#[derive(Clone, Debug)]
+pub struct ImageObs {
+    pub image: usize,
+    pub point: String,
+    pub x: f64,
+    pub y: f64,
+    pub sigma: f64,
+    /// Size of an injected blunder, pixels (0 for good observations).
+    pub blunder: f64,
+}
+
+/// Rotation camera → ENU from yaw, pitch, roll (NED body: x forward, y right, z down); the
+/// camera looks down with its x axis forward and z axis up.
+pub fn camera_rotation(yaw: f64, pitch: f64, roll: f64) -> Matrix3<f64> {
+    let (sy, cy) = yaw.sin_cos();
+    let (sp, cp) = pitch.sin_cos();
+    let (sr, cr) = roll.sin_cos();
+    let rz = Matrix3::new(cy, -sy, 0.0, sy, cy, 0.0, 0.0, 0.0, 1.0);
+    let ry = Matrix3::new(cp, 0.0, sp, 0.0, 1.0, 0.0, -sp, 0.0, cp);
+    let rx = Matrix3::new(1.0, 0.0, 0.0, 0.0, cr, -sr, 0.0, sr, cr);
+    let ned_to_enu = Matrix3::new(0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0);
+    let cam_to_body = Matrix3::from_diagonal(&Vector3::new(1.0, -1.0, -1.0));
+    ned_to_enu * rz * ry * rx * cam_to_body
+}
+
+/// ω-φ-κ angles of R = Rω·Rφ·Rκ (western convention), radians.
+pub fn omega_phi_kappa(r: &Matrix3<f64>) -> (f64, f64, f64) {
+    let phi = r[(0, 2)].clamp(-1.0, 1.0).asin();
+    let omega = (-r[(1, 2)]).atan2(r[(2, 2)]);
+    let kappa = (-r[(0, 1)]).atan2(r[(0, 0)]);
+    (omega, phi, kappa)
+}
+
+/// Exposures along the strips at the forward overlap.
+pub fn exposures(
+    flight: &Flight,
+    cam: &CameraSpec,
+    altitude: f64,
+    speed: f64,
+    overlap: f64,
+) -> Vec<Exposure> {
+    let footprint = altitude * cam.width_px as f64 * cam.pixel / cam.focal;
+    let base = (1.0 - overlap) * footprint;
+    let mut out = Vec::new();
+    for (strip, t0, dur) in flight.strips() {
+        let n = (dur * speed / base).floor() as usize;
+        for k in 0..=n {
+            let t = t0 + k as f64 * base / speed;
+            let state = flight.at(t);
+            let r = camera_rotation(state.yaw, state.pitch, state.roll);
+            let centre = state.pos - r * cam.lever;
+            out.push(Exposure {
+                id: out.len() + 1,
+                strip,
+                t,
+                state,
+                r,
+                centre,
+            });
+        }
+    }
+    out
+}
+
+/// Ground control, check and tie points spread over the block.
+pub fn ground_points(
+    rng: &mut Rng,
+    half_along: f64,
+    half_across: f64,
+    heading: f64,
+    relief: f64,
+    counts: [usize; 3],
+) -> Vec<GroundPoint> {
+    let (sh, ch) = heading.sin_cos();
+    let along = Vector3::new(sh, ch, 0.0);
+    let across = Vector3::new(ch, -sh, 0.0);
+    let mut out = Vec::new();
+    for (kind, n, prefix) in [
+        (PointKind::Gcp, counts[0], "G"),
+        (PointKind::Check, counts[1], "C"),
+        (PointKind::Tie, counts[2], "T"),
+    ] {
+        for k in 0..n {
+            // GCPs go to the block corners first, then anywhere; others anywhere.
+            let (a, c) = if kind == PointKind::Gcp && k < 4 {
+                let sa = if k.is_multiple_of(2) { -0.9 } else { 0.9 };
+                let sc = if k < 2 { -0.9 } else { 0.9 };
+                (sa, sc)
+            } else {
+                (rng.range(-0.95, 0.95), rng.range(-0.95, 0.95))
+            };
+            let h = relief * rng.range(-1.0, 1.0);
+            out.push(GroundPoint {
+                id: format!("{prefix}{:04}", k + 1),
+                kind,
+                enu: along * a * half_along + across * c * half_across + Vector3::new(0.0, 0.0, h),
+            });
+        }
+    }
+    out
+}
+
+/// Project `p` into an exposure; `None` when behind the camera or outside the image.
+pub fn project(e: &Exposure, cam: &CameraSpec, p: &Vector3<f64>) -> Option<(f64, f64)> {
+    let v = e.r.transpose() * (p - e.centre);
+    if v.z >= 0.0 {
+        return None;
+    }
+    let x = -cam.focal * v.x / v.z;
+    let y = -cam.focal * v.y / v.z;
+    let px = cam.width_px as f64 / 2.0 + x / cam.pixel;
+    let py = cam.height_px as f64 / 2.0 - y / cam.pixel;
+    (px >= 0.0 && py >= 0.0 && px < cam.width_px as f64 && py < cam.height_px as f64)
+        .then_some((px, py))
+}
+
+/// Noisy image observations of every visible point, with `blunders` gross errors.
+pub fn image_observations(
+    exps: &[Exposure],
+    points: &[GroundPoint],
+    cam: &CameraSpec,
+    sigma: f64,
+    blunders: usize,
+    rng: &mut Rng,
+) -> Vec<ImageObs> {
+    let mut out = Vec::new();
+    for e in exps {
+        for p in points {
+            if let Some((x, y)) = project(e, cam, &p.enu) {
+                out.push(ImageObs {
+                    image: e.id,
+                    point: p.id.clone(),
+                    x: x + sigma * rng.normal(),
+                    y: y + sigma * rng.normal(),
+                    sigma,
+                    blunder: 0.0,
+                });
+            }
+        }
+    }
+    for _ in 0..blunders.min(out.len()) {
+        let i = (rng.uniform() * out.len() as f64) as usize;
+        if out[i].blunder != 0.0 {
+            continue;
+        }
+        let b = rng.range(10.0, 30.0) * if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
+        out[i].x += b;
+        out[i].blunder = b;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn level_flight_north_looks_down_with_x_forward() {
+        let r = camera_rotation(0.0, 0.0, 0.0);
+        assert!(
+            (r * Vector3::z() - Vector3::z()).norm() < 1e-12,
+            "camera z is up"
+        );
+        assert!(
+            (r * Vector3::x() - Vector3::y()).norm() < 1e-12,
+            "camera x is north (forward)"
+        );
+        let r = camera_rotation(0.4, 0.05, -0.1);
+        assert!((r.transpose() * r - Matrix3::identity()).norm() < 1e-12);
+        let (o, p, k) = omega_phi_kappa(&r);
+        let rebuilt = Matrix3::new(1.0, 0.0, 0.0, 0.0, o.cos(), -o.sin(), 0.0, o.sin(), o.cos())
+            * Matrix3::new(p.cos(), 0.0, p.sin(), 0.0, 1.0, 0.0, -p.sin(), 0.0, p.cos())
+            * Matrix3::new(k.cos(), -k.sin(), 0.0, k.sin(), k.cos(), 0.0, 0.0, 0.0, 1.0);
+        assert!((rebuilt - r).norm() < 1e-12);
+    }
+}
