@@ -275,6 +275,8 @@ impl<'a> Filter<'a> {
             }
         }
         self.pending_reset.clear();
+        // Base slips apply once, to the first rover epoch that uses the new base epoch.
+        self.base_slips.clear();
         // New ambiguity states from phase minus code.
         for pr in &pairs {
             for f in 0..o.nf {

@@ -62,6 +62,9 @@ impl SlipDetector {
     pub fn check_epoch(&mut self, t: Epoch, sats: &[SatMeas]) -> Vec<[Option<SlipCause>; NF]> {
         // Doppler misfits (metres) against the previous epoch, before the history moves on.
         let mut misfit: Vec<[f64; NF]> = vec![[f64::NAN; NF]; sats.len()];
+        // Allowance for dynamics: the trapezoid rule errs by up to half the Doppler change
+        // times the interval when the receiver accelerates abruptly (take-off, pull-up).
+        let mut allowance: Vec<[f64; NF]> = vec![[0.0; NF]; sats.len()];
         let mut dt_all = f64::NAN;
         for (k, m) in sats.iter().enumerate() {
             let Some(h) = self.hist.get(&m.sv) else {
@@ -81,6 +84,7 @@ impl SlipDetector {
                     // Phase (cycles) shrinks with the range, Doppler is positive when approaching.
                     let predicted = -0.5 * (m.d[f] + h.d[f]) * dt;
                     *mis = (m.l[f] - h.l[f] - predicted) * m.wavelength(f);
+                    allowance[k][f] = 0.5 * (m.d[f] - h.d[f]).abs() * dt.abs();
                 }
             }
         }
@@ -101,7 +105,7 @@ impl SlipDetector {
             for (k, m) in sats.iter().enumerate() {
                 for f in 0..NF {
                     let cycles = (misfit[k][f] - common) / m.wavelength(f);
-                    if cycles.abs() > self.doppler_threshold + 0.5 * dt_all {
+                    if cycles.abs() > self.doppler_threshold + 0.5 * dt_all + allowance[k][f] {
                         out[k][f] = out[k][f].or(Some(SlipCause::Doppler));
                     }
                 }
