@@ -24,17 +24,20 @@ pub(super) type Fix = (
 );
 
 /// Double-difference rows (ambiguity index, reference index) per system and slot.
-fn dd_rows(cands: &[Cand], excluded: &[Sv]) -> Vec<(usize, usize)> {
+fn dd_rows(cands: &[Cand], excluded: &[Sv], mature: usize) -> Vec<(usize, usize)> {
     let mut groups: BTreeMap<(Constellation, usize), Vec<&Cand>> = BTreeMap::new();
     for c in cands.iter().filter(|c| !excluded.contains(&c.1)) {
         groups.entry((c.1.sys, c.2)).or_default().push(c);
     }
     let mut rows = Vec::new();
     for g in groups.values().filter(|g| g.len() >= 2) {
-        let Some(r) = g
-            .iter()
-            .max_by(|a, b| a.3.partial_cmp(&b.3).unwrap_or(std::cmp::Ordering::Equal))
-        else {
+        // Reference: the highest satellite among those locked for a while (a freshly reset
+        // reference would make every double difference of its group uncertain).
+        let Some(r) = g.iter().max_by(|a, b| {
+            ((a.4 >= mature), a.3)
+                .partial_cmp(&((b.4 >= mature), b.3))
+                .unwrap_or(std::cmp::Ordering::Equal)
+        }) else {
             continue;
         };
         rows.extend(g.iter().filter(|c| c.0 != r.0).map(|c| (c.0, r.0)));
@@ -175,11 +178,16 @@ impl Filter<'_> {
         self.last_ratio = None;
         let mut attempt = 0;
         while attempt <= o.max_partial_drops {
-            let rows = dd_rows(&cands, &excluded);
+            let rows = dd_rows(&cands, &excluded, o.mature_lock);
             if rows.len() < o.min_fix_ambiguities {
                 return None;
             }
             if let Some(f) = self.try_fix(&x, &p, &rows) {
+                // A partial fix that leaves the position at several centimetres is no fix:
+                // the solution stays float rather than claim what it does not have.
+                if !excluded.is_empty() && f.1.trace().sqrt() > o.max_partial_fix_sigma {
+                    return None;
+                }
                 return Some(f);
             }
             if !widelane_tried {

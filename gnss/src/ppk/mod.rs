@@ -73,6 +73,8 @@ pub struct PpkOptions {
     pub mature_lock: usize,
     pub ar_elev_mask: f64,
     pub max_partial_drops: usize,
+    /// A partial fix whose 3D position sigma exceeds this (m) is not accepted.
+    pub max_partial_fix_sigma: f64,
     pub min_fix_ambiguities: usize,
     /// Variance of the fix-and-hold constraint, cycles².
     pub hold_variance: f64,
@@ -112,6 +114,7 @@ impl Default for PpkOptions {
             mature_lock: 5,
             ar_elev_mask: 15f64.to_radians(),
             max_partial_drops: 6,
+            max_partial_fix_sigma: 0.03,
             min_fix_ambiguities: 4,
             hold_variance: 0.001,
             estimate_iono: false,
