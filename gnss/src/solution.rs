@@ -83,7 +83,7 @@ pub fn write_atomic(
 
 /// Format one record as RTKLIB does.
 pub fn format_record(r: &PosRecord, format: PosFormat) -> String {
-    let t = crate::time::format_ymdhms(r.time);
+    let t = crate::time::format_ymdhms_us(r.time);
     match format {
         PosFormat::Llh => {
             let g = r.pos.to_geodetic();
@@ -131,8 +131,8 @@ pub fn format_record(r: &PosRecord, format: PosFormat) -> String {
 /// The column header line.
 pub fn column_header(format: PosFormat) -> &'static str {
     match format {
-        PosFormat::Llh => "%  GPST                   latitude(deg) longitude(deg)  height(m)   Q  ns   sdn(m)   sde(m)   sdu(m)  sdne(m)  sdeu(m)  sdun(m) age(s)  ratio",
-        PosFormat::Xyz => "%  GPST                      x-ecef(m)      y-ecef(m)      z-ecef(m)   Q  ns   sdx(m)   sdy(m)   sdz(m)  sdxy(m)  sdyz(m)  sdzx(m) age(s)  ratio",
+        PosFormat::Llh => "%  GPST                      latitude(deg) longitude(deg)  height(m)   Q  ns   sdn(m)   sde(m)   sdu(m)  sdne(m)  sdeu(m)  sdun(m) age(s)  ratio",
+        PosFormat::Xyz => "%  GPST                         x-ecef(m)      y-ecef(m)      z-ecef(m)   Q  ns   sdx(m)   sdy(m)   sdz(m)  sdxy(m)  sdyz(m)  sdzx(m) age(s)  ratio",
     }
 }
 

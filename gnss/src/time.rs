@@ -59,6 +59,17 @@ pub fn format_ymdhms(e: Epoch) -> String {
     format!("{y:04}/{mo:02}/{d:02} {h:02}:{mi:02}:{s:02}.{ms_part:03}")
 }
 
+/// Calendar string `yyyy/mm/dd hh:mm:ss.ssssss` in GPST (microseconds: a trajectory at 60 m/s
+/// moves 3 cm in the half millisecond a 3-decimal time would hide).
+pub fn format_ymdhms_us(e: Epoch) -> String {
+    let e = to_gpst(e);
+    let us = (e.to_gpst_seconds() * 1e6).round() / 1e6;
+    let whole = us.floor();
+    let (y, mo, d, h, mi, s, _) = Epoch::from_gpst_seconds(whole).to_gregorian(TimeScale::GPST);
+    let frac = ((us - whole) * 1e6).round() as u32;
+    format!("{y:04}/{mo:02}/{d:02} {h:02}:{mi:02}:{s:02}.{:06}", frac.min(999_999))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -70,5 +81,7 @@ mod tests {
         assert!((tow - (4.0 * 86400.0 + 12.0 * 3600.0)).abs() < 1e-9);
         assert_eq!(from_week_tow(w, tow), e);
         assert_eq!(format_ymdhms(e), "2020/06/25 12:00:00.000");
+        let f = e + hifitime::Duration::from_seconds(0.000_581);
+        assert_eq!(format_ymdhms_us(f), "2020/06/25 12:00:00.000581");
     }
 }
