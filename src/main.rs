@@ -55,6 +55,31 @@ fn triple(what: &str, s: &str) -> Result<[f64; 3]> {
     Ok([v[0], v[1], v[2]])
 }
 
+#[derive(Clone, Copy, ValueEnum)]
+enum TimeSystemArg {
+    Gpst,
+    Utc,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ConventionArg {
+    /// yaw, pitch, roll (IMU, gimbal, compass)
+    Ypr,
+    /// omega, phi, kappa (R = Rω·Rφ·Rκ)
+    Opk,
+    /// phi, omega, kappa (R = Rφ·Rω·Rκ)
+    Pok,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ExportArg {
+    Metashape,
+    Pix4d,
+    Odm,
+    Csv,
+    Pos,
+}
+
 #[derive(Subcommand)]
 enum Cmd {
     /// Describe an observation file: version, span, interval, systems, signals, events, problems.
@@ -111,6 +136,59 @@ enum Cmd {
         format: Format,
         #[arg(short = 'o', long)]
         out: PathBuf,
+    },
+    /// Camera projection centres: exposure times on a trajectory, lever arm rotated by the
+    /// camera attitude, exported for photogrammetry software.
+    Exposures {
+        /// Antenna trajectory (.pos, llh or xyz).
+        #[arg(long)]
+        trajectory: PathBuf,
+        /// Rover RINEX with flag-5 event records.
+        #[arg(long, group = "src")]
+        events: Option<PathBuf>,
+        /// DJI Timestamp.MRK.
+        #[arg(long, group = "src")]
+        mrk: Option<PathBuf>,
+        /// CSV of times (header: id and week,tow or time).
+        #[arg(long, group = "src")]
+        times: Option<PathBuf>,
+        /// Time system of --times.
+        #[arg(long, value_enum, default_value = "gpst")]
+        time_system: TimeSystemArg,
+        /// Antenna phase centre in the camera frame, metres: U,V,W.
+        #[arg(long, allow_hyphen_values = true)]
+        lever_arm: Option<String>,
+        /// Attitude CSV: week,tow,angle1,angle2,angle3 (degrees).
+        #[arg(long)]
+        attitude: Option<PathBuf>,
+        #[arg(long, value_enum, default_value = "ypr")]
+        attitude_convention: ConventionArg,
+        /// Camera latency added to every event, milliseconds.
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        delay_ms: f64,
+        /// Longest trajectory gap to interpolate across, seconds (default 2.5 intervals).
+        #[arg(long)]
+        max_gap: Option<f64>,
+        #[arg(long, value_enum, default_value = "csv")]
+        format: ExportArg,
+        /// geodetic, utm, utm:ZONE or gk:CENTRAL_MERIDIAN.
+        #[arg(long, default_value = "geodetic")]
+        projection: String,
+        #[arg(short = 'o', long)]
+        out: PathBuf,
+    },
+    /// The lever arm from tape lengths: D0 (origin mark → antenna) and DX,DY,DZ (marks at
+    /// distance A along the body axes → antenna).
+    Leverarm {
+        /// D0,DX,DY,DZ in metres.
+        #[arg(long)]
+        tapes: String,
+        /// Distance A of the marks from the origin, metres.
+        #[arg(long)]
+        ruler: f64,
+        /// Sigma of one tape length, metres.
+        #[arg(long, default_value_t = 0.002)]
+        sigma: f64,
     },
     /// Simulate a survey flight with exact truth: base and rover RINEX with camera events, a
     /// navigation file, truth trajectory, exposures, ground points and image observations.
@@ -275,6 +353,114 @@ fn run(cli: Cli) -> Result<()> {
             let report = pipeline::ppk(&job, &|n| bar.inc(n as u64));
             bar.finish_and_clear();
             print!("{}", report.context("carrier-phase positioning failed")?);
+        }
+        Cmd::Exposures {
+            trajectory,
+            events,
+            mrk,
+            times,
+            time_system,
+            lever_arm,
+            attitude,
+            attitude_convention,
+            delay_ms,
+            max_gap,
+            format,
+            projection,
+            out,
+        } => {
+            use integration::exposure::{attitude, events::TimeSystem, export};
+            use integration::pipeline::EventSource;
+            let source = match (events, mrk, times) {
+                (Some(p), _, _) => EventSource::Rinex(p),
+                (_, Some(p), _) => EventSource::Mrk(p),
+                (_, _, Some(p)) => EventSource::Times(
+                    p,
+                    match time_system {
+                        TimeSystemArg::Gpst => TimeSystem::Gpst,
+                        TimeSystemArg::Utc => TimeSystem::Utc,
+                    },
+                ),
+                _ => bail!("give the exposure times: --events ROVER.obs, --mrk Timestamp.MRK or --times FILE.csv"),
+            };
+            let lever_arm = match lever_arm {
+                Some(s) => {
+                    let [u, v, w] = triple("--lever-arm", &s)?;
+                    Some(nalgebra::Vector3::new(u, v, w))
+                }
+                None => None,
+            };
+            let conv = match attitude_convention {
+                ConventionArg::Ypr => attitude::AngleConvention::YawPitchRoll,
+                ConventionArg::Opk => attitude::AngleConvention::OmegaPhiKappa,
+                ConventionArg::Pok => attitude::AngleConvention::PhiOmegaKappa,
+            };
+            let attitude = match attitude {
+                Some(p) => Some(attitude::AttitudeTable::read_csv(&p, conv)?),
+                None => None,
+            };
+            let projection = match projection.as_str() {
+                "geodetic" => export::Projection::Geodetic,
+                "utm" => export::Projection::Utm(None),
+                p if p.starts_with("utm:") => export::Projection::Utm(Some(
+                    p[4..]
+                        .parse()
+                        .with_context(|| format!("--projection {p}: utm:ZONE with a zone 1-60"))?,
+                )),
+                p if p.starts_with("gk:") => {
+                    export::Projection::GaussKruger(p[3..].parse().with_context(|| {
+                        format!("--projection {p}: gk:CENTRAL_MERIDIAN in degrees")
+                    })?)
+                }
+                p => bail!("--projection {p}: use geodetic, utm, utm:ZONE or gk:CM"),
+            };
+            let job = pipeline::ExposureJob {
+                trajectory,
+                events: source,
+                options: integration::exposure::ExposureOptions {
+                    lever_arm,
+                    attitude,
+                    delay_ms,
+                    max_gap,
+                },
+                format: match format {
+                    ExportArg::Metashape => export::Format::Metashape,
+                    ExportArg::Pix4d => export::Format::Pix4d,
+                    ExportArg::Odm => export::Format::Odm,
+                    ExportArg::Csv => export::Format::Csv,
+                    ExportArg::Pos => export::Format::Pos,
+                },
+                projection,
+                out,
+            };
+            print!("{}", pipeline::exposures(&job).context("exposures failed")?);
+        }
+        Cmd::Leverarm {
+            tapes,
+            ruler,
+            sigma,
+        } => {
+            let v: Vec<f64> = tapes
+                .split(',')
+                .map(|t| t.trim().parse::<f64>())
+                .collect::<std::result::Result<_, _>>()
+                .with_context(|| {
+                    format!("--tapes '{tapes}': four lengths D0,DX,DY,DZ in metres")
+                })?;
+            if v.len() != 4 {
+                bail!("--tapes '{tapes}': four lengths D0,DX,DY,DZ in metres");
+            }
+            let s = integration::exposure::leverarm::solve(v[0], [v[1], v[2], v[3]], ruler, sigma)?;
+            println!(
+                "lever arm (u v w, metres): {:.4} {:.4} {:.4}",
+                s.offset.x, s.offset.y, s.offset.z
+            );
+            println!(
+                "sigma     (u v w, metres): {:.4} {:.4} {:.4}",
+                s.cov[(0, 0)].sqrt(),
+                s.cov[(1, 1)].sqrt(),
+                s.cov[(2, 2)].sqrt()
+            );
         }
         Cmd::Simulate {
             scenario,

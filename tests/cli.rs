@@ -532,11 +532,38 @@ fn demo_runs_the_chain_and_reports_accuracy() {
     let t = text(&o);
     assert_eq!(o.status.code(), Some(0), "{t}");
     // "carrier phase: N epochs, M fixed (P %), fixed 3D RMS X mm, worst Y mm vs truth"
-    let line = t.lines().find(|l| l.starts_with("carrier phase:")).expect("a carrier-phase line");
-    let pct: f64 = line.split('(').nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
-    let rms: f64 = line.split("3D RMS ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+    let line = t
+        .lines()
+        .find(|l| l.starts_with("carrier phase:"))
+        .expect("a carrier-phase line");
+    let pct: f64 = line
+        .split('(')
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let rms: f64 = line
+        .split("3D RMS ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
     assert!(pct >= 99.0 && rms <= 20.0, "{line}");
-    for f in ["rover.obs", "base.obs", "nav.rnx", "truth_trajectory.csv", "truth_exposures.csv", "image_observations.csv", "rover_ppk.pos"] {
+    for f in [
+        "rover.obs",
+        "base.obs",
+        "nav.rnx",
+        "truth_trajectory.csv",
+        "truth_exposures.csv",
+        "image_observations.csv",
+        "rover_ppk.pos",
+    ] {
         assert!(out.join(f).exists(), "{f} written");
     }
 }
@@ -548,6 +575,12 @@ fn simulate_rejects_a_bad_scenario_naming_the_key() {
     std::fs::write(&f, src.replace("speed = 55.0", "speed = -55.0")).unwrap();
     let o = ppkat(&["simulate", "--scenario", p(&f), "--out", p(&tmp("bad-sim"))]);
     fails_with(&o, &["bad-scenario.toml", "flight.speed"]);
-    let o = ppkat(&["simulate", "--builtin", "nosuch", "--out", p(&tmp("bad-sim2"))]);
+    let o = ppkat(&[
+        "simulate",
+        "--builtin",
+        "nosuch",
+        "--out",
+        p(&tmp("bad-sim2")),
+    ]);
     fails_with(&o, &["nosuch", "demo"]);
 }

@@ -32,14 +32,14 @@ pub enum Error {
 pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
-    pub(crate) fn parse(path: &std::path::Path, line: usize, what: impl Into<String>) -> Self {
+    pub fn parse(path: &std::path::Path, line: usize, what: impl Into<String>) -> Self {
         Error::Parse {
             path: path.to_path_buf(),
             line,
             what: what.into(),
         }
     }
-    pub(crate) fn input(path: &std::path::Path, what: impl Into<String>) -> Self {
+    pub fn input(path: &std::path::Path, what: impl Into<String>) -> Self {
         Error::Input {
             path: path.to_path_buf(),
             what: what.into(),

@@ -67,7 +67,10 @@ pub fn format_ymdhms_us(e: Epoch) -> String {
     let whole = us.floor();
     let (y, mo, d, h, mi, s, _) = Epoch::from_gpst_seconds(whole).to_gregorian(TimeScale::GPST);
     let frac = ((us - whole) * 1e6).round() as u32;
-    format!("{y:04}/{mo:02}/{d:02} {h:02}:{mi:02}:{s:02}.{:06}", frac.min(999_999))
+    format!(
+        "{y:04}/{mo:02}/{d:02} {h:02}:{mi:02}:{s:02}.{:06}",
+        frac.min(999_999)
+    )
 }
 
 #[cfg(test)]

@@ -6,6 +6,7 @@
 
 pub mod bench;
 pub mod demo;
+pub mod exposure;
 pub mod pipeline;
 pub mod simulate;
 

@@ -327,3 +327,120 @@ impl fmt::Display for PpkReport {
         Ok(())
     }
 }
+
+/// Where the exposure times come from.
+#[derive(Clone, Debug)]
+pub enum EventSource {
+    Rinex(PathBuf),
+    Mrk(PathBuf),
+    Times(PathBuf, crate::exposure::events::TimeSystem),
+}
+
+/// Inputs of the exposure stage.
+#[derive(Clone, Debug)]
+pub struct ExposureJob {
+    pub trajectory: PathBuf,
+    pub events: EventSource,
+    pub options: crate::exposure::ExposureOptions,
+    pub format: crate::exposure::export::Format,
+    pub projection: crate::exposure::export::Projection,
+    pub out: PathBuf,
+}
+
+/// What the exposure stage did.
+#[derive(Clone, Debug)]
+pub struct ExposureReport {
+    pub result: crate::exposure::ExposureResult,
+    pub events: usize,
+    pub clock_correction: f64,
+    pub out: PathBuf,
+}
+
+/// Read events and trajectory, compute projection centres, write them.
+pub fn exposures(job: &ExposureJob) -> Result<ExposureReport> {
+    use crate::exposure::{compute, events, export, trajectory::Trajectory};
+    let traj = Trajectory::read_pos(&job.trajectory)?;
+    let (evs, clock_correction) = match &job.events {
+        EventSource::Rinex(p) => {
+            let obs = ObsFile::read(p)?;
+            let (e, c) = events::from_rinex(&obs, &traj);
+            if e.is_empty() {
+                return Err(Error::input(
+                    p,
+                    "the file holds no flag-5 event (camera exposure) records",
+                ));
+            }
+            (e, c)
+        }
+        EventSource::Mrk(p) => (events::read_mrk(p)?, 0.0),
+        EventSource::Times(p, sys) => (events::read_times_csv(p, *sys)?, 0.0),
+    };
+    let n = evs.len();
+    let result = compute(evs, &traj, &job.options);
+    if result.stations.is_empty() {
+        return Err(Error::NoData(format!(
+            "none of the {n} exposures could be placed on the trajectory {} (first refusal: {})",
+            job.trajectory.display(),
+            result
+                .refused
+                .first()
+                .map(|r| format!("{} at {}: {}", r.id, format_ymdhms(r.time), r.why))
+                .unwrap_or_default()
+        )));
+    }
+    export::write(&job.out, &result.stations, job.format, job.projection)?;
+    Ok(ExposureReport {
+        result,
+        events: n,
+        clock_correction,
+        out: job.out.clone(),
+    })
+}
+
+impl fmt::Display for ExposureReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let r = &self.result;
+        writeln!(
+            f,
+            "exposures: {} read, {} camera stations written → {}",
+            self.events,
+            r.stations.len(),
+            self.out.display()
+        )?;
+        if self.clock_correction > 0.0 {
+            writeln!(
+                f,
+                "  event times corrected by the receiver clock (up to {:.3} ms)",
+                self.clock_correction * 1e3
+            )?;
+        }
+        let flagged = r.stations.iter().filter(|s| !s.flags.is_empty()).count();
+        if flagged > 0 {
+            writeln!(
+                f,
+                "  {flagged} stations flagged (see the flags column): e.g. {}",
+                r.stations
+                    .iter()
+                    .find(|s| !s.flags.is_empty())
+                    .map(|s| s.flags.join("; "))
+                    .unwrap_or_default()
+            )?;
+        }
+        for x in r.refused.iter().take(20) {
+            writeln!(
+                f,
+                "  refused {} at {}: {}",
+                x.id,
+                format_ymdhms(x.time),
+                x.why
+            )?;
+        }
+        if r.refused.len() > 20 {
+            writeln!(f, "  … {} more refused", r.refused.len() - 20)?;
+        }
+        for w in &r.warnings {
+            writeln!(f, "  warning: {w}")?;
+        }
+        Ok(())
+    }
+}

@@ -102,9 +102,12 @@ pub fn exposures(
     let base = (1.0 - overlap) * footprint;
     let mut out = Vec::new();
     for (strip, t0, dur) in flight.strips() {
-        let n = (dur * speed / base).floor() as usize;
+        // Straight run-in and run-out: no exposure within 3 s of a turn (the aircraft rolls
+        // level before the first photograph of a strip).
+        let margin = 3.0f64.min(dur / 10.0);
+        let n = ((dur - 2.0 * margin) * speed / base).floor() as usize;
         for k in 0..=n {
-            let t = t0 + k as f64 * base / speed;
+            let t = t0 + margin + k as f64 * base / speed;
             let state = flight.at(t);
             let r = camera_rotation(state.yaw, state.pitch, state.roll);
             let centre = state.pos - r * cam.lever;

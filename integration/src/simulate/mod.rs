@@ -456,6 +456,30 @@ fn write(dir: &Path, name: &str, text: &str) -> Result<PathBuf, SimError> {
     Ok(p)
 }
 
+/// The analytic flight of a scenario: the path, its start epoch and a function giving the
+/// true antenna position (ECEF) at a GPST epoch — for tests that need truth between samples.
+pub fn truth_flight(s: &Scenario) -> Result<impl Fn(Epoch) -> Ecef, SimError> {
+    let start = s.start_epoch()?;
+    let origin =
+        Geodetic::from_degrees(s.site.lat_deg, s.site.lon_deg, s.site.ground_height).to_ecef();
+    let flight = Flight::new(&plan_of(s), &mut Rng::new(s.seed).fork(3));
+    Ok(move |t: Epoch| Enu(flight.at((t - start).to_seconds()).pos).to_ecef(&origin))
+}
+
+fn plan_of(s: &Scenario) -> FlightPlan {
+    let base_enu = Vector3::new(s.base.east, s.base.north, s.base.height_above_ground);
+    FlightPlan {
+        altitude: s.flight.altitude,
+        speed: s.flight.speed,
+        strips: s.flight.strips,
+        strip_length: s.flight.strip_length,
+        strip_spacing: s.flight.strip_spacing,
+        heading: s.flight.heading_deg.to_radians(),
+        static_start: s.flight.static_start_s,
+        start: base_enu + Vector3::new(30.0, 0.0, 0.0),
+    }
+}
+
 /// Run a scenario into `dir` (created if needed).
 pub fn run(s: &Scenario, dir: &Path) -> Result<SimReport, SimError> {
     s.validate()?;
@@ -470,16 +494,7 @@ pub fn run(s: &Scenario, dir: &Path) -> Result<SimReport, SimError> {
     let origin = origin_geo.to_ecef();
     let to_ecef = |v: &Vector3<f64>| Enu(*v).to_ecef(&origin);
     let base_enu = Vector3::new(s.base.east, s.base.north, s.base.height_above_ground);
-    let plan = FlightPlan {
-        altitude: s.flight.altitude,
-        speed: s.flight.speed,
-        strips: s.flight.strips,
-        strip_length: s.flight.strip_length,
-        strip_spacing: s.flight.strip_spacing,
-        heading: s.flight.heading_deg.to_radians(),
-        static_start: s.flight.static_start_s,
-        start: base_enu + Vector3::new(30.0, 0.0, 0.0),
-    };
+    let plan = plan_of(s);
     let flight = Flight::new(&plan, &mut rng.fork(3));
     let duration = flight.duration();
     let end = start + Duration::from_seconds(duration);

@@ -1,0 +1,175 @@
+//! Camera attitude at an exposure: from an IMU/gimbal (yaw, pitch, roll; NED body, fixed
+//! body→camera mounting with the camera looking down, image x forward), from photogrammetric
+//! angles (ω-φ-κ with R = Rω·Rφ·Rκ, or φ-ω-κ with R = Rφ·Rω·Rκ and the Chinese-text Rφ),
+//! or — when nothing else exists — from the trajectory heading with zero pitch and roll.
+//! R maps the camera frame into the local ENU frame at the exposure.
+
+use gnss::error::{Error, Result};
+use gnss::time::from_week_tow;
+use hifitime::Epoch;
+use nalgebra::{Matrix3, Vector3};
+use std::path::Path;
+
+/// Convention of the three angles of an attitude file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AngleConvention {
+    /// Yaw (from north, clockwise), pitch (nose up), roll (right wing down): IMU, gimbal or
+    /// compass heading/pitch/roll.
+    YawPitchRoll,
+    /// ω-φ-κ, R = Rω·Rφ·Rκ.
+    OmegaPhiKappa,
+    /// φ-ω-κ, R = Rφ·Rω·Rκ, Rφ = [[cφ,0,−sφ],[0,1,0],[sφ,0,cφ]].
+    PhiOmegaKappa,
+}
+
+fn rx(a: f64) -> Matrix3<f64> {
+    let (s, c) = a.sin_cos();
+    Matrix3::new(1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c)
+}
+fn ry(a: f64) -> Matrix3<f64> {
+    let (s, c) = a.sin_cos();
+    Matrix3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
+}
+fn rz(a: f64) -> Matrix3<f64> {
+    let (s, c) = a.sin_cos();
+    Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
+}
+
+/// Camera → ENU from yaw, pitch, roll (radians) with the standard downward mounting.
+pub fn from_yaw_pitch_roll(yaw: f64, pitch: f64, roll: f64) -> Matrix3<f64> {
+    let ned_to_enu = Matrix3::new(0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0);
+    let cam_to_body = Matrix3::from_diagonal(&Vector3::new(1.0, -1.0, -1.0));
+    ned_to_enu * rz(yaw) * ry(pitch) * rx(roll) * cam_to_body
+}
+
+/// R from three angles (radians) in a convention.
+pub fn rotation(conv: AngleConvention, a: [f64; 3]) -> Matrix3<f64> {
+    match conv {
+        AngleConvention::YawPitchRoll => from_yaw_pitch_roll(a[0], a[1], a[2]),
+        AngleConvention::OmegaPhiKappa => rx(a[0]) * ry(a[1]) * rz(a[2]),
+        // Chinese texts: Rφ rotates about Y with the opposite sign, R = Rφ·Rω·Rκ.
+        AngleConvention::PhiOmegaKappa => ry(-a[0]) * rx(a[1]) * rz(a[2]),
+    }
+}
+
+/// ω-φ-κ of R (R = Rω·Rφ·Rκ), radians.
+pub fn omega_phi_kappa(r: &Matrix3<f64>) -> [f64; 3] {
+    let phi = r[(0, 2)].clamp(-1.0, 1.0).asin();
+    [
+        (-r[(1, 2)]).atan2(r[(2, 2)]),
+        phi,
+        (-r[(0, 1)]).atan2(r[(0, 0)]),
+    ]
+}
+
+/// Attitude samples over time.
+#[derive(Clone, Debug)]
+pub struct AttitudeTable {
+    pub conv: AngleConvention,
+    pub times: Vec<Epoch>,
+    /// Radians.
+    pub angles: Vec<[f64; 3]>,
+}
+
+fn unwrap_to(a: f64, reference: f64) -> f64 {
+    let mut x = a;
+    while x - reference > std::f64::consts::PI {
+        x -= 2.0 * std::f64::consts::PI;
+    }
+    while reference - x > std::f64::consts::PI {
+        x += 2.0 * std::f64::consts::PI;
+    }
+    x
+}
+
+impl AttitudeTable {
+    /// CSV with header `week,tow,a1,a2,a3` (degrees), GPST.
+    pub fn read_csv(path: &Path, conv: AngleConvention) -> Result<AttitudeTable> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let mut times = Vec::new();
+        let mut angles = Vec::new();
+        for (i, line) in text.lines().enumerate() {
+            let l = line.trim();
+            if l.is_empty()
+                || l.starts_with('#')
+                || l.starts_with(|c: char| c.is_ascii_alphabetic())
+            {
+                continue;
+            }
+            let f: Vec<f64> = l
+                .split(',')
+                .map(|x| x.trim().parse::<f64>())
+                .collect::<std::result::Result<_, _>>()
+                .map_err(|_| Error::Parse {
+                    path: path.to_path_buf(),
+                    line: i + 1,
+                    what: "numbers expected: week,tow,angle1,angle2,angle3 (degrees)".into(),
+                })?;
+            if f.len() < 5 {
+                return Err(Error::Parse {
+                    path: path.to_path_buf(),
+                    line: i + 1,
+                    what: "five columns expected: week,tow,angle1,angle2,angle3".into(),
+                });
+            }
+            times.push(from_week_tow(f[0] as u32, f[1]));
+            angles.push([f[2].to_radians(), f[3].to_radians(), f[4].to_radians()]);
+        }
+        if times.len() < 2 {
+            return Err(Error::input(path, "fewer than two attitude samples"));
+        }
+        Ok(AttitudeTable {
+            conv,
+            times,
+            angles,
+        })
+    }
+
+    /// R at `t` (angles interpolated linearly, wrap-aware); `None` outside the table.
+    pub fn at(&self, t: Epoch) -> Option<Matrix3<f64>> {
+        let (t0, t1) = (*self.times.first()?, *self.times.last()?);
+        if t < t0 || t > t1 {
+            return None;
+        }
+        let j = self
+            .times
+            .partition_point(|x| *x <= t)
+            .clamp(1, self.times.len() - 1);
+        let (a, b) = (&self.angles[j - 1], &self.angles[j]);
+        let f = (t - self.times[j - 1]).to_seconds()
+            / (self.times[j] - self.times[j - 1]).to_seconds().max(1e-9);
+        let mut x = [0.0; 3];
+        for k in 0..3 {
+            let bk = unwrap_to(b[k], a[k]);
+            x[k] = a[k] + (bk - a[k]) * f;
+        }
+        Some(rotation(self.conv, x))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn conventions_agree_on_the_same_rotation() {
+        let r = from_yaw_pitch_roll(0.7, 0.03, -0.05);
+        let opk = omega_phi_kappa(&r);
+        assert!((rotation(AngleConvention::OmegaPhiKappa, opk) - r).norm() < 1e-12);
+        // Level, heading north: camera x north, z up.
+        let r0 = from_yaw_pitch_roll(0.0, 0.0, 0.0);
+        assert!((r0 * Vector3::x() - Vector3::y()).norm() < 1e-12);
+        assert!((r0 * Vector3::z() - Vector3::z()).norm() < 1e-12);
+        // φ-ω-κ with φ = −ω-φ-κ's φ for pure φ rotations.
+        assert!(
+            (rotation(AngleConvention::PhiOmegaKappa, [0.1, 0.0, 0.0])
+                - rotation(AngleConvention::OmegaPhiKappa, [0.0, -0.1, 0.0]))
+            .norm()
+                < 1e-12
+        );
+        assert!((unwrap_to(3.1, -3.1) - (3.1 - 2.0 * std::f64::consts::PI)).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,229 @@
+//! Exports of camera stations: Metashape and Pix4D reference CSVs, OpenDroneMap `geo.txt`, a
+//! full CSV (time, coordinates, sigmas, quality, attitude, flags) and an RTKLIB `.pos`; in
+//! geodetic coordinates or projected (UTM, Gauss–Krüger).
+
+use super::attitude::omega_phi_kappa;
+use super::CameraStation;
+use gnss::error::Result;
+use gnss::frame::enu_rotation;
+use gnss::solution::{write_atomic, write_pos, PosFormat, PosRecord};
+use gnss::tmerc::{Projected, TransverseMercator};
+use std::path::Path;
+
+/// Output layout.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    Metashape,
+    Pix4d,
+    Odm,
+    Csv,
+    Pos,
+}
+
+/// Horizontal coordinates of the outputs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    Geodetic,
+    /// UTM; the zone of the first station when `None`.
+    Utm(Option<u8>),
+    /// Gauss–Krüger with a central meridian (degrees).
+    GaussKruger(f64),
+}
+
+struct Row {
+    id: String,
+    week: u32,
+    tow: f64,
+    /// lat/lon degrees or easting/northing metres.
+    x: f64,
+    y: f64,
+    h: f64,
+    sigma_enu: [f64; 3],
+    quality: u8,
+    ypr: [f64; 3],
+    opk: [f64; 3],
+    flags: String,
+}
+
+fn rows(st: &[CameraStation], proj: Projection) -> (Vec<Row>, String) {
+    let tm = match proj {
+        Projection::Geodetic => None,
+        Projection::Utm(z) => {
+            let g = st.first().map(|s| s.centre.to_geodetic());
+            let zone = z
+                .or_else(|| g.map(|g| TransverseMercator::utm_zone_of(g.lon)))
+                .unwrap_or(31);
+            let north = g.map(|g| g.lat >= 0.0).unwrap_or(true);
+            Some((
+                TransverseMercator::utm(zone, north),
+                format!("UTM zone {zone}{}", if north { "N" } else { "S" }),
+            ))
+        }
+        Projection::GaussKruger(cm) => Some((
+            TransverseMercator::gauss_kruger(cm),
+            format!("Gauss-Krueger CM {cm}"),
+        )),
+    };
+    let crs = tm
+        .as_ref()
+        .map(|t| t.1.clone())
+        .unwrap_or_else(|| "WGS84 geodetic (EPSG:4326), ellipsoidal heights".into());
+    let out = st
+        .iter()
+        .map(|s| {
+            let g = s.centre.to_geodetic();
+            let r = enu_rotation(&g);
+            let c = r * s.cov * r.transpose();
+            let (x, y) = match &tm {
+                Some((t, _)) => {
+                    let Projected { easting, northing } = t.forward(&g);
+                    (easting, northing)
+                }
+                None => (g.lat.to_degrees(), g.lon.to_degrees()),
+            };
+            // Yaw/pitch/roll back from R (camera x forward, z up).
+            let body = s.rotation
+                * nalgebra::Matrix3::from_diagonal(&nalgebra::Vector3::new(1.0, -1.0, -1.0));
+            let ned = nalgebra::Matrix3::new(0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0) * body;
+            let yaw = ned[(1, 0)].atan2(ned[(0, 0)]);
+            let pitch = (-ned[(2, 0)]).clamp(-1.0, 1.0).asin();
+            let roll = ned[(2, 1)].atan2(ned[(2, 2)]);
+            let opk = omega_phi_kappa(&s.rotation);
+            let (week, tow) = gnss::time::week_tow(s.time);
+            Row {
+                id: s.id.clone(),
+                week,
+                tow,
+                x,
+                y,
+                h: g.h,
+                sigma_enu: [
+                    c[(0, 0)].max(0.0).sqrt(),
+                    c[(1, 1)].max(0.0).sqrt(),
+                    c[(2, 2)].max(0.0).sqrt(),
+                ],
+                quality: s.quality as u8,
+                ypr: [
+                    yaw.to_degrees().rem_euclid(360.0),
+                    pitch.to_degrees(),
+                    roll.to_degrees(),
+                ],
+                opk: opk.map(f64::to_degrees),
+                flags: s.flags.join("; "),
+            }
+        })
+        .collect();
+    (out, crs)
+}
+
+/// Write stations in a format.
+pub fn write(path: &Path, st: &[CameraStation], format: Format, proj: Projection) -> Result<()> {
+    if format == Format::Pos {
+        let recs: Vec<PosRecord> = st
+            .iter()
+            .map(|s| PosRecord {
+                time: s.time,
+                pos: s.centre,
+                quality: s.quality,
+                nsat: 0,
+                cov: s.cov,
+                age: 0.0,
+                ratio: 0.0,
+            })
+            .collect();
+        return write_pos(
+            path,
+            &["program   : ppkat exposures (projection centres)".to_string()],
+            &recs,
+            PosFormat::Llh,
+        );
+    }
+    let (rows, crs) = rows(st, proj);
+    let geo = proj == Projection::Geodetic;
+    write_atomic(path, |w| {
+        match format {
+            Format::Metashape => {
+                writeln!(w, "# ppkat camera stations; {crs}")?;
+                if geo {
+                    writeln!(
+                        w,
+                        "#label,longitude,latitude,altitude,sx,sy,sz,yaw,pitch,roll"
+                    )?;
+                } else {
+                    writeln!(
+                        w,
+                        "#label,easting,northing,altitude,sx,sy,sz,yaw,pitch,roll"
+                    )?;
+                }
+                for r in &rows {
+                    let (a, b) = if geo { (r.y, r.x) } else { (r.x, r.y) };
+                    writeln!(
+                        w,
+                        "{},{a:.9},{b:.9},{:.4},{:.4},{:.4},{:.4},{:.3},{:.3},{:.3}",
+                        r.id,
+                        r.h,
+                        r.sigma_enu[0],
+                        r.sigma_enu[1],
+                        r.sigma_enu[2],
+                        r.ypr[0],
+                        r.ypr[1],
+                        r.ypr[2]
+                    )?;
+                }
+            }
+            Format::Pix4d => {
+                writeln!(
+                    w,
+                    "imagename,{},altitude,omega,phi,kappa,accuracy_horz,accuracy_vert",
+                    if geo {
+                        "latitude,longitude"
+                    } else {
+                        "easting,northing"
+                    }
+                )?;
+                for r in &rows {
+                    let sh = r.sigma_enu[0].hypot(r.sigma_enu[1]);
+                    writeln!(
+                        w,
+                        "{},{:.9},{:.9},{:.4},{:.4},{:.4},{:.4},{sh:.4},{:.4}",
+                        r.id, r.x, r.y, r.h, r.opk[0], r.opk[1], r.opk[2], r.sigma_enu[2]
+                    )?;
+                }
+            }
+            Format::Odm => {
+                // geo.txt: projection line, then image geo_x geo_y geo_z omega phi kappa horz vert.
+                writeln!(
+                    w,
+                    "{}",
+                    if geo {
+                        "EPSG:4326".to_string()
+                    } else {
+                        crs.clone()
+                    }
+                )?;
+                for r in &rows {
+                    let (a, b) = if geo { (r.y, r.x) } else { (r.x, r.y) };
+                    let sh = r.sigma_enu[0].hypot(r.sigma_enu[1]);
+                    writeln!(
+                        w,
+                        "{} {a:.9} {b:.9} {:.4} {:.4} {:.4} {:.4} {sh:.4} {:.4}",
+                        r.id, r.h, r.opk[0], r.opk[1], r.opk[2], r.sigma_enu[2]
+                    )?;
+                }
+            }
+            Format::Csv => {
+                writeln!(w, "# ppkat camera stations (projection centres), GPST; {crs}; sigmas ENU (m); Q as RTKLIB; angles degrees, R camera->ENU, omega/phi/kappa: R = Rw*Rp*Rk")?;
+                writeln!(w, "id,week,tow,{},h,sigma_e,sigma_n,sigma_u,quality,yaw,pitch,roll,omega,phi,kappa,flags", if geo { "lat,lon" } else { "easting,northing" })?;
+                for r in &rows {
+                    writeln!(
+                        w,
+                        "{},{},{:.6},{:.9},{:.9},{:.4},{:.4},{:.4},{:.4},{},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5},\"{}\"",
+                        r.id, r.week, r.tow, r.x, r.y, r.h, r.sigma_enu[0], r.sigma_enu[1], r.sigma_enu[2], r.quality, r.ypr[0], r.ypr[1], r.ypr[2], r.opk[0], r.opk[1], r.opk[2], r.flags
+                    )?;
+                }
+            }
+            Format::Pos => unreachable!("handled above"),
+        }
+        Ok(())
+    })
+}

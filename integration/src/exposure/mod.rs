@@ -1,0 +1,169 @@
+//! Exposures: camera exposure times (RINEX events, DJI MRK, CSV) → antenna position
+//! interpolated on the trajectory → lever arm rotated by the camera attitude → projection
+//! centres with covariance and quality, and exports for photogrammetry software.
+//!
+//! Lever-arm convention (as the whole project): X_A = X_S + R·(u, v, w), (u, v, w) the antenna
+//! phase centre in the camera frame, R camera → local ENU.
+
+pub mod attitude;
+pub mod events;
+pub mod export;
+pub mod leverarm;
+pub mod trajectory;
+
+use attitude::{from_yaw_pitch_roll, AttitudeTable};
+use events::ExposureEvent;
+use gnss::frame::{enu_rotation, Ecef};
+use gnss::solution::Quality;
+use hifitime::{Duration, Epoch};
+use nalgebra::{Matrix3, Vector3};
+use trajectory::{InterpError, Trajectory};
+
+/// Where a station's attitude came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AttitudeSource {
+    Table,
+    /// Trajectory heading, zero pitch and roll (flagged).
+    Heading,
+}
+
+/// A camera station: the projection centre of one exposure.
+#[derive(Clone, Debug)]
+pub struct CameraStation {
+    pub id: String,
+    pub time: Epoch,
+    pub antenna: Ecef,
+    pub centre: Ecef,
+    /// ECEF covariance of the centre, m² (from the trajectory).
+    pub cov: Matrix3<f64>,
+    pub quality: Quality,
+    /// Camera → ENU at the station.
+    pub rotation: Matrix3<f64>,
+    pub attitude: AttitudeSource,
+    pub flags: Vec<String>,
+}
+
+/// Options of the exposure stage.
+#[derive(Clone, Debug, Default)]
+pub struct ExposureOptions {
+    /// Antenna phase centre in the camera frame (u, v, w), metres.
+    pub lever_arm: Option<Vector3<f64>>,
+    pub attitude: Option<AttitudeTable>,
+    /// Camera latency added to every event time, milliseconds.
+    pub delay_ms: f64,
+    /// Longest trajectory gap to interpolate across, seconds (None: 2.5 intervals).
+    pub max_gap: Option<f64>,
+}
+
+/// An exposure that got no station, and why.
+#[derive(Clone, Debug)]
+pub struct Refused {
+    pub id: String,
+    pub time: Epoch,
+    pub why: String,
+}
+
+/// Result of the exposure stage.
+#[derive(Clone, Debug, Default)]
+pub struct ExposureResult {
+    pub stations: Vec<CameraStation>,
+    pub refused: Vec<Refused>,
+    pub warnings: Vec<String>,
+}
+
+/// Compute projection centres for events on a trajectory.
+pub fn compute(
+    mut events: Vec<ExposureEvent>,
+    traj: &Trajectory,
+    opts: &ExposureOptions,
+) -> ExposureResult {
+    let mut res = ExposureResult::default();
+    let (unsorted, dups) = events::sort_and_dedup(&mut events);
+    if unsorted {
+        res.warnings
+            .push("exposure times were not in time order: sorted".into());
+    }
+    for d in dups {
+        res.refused.push(Refused {
+            id: d.id,
+            time: d.time,
+            why: "duplicate time (same as the previous exposure)".into(),
+        });
+    }
+    if let Some(shift) = events::utc_as_gpst_shift(&events, traj) {
+        res.warnings.push(format!("the MRK positions match the trajectory {shift:.0} s later: the times look like UTC declared as GPST"));
+    }
+    let max_gap = opts.max_gap.unwrap_or(2.5 * traj.interval);
+    let mut heading_flagged = 0;
+    for e in events {
+        let t = e.time + Duration::from_seconds(opts.delay_ms / 1000.0);
+        let ip = match traj.interpolate(t, max_gap) {
+            Ok(ip) => ip,
+            Err(InterpError::Outside) => {
+                res.refused.push(Refused {
+                    id: e.id,
+                    time: t,
+                    why: "outside the trajectory".into(),
+                });
+                continue;
+            }
+            Err(InterpError::Gap(g)) => {
+                res.refused.push(Refused {
+                    id: e.id,
+                    time: t,
+                    why: format!("in a trajectory gap of {g:.1} s (limit {max_gap:.1} s)"),
+                });
+                continue;
+            }
+        };
+        let mut flags = Vec::new();
+        if ip.quality != Quality::Fixed {
+            flags.push(format!("next to a {:?} epoch", ip.quality));
+        }
+        let g = ip.pos.to_geodetic();
+        let enu_to_ecef = enu_rotation(&g).transpose();
+        let (rotation, source) = match opts.attitude.as_ref().and_then(|a| a.at(t)) {
+            Some(r) => (r, AttitudeSource::Table),
+            None => {
+                let v = enu_rotation(&g) * ip.vel;
+                heading_flagged += 1;
+                flags.push(
+                    "attitude from the trajectory heading (pitch and roll taken as zero)".into(),
+                );
+                (
+                    from_yaw_pitch_roll(v.x.atan2(v.y), 0.0, 0.0),
+                    AttitudeSource::Heading,
+                )
+            }
+        };
+        let centre = if let Some(m) = &e.mrk {
+            // DJI: the antenna → camera offset is given in north, east, up.
+            Ecef(
+                ip.pos.0
+                    + enu_to_ecef * Vector3::new(m.offset_neu[1], m.offset_neu[0], m.offset_neu[2]),
+            )
+        } else if let Some(l) = opts.lever_arm {
+            Ecef(ip.pos.0 - enu_to_ecef * (rotation * l))
+        } else {
+            flags.push("no lever arm: the projection centre is the antenna".into());
+            ip.pos
+        };
+        res.stations.push(CameraStation {
+            id: e.id,
+            time: t,
+            antenna: ip.pos,
+            centre,
+            cov: ip.cov,
+            quality: ip.quality,
+            rotation,
+            attitude: source,
+            flags,
+        });
+    }
+    if heading_flagged > 0 && opts.attitude.is_some() {
+        res.warnings.push(format!("{heading_flagged} exposures outside the attitude file: heading from the trajectory used"));
+    } else if heading_flagged > 0 && opts.lever_arm.is_some() {
+        res.warnings.push("no attitude given: the lever arm is rotated by the trajectory heading with zero pitch and roll (flagged on every station)".into());
+    }
+    res
+}
