@@ -584,3 +584,94 @@ fn simulate_rejects_a_bad_scenario_naming_the_key() {
     ]);
     fails_with(&o, &["nosuch", "demo"]);
 }
+
+#[test]
+fn leverarm_from_tapes() {
+    let o = ppkat(&[
+        "leverarm",
+        "--tapes",
+        "1.840674,1.868176,2.087123,0.904479",
+        "--ruler",
+        "1.0",
+    ]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(t.contains("0.4490 0.0160 1.7850"), "{t}");
+    let o = ppkat(&["leverarm", "--tapes", "1.0,0.5,0.5", "--ruler", "1.0"]);
+    fails_with(&o, &["--tapes", "four lengths"]);
+}
+
+/// The demo's rover events on its PPK trajectory, in every export format.
+#[test]
+fn exposures_in_every_format() {
+    let dir = tmp("exp-formats");
+    let o = ppkat(&["demo", "--out", p(&dir)]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let traj = dir.join("rover_ppk.pos");
+    let rover = dir.join("rover.obs");
+    for (fmt, needle) in [
+        ("csv", "id,week,tow,lat,lon"),
+        ("metashape", "#label,longitude"),
+        ("pix4d", "imagename,latitude"),
+        ("odm", "EPSG:4326"),
+        ("pos", "latitude(deg)"),
+    ] {
+        let out = dir.join(format!("stations.{fmt}"));
+        let o = ppkat(&[
+            "exposures",
+            "--trajectory",
+            p(&traj),
+            "--events",
+            p(&rover),
+            "--lever-arm",
+            "0.10,-0.05,0.45",
+            "--format",
+            fmt,
+            "-o",
+            p(&out),
+        ]);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(0), "{t}");
+        assert!(
+            t.contains("camera stations written") && t.contains("heading"),
+            "{t}"
+        );
+        let body = std::fs::read_to_string(&out).unwrap();
+        assert!(
+            body.contains(needle),
+            "{fmt}: {}",
+            &body[..body.len().min(300)]
+        );
+        assert!(body.lines().count() > 100, "{fmt}");
+    }
+    let out = dir.join("stations-utm.csv");
+    let o = ppkat(&[
+        "exposures",
+        "--trajectory",
+        p(&traj),
+        "--events",
+        p(&rover),
+        "--projection",
+        "utm",
+        "-o",
+        p(&out),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let body = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        body.contains("UTM zone 32N") && body.contains("easting,northing"),
+        "{}",
+        &body[..300]
+    );
+    // An observation file without events is refused by name.
+    let o = ppkat(&[
+        "exposures",
+        "--trajectory",
+        p(&traj),
+        "--events",
+        p(&dir.join("base.obs")),
+        "-o",
+        p(&dir.join("x.csv")),
+    ]);
+    fails_with(&o, &["base.obs", "no flag-5 event"]);
+}

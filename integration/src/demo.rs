@@ -101,6 +101,9 @@ pub struct DemoReport {
     pub ppk_fixed: usize,
     pub ppk_3d_rms_fixed: f64,
     pub ppk_max_fixed: f64,
+    pub stations: usize,
+    pub stations_refused: usize,
+    pub centre_3d_rms: f64,
     pub seconds: f64,
 }
 
@@ -123,8 +126,12 @@ impl fmt::Display for DemoReport {
         )?;
         writeln!(
             f,
-            "(exposures, lever arm and the joint adjustment join the demo with their issues)"
+            "exposures: {} camera stations ({} refused), projection centres 3D RMS {:.1} mm vs truth (lever arm rotated by the simulated IMU attitude)",
+            self.stations,
+            self.stations_refused,
+            self.centre_3d_rms * 1000.0
         )?;
+        writeln!(f, "(the joint adjustment joins the demo with its issue)")?;
         writeln!(
             f,
             "demo finished in {:.1} s; outputs in {}",
@@ -192,13 +199,74 @@ pub fn run(out: &Path) -> Result<DemoReport, ChainError> {
             ratio: s.ratio,
         })
         .collect();
+    let pos_path = out.join("rover_ppk.pos");
     write_pos(
-        &out.join("rover_ppk.pos"),
+        &pos_path,
         &["program   : ppkat demo (carrier-phase kinematic)".to_string()],
         &records,
         PosFormat::Llh,
     )?;
+    // Exposures: events of the rover file on the PPK trajectory, lever arm rotated by the
+    // attitude an IMU would give (the simulated attitude, written as an attitude file).
+    let traj = crate::exposure::trajectory::Trajectory::read_pos(&pos_path)?;
+    let (events, _) = crate::exposure::events::from_rinex(&rover, &traj);
+    let att_path = out.join("imu_attitude.csv");
+    let truth_text = |name: &str| {
+        std::fs::read_to_string(out.join(name)).map_err(|e| ChainError::Truth {
+            path: name.into(),
+            what: e.to_string(),
+        })
+    };
+    let mut att = String::from("# simulated IMU attitude: week,tow,yaw,pitch,roll (degrees)\n");
+    for l in truth_text("truth_trajectory.csv")?.lines() {
+        let f: Vec<&str> = l.split(',').collect();
+        if f.len() == 11 && f[0].chars().all(|c| c.is_ascii_digit()) {
+            att.push_str(&format!("{},{},{},{},{}\n", f[0], f[1], f[10], f[9], f[8]));
+        }
+    }
+    gnss::solution::write_atomic(&att_path, |w| w.write_all(att.as_bytes()))?;
+    let attitude = crate::exposure::attitude::AttitudeTable::read_csv(
+        &att_path,
+        crate::exposure::attitude::AngleConvention::YawPitchRoll,
+    )?;
+    let lever = Vector3::from(scenario.camera.lever_arm);
+    let opts = crate::exposure::ExposureOptions {
+        lever_arm: Some(lever),
+        attitude: Some(attitude),
+        ..Default::default()
+    };
+    let ex = crate::exposure::compute(events, &traj, &opts);
+    crate::exposure::export::write(
+        &out.join("camera_stations.csv"),
+        &ex.stations,
+        crate::exposure::export::Format::Csv,
+        crate::exposure::export::Projection::Geodetic,
+    )?;
+    let truth_centres: Vec<(f64, Vector3<f64>)> = truth_text("truth_exposures.csv")?
+        .lines()
+        .filter(|l| l.chars().next().is_some_and(|c| c.is_ascii_digit()))
+        .filter_map(|l| {
+            let f: Vec<f64> = l
+                .split(',')
+                .map(|x| x.parse().ok())
+                .collect::<Option<_>>()?;
+            Some((
+                f[2] * gnss::time::WEEK_SECONDS + f[3],
+                Vector3::new(f[4], f[5], f[6]),
+            ))
+        })
+        .collect();
+    let mut ce = Vec::new();
+    for st in &ex.stations {
+        let t = st.time.to_gpst_seconds();
+        if let Some((_, c)) = truth_centres.iter().find(|(tt, _)| (tt - t).abs() < 0.01) {
+            ce.push((st.centre.0 - c).norm());
+        }
+    }
     Ok(DemoReport {
+        stations: ex.stations.len(),
+        stations_refused: ex.refused.len(),
+        centre_3d_rms: rms(&ce),
         spp_epochs: sppr.solutions.len(),
         spp_h_rms: rms(&h),
         spp_v_rms: rms(&v),
