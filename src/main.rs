@@ -171,6 +171,12 @@ enum Cmd {
         max_gap: Option<f64>,
         #[arg(long, value_enum, default_value = "csv")]
         format: ExportArg,
+        /// Folder of the photographs (JPEG), matched in name order to the exposures.
+        #[arg(long)]
+        photos: Option<PathBuf>,
+        /// Write geotagged copies of the photos into this folder (originals are never touched).
+        #[arg(long, requires = "photos")]
+        geotag: Option<PathBuf>,
         /// geodetic, utm, utm:ZONE or gk:CENTRAL_MERIDIAN.
         #[arg(long, default_value = "geodetic")]
         projection: String,
@@ -366,6 +372,8 @@ fn run(cli: Cli) -> Result<()> {
             delay_ms,
             max_gap,
             format,
+            photos,
+            geotag,
             projection,
             out,
         } => {
@@ -432,6 +440,8 @@ fn run(cli: Cli) -> Result<()> {
                 },
                 projection,
                 out,
+                photos,
+                geotag,
             };
             print!("{}", pipeline::exposures(&job).context("exposures failed")?);
         }

@@ -345,6 +345,10 @@ pub struct ExposureJob {
     pub format: crate::exposure::export::Format,
     pub projection: crate::exposure::export::Projection,
     pub out: PathBuf,
+    /// Photographs to match to the exposures (their names become the station labels).
+    pub photos: Option<PathBuf>,
+    /// Write geotagged copies of the photos into this folder (originals untouched).
+    pub geotag: Option<PathBuf>,
 }
 
 /// What the exposure stage did.
@@ -354,6 +358,9 @@ pub struct ExposureReport {
     pub events: usize,
     pub clock_correction: f64,
     pub out: PathBuf,
+    /// Photo matching: Ok(number matched) or the mismatch found.
+    pub photos: Option<std::result::Result<usize, String>>,
+    pub geotagged: usize,
 }
 
 /// Read events and trajectory, compute projection centres, write them.
@@ -376,7 +383,7 @@ pub fn exposures(job: &ExposureJob) -> Result<ExposureReport> {
         EventSource::Times(p, sys) => (events::read_times_csv(p, *sys)?, 0.0),
     };
     let n = evs.len();
-    let result = compute(evs, &traj, &job.options);
+    let mut result = compute(evs, &traj, &job.options);
     if result.stations.is_empty() {
         return Err(Error::NoData(format!(
             "none of the {n} exposures could be placed on the trajectory {} (first refusal: {})",
@@ -388,12 +395,39 @@ pub fn exposures(job: &ExposureJob) -> Result<ExposureReport> {
                 .unwrap_or_default()
         )));
     }
+    let mut photos = None;
+    let mut geotagged = 0;
+    if let Some(dir) = &job.photos {
+        let list = crate::exposure::photos::list(dir)?;
+        match crate::exposure::photos::check(&list, &result.stations) {
+            Ok(()) => {
+                for (s, p) in result.stations.iter_mut().zip(&list) {
+                    s.id = p.name.clone();
+                }
+                if let Some(g) = &job.geotag {
+                    geotagged = crate::exposure::photos::geotag(&list, &result.stations, g)?.len();
+                }
+                photos = Some(Ok(list.len()));
+            }
+            Err(why) => {
+                if job.geotag.is_some() {
+                    return Err(Error::input(
+                        dir,
+                        format!("the photos do not match the exposures, nothing geotagged: {why}"),
+                    ));
+                }
+                photos = Some(Err(why));
+            }
+        }
+    }
     export::write(&job.out, &result.stations, job.format, job.projection)?;
     Ok(ExposureReport {
         result,
         events: n,
         clock_correction,
         out: job.out.clone(),
+        photos,
+        geotagged,
     })
 }
 
@@ -413,6 +447,11 @@ impl fmt::Display for ExposureReport {
                 "  event times corrected by the receiver clock (up to {:.3} ms)",
                 self.clock_correction * 1e3
             )?;
+        }
+        match &self.photos {
+            Some(Ok(n)) => writeln!(f, "  {n} photos matched to the exposures (names used as labels); {} geotagged copies written", self.geotagged)?,
+            Some(Err(why)) => writeln!(f, "  PHOTOS DO NOT MATCH: {why}; stations keep their event numbers")?,
+            None => {}
         }
         let flagged = r.stations.iter().filter(|s| !s.flags.is_empty()).count();
         if flagged > 0 {

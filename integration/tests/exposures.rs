@@ -320,3 +320,75 @@ fn bad_exposure_inputs_are_refused_or_flagged() {
         res.warnings
     );
 }
+
+/// Photographs: matched to the exposures by their rhythm, geotagged copies carry the
+/// projection centres, the originals stay byte for byte as they were; a missing photo is
+/// found where it is missing.
+#[test]
+fn photos_are_matched_and_geotagged_copies_written() {
+    use integration::exposure::photos;
+    use integration::exposure::{AttitudeSource, CameraStation};
+    let src = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fixtures/photo_16x16.jpg");
+    let dir = tmp("photos");
+    std::fs::create_dir_all(&dir).unwrap();
+    let t0 = from_week_tow(2318, 291_700.0);
+    let mut stations = Vec::new();
+    for k in 0..6 {
+        let name = dir.join(format!("IMG_{:04}.jpg", k + 1));
+        std::fs::copy(&src, &name).unwrap();
+        let mut m = little_exif::metadata::Metadata::new_from_path(&name).unwrap();
+        m.set_tag(little_exif::exif_tag::ExifTag::DateTimeOriginal(format!(
+            "2024:06:12 09:01:{:02}",
+            10 + 3 * k
+        )));
+        m.write_to_file(&name).unwrap();
+        let c =
+            gnss::frame::Geodetic::from_degrees(47.3 + 0.001 * k as f64, 8.55, 830.0 + k as f64)
+                .to_ecef();
+        stations.push(CameraStation {
+            id: format!("{}", k + 1),
+            time: t0 + hifitime::Duration::from_seconds(3.0 * k as f64),
+            antenna: c,
+            centre: c,
+            cov: Matrix3::identity() * 1e-4,
+            quality: Quality::Fixed,
+            rotation: Matrix3::identity(),
+            attitude: AttitudeSource::Heading,
+            flags: vec![],
+        });
+    }
+    let originals: Vec<Vec<u8>> = (0..6)
+        .map(|k| std::fs::read(dir.join(format!("IMG_{:04}.jpg", k + 1))).unwrap())
+        .collect();
+    let list = photos::list(&dir).unwrap();
+    assert_eq!(list.len(), 6);
+    assert!(list.iter().all(|p| p.taken.is_some()), "capture times read");
+    photos::check(&list, &stations).unwrap();
+    let out = tmp("geotagged");
+    let written = photos::geotag(&list, &stations, &out).unwrap();
+    assert_eq!(written.len(), 6);
+    for (k, w) in written.iter().enumerate() {
+        let (lat, lon, h) = photos::read_position(w).expect("GPS tags written");
+        let g = stations[k].centre.to_geodetic();
+        assert!(
+            (lat - g.lat.to_degrees()).abs() < 1e-7 && (lon - g.lon.to_degrees()).abs() < 1e-7,
+            "{lat} {lon}"
+        );
+        assert!((h - g.h).abs() < 0.001);
+        assert_eq!(
+            std::fs::read(dir.join(format!("IMG_{:04}.jpg", k + 1))).unwrap(),
+            originals[k],
+            "original untouched"
+        );
+    }
+    // Writing into the photos' own folder is refused.
+    assert!(photos::geotag(&list, &stations, &dir).is_err());
+    // A photo missing in the middle.
+    std::fs::remove_file(dir.join("IMG_0003.jpg")).unwrap();
+    let list = photos::list(&dir).unwrap();
+    let why = photos::check(&list, &stations).unwrap_err();
+    assert!(
+        why.contains("5 photos, 6 exposures") && why.contains("IMG_0004.jpg (#3)"),
+        "{why}"
+    );
+}

@@ -9,6 +9,7 @@ pub mod attitude;
 pub mod events;
 pub mod export;
 pub mod leverarm;
+pub mod photos;
 pub mod trajectory;
 
 use attitude::{from_yaw_pitch_roll, AttitudeTable};
