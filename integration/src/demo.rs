@@ -186,19 +186,7 @@ pub fn run(out: &Path) -> Result<DemoReport, ChainError> {
             d.push((s.pos.0 - p).norm());
         }
     }
-    let records: Vec<PosRecord> = res
-        .solutions
-        .iter()
-        .map(|s| PosRecord {
-            time: s.time,
-            pos: s.pos,
-            quality: s.quality,
-            nsat: s.nsat,
-            cov: s.cov,
-            age: s.age,
-            ratio: s.ratio,
-        })
-        .collect();
+    let records: Vec<PosRecord> = res.solutions.iter().map(|s| s.to_record()).collect();
     let pos_path = out.join("rover_ppk.pos");
     write_pos(
         &pos_path,

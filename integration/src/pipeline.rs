@@ -231,19 +231,7 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
         progress,
     )?;
     warnings.extend(result.warnings.iter().cloned());
-    let records: Vec<PosRecord> = result
-        .solutions
-        .iter()
-        .map(|s| PosRecord {
-            time: s.time,
-            pos: s.pos,
-            quality: s.quality,
-            nsat: s.nsat,
-            cov: s.cov,
-            age: s.age,
-            ratio: s.ratio,
-        })
-        .collect();
+    let records: Vec<PosRecord> = result.solutions.iter().map(|s| s.to_record()).collect();
     let o = &job.options;
     let b = result.base_marker;
     let header = vec![

@@ -184,19 +184,7 @@ fn events_to_ppk_to_projection_centres() {
     )
     .unwrap();
     let pos = s.dir.join("ppk.pos");
-    let recs: Vec<PosRecord> = r
-        .solutions
-        .iter()
-        .map(|x| PosRecord {
-            time: x.time,
-            pos: x.pos,
-            quality: x.quality,
-            nsat: x.nsat,
-            cov: x.cov,
-            age: x.age,
-            ratio: x.ratio,
-        })
-        .collect();
+    let recs: Vec<PosRecord> = r.solutions.iter().map(|s| s.to_record()).collect();
     write_pos(&pos, &[], &recs, PosFormat::Xyz).unwrap();
     let traj = Trajectory::read_pos(&pos).unwrap();
     let (evs, clock) = events::from_rinex(&rover, &traj);

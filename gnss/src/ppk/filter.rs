@@ -53,6 +53,21 @@ pub struct EpochSol {
     pub nfix: usize,
 }
 
+impl EpochSol {
+    /// The `.pos` line of this solution.
+    pub fn to_record(&self) -> crate::solution::PosRecord {
+        crate::solution::PosRecord {
+            time: self.time,
+            pos: self.pos,
+            quality: self.quality,
+            nsat: self.nsat,
+            cov: self.cov,
+            age: self.age,
+            ratio: self.ratio,
+        }
+    }
+}
+
 /// Counters of a pass.
 #[derive(Clone, Debug, Default)]
 pub struct PassStats {

@@ -4,6 +4,7 @@
 
 use super::flight::{Flight, FlightState};
 use super::rng::Rng;
+use crate::exposure::attitude::from_yaw_pitch_roll;
 use nalgebra::{Matrix3, Vector3};
 
 /// Camera of the simulation (pinhole, principal point at the image centre).
@@ -68,28 +69,6 @@ pub struct ImageObs {
     pub blunder: f64,
 }
 
-/// Rotation camera → ENU from yaw, pitch, roll (NED body: x forward, y right, z down); the
-/// camera looks down with its x axis forward and z axis up.
-pub fn camera_rotation(yaw: f64, pitch: f64, roll: f64) -> Matrix3<f64> {
-    let (sy, cy) = yaw.sin_cos();
-    let (sp, cp) = pitch.sin_cos();
-    let (sr, cr) = roll.sin_cos();
-    let rz = Matrix3::new(cy, -sy, 0.0, sy, cy, 0.0, 0.0, 0.0, 1.0);
-    let ry = Matrix3::new(cp, 0.0, sp, 0.0, 1.0, 0.0, -sp, 0.0, cp);
-    let rx = Matrix3::new(1.0, 0.0, 0.0, 0.0, cr, -sr, 0.0, sr, cr);
-    let ned_to_enu = Matrix3::new(0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0);
-    let cam_to_body = Matrix3::from_diagonal(&Vector3::new(1.0, -1.0, -1.0));
-    ned_to_enu * rz * ry * rx * cam_to_body
-}
-
-/// ω-φ-κ angles of R = Rω·Rφ·Rκ (western convention), radians.
-pub fn omega_phi_kappa(r: &Matrix3<f64>) -> (f64, f64, f64) {
-    let phi = r[(0, 2)].clamp(-1.0, 1.0).asin();
-    let omega = (-r[(1, 2)]).atan2(r[(2, 2)]);
-    let kappa = (-r[(0, 1)]).atan2(r[(0, 0)]);
-    (omega, phi, kappa)
-}
-
 /// Exposures along the strips at the forward overlap.
 pub fn exposures(
     flight: &Flight,
@@ -109,7 +88,7 @@ pub fn exposures(
         for k in 0..=n {
             let t = t0 + margin + k as f64 * base / speed;
             let state = flight.at(t);
-            let r = camera_rotation(state.yaw, state.pitch, state.roll);
+            let r = from_yaw_pitch_roll(state.yaw, state.pitch, state.roll);
             let centre = state.pos - r * cam.lever;
             out.push(Exposure {
                 id: out.len() + 1,
@@ -210,29 +189,4 @@ pub fn image_observations(
         out[i].blunder = b;
     }
     out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn level_flight_north_looks_down_with_x_forward() {
-        let r = camera_rotation(0.0, 0.0, 0.0);
-        assert!(
-            (r * Vector3::z() - Vector3::z()).norm() < 1e-12,
-            "camera z is up"
-        );
-        assert!(
-            (r * Vector3::x() - Vector3::y()).norm() < 1e-12,
-            "camera x is north (forward)"
-        );
-        let r = camera_rotation(0.4, 0.05, -0.1);
-        assert!((r.transpose() * r - Matrix3::identity()).norm() < 1e-12);
-        let (o, p, k) = omega_phi_kappa(&r);
-        let rebuilt = Matrix3::new(1.0, 0.0, 0.0, 0.0, o.cos(), -o.sin(), 0.0, o.sin(), o.cos())
-            * Matrix3::new(p.cos(), 0.0, p.sin(), 0.0, 1.0, 0.0, -p.sin(), 0.0, p.cos())
-            * Matrix3::new(k.cos(), -k.sin(), 0.0, k.sin(), k.cos(), 0.0, 0.0, 0.0, 1.0);
-        assert!((rebuilt - r).norm() < 1e-12);
-    }
 }
