@@ -196,6 +196,13 @@ enum Cmd {
         #[arg(long, default_value_t = 0.002)]
         sigma: f64,
     },
+    /// Bundle adjustment of a "Bundle Adjustment in the Large" problem.
+    Bal {
+        file: PathBuf,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+    },
     /// Simulate a survey flight with exact truth: base and rover RINEX with camera events, a
     /// navigation file, truth trajectory, exposures, ground points and image observations.
     Simulate {
@@ -444,6 +451,31 @@ fn run(cli: Cli) -> Result<()> {
                 geotag,
             };
             print!("{}", pipeline::exposures(&job).context("exposures failed")?);
+        }
+        Cmd::Bal { file, threads } => {
+            use integration::photo::bal;
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads.unwrap_or(0))
+                .build()
+                .context("cannot start the worker threads")?;
+            let mut problem = bal::BalProblem::read(&file)?;
+            println!(
+                "{}: {} cameras, {} points, {} observations",
+                file.display(),
+                problem.cameras.len(),
+                problem.points.len(),
+                problem.obs.len()
+            );
+            let r = pool.install(|| bal::solve(&mut problem, &bal::LmOptions::default()));
+            println!("initial cost: {:.6e}", r.initial_cost);
+            println!("iterations: {} ({} successful)", r.iterations, r.successful);
+            println!(
+                "wall time: {:.3} s on {} thread(s)",
+                r.seconds,
+                pool.current_num_threads()
+            );
+            println!("RMS reprojection error: {:.4} px", r.rms_px);
+            println!("final cost: {:.6e}", r.final_cost);
         }
         Cmd::Leverarm {
             tapes,

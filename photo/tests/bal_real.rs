@@ -1,0 +1,40 @@
+//! The BAL problems of the shared data: final cost against the reference solver's.
+
+use photo::bal::{solve, BalProblem, LmOptions};
+use std::path::PathBuf;
+
+fn data(rel: &str) -> Option<PathBuf> {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../shared/data")
+        .join(rel);
+    if p.exists() {
+        return Some(p);
+    }
+    assert!(
+        std::env::var("CI").map(|v| v != "true").unwrap_or(true),
+        "{} missing on CI",
+        p.display()
+    );
+    eprintln!("skipped: {} not found (shared data absent)", p.display());
+    None
+}
+
+#[test]
+fn ladybug_49_cameras_reach_the_reference_cost() {
+    for (file, bound) in [
+        (
+            "photo/bal/bal-ladybug-problem-49-7776-pre-shrink-1800.txt",
+            3.0044e3,
+        ),
+        ("photo/bal/problem-49-7776-pre.txt", 1.3358e4),
+    ] {
+        let Some(p) = data(file) else { return };
+        let mut prob = BalProblem::read(&p).unwrap();
+        let r = solve(&mut prob, &LmOptions::default());
+        eprintln!(
+            "{file}: cost {:.6e} → {:.6e} in {} iterations ({} successful), {:.2} s, RMS {:.3} px",
+            r.initial_cost, r.final_cost, r.iterations, r.successful, r.seconds, r.rms_px
+        );
+        assert!(r.final_cost <= bound, "{file}: {}", r.final_cost);
+    }
+}
