@@ -7,7 +7,8 @@
 use gnss::error::{Error, Result};
 use gnss::time::from_week_tow;
 use hifitime::Epoch;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Matrix3;
+use photo::rotation::Angles;
 use std::path::Path;
 
 /// Convention of the three angles of an attitude file.
@@ -22,44 +23,39 @@ pub enum AngleConvention {
     PhiOmegaKappa,
 }
 
-fn rx(a: f64) -> Matrix3<f64> {
-    let (s, c) = a.sin_cos();
-    Matrix3::new(1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c)
-}
-fn ry(a: f64) -> Matrix3<f64> {
-    let (s, c) = a.sin_cos();
-    Matrix3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
-}
-fn rz(a: f64) -> Matrix3<f64> {
-    let (s, c) = a.sin_cos();
-    Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
-}
-
 /// Camera → ENU from yaw, pitch, roll (radians) with the standard downward mounting.
 pub fn from_yaw_pitch_roll(yaw: f64, pitch: f64, roll: f64) -> Matrix3<f64> {
-    let ned_to_enu = Matrix3::new(0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0);
-    let cam_to_body = Matrix3::from_diagonal(&Vector3::new(1.0, -1.0, -1.0));
-    ned_to_enu * rz(yaw) * ry(pitch) * rx(roll) * cam_to_body
+    Angles::YawPitchRoll { yaw, pitch, roll }.matrix()
 }
 
 /// R from three angles (radians) in a convention.
 pub fn rotation(conv: AngleConvention, a: [f64; 3]) -> Matrix3<f64> {
     match conv {
-        AngleConvention::YawPitchRoll => from_yaw_pitch_roll(a[0], a[1], a[2]),
-        AngleConvention::OmegaPhiKappa => rx(a[0]) * ry(a[1]) * rz(a[2]),
-        // Chinese texts: Rφ rotates about Y with the opposite sign, R = Rφ·Rω·Rκ.
-        AngleConvention::PhiOmegaKappa => ry(-a[0]) * rx(a[1]) * rz(a[2]),
+        AngleConvention::YawPitchRoll => Angles::YawPitchRoll {
+            yaw: a[0],
+            pitch: a[1],
+            roll: a[2],
+        },
+        AngleConvention::OmegaPhiKappa => Angles::OmegaPhiKappa {
+            omega: a[0],
+            phi: a[1],
+            kappa: a[2],
+        },
+        AngleConvention::PhiOmegaKappa => Angles::PhiOmegaKappa {
+            phi: a[0],
+            omega: a[1],
+            kappa: a[2],
+        },
     }
+    .matrix()
 }
 
 /// ω-φ-κ of R (R = Rω·Rφ·Rκ), radians.
 pub fn omega_phi_kappa(r: &Matrix3<f64>) -> [f64; 3] {
-    let phi = r[(0, 2)].clamp(-1.0, 1.0).asin();
-    [
-        (-r[(1, 2)]).atan2(r[(2, 2)]),
-        phi,
-        (-r[(0, 1)]).atan2(r[(0, 0)]),
-    ]
+    match Angles::omega_phi_kappa(r) {
+        Angles::OmegaPhiKappa { omega, phi, kappa } => [omega, phi, kappa],
+        _ => unreachable!("omega_phi_kappa returns that convention"),
+    }
 }
 
 /// Attitude samples over time.
@@ -161,8 +157,8 @@ mod tests {
         assert!((rotation(AngleConvention::OmegaPhiKappa, opk) - r).norm() < 1e-12);
         // Level, heading north: camera x north, z up.
         let r0 = from_yaw_pitch_roll(0.0, 0.0, 0.0);
-        assert!((r0 * Vector3::x() - Vector3::y()).norm() < 1e-12);
-        assert!((r0 * Vector3::z() - Vector3::z()).norm() < 1e-12);
+        assert!((r0 * nalgebra::Vector3::x() - nalgebra::Vector3::y()).norm() < 1e-12);
+        assert!((r0 * nalgebra::Vector3::z() - nalgebra::Vector3::z()).norm() < 1e-12);
         // φ-ω-κ with φ = −ω-φ-κ's φ for pure φ rotations.
         assert!(
             (rotation(AngleConvention::PhiOmegaKappa, [0.1, 0.0, 0.0])

@@ -81,13 +81,11 @@ fn rows(st: &[CameraStation], proj: Projection) -> (Vec<Row>, String) {
                 }
                 None => (g.lat.to_degrees(), g.lon.to_degrees()),
             };
-            // Yaw/pitch/roll back from R (camera x forward, z up).
-            let body = s.rotation
-                * nalgebra::Matrix3::from_diagonal(&nalgebra::Vector3::new(1.0, -1.0, -1.0));
-            let ned = nalgebra::Matrix3::new(0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0) * body;
-            let yaw = ned[(1, 0)].atan2(ned[(0, 0)]);
-            let pitch = (-ned[(2, 0)]).clamp(-1.0, 1.0).asin();
-            let roll = ned[(2, 1)].atan2(ned[(2, 2)]);
+            let photo::rotation::Angles::YawPitchRoll { yaw, pitch, roll } =
+                photo::rotation::Angles::yaw_pitch_roll(&s.rotation)
+            else {
+                unreachable!("yaw_pitch_roll returns that convention")
+            };
             let opk = omega_phi_kappa(&s.rotation);
             let (week, tow) = gnss::time::week_tow(s.time);
             Row {
