@@ -6,4 +6,5 @@
 //! Schur elimination of the points).
 
 pub mod bal;
+pub mod camera;
 pub mod rotation;
