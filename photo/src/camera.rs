@@ -46,17 +46,33 @@ pub struct Jacobians {
 impl Camera {
     /// An ideal camera (no distortion).
     pub fn ideal(f: f64, pixel: f64, width_px: usize, height_px: usize) -> Camera {
-        Camera { f, x0: 0.0, y0: 0.0, k: [0.0; 3], p: [0.0; 2], b: [0.0; 2], pixel, width_px, height_px }
+        Camera {
+            f,
+            x0: 0.0,
+            y0: 0.0,
+            k: [0.0; 3],
+            p: [0.0; 2],
+            b: [0.0; 2],
+            pixel,
+            width_px,
+            height_px,
+        }
     }
 
     /// Pixel (column right, row down, origin at the top-left corner) → image coordinates.
     pub fn pixel_to_image(&self, px: Vector2<f64>) -> Vector2<f64> {
-        Vector2::new((px.x - self.width_px as f64 / 2.0) * self.pixel, (self.height_px as f64 / 2.0 - px.y) * self.pixel)
+        Vector2::new(
+            (px.x - self.width_px as f64 / 2.0) * self.pixel,
+            (self.height_px as f64 / 2.0 - px.y) * self.pixel,
+        )
     }
 
     /// Image coordinates → pixel.
     pub fn image_to_pixel(&self, xy: Vector2<f64>) -> Vector2<f64> {
-        Vector2::new(xy.x / self.pixel + self.width_px as f64 / 2.0, self.height_px as f64 / 2.0 - xy.y / self.pixel)
+        Vector2::new(
+            xy.x / self.pixel + self.width_px as f64 / 2.0,
+            self.height_px as f64 / 2.0 - xy.y / self.pixel,
+        )
     }
 
     /// Distortion Δ at an ideal point and its 2×2 derivative.
@@ -85,7 +101,11 @@ impl Camera {
     }
 
     /// Projection and its analytic Jacobians.
-    pub fn project_with_jacobians(&self, pose: &Pose, x: &Vector3<f64>) -> Option<(Vector2<f64>, Jacobians)> {
+    pub fn project_with_jacobians(
+        &self,
+        pose: &Pose,
+        x: &Vector3<f64>,
+    ) -> Option<(Vector2<f64>, Jacobians)> {
         let d = x - pose.centre;
         let v = pose.r.transpose() * d;
         if v.z >= -1e-12 {
@@ -94,11 +114,19 @@ impl Camera {
         let c = Vector2::new(-self.f * v.x / v.z, -self.f * v.y / v.z);
         let (delta, dj) = self.distortion(c);
         let out = Vector2::new(self.x0, self.y0) + c + delta;
-        let dc_dv = Matrix2x3::new(-self.f / v.z, 0.0, self.f * v.x / (v.z * v.z), 0.0, -self.f / v.z, self.f * v.y / (v.z * v.z));
+        let dc_dv = Matrix2x3::new(
+            -self.f / v.z,
+            0.0,
+            self.f * v.x / (v.z * v.z),
+            0.0,
+            -self.f / v.z,
+            self.f * v.y / (v.z * v.z),
+        );
         let a = (Matrix2::identity() + dj) * dc_dv; // d out / d v
         let rt = pose.r.transpose();
         let mut jp = SMatrix::<f64, 2, 6>::zeros();
-        jp.fixed_view_mut::<2, 3>(0, 0).copy_from(&(a * rt * skew(&d)));
+        jp.fixed_view_mut::<2, 3>(0, 0)
+            .copy_from(&(a * rt * skew(&d)));
         jp.fixed_view_mut::<2, 3>(0, 3).copy_from(&(-(a * rt)));
         let mut ji = SMatrix::<f64, 2, N_INTERIOR>::zeros();
         ji.set_column(0, &((Matrix2::identity() + dj) * (c / self.f)));
@@ -112,17 +140,35 @@ impl Camera {
         ji.set_column(7, &Vector2::new(2.0 * c.x * c.y, r2 + 2.0 * c.y * c.y));
         ji.set_column(8, &Vector2::new(c.x, 0.0));
         ji.set_column(9, &Vector2::new(c.y, 0.0));
-        Some((out, Jacobians { pose: jp, point: a * rt, interior: ji }))
+        Some((
+            out,
+            Jacobians {
+                pose: jp,
+                point: a * rt,
+                interior: ji,
+            },
+        ))
     }
 
     /// Interior parameters as a vector (order of [`N_INTERIOR`]).
     pub fn interior(&self) -> [f64; N_INTERIOR] {
-        [self.f, self.x0, self.y0, self.k[0], self.k[1], self.k[2], self.p[0], self.p[1], self.b[0], self.b[1]]
+        [
+            self.f, self.x0, self.y0, self.k[0], self.k[1], self.k[2], self.p[0], self.p[1],
+            self.b[0], self.b[1],
+        ]
     }
 
     /// The camera with interior parameters replaced.
     pub fn with_interior(&self, v: &[f64; N_INTERIOR]) -> Camera {
-        Camera { f: v[0], x0: v[1], y0: v[2], k: [v[3], v[4], v[5]], p: [v[6], v[7]], b: [v[8], v[9]], ..*self }
+        Camera {
+            f: v[0],
+            x0: v[1],
+            y0: v[2],
+            k: [v[3], v[4], v[5]],
+            p: [v[6], v[7]],
+            b: [v[8], v[9]],
+            ..*self
+        }
     }
 }
 
@@ -132,8 +178,26 @@ mod tests {
     use crate::rotation::{exp_so3, Angles};
 
     fn setup() -> (Camera, Pose, Vector3<f64>) {
-        let cam = Camera { f: 0.035, x0: 1.2e-4, y0: -0.8e-4, k: [-0.05 / 0.035f64.powi(2), 0.01, 0.0], p: [1e-3, -2e-3], b: [1e-4, -2e-4], pixel: 3.9e-6, width_px: 6000, height_px: 4000 };
-        let pose = Pose { r: Angles::OmegaPhiKappa { omega: 0.02, phi: -0.03, kappa: 1.2 }.matrix(), centre: Vector3::new(10.0, -20.0, 350.0) };
+        let cam = Camera {
+            f: 0.035,
+            x0: 1.2e-4,
+            y0: -0.8e-4,
+            k: [-0.05 / 0.035f64.powi(2), 0.01, 0.0],
+            p: [1e-3, -2e-3],
+            b: [1e-4, -2e-4],
+            pixel: 3.9e-6,
+            width_px: 6000,
+            height_px: 4000,
+        };
+        let pose = Pose {
+            r: Angles::OmegaPhiKappa {
+                omega: 0.02,
+                phi: -0.03,
+                kappa: 1.2,
+            }
+            .matrix(),
+            centre: Vector3::new(10.0, -20.0, 350.0),
+        };
         (cam, pose, Vector3::new(40.0, 15.0, 3.0))
     }
 
@@ -145,14 +209,26 @@ mod tests {
         for k in 0..6 {
             let mut d = [0.0; 6];
             d[k] = h;
-            let pp = Pose { r: exp_so3(&Vector3::new(d[0], d[1], d[2])) * pose.r, centre: pose.centre + Vector3::new(d[3], d[4], d[5]) };
-            let pm = Pose { r: exp_so3(&Vector3::new(-d[0], -d[1], -d[2])) * pose.r, centre: pose.centre - Vector3::new(d[3], d[4], d[5]) };
+            let pp = Pose {
+                r: exp_so3(&Vector3::new(d[0], d[1], d[2])) * pose.r,
+                centre: pose.centre + Vector3::new(d[3], d[4], d[5]),
+            };
+            let pm = Pose {
+                r: exp_so3(&Vector3::new(-d[0], -d[1], -d[2])) * pose.r,
+                centre: pose.centre - Vector3::new(d[3], d[4], d[5]),
+            };
             let num = (cam.project(&pp, &x).unwrap() - cam.project(&pm, &x).unwrap()) / (2.0 * h);
-            assert!((num - j.pose.column(k)).norm() < 1e-6 * (1.0 + num.norm()), "pose {k}: {num} vs {}", j.pose.column(k));
+            assert!(
+                (num - j.pose.column(k)).norm() < 1e-6 * (1.0 + num.norm()),
+                "pose {k}: {num} vs {}",
+                j.pose.column(k)
+            );
         }
         for k in 0..3 {
             let e = Vector3::ith(k, h);
-            let num = (cam.project(&pose, &(x + e)).unwrap() - cam.project(&pose, &(x - e)).unwrap()) / (2.0 * h);
+            let num = (cam.project(&pose, &(x + e)).unwrap()
+                - cam.project(&pose, &(x - e)).unwrap())
+                / (2.0 * h);
             assert!((num - j.point.column(k)).norm() < 1e-9, "point {k}");
         }
         let base = cam.interior();
@@ -161,8 +237,14 @@ mod tests {
             let (mut a, mut b) = (base, base);
             a[k] += hk;
             b[k] -= hk;
-            let num = (cam.with_interior(&a).project(&pose, &x).unwrap() - cam.with_interior(&b).project(&pose, &x).unwrap()) / (2.0 * hk);
-            assert!((num - j.interior.column(k)).norm() < 1e-6 * (1.0 + num.norm()), "interior {k}: {num} vs {}", j.interior.column(k));
+            let num = (cam.with_interior(&a).project(&pose, &x).unwrap()
+                - cam.with_interior(&b).project(&pose, &x).unwrap())
+                / (2.0 * hk);
+            assert!(
+                (num - j.interior.column(k)).norm() < 1e-6 * (1.0 + num.norm()),
+                "interior {k}: {num} vs {}",
+                j.interior.column(k)
+            );
         }
         // Pixel conversions invert each other.
         let px = cam.image_to_pixel(p0);

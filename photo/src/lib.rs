@@ -7,4 +7,5 @@
 
 pub mod bal;
 pub mod camera;
+pub mod intersection;
 pub mod rotation;
