@@ -8,4 +8,5 @@
 pub mod bal;
 pub mod camera;
 pub mod intersection;
+pub mod resection;
 pub mod rotation;
