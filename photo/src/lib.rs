@@ -7,6 +7,8 @@
 
 pub mod bal;
 pub mod camera;
+pub mod factors;
 pub mod intersection;
 pub mod resection;
 pub mod rotation;
+pub mod solver;

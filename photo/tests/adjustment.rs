@@ -1,0 +1,176 @@
+//! The general adjustment on a synthetic block with exact truth: data snooping finds injected
+//! blunders without removing good observations; variance components recover group sigmas.
+
+use nalgebra::{DVector, Vector2, Vector3};
+use photo::camera::{Camera, Pose};
+use photo::factors::{ControlPoint, ImagePoint};
+use photo::rotation::Angles;
+use photo::solver::{Block, Loss, Problem};
+
+/// Deterministic normal numbers (SplitMix64 + Box–Muller).
+struct Rng(u64);
+impl Rng {
+    fn u(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn n(&mut self) -> f64 {
+        (-2.0 * self.u().max(1e-300).ln()).sqrt() * (2.0 * std::f64::consts::PI * self.u()).cos()
+    }
+}
+
+const PX: f64 = 3.9e-6;
+
+struct Block3 {
+    cam: Camera,
+    poses: Vec<Pose>,
+    points: Vec<Vector3<f64>>,
+}
+
+fn block() -> Block3 {
+    let cam = Camera::ideal(0.035, PX, 6000, 4000);
+    let mut poses = Vec::new();
+    for i in 0..3 {
+        for j in 0..3 {
+            poses.push(Pose {
+                r: Angles::OmegaPhiKappa {
+                    omega: 0.01 * (i as f64 - 1.0),
+                    phi: 0.01 * (j as f64 - 1.0),
+                    kappa: 0.02,
+                }
+                .matrix(),
+                centre: Vector3::new(60.0 * i as f64, 60.0 * j as f64, 350.0),
+            });
+        }
+    }
+    let mut rng = Rng(11);
+    let points = (0..340)
+        .map(|_| {
+            Vector3::new(
+                rng.u() * 160.0 - 20.0,
+                rng.u() * 160.0 - 20.0,
+                rng.u() * 10.0,
+            )
+        })
+        .collect();
+    Block3 { cam, poses, points }
+}
+
+/// Build the problem: image points (σ_true per camera, in groups), 12 control points, a
+/// perturbed start, `blunders` image points shifted by 10–30 px. Returns the problem, the
+/// blunders' factor indices and the number of image points.
+fn problem(
+    b: &Block3,
+    sigma_true: impl Fn(usize) -> f64,
+    group_of: impl Fn(usize) -> usize,
+    blunders: usize,
+) -> (Problem, Vec<usize>, usize) {
+    let mut rng = Rng(5);
+    let mut p = Problem::new(Loss::Trivial);
+    let pose_ids: Vec<usize> = b
+        .poses
+        .iter()
+        .map(|t| {
+            let r = photo::rotation::exp_so3(&Vector3::new(
+                0.005 * rng.n(),
+                0.005 * rng.n(),
+                0.005 * rng.n(),
+            )) * t.r;
+            p.add_block(
+                Block::Pose(Pose {
+                    r,
+                    centre: t.centre + Vector3::new(rng.n(), rng.n(), rng.n()),
+                }),
+                false,
+            )
+        })
+        .collect();
+    let pt_ids: Vec<usize> = b
+        .points
+        .iter()
+        .map(|x| {
+            p.add_block(
+                Block::Vector(DVector::from_column_slice(
+                    (x + Vector3::new(rng.n(), rng.n(), rng.n())).as_slice(),
+                )),
+                false,
+            )
+        })
+        .collect();
+    // Observations first, so that blunders can be placed before the factors are built.
+    let mut obs: Vec<(usize, usize, Vector2<f64>)> = Vec::new();
+    for (c, pose) in b.poses.iter().enumerate() {
+        for (k, x) in b.points.iter().enumerate() {
+            if let Some(xy) = b.cam.project(pose, x) {
+                let px = b.cam.image_to_pixel(xy);
+                if px.x >= 0.0 && px.y >= 0.0 && px.x < 6000.0 && px.y < 4000.0 {
+                    obs.push((c, k, xy + Vector2::new(rng.n(), rng.n()) * sigma_true(c)));
+                }
+            }
+        }
+    }
+    let chosen: Vec<usize> = (0..blunders).map(|i| (i * 397 + 50) % obs.len()).collect();
+    for (n, &i) in chosen.iter().enumerate() {
+        let size = (10.0 + 4.0 * n as f64) * PX * if n % 2 == 0 { 1.0 } else { -1.0 };
+        obs[i].2.y += size;
+    }
+    let mut bl = Vec::new();
+    for (i, (c, k, xy)) in obs.iter().enumerate() {
+        let f = p.add_factor(Box::new(ImagePoint::new(
+            b.cam,
+            pose_ids[*c],
+            pt_ids[*k],
+            *xy,
+            PX,
+            group_of(*c),
+        )));
+        if chosen.contains(&i) {
+            bl.push(f);
+        }
+    }
+    for k in 0..12 {
+        p.add_factor(Box::new(ControlPoint::new(
+            pt_ids[k * 25],
+            b.points[k * 25],
+            [0.02; 3],
+            1,
+        )));
+    }
+    (p, bl, obs.len())
+}
+
+#[test]
+fn data_snooping_finds_five_blunders_among_two_thousand_points() {
+    let b = block();
+    let (mut p, blunders, n_image) = problem(&b, |_| PX, |_| 0, 5);
+    assert!(n_image >= 1900, "{n_image} image points");
+    // 5 % family-wise over all image coordinates (Bonferroni), not 0.1 % per test.
+    let critical = photo::solver::snooping_critical(0.05, 2 * n_image);
+    let (stats, removed) = p.data_snooping(critical, 30).unwrap();
+    let mut r = removed.clone();
+    r.sort();
+    let mut want = blunders.clone();
+    want.sort();
+    eprintln!("{n_image} image points, {} unknowns, critical |w| {critical:.2}, σ0 {:.3}, removed {:?} (blunders {:?})", stats.unknowns, stats.sigma0, removed, blunders);
+    assert_eq!(r, want, "exactly the blunders are removed");
+    assert!((stats.sigma0 - 1.0).abs() < 0.1, "σ0 {}", stats.sigma0);
+}
+
+#[test]
+fn variance_components_recover_two_group_sigmas() {
+    let b = block();
+    // Cameras 0–4 measured at 1 px, 5–8 at 2 px; both assumed 1 px.
+    let (mut p, _, _) = problem(
+        &b,
+        |c| if c < 5 { PX } else { 2.0 * PX },
+        |c| if c < 5 { 0 } else { 2 },
+        0,
+    );
+    let s = p.variance_components(10, 30).unwrap();
+    eprintln!("variance components: σ multipliers {s:?}");
+    assert!((s[0] - 1.0).abs() < 0.1, "group 0: {}", s[0]);
+    assert!((s[2] - 2.0).abs() < 0.2, "group 2: {}", s[2]);
+}
