@@ -113,6 +113,16 @@ struct Lin {
     j: Vec<(usize, DMatrix<f64>)>,
 }
 
+/// Reliability of one factor's components.
+#[derive(Clone, Debug)]
+pub struct Reliability {
+    pub factor: usize,
+    /// Redundancy numbers (0 = uncontrolled, 1 = fully controlled).
+    pub redundancy: DVector<f64>,
+    /// Normalised residuals v/(σ·√r) (Baarda's w).
+    pub normalised: DVector<f64>,
+}
+
 /// Statistics of an adjustment.
 #[derive(Clone, Debug, Default)]
 pub struct Stats {
@@ -126,7 +136,7 @@ pub struct Stats {
 /// Why an adjustment fails.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SolveError {
-    #[error("the normal equations are singular: a datum defect (no control, nothing fixed) or an unobserved block ({0})")]
+    #[error("the normal equations are singular: {0}")]
     Singular(String),
     #[error("more unknowns ({0}) than observations ({1})")]
     Underdetermined(usize, usize),
@@ -244,6 +254,24 @@ impl Problem {
         let mut lambda = 1e-6;
         let mut stats = Stats::default();
         let mut cost = self.cost(&off)?;
+        // Every free block must be determined by its own observations (a point seen by one
+        // ray, a camera without points are not): check its diagonal block of the normals.
+        {
+            let lin = self.linearise(&off)?;
+            let (nm, _) = Self::normal_matrix(&lin, n, None);
+            for (b, o) in off.iter().enumerate() {
+                let Some(o) = o else { continue };
+                let d = self.blocks[b].dim();
+                let e = nm
+                    .view((*o, *o), (d, d))
+                    .into_owned()
+                    .symmetric_eigenvalues();
+                let (lo, hi) = (e.min(), e.max());
+                if !(hi > 0.0 && lo > 1e-10 * hi) {
+                    return Err(SolveError::Singular(format!("block {b} is not determined by its observations (observed too few times or not at all)")));
+                }
+            }
+        }
         for it in 1..=max_iterations {
             stats.iterations = it;
             let lin = self.linearise(&off)?;
@@ -283,6 +311,18 @@ impl Problem {
         let m: usize = lin.iter().map(|l| l.r.len()).sum();
         if m < n {
             return Err(SolveError::Underdetermined(n, m));
+        }
+        // The undamped normals must be regular: otherwise a datum defect (no control, nothing fixed).
+        let (nm, _) = Self::normal_matrix(&lin, n, None);
+        let max_diag = nm.diagonal().max();
+        let regular = nm
+            .cholesky()
+            .map(|c| c.l().diagonal().iter().all(|d| d * d > 1e-12 * max_diag))
+            .unwrap_or(false);
+        if !regular {
+            return Err(SolveError::Singular(format!(
+                "{n} unknowns: a datum defect (no control points, nothing fixed)"
+            )));
         }
         stats.observations = m;
         stats.unknowns = n;
@@ -330,7 +370,7 @@ impl Problem {
 
     /// Per active factor: redundancy numbers and normalised residuals w = v/(σ·√r) of its
     /// components.
-    pub fn reliability(&self) -> Result<Vec<(usize, DVector<f64>, DVector<f64>)>, SolveError> {
+    pub fn reliability(&self) -> Result<Vec<Reliability>, SolveError> {
         let (q, lin) = self.cofactors()?;
         Ok(lin
             .iter()
@@ -348,7 +388,11 @@ impl Problem {
                         }
                     }),
                 );
-                (l.factor, rr, w)
+                Reliability {
+                    factor: l.factor,
+                    redundancy: rr,
+                    normalised: w,
+                }
             })
             .collect())
     }
@@ -366,7 +410,12 @@ impl Problem {
             let rel = self.reliability()?;
             let worst = rel
                 .iter()
-                .map(|(k, _, w)| (*k, w.iter().fold(0.0f64, |m, x| m.max(x.abs()))))
+                .map(|r| {
+                    (
+                        r.factor,
+                        r.normalised.iter().fold(0.0f64, |m, x| m.max(x.abs())),
+                    )
+                })
                 .max_by(|a, b| a.1.partial_cmp(&b.1).unwrap_or(std::cmp::Ordering::Equal));
             match worst {
                 Some((k, w)) if w > critical => {
@@ -423,7 +472,7 @@ pub fn normal_quantile(p: f64) -> f64 {
         -3.969683028665376e+01,
         2.209460984245205e+02,
         -2.759285104469687e+02,
-        1.383577518672690e+02,
+        1.38357751867269e+02,
         -3.066479806614716e+01,
         2.506628277459239e+00,
     ];

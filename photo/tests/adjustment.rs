@@ -174,3 +174,54 @@ fn variance_components_recover_two_group_sigmas() {
     assert!((s[0] - 1.0).abs() < 0.1, "group 0: {}", s[0]);
     assert!((s[2] - 2.0).abs() < 0.2, "group 2: {}", s[2]);
 }
+
+#[test]
+fn bad_problems_give_clear_errors() {
+    let b = block();
+    let (mut p, _, _) = problem(&b, |_| PX, |_| 0, 0);
+    // A point seen once (an extra point block with a single ray): not determined.
+    let lonely = p.add_block(
+        Block::Vector(DVector::from_column_slice(&[50.0, 50.0, 0.0])),
+        false,
+    );
+    let xy = b
+        .cam
+        .project(&b.poses[4], &Vector3::new(50.0, 50.0, 0.0))
+        .unwrap();
+    p.add_factor(Box::new(ImagePoint::new(b.cam, 4, lonely, xy, PX, 0)));
+    let e = p.solve(10).unwrap_err().to_string();
+    assert!(e.contains("singular"), "{e}");
+    // A camera with no observations: not determined either.
+    let (mut q, _, _) = problem(&b, |_| PX, |_| 0, 0);
+    q.add_block(Block::Pose(b.poses[0]), false);
+    assert!(q.solve(10).unwrap_err().to_string().contains("singular"));
+    // No control and nothing fixed: a datum defect.
+    let mut d = Problem::new(Loss::Huber(2.0));
+    let pose = d.add_block(Block::Pose(b.poses[0]), false);
+    let pt = d.add_block(
+        Block::Vector(DVector::from_column_slice(b.points[0].as_slice())),
+        false,
+    );
+    d.add_factor(Box::new(ImagePoint::new(
+        b.cam,
+        pose,
+        pt,
+        b.cam.project(&b.poses[0], &b.points[0]).unwrap(),
+        PX,
+        0,
+    )));
+    assert!(d.solve(10).is_err());
+}
+
+#[test]
+fn bal_files_with_bad_numbers_are_refused() {
+    let dir = std::env::temp_dir().join(format!("ppkat-bal-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let f = dir.join("nan.txt");
+    std::fs::write(&f, "1 1 1\n0 0 1.0 NaN\n0 0 0 0 0 -1 500 0 0\n1 2 3\n").unwrap();
+    let e = photo::bal::BalProblem::read(&f).unwrap_err().to_string();
+    assert!(e.contains("nan.txt") && e.contains("not finite"), "{e}");
+    std::fs::write(&f, "1 1 1\n0 3 1.0 2.0\n").unwrap();
+    let e = photo::bal::BalProblem::read(&f).unwrap_err().to_string();
+    assert!(e.contains("point 3"), "{e}");
+}
