@@ -90,6 +90,35 @@ pub fn truth_at(truth: &[TruthSample], t: f64) -> Option<Vector3<f64>> {
     Some(a.pos * h00 + a.vel * (h10 * h) + b.pos * h01 + b.vel * (h11 * h))
 }
 
+/// The files of a simulation, read: rover and base observations and the orbits.
+pub struct SimInputs {
+    pub rover: ObsFile,
+    pub base: ObsFile,
+    pub orbits: Orbits,
+}
+
+impl SimInputs {
+    pub fn read(sim: &SimReport) -> Result<SimInputs, ChainError> {
+        Ok(SimInputs {
+            rover: ObsFile::read(&sim.rover)?,
+            base: ObsFile::read(&sim.base)?,
+            orbits: Orbits::broadcast(Ephemerides::from_nav(&[NavFile::read(&sim.nav)?])),
+        })
+    }
+
+    /// Carrier-phase positioning of the simulated rover against the simulated base.
+    pub fn ppk(&self, sim: &SimReport, opts: &PpkOptions) -> Result<ppk::PpkResult, ChainError> {
+        Ok(ppk::process(
+            &self.rover,
+            &self.base,
+            BasePosition::Given(sim.base_position),
+            &self.orbits,
+            opts,
+            &|_| {},
+        )?)
+    }
+}
+
 /// What the demo measured.
 #[derive(Clone, Debug)]
 pub struct DemoReport {
@@ -151,17 +180,11 @@ pub fn run(out: &Path) -> Result<DemoReport, ChainError> {
     let scenario = simulate::builtin("demo").expect("the demo scenario exists");
     let sim = simulate::run(&scenario, out)?;
     let truth = read_truth(&out.join("truth_trajectory.csv"))?;
-    let rover = ObsFile::read(&sim.rover)?;
-    let base = ObsFile::read(&sim.base)?;
-    let orbits = Orbits::broadcast(Ephemerides::from_nav(&[NavFile::read(&sim.nav)?]));
+    let inputs = SimInputs::read(&sim)?;
+    let (rover, orbits) = (&inputs.rover, &inputs.orbits);
     let t_of = |t: hifitime::Epoch| t.to_gpst_seconds();
     // Single point.
-    let sppr = spp::run(
-        &rover.epochs,
-        &rover.header,
-        &orbits,
-        &SppOptions::default(),
-    );
+    let sppr = spp::run(&rover.epochs, &rover.header, orbits, &SppOptions::default());
     let (mut h, mut v) = (Vec::new(), Vec::new());
     for s in &sppr.solutions {
         let clock = s.clocks.values().next().copied().unwrap_or(0.0) / gnss::orbit::C;
@@ -172,14 +195,7 @@ pub fn run(out: &Path) -> Result<DemoReport, ChainError> {
         }
     }
     // Carrier phase.
-    let res = ppk::process(
-        &rover,
-        &base,
-        BasePosition::Given(sim.base_position),
-        &orbits,
-        &PpkOptions::default(),
-        &|_| {},
-    )?;
+    let res = inputs.ppk(&sim, &PpkOptions::default())?;
     let mut d = Vec::new();
     for s in res.solutions.iter().filter(|s| s.quality == Quality::Fixed) {
         if let Some(p) = truth_at(&truth, t_of(s.time)) {
@@ -197,7 +213,7 @@ pub fn run(out: &Path) -> Result<DemoReport, ChainError> {
     // Exposures: events of the rover file on the PPK trajectory, lever arm rotated by the
     // attitude an IMU would give (the simulated attitude, written as an attitude file).
     let traj = crate::exposure::trajectory::Trajectory::read_pos(&pos_path)?;
-    let (events, _) = crate::exposure::events::from_rinex(&rover, &traj);
+    let (events, _) = crate::exposure::events::from_rinex(rover, &traj);
     let att_path = out.join("imu_attitude.csv");
     let truth_text = |name: &str| {
         std::fs::read_to_string(out.join(name)).map_err(|e| ChainError::Truth {

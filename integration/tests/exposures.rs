@@ -8,6 +8,7 @@ use gnss::rinex::nav::NavFile;
 use gnss::rinex::ObsFile;
 use gnss::solution::{write_pos, PosFormat, PosRecord, Quality};
 use gnss::time::from_week_tow;
+use integration::demo::SimInputs;
 use integration::exposure::attitude::{AngleConvention, AttitudeTable};
 use integration::exposure::events::{self, ExposureEvent};
 use integration::exposure::trajectory::{TrajPoint, Trajectory};
@@ -171,23 +172,14 @@ fn interpolation_through_turns() {
 #[test]
 fn events_to_ppk_to_projection_centres() {
     let s = sim("e2e");
-    let rover = ObsFile::read(&s.rep.rover).unwrap();
-    let base = ObsFile::read(&s.rep.base).unwrap();
-    let orbits = Orbits::broadcast(Ephemerides::from_nav(&[NavFile::read(&s.rep.nav).unwrap()]));
-    let r = ppk::process(
-        &rover,
-        &base,
-        BasePosition::Given(s.rep.base_position),
-        &orbits,
-        &PpkOptions::default(),
-        &|_| {},
-    )
-    .unwrap();
+    let inputs = SimInputs::read(&s.rep).unwrap();
+    let rover = &inputs.rover;
+    let r = inputs.ppk(&s.rep, &PpkOptions::default()).unwrap();
     let pos = s.dir.join("ppk.pos");
     let recs: Vec<PosRecord> = r.solutions.iter().map(|s| s.to_record()).collect();
     write_pos(&pos, &[], &recs, PosFormat::Xyz).unwrap();
     let traj = Trajectory::read_pos(&pos).unwrap();
-    let (evs, clock) = events::from_rinex(&rover, &traj);
+    let (evs, clock) = events::from_rinex(rover, &traj);
     let (_, att) = truth_trajectory(&s.dir, 1);
     let res = compute(
         evs,

@@ -7,7 +7,7 @@ use gnss::ppk::{self, BasePosition, PpkOptions};
 use gnss::rinex::nav::NavFile;
 use gnss::rinex::ObsFile;
 use gnss::solution::Quality;
-use integration::demo::{read_truth, truth_at};
+use integration::demo::{read_truth, truth_at, SimInputs};
 use integration::simulate::{self, ErrorModel, Scenario, SimError};
 use std::path::PathBuf;
 
@@ -82,18 +82,9 @@ fn ppk_round_trip_on_a_20_minute_flight() {
     let rep = simulate::run(&s, &dir).unwrap();
     assert!(rep.duration_s >= 1200.0, "{} s", rep.duration_s);
     let truth = read_truth(&dir.join("truth_trajectory.csv")).unwrap();
-    let rover = ObsFile::read(&rep.rover).unwrap();
-    let base = ObsFile::read(&rep.base).unwrap();
-    let orbits = Orbits::broadcast(Ephemerides::from_nav(&[NavFile::read(&rep.nav).unwrap()]));
-    let r = ppk::process(
-        &rover,
-        &base,
-        BasePosition::Given(rep.base_position),
-        &orbits,
-        &PpkOptions::default(),
-        &|_| {},
-    )
-    .unwrap();
+    let inputs = SimInputs::read(&rep).unwrap();
+    let (rover, orbits) = (&inputs.rover, &inputs.orbits);
+    let r = inputs.ppk(&rep, &PpkOptions::default()).unwrap();
     let mut d = Vec::new();
     for s in r.solutions.iter().filter(|s| s.quality == Quality::Fixed) {
         let t = truth_at(&truth, s.time.to_gpst_seconds()).unwrap();
@@ -202,18 +193,9 @@ fn injected_slips_and_gaps_are_survived() {
     let rep = simulate::run(&s, &dir).unwrap();
     assert!(rep.rover_stats.slips > 0 && rep.rover_stats.gap_records > 0);
     let truth = read_truth(&dir.join("truth_trajectory.csv")).unwrap();
-    let rover = ObsFile::read(&rep.rover).unwrap();
-    let base = ObsFile::read(&rep.base).unwrap();
-    let orbits = Orbits::broadcast(Ephemerides::from_nav(&[NavFile::read(&rep.nav).unwrap()]));
-    let r = ppk::process(
-        &rover,
-        &base,
-        BasePosition::Given(rep.base_position),
-        &orbits,
-        &PpkOptions::default(),
-        &|_| {},
-    )
-    .unwrap();
+    let inputs = SimInputs::read(&rep).unwrap();
+    let (rover, orbits) = (&inputs.rover, &inputs.orbits);
+    let r = inputs.ppk(&rep, &PpkOptions::default()).unwrap();
     let fw = r.forward.as_ref().unwrap();
     let lli = fw
         .slips
