@@ -6,8 +6,12 @@
 //! by a left perturbation R ← exp(δ)·R; the cost is the file's, ½Σr².
 
 use crate::rotation::{exp_so3, log_so3, skew};
+use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::{SparseColMat, Triplet};
 use nalgebra::{DMatrix, DVector, Matrix2x3, Matrix3, SMatrix, SVector, Vector2, Vector3};
 use rayon::prelude::*;
+use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Errors reading a BAL file.
@@ -182,6 +186,9 @@ pub struct LmOptions {
     pub function_tolerance: f64,
     /// Initial trust-region radius (damping = 1/radius on the scaled diagonal).
     pub initial_radius: f64,
+    /// Largest reduced camera system solved densely; larger ones go to faer's sparse
+    /// Cholesky with the symbolic factorisation computed once.
+    pub dense_limit: usize,
 }
 
 impl Default for LmOptions {
@@ -190,6 +197,7 @@ impl Default for LmOptions {
             max_iterations: 100,
             function_tolerance: 1e-6,
             initial_radius: 1e4,
+            dense_limit: 2000,
         }
     }
 }
@@ -220,8 +228,62 @@ fn apply(p: &BalProblem, dc: &[SVector<f64, 9>], dp: &[Vector3<f64>]) -> BalProb
     q
 }
 
+type Blocks = BTreeMap<(usize, usize), SMatrix<f64, 9, 9>>;
+
+fn solve_dense(n: usize, blocks: &Blocks, b: &DVector<f64>) -> Option<DVector<f64>> {
+    let mut s = DMatrix::<f64>::zeros(n, n);
+    for (&(i, k), m) in blocks {
+        s.view_mut((9 * i, 9 * k), (9, 9)).copy_from(m);
+        if i != k {
+            s.view_mut((9 * k, 9 * i), (9, 9)).copy_from(&m.transpose());
+        }
+    }
+    Some(s.cholesky()?.solve(b))
+}
+
+/// Lower-triangle triplets of the block matrix (in a fixed order).
+fn triplets(blocks: &Blocks) -> Vec<Triplet<usize, usize, f64>> {
+    let mut t = Vec::with_capacity(blocks.len() * 81);
+    for (&(i, k), m) in blocks {
+        for r in 0..9 {
+            for c in 0..9 {
+                let (row, col) = (9 * i + r, 9 * k + c);
+                if row >= col {
+                    t.push(Triplet {
+                        row,
+                        col,
+                        val: m[(r, c)],
+                    });
+                }
+            }
+        }
+    }
+    t
+}
+
+fn sparse_symbolic(n: usize, blocks: &Blocks) -> Option<SymbolicLlt<usize>> {
+    // Sequential factorisation: bit-identical results whatever the thread count.
+    faer::set_global_parallelism(faer::Par::Seq);
+    let m = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets(blocks)).ok()?;
+    SymbolicLlt::try_new(m.symbolic(), faer::Side::Lower).ok()
+}
+
+fn solve_sparse(
+    sym: &SymbolicLlt<usize>,
+    n: usize,
+    blocks: &Blocks,
+    b: &DVector<f64>,
+) -> Option<DVector<f64>> {
+    let m = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets(blocks)).ok()?;
+    let llt = Llt::try_new_with_symbolic(sym.clone(), m.as_ref(), faer::Side::Lower).ok()?;
+    let mut rhs = faer::Mat::<f64>::from_fn(n, 1, |i, _| b[i]);
+    llt.solve_in_place(rhs.as_mut());
+    Some(DVector::from_fn(n, |i, _| rhs[(i, 0)]))
+}
+
 /// Minimise ½Σr² by Levenberg–Marquardt; the points are eliminated by the Schur complement
-/// and the reduced camera system is solved by dense Cholesky.
+/// and the reduced camera system is solved by dense Cholesky when small, by faer's sparse
+/// Cholesky (symbolic factorisation reused across iterations) when large.
 pub fn solve(problem: &mut BalProblem, opts: &LmOptions) -> LmReport {
     let t0 = std::time::Instant::now();
     let nc = problem.cameras.len();
@@ -236,6 +298,8 @@ pub fn solve(problem: &mut BalProblem, opts: &LmOptions) -> LmReport {
     let mut radius = opts.initial_radius;
     let mut nu = 2.0;
     let (mut iterations, mut successful) = (0, 0);
+    // The sparsity of the reduced system never changes: its symbolic factorisation is reused.
+    let mut symbolic: Option<SymbolicLlt<usize>> = None;
     while iterations < opts.max_iterations {
         iterations += 1;
         // Jacobians and residuals, in parallel.
@@ -273,20 +337,31 @@ pub fn solve(problem: &mut BalProblem, opts: &LmOptions) -> LmReport {
             .iter()
             .map(|ks| ks.iter().map(|&k| lin[k].1.transpose() * lin[k].2).sum())
             .collect();
-        // Reduced camera system S·Δc = b.
+        // Reduced camera system S·Δc = b, kept as 9×9 blocks of its lower triangle.
         let n = 9 * nc;
-        let mut s = DMatrix::<f64>::zeros(n, n);
+        let mut blocks: Blocks = BTreeMap::new();
         let mut b = DVector::<f64>::zeros(n);
         for i in 0..nc {
             let mut ui = u[i];
             for d in 0..9 {
                 ui[(d, d)] += lambda * ui[(d, d)].clamp(1e-6, 1e32);
             }
-            s.view_mut((9 * i, 9 * i), (9, 9)).copy_from(&ui);
+            blocks.insert((i, i), ui);
             b.rows_mut(9 * i, 9).copy_from(&(-gc[i]));
         }
         for (j, ks) in by_point.iter().enumerate() {
-            let Some(vi) = vinv[j] else { continue };
+            let Some(vi) = vinv[j] else {
+                // Keep the sparsity pattern fixed (the symbolic factorisation is reused).
+                for &a in ks {
+                    for &c in ks {
+                        let (ci, ck) = (problem.obs[a].cam, problem.obs[c].cam);
+                        if ck <= ci {
+                            blocks.entry((ci, ck)).or_insert_with(SMatrix::zeros);
+                        }
+                    }
+                }
+                continue;
+            };
             let ws: Vec<(usize, SMatrix<f64, 9, 3>)> = ks
                 .iter()
                 .map(|&k| (problem.obs[k].cam, lin[k].0.transpose() * lin[k].1))
@@ -297,18 +372,28 @@ pub fn solve(problem: &mut BalProblem, opts: &LmOptions) -> LmReport {
                 let mut bv = b.rows_mut(9 * ci, 9);
                 bv += wi * vg;
                 for (ck, wk) in &ws {
-                    let blk = wv * wk.transpose();
-                    let mut view = s.view_mut((9 * ci, 9 * ck), (9, 9));
-                    view -= blk;
+                    if ck <= ci {
+                        *blocks.entry((*ci, *ck)).or_insert_with(SMatrix::zeros) -=
+                            wv * wk.transpose();
+                    }
                 }
             }
         }
-        let Some(ch) = s.cholesky() else {
+        let solved = if n <= opts.dense_limit {
+            solve_dense(n, &blocks, &b)
+        } else {
+            if symbolic.is_none() {
+                symbolic = sparse_symbolic(n, &blocks);
+            }
+            symbolic
+                .as_ref()
+                .and_then(|sym| solve_sparse(sym, n, &blocks, &b))
+        };
+        let Some(dc_all) = solved else {
             radius /= nu;
             nu *= 2.0;
             continue;
         };
-        let dc_all = ch.solve(&b);
         let dc: Vec<SVector<f64, 9>> = (0..nc)
             .map(|i| SVector::<f64, 9>::from_iterator(dc_all.rows(9 * i, 9).iter().copied()))
             .collect();

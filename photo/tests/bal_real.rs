@@ -38,3 +38,27 @@ fn ladybug_49_cameras_reach_the_reference_cost() {
         assert!(r.final_cost <= bound, "{file}: {}", r.final_cost);
     }
 }
+
+/// The sparse path (faer, symbolic factorisation reused) gives the dense path's answer.
+#[test]
+fn sparse_reduced_system_matches_dense() {
+    let Some(p) = data("photo/bal/bal-ladybug-problem-49-7776-pre-shrink-1800.txt") else {
+        return;
+    };
+    let mut dense = BalProblem::read(&p).unwrap();
+    let mut sparse = dense.clone();
+    let a = solve(&mut dense, &LmOptions::default());
+    let b = solve(
+        &mut sparse,
+        &LmOptions {
+            dense_limit: 0,
+            ..LmOptions::default()
+        },
+    );
+    eprintln!(
+        "dense {:.9e} in {} iterations, sparse {:.9e} in {}",
+        a.final_cost, a.iterations, b.final_cost, b.iterations
+    );
+    assert!((a.final_cost - b.final_cost).abs() <= 1e-6 * a.final_cost);
+    assert!(b.final_cost <= 3.0044e3);
+}
