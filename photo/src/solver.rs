@@ -4,12 +4,16 @@
 //! knows what a factor means. After convergence: σ0, covariances, redundancy numbers, Baarda
 //! data snooping with removal, and variance components per observation group.
 //!
-//! This first version solves the full normal equations densely (fine up to a few thousand
-//! unknowns); the BAL solver shows the Schur-complement path for large camera–point problems.
+//! Object points (blocks added with [`Problem::add_point`]) are eliminated by the Schur
+//! complement in every step and the reduced system over the other blocks is solved densely;
+//! factors are linearised in parallel. The statistics (covariances, redundancy numbers) use
+//! the full inverse normal matrix, fine up to a few thousand unknowns.
 
 use crate::camera::Pose;
 use crate::rotation::exp_so3;
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use rayon::prelude::*;
+use std::collections::BTreeMap;
 
 /// A parameter block.
 #[derive(Clone, Debug)]
@@ -98,6 +102,8 @@ impl Loss {
 pub struct Problem {
     pub blocks: Vec<Block>,
     pub fixed: Vec<bool>,
+    /// Blocks eliminated by the Schur complement (object points).
+    pub eliminate: Vec<bool>,
     pub factors: Vec<Box<dyn Factor>>,
     /// Factors removed by data snooping (never deleted: kept for the report).
     pub removed: Vec<bool>,
@@ -111,6 +117,8 @@ struct Lin {
     factor: usize,
     r: DVector<f64>,
     j: Vec<(usize, DMatrix<f64>)>,
+    /// The free blocks of `j`, in the same order.
+    blocks: Vec<usize>,
 }
 
 /// Reliability of one factor's components.
@@ -149,6 +157,7 @@ impl Problem {
         Problem {
             blocks: Vec::new(),
             fixed: Vec::new(),
+            eliminate: Vec::new(),
             factors: Vec::new(),
             removed: Vec::new(),
             group_scale: vec![1.0],
@@ -158,7 +167,18 @@ impl Problem {
     pub fn add_block(&mut self, b: Block, fixed: bool) -> usize {
         self.blocks.push(b);
         self.fixed.push(fixed);
+        self.eliminate.push(false);
         self.blocks.len() - 1
+    }
+
+    /// An object point: a 3-vector eliminated by the Schur complement while solving.
+    pub fn add_point(&mut self, x: Vector3<f64>, fixed: bool) -> usize {
+        let id = self.add_block(
+            Block::Vector(DVector::from_column_slice(x.as_slice())),
+            fixed,
+        );
+        self.eliminate[id] = true;
+        id
     }
     pub fn add_factor(&mut self, f: Box<dyn Factor>) -> usize {
         let g = f.group();
@@ -188,35 +208,164 @@ impl Problem {
     /// Linearise every active factor: whitened residual and whitened Jacobian blocks with their
     /// column offsets (fixed blocks dropped).
     fn linearise(&self, off: &[Option<usize>]) -> Result<Vec<Lin>, SolveError> {
-        let mut out = Vec::new();
-        for (k, f) in self.factors.iter().enumerate() {
-            if self.removed[k] {
-                continue;
-            }
-            let bl: Vec<&Block> = f.blocks().iter().map(|&i| &self.blocks[i]).collect();
-            let (r, js) = f.evaluate(&bl).ok_or(SolveError::Evaluation(k))?;
-            let scale = self.group_scale[f.group()].sqrt();
-            let sig = f.sigmas() * scale;
-            let rw = r.component_div(&sig);
-            let mut jw = Vec::new();
-            for (bi, j) in f.blocks().iter().zip(js) {
-                if let Some(o) = off[*bi] {
-                    let mut j = j;
-                    for i in 0..j.nrows() {
-                        for c in 0..j.ncols() {
-                            j[(i, c)] /= sig[i];
+        // In parallel, collected in factor order: the sums that follow are deterministic.
+        let lin: Vec<Result<Option<Lin>, SolveError>> = self
+            .factors
+            .par_iter()
+            .enumerate()
+            .map(|(k, f)| {
+                if self.removed[k] {
+                    return Ok(None);
+                }
+                let bl: Vec<&Block> = f.blocks().iter().map(|&i| &self.blocks[i]).collect();
+                let (r, js) = f.evaluate(&bl).ok_or(SolveError::Evaluation(k))?;
+                let sig = f.sigmas() * self.group_scale[f.group()].sqrt();
+                let rw = r.component_div(&sig);
+                let mut jw = Vec::new();
+                for (bi, mut j) in f.blocks().iter().copied().zip(js) {
+                    if let Some(o) = off[bi] {
+                        for i in 0..j.nrows() {
+                            for c in 0..j.ncols() {
+                                j[(i, c)] /= sig[i];
+                            }
                         }
+                        jw.push((o, j));
                     }
-                    jw.push((o, j));
+                }
+                let blocks: Vec<usize> = f
+                    .blocks()
+                    .iter()
+                    .copied()
+                    .filter(|b| off[*b].is_some())
+                    .collect();
+                Ok(Some(Lin {
+                    factor: k,
+                    r: rw,
+                    j: jw,
+                    blocks,
+                }))
+            })
+            .collect();
+        lin.into_iter().filter_map(|x| x.transpose()).collect()
+    }
+
+    /// One damped Gauss–Newton step with the point blocks eliminated by the Schur complement
+    /// (the reduced system over the other blocks is solved densely). Falls back to the full
+    /// normals when a factor ties two points together.
+    fn schur_step(
+        &self,
+        lin: &[Lin],
+        off: &[Option<usize>],
+        n: usize,
+        lambda: f64,
+    ) -> Option<DVector<f64>> {
+        let is_pt = |b: usize| self.eliminate[b];
+        if lin
+            .iter()
+            .any(|l| l.blocks.iter().filter(|b| is_pt(**b)).count() > 1)
+        {
+            let (nm, g) = Self::normal_matrix(lin, n, Some(self.loss));
+            let mut d = nm.clone();
+            for i in 0..n {
+                d[(i, i)] += lambda * nm[(i, i)].max(1e-12);
+            }
+            return Some(d.cholesky()?.solve(&(-g)));
+        }
+        // Reduced layout: the non-point free blocks.
+        let mut roff: Vec<Option<usize>> = vec![None; self.blocks.len()];
+        let mut nr = 0;
+        for (b, o) in off.iter().enumerate() {
+            if o.is_some() && !is_pt(b) {
+                roff[b] = Some(nr);
+                nr += self.blocks[b].dim();
+            }
+        }
+        let mut u = DMatrix::<f64>::zeros(nr, nr);
+        let mut gr = DVector::<f64>::zeros(nr);
+        let mut v: BTreeMap<usize, (Matrix3<f64>, Vector3<f64>)> = BTreeMap::new();
+        let mut w: BTreeMap<(usize, usize), DMatrix<f64>> = BTreeMap::new(); // (point, block) → 3×d
+        for l in lin {
+            let wt = self.loss.weight(l.r.norm());
+            for (ba, (_, ja)) in l.blocks.iter().zip(&l.j) {
+                let ga = ja.transpose() * &l.r * wt;
+                if is_pt(*ba) {
+                    let e = v.entry(*ba).or_insert((Matrix3::zeros(), Vector3::zeros()));
+                    e.0 += Matrix3::from_iterator((ja.transpose() * ja * wt).iter().copied());
+                    e.1 += Vector3::from_iterator(ga.iter().copied());
+                } else if let Some(ra) = roff[*ba] {
+                    let mut gv = gr.rows_mut(ra, ja.ncols());
+                    gv += &ga;
+                }
+                for (bb, (_, jb)) in l.blocks.iter().zip(&l.j) {
+                    match (is_pt(*ba), is_pt(*bb), roff[*ba], roff[*bb]) {
+                        (false, false, Some(ra), Some(rb)) => {
+                            let mut view = u.view_mut((ra, rb), (ja.ncols(), jb.ncols()));
+                            view += ja.transpose() * jb * wt;
+                        }
+                        (true, false, _, Some(_)) => {
+                            let e = w
+                                .entry((*ba, *bb))
+                                .or_insert_with(|| DMatrix::zeros(3, jb.ncols()));
+                            *e += ja.transpose() * jb * wt;
+                        }
+                        _ => {}
+                    }
                 }
             }
-            out.push(Lin {
-                factor: k,
-                r: rw,
-                j: jw,
-            });
         }
-        Ok(out)
+        for i in 0..nr {
+            u[(i, i)] += lambda * u[(i, i)].max(1e-12);
+        }
+        // Eliminate each point.
+        let mut vinv: BTreeMap<usize, Matrix3<f64>> = BTreeMap::new();
+        let mut by_point: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+        for &(p, b) in w.keys() {
+            by_point.entry(p).or_default().push(b);
+        }
+        for (p, (vp, gp)) in &v {
+            let mut vd = *vp;
+            for d in 0..3 {
+                vd[(d, d)] += lambda * vp[(d, d)].max(1e-12);
+            }
+            let vi = vd.try_inverse()?;
+            vinv.insert(*p, vi);
+            let cams = by_point.get(p).cloned().unwrap_or_default();
+            for &a in &cams {
+                let wa = &w[&(*p, a)];
+                let ra = roff[a]?;
+                let t = wa.transpose() * DMatrix::from_column_slice(3, 3, vi.as_slice());
+                let mut gv = gr.rows_mut(ra, wa.ncols());
+                gv -= &t * DVector::from_column_slice(gp.as_slice());
+                for &b in &cams {
+                    let wb = &w[&(*p, b)];
+                    let rb = roff[b]?;
+                    let mut view = u.view_mut((ra, rb), (wa.ncols(), wb.ncols()));
+                    view -= &t * wb;
+                }
+            }
+        }
+        let dr = u.cholesky()?.solve(&(-gr));
+        // Back-substitution and the full step.
+        let mut dx = DVector::<f64>::zeros(n);
+        for (b, o) in off.iter().enumerate() {
+            if let (Some(o), Some(ro)) = (o, roff[b]) {
+                let d = self.blocks[b].dim();
+                dx.rows_mut(*o, d).copy_from(&dr.rows(ro, d));
+            }
+        }
+        for (p, (_, gp)) in &v {
+            let mut rhs = -gp;
+            for &a in by_point.get(p).map(|x| x.as_slice()).unwrap_or(&[]) {
+                let ra = roff[a]?;
+                let wa = &w[&(*p, a)];
+                let da = dr.rows(ra, wa.ncols());
+                rhs -= Vector3::from_iterator((wa * da).iter().copied());
+            }
+            let dp = vinv[p] * rhs;
+            let o = off[*p]?;
+            dx.rows_mut(o, 3).copy_from(&dp);
+        }
+        Some(dx)
     }
 
     fn normal_matrix(lin: &[Lin], n: usize, loss: Option<Loss>) -> (DMatrix<f64>, DVector<f64>) {
@@ -275,15 +424,9 @@ impl Problem {
         for it in 1..=max_iterations {
             stats.iterations = it;
             let lin = self.linearise(&off)?;
-            let (nm, g) = Self::normal_matrix(&lin, n, Some(self.loss));
-            let mut damped = nm.clone();
-            for i in 0..n {
-                damped[(i, i)] += lambda * nm[(i, i)].max(1e-12);
-            }
-            let ch = damped
-                .cholesky()
+            let dx = self
+                .schur_step(&lin, &off, n, lambda)
                 .ok_or_else(|| SolveError::Singular(format!("{n} unknowns")))?;
-            let dx = ch.solve(&(-&g));
             let saved = self.blocks.clone();
             for (b, o) in self.blocks.iter_mut().zip(&off) {
                 if let Some(o) = o {

@@ -91,14 +91,7 @@ fn problem(
     let pt_ids: Vec<usize> = b
         .points
         .iter()
-        .map(|x| {
-            p.add_block(
-                Block::Vector(DVector::from_column_slice(
-                    (x + Vector3::new(rng.n(), rng.n(), rng.n())).as_slice(),
-                )),
-                false,
-            )
-        })
+        .map(|x| p.add_point(x + Vector3::new(rng.n(), rng.n(), rng.n()), false))
         .collect();
     // Observations first, so that blunders can be placed before the factors are built.
     let mut obs: Vec<(usize, usize, Vector2<f64>)> = Vec::new();
