@@ -11,6 +11,9 @@
 
 use crate::camera::Pose;
 use crate::rotation::exp_so3;
+use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::{SparseColMat, Triplet};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -110,6 +113,10 @@ pub struct Problem {
     /// Variance factor per group (σ² multipliers), 1 by default.
     pub group_scale: Vec<f64>,
     pub loss: Loss,
+    /// Largest reduced system solved densely; larger ones go to faer's sparse Cholesky.
+    pub dense_limit: usize,
+    /// Symbolic factorisation of the sparse reduced system, with the block pattern it is for.
+    symbolic: std::sync::Mutex<Option<SymbolicCache>>,
 }
 
 /// One linearised factor: whitened residual and Jacobian blocks at their column offsets.
@@ -130,6 +137,9 @@ pub struct Reliability {
     /// Normalised residuals v/(σ·√r) (Baarda's w).
     pub normalised: DVector<f64>,
 }
+
+/// A symbolic sparse factorisation and the block pattern it was computed for.
+type SymbolicCache = (Vec<(usize, usize)>, SymbolicLlt<usize>);
 
 /// Statistics of an adjustment.
 #[derive(Clone, Debug, Default)]
@@ -162,6 +172,8 @@ impl Problem {
             removed: Vec::new(),
             group_scale: vec![1.0],
             loss,
+            dense_limit: 3000,
+            symbolic: std::sync::Mutex::new(None),
         }
     }
     pub fn add_block(&mut self, b: Block, fixed: bool) -> usize {
@@ -249,6 +261,52 @@ impl Problem {
         lin.into_iter().filter_map(|x| x.transpose()).collect()
     }
 
+    /// Solve the reduced system (blocks at offsets) for −g: dense when small, faer's sparse
+    /// Cholesky when large, its symbolic factorisation kept while the pattern is unchanged.
+    fn solve_reduced(
+        &self,
+        nr: usize,
+        u: &BTreeMap<(usize, usize), DMatrix<f64>>,
+        g: &DVector<f64>,
+    ) -> Option<DVector<f64>> {
+        if nr <= self.dense_limit {
+            let mut m = DMatrix::<f64>::zeros(nr, nr);
+            for (&(r, c), b) in u {
+                m.view_mut((r, c), (b.nrows(), b.ncols())).copy_from(b);
+            }
+            return Some(m.cholesky()?.solve(&(-g)));
+        }
+        let mut t = Vec::new();
+        for (&(r0, c0), b) in u {
+            for i in 0..b.nrows() {
+                for j in 0..b.ncols() {
+                    if r0 + i >= c0 + j {
+                        t.push(Triplet {
+                            row: r0 + i,
+                            col: c0 + j,
+                            val: b[(i, j)],
+                        });
+                    }
+                }
+            }
+        }
+        let m = SparseColMat::<usize, f64>::try_new_from_triplets(nr, nr, &t).ok()?;
+        let pattern: Vec<(usize, usize)> = u.keys().copied().collect();
+        let mut cache = self.symbolic.lock().ok()?;
+        if cache.as_ref().map(|c| c.0 != pattern).unwrap_or(true) {
+            faer::set_global_parallelism(faer::Par::Seq);
+            *cache = Some((
+                pattern,
+                SymbolicLlt::try_new(m.symbolic(), faer::Side::Lower).ok()?,
+            ));
+        }
+        let sym = cache.as_ref()?.1.clone();
+        let llt = Llt::try_new_with_symbolic(sym, m.as_ref(), faer::Side::Lower).ok()?;
+        let mut rhs = faer::Mat::<f64>::from_fn(nr, 1, |i, _| -g[i]);
+        llt.solve_in_place(rhs.as_mut());
+        Some(DVector::from_fn(nr, |i, _| rhs[(i, 0)]))
+    }
+
     /// One damped Gauss–Newton step with the point blocks eliminated by the Schur complement
     /// (the reduced system over the other blocks is solved densely). Falls back to the full
     /// normals when a factor ties two points together.
@@ -280,7 +338,8 @@ impl Problem {
                 nr += self.blocks[b].dim();
             }
         }
-        let mut u = DMatrix::<f64>::zeros(nr, nr);
+        // The reduced matrix as blocks keyed by (row offset, column offset).
+        let mut u: BTreeMap<(usize, usize), DMatrix<f64>> = BTreeMap::new();
         let mut gr = DVector::<f64>::zeros(nr);
         let mut v: BTreeMap<usize, (Matrix3<f64>, Vector3<f64>)> = BTreeMap::new();
         let mut w: BTreeMap<(usize, usize), DMatrix<f64>> = BTreeMap::new(); // (point, block) → 3×d
@@ -299,8 +358,9 @@ impl Problem {
                 for (bb, (_, jb)) in l.blocks.iter().zip(&l.j) {
                     match (is_pt(*ba), is_pt(*bb), roff[*ba], roff[*bb]) {
                         (false, false, Some(ra), Some(rb)) => {
-                            let mut view = u.view_mut((ra, rb), (ja.ncols(), jb.ncols()));
-                            view += ja.transpose() * jb * wt;
+                            *u.entry((ra, rb))
+                                .or_insert_with(|| DMatrix::zeros(ja.ncols(), jb.ncols())) +=
+                                ja.transpose() * jb * wt;
                         }
                         (true, false, _, Some(_)) => {
                             let e = w
@@ -313,8 +373,12 @@ impl Problem {
                 }
             }
         }
-        for i in 0..nr {
-            u[(i, i)] += lambda * u[(i, i)].max(1e-12);
+        for ((ra, rb), m) in u.iter_mut() {
+            if ra == rb {
+                for i in 0..m.nrows() {
+                    m[(i, i)] += lambda * m[(i, i)].max(1e-12);
+                }
+            }
         }
         // Eliminate each point.
         let mut vinv: BTreeMap<usize, Matrix3<f64>> = BTreeMap::new();
@@ -339,12 +403,12 @@ impl Problem {
                 for &b in &cams {
                     let wb = &w[&(*p, b)];
                     let rb = roff[b]?;
-                    let mut view = u.view_mut((ra, rb), (wa.ncols(), wb.ncols()));
-                    view -= &t * wb;
+                    *u.entry((ra, rb))
+                        .or_insert_with(|| DMatrix::zeros(wa.ncols(), wb.ncols())) -= &t * wb;
                 }
             }
         }
-        let dr = u.cholesky()?.solve(&(-gr));
+        let dr = self.solve_reduced(nr, &u, &gr)?;
         // Back-substitution and the full step.
         let mut dx = DVector::<f64>::zeros(n);
         for (b, o) in off.iter().enumerate() {

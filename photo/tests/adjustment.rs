@@ -253,3 +253,25 @@ fn robust_losses_resist_blunders() {
     );
     assert!(huber < plain && cauchy < plain, "{plain} {huber} {cauchy}");
 }
+
+/// The sparse reduced system (faer, symbolic factorisation kept) gives the dense answer.
+#[test]
+fn sparse_and_dense_reduced_systems_agree() {
+    let b = block();
+    let (mut dense, _, _) = problem(&b, |_| PX, |_| 0, 0);
+    let (mut sparse, _, _) = problem(&b, |_| PX, |_| 0, 0);
+    sparse.dense_limit = 0;
+    let a = dense.solve(30).unwrap();
+    let s = sparse.solve(30).unwrap();
+    assert!(
+        (a.sigma0 - s.sigma0).abs() < 1e-9 * a.sigma0,
+        "{} {}",
+        a.sigma0,
+        s.sigma0
+    );
+    for (x, y) in dense.blocks.iter().zip(&sparse.blocks) {
+        if let (Some(x), Some(y)) = (x.vector(), y.vector()) {
+            assert!((x - y).norm() < 1e-6, "{x} {y}");
+        }
+    }
+}
