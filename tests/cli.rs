@@ -219,15 +219,20 @@ fn spp_writes_an_rtklib_pos_file() {
     }
 }
 
+/// The GEONET rover, base and navigation files, or `None` (skipped) without shared data.
+fn geonet() -> Option<(PathBuf, PathBuf, PathBuf)> {
+    Some((
+        shared("gnss/geonet-2005/07590920.05o")?,
+        shared("gnss/geonet-2005/30400920.05o")?,
+        shared("gnss/geonet-2005/07590920.05n")?,
+    ))
+}
+
 const GEONET_BASE_POS: &str = "--base-pos=-3978241.958,3382840.234,3649900.853";
 
 #[test]
 fn ppk_geonet_writes_fixed_solutions_with_quality_columns() {
-    let (Some(rover), Some(base), Some(nav)) = (
-        shared("gnss/geonet-2005/07590920.05o"),
-        shared("gnss/geonet-2005/30400920.05o"),
-        shared("gnss/geonet-2005/07590920.05n"),
-    ) else {
+    let Some((rover, base, nav)) = geonet() else {
         return;
     };
     let out = tmp("geonet-ppk.pos");
@@ -326,11 +331,7 @@ fn ppk_rover_without_phase() {
 
 #[test]
 fn ppk_without_any_base_position() {
-    let (Some(rover), Some(base), Some(nav)) = (
-        shared("gnss/geonet-2005/07590920.05o"),
-        shared("gnss/geonet-2005/30400920.05o"),
-        shared("gnss/geonet-2005/07590920.05n"),
-    ) else {
+    let Some((rover, base, nav)) = geonet() else {
         return;
     };
     let src = std::fs::read_to_string(&base).unwrap();
@@ -480,11 +481,7 @@ fn ppk_high_rate_rover_against_a_30_s_base() {
 /// the reported rover (reference point) is 10 cm lower than without it.
 #[test]
 fn ppk_applies_antex_phase_centre_offsets() {
-    let (Some(rover), Some(base), Some(nav)) = (
-        shared("gnss/geonet-2005/07590920.05o"),
-        shared("gnss/geonet-2005/30400920.05o"),
-        shared("gnss/geonet-2005/07590920.05n"),
-    ) else {
+    let Some((rover, base, nav)) = geonet() else {
         return;
     };
     let src = std::fs::read_to_string(&rover).unwrap();

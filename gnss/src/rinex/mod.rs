@@ -274,6 +274,7 @@ pub fn write_plain_text(path: &Path, w: &mut dyn std::io::Write) -> Result<()> {
         return Ok(());
     }
     // CRINEX: copy the header (after the two CRINEX lines), then decode the body.
+    let crinex = lines::parse_real(lines::cols(&first, 0, 9)).ok().flatten();
     src.next_line()?;
     let mut header_text = Vec::new();
     loop {
@@ -288,7 +289,7 @@ pub fn write_plain_text(path: &Path, w: &mut dyn std::io::Write) -> Result<()> {
     }
     w.write_all(&header_text).map_err(io)?;
     let mut hsrc = Lines::from_reader(path, std::io::Cursor::new(header_text));
-    let header = header::read_header(&mut hsrc, Some(3.0))?;
+    let header = header::read_header(&mut hsrc, crinex)?;
     let mut crx = crx::Crx::new(src, &header);
     let mut buf = Vec::new();
     let mut warnings = Vec::new();
