@@ -275,3 +275,29 @@ fn sparse_and_dense_reduced_systems_agree() {
         }
     }
 }
+
+/// The statistics through the Schur complement (reduced inverse + per-point blocks) equal
+/// those from the full inverse normal matrix (points not eliminated).
+#[test]
+fn schur_cofactors_equal_the_full_inverse() {
+    let b = block();
+    let (mut schur, _, _) = problem(&b, |_| PX, |_| 0, 0);
+    let (mut full, _, _) = problem(&b, |_| PX, |_| 0, 0);
+    full.eliminate = vec![false; full.blocks.len()];
+    let s0 = schur.solve(30).unwrap().sigma0;
+    full.solve(30).unwrap();
+    let probe: Vec<usize> = vec![0, 4, 8, 9, 60, 200, 348];
+    let a = schur.covariances(&probe, s0).unwrap();
+    let c = full.covariances(&probe, s0).unwrap();
+    for (x, y) in a.iter().zip(&c) {
+        let (x, y) = (x.as_ref().unwrap(), y.as_ref().unwrap());
+        assert!((x - y).norm() < 1e-6 * y.norm(), "{x} {y}");
+    }
+    let ra = schur.reliability().unwrap();
+    let rc = full.reliability().unwrap();
+    assert_eq!(ra.len(), rc.len());
+    for (x, y) in ra.iter().zip(&rc) {
+        assert!((&x.redundancy - &y.redundancy).amax() < 1e-6);
+        assert!((&x.normalised - &y.normalised).amax() < 1e-5);
+    }
+}

@@ -1,0 +1,341 @@
+//! Statistics at the solution: cofactors of the unknowns, reliability (redundancy numbers,
+//! normalised residuals), Baarda data snooping and Förstner variance components.
+//!
+//! The cofactor matrix is never formed in full for a block with points: the reduced system
+//! over orientations and other non-point blocks is inverted (dense, faer when large), and the
+//! point blocks follow from the Schur complement:
+//! Q_pc = −V_p⁻¹·Σ W_pc'·Q_c'c and Q_pp = V_p⁻¹ − (Σ_c Q_pc·W_pcᵀ)·V_p⁻¹.
+//! That is all a factor touching one point and some orientations needs, so the statistics
+//! cost one inverse of the reduced system plus a few small products per point.
+
+use super::reduced::{dense_factor, Reduced};
+use super::{Lin, Problem, Reliability, SolveError, Stats};
+use nalgebra::{DMatrix, DVector, Matrix3};
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+
+/// Cofactor blocks of the free unknowns (in units of σ0²).
+pub(super) enum Cofactors {
+    /// The full inverse (factors tie points together).
+    Full {
+        off: Vec<Option<usize>>,
+        q: DMatrix<f64>,
+    },
+    /// The reduced inverse and, per point, its own block and its blocks with the
+    /// orientations it is tied to.
+    Schur {
+        red: Reduced,
+        qcc: DMatrix<f64>,
+        off: Vec<Option<usize>>,
+        points: BTreeMap<usize, PointQ>,
+    },
+}
+
+pub(super) struct PointQ {
+    qpp: Matrix3<f64>,
+    qpc: BTreeMap<usize, DMatrix<f64>>,
+}
+
+impl Cofactors {
+    /// The cofactor block between two free blocks, `None` when it is not available (two
+    /// different points, or a point and a block it has no observation with).
+    pub fn block(&self, a: usize, b: usize, dims: (usize, usize)) -> Option<DMatrix<f64>> {
+        match self {
+            Cofactors::Full { off, q } => Some(q.view((off[a]?, off[b]?), dims).into_owned()),
+            Cofactors::Schur {
+                red, qcc, points, ..
+            } => match (points.get(&a), points.get(&b)) {
+                (None, None) => Some(qcc.view((red.roff[a]?, red.roff[b]?), dims).into_owned()),
+                (Some(pa), None) => pa.qpc.get(&b).cloned(),
+                (None, Some(pb)) => pb.qpc.get(&a).map(|m| m.transpose()),
+                (Some(pa), Some(_)) if a == b => {
+                    Some(DMatrix::from_column_slice(3, 3, pa.qpp.as_slice()))
+                }
+                _ => None,
+            },
+        }
+    }
+
+    fn free(&self, b: usize) -> bool {
+        match self {
+            Cofactors::Full { off, .. } | Cofactors::Schur { off, .. } => off[b].is_some(),
+        }
+    }
+}
+
+impl Problem {
+    /// Cofactors of the unknowns at the current values.
+    pub(super) fn cofactors(&self) -> Result<(Cofactors, Vec<Lin>), SolveError> {
+        let (off, n) = self.layout();
+        let lin = self.linearise(&off)?;
+        let singular = || SolveError::Singular(format!("{n} unknowns"));
+        if self.points_tied(&lin) {
+            let (nm, _) = Self::normal_matrix(&lin, n, None);
+            let q = nm.cholesky().ok_or_else(singular)?.inverse();
+            return Ok((Cofactors::Full { off, q }, lin));
+        }
+        let red = self.reduce(&lin, &off, 0.0, false).ok_or_else(singular)?;
+        let qcc = if red.nr == 0 {
+            DMatrix::zeros(0, 0)
+        } else {
+            dense_factor(&red.dense(), true)
+                .and_then(|(_, q)| q)
+                .ok_or_else(singular)?
+        };
+        let points: BTreeMap<usize, PointQ> = red
+            .vinv
+            .par_iter()
+            .map(|(p, (vi, _))| {
+                let vi_d = DMatrix::from_column_slice(3, 3, vi.as_slice());
+                let ws = red.w.get(p).map(|x| x.as_slice()).unwrap_or(&[]);
+                let mut qpc = BTreeMap::new();
+                let mut acc = DMatrix::<f64>::zeros(3, 3);
+                for (c, wc) in ws {
+                    let rc = red.roff[*c].unwrap_or(0);
+                    let mut s = DMatrix::<f64>::zeros(3, wc.ncols());
+                    for (c2, w2) in ws {
+                        let r2 = red.roff[*c2].unwrap_or(0);
+                        s += w2 * qcc.view((r2, rc), (w2.ncols(), wc.ncols()));
+                    }
+                    let q = -(&vi_d * s);
+                    acc += &q * wc.transpose();
+                    qpc.insert(*c, q);
+                }
+                let qpp = &vi_d - acc * &vi_d;
+                (
+                    *p,
+                    PointQ {
+                        qpp: Matrix3::from_iterator(qpp.iter().copied()),
+                        qpc,
+                    },
+                )
+            })
+            .collect();
+        Ok((
+            Cofactors::Schur {
+                red,
+                qcc,
+                off,
+                points,
+            },
+            lin,
+        ))
+    }
+
+    /// Whether the undamped normal equations are regular at the current values (otherwise a
+    /// datum defect).
+    pub(super) fn regular(&self, lin: &[Lin], off: &[Option<usize>], n: usize) -> bool {
+        if self.points_tied(lin) {
+            let (nm, _) = Self::normal_matrix(lin, n, None);
+            return dense_factor(&nm, false).map(|x| x.0).unwrap_or(false);
+        }
+        match self.reduce(lin, off, 0.0, false) {
+            Some(red) if red.nr == 0 => true,
+            Some(red) => dense_factor(&red.dense(), false)
+                .map(|x| x.0)
+                .unwrap_or(false),
+            None => false,
+        }
+    }
+
+    /// Diagonal of J·Q·Jᵀ for one linearised factor.
+    fn hat_diag(&self, l: &Lin, q: &Cofactors) -> DVector<f64> {
+        let m = l.r.len();
+        let mut h = DMatrix::<f64>::zeros(m, m);
+        for (ba, (_, ja)) in l.blocks.iter().zip(&l.j) {
+            for (bb, (_, jb)) in l.blocks.iter().zip(&l.j) {
+                if let Some(qab) = q.block(*ba, *bb, (ja.ncols(), jb.ncols())) {
+                    h += ja * qab * jb.transpose();
+                }
+            }
+        }
+        h.diagonal()
+    }
+
+    /// Covariance of a free block (σ0² applied).
+    pub fn covariance(
+        &self,
+        block: usize,
+        sigma0: f64,
+    ) -> Result<Option<DMatrix<f64>>, SolveError> {
+        Ok(self.covariances(&[block], sigma0)?.pop().flatten())
+    }
+
+    /// Covariances of several blocks from one computation of the cofactors.
+    pub fn covariances(
+        &self,
+        blocks: &[usize],
+        sigma0: f64,
+    ) -> Result<Vec<Option<DMatrix<f64>>>, SolveError> {
+        let (q, _) = self.cofactors()?;
+        Ok(blocks
+            .iter()
+            .map(|&b| {
+                if !q.free(b) {
+                    return None;
+                }
+                let d = self.blocks[b].dim();
+                q.block(b, b, (d, d)).map(|m| m * (sigma0 * sigma0))
+            })
+            .collect())
+    }
+
+    /// Per active factor: redundancy numbers and normalised residuals w = v/(σ·√r) of its
+    /// components.
+    pub fn reliability(&self) -> Result<Vec<Reliability>, SolveError> {
+        let (q, lin) = self.cofactors()?;
+        Ok(lin
+            .par_iter()
+            .map(|l| {
+                let h = self.hat_diag(l, &q);
+                let m = l.r.len();
+                let rr = DVector::from_iterator(m, (0..m).map(|i| (1.0 - h[i]).max(0.0)));
+                let w = DVector::from_iterator(
+                    m,
+                    (0..m).map(|i| {
+                        if rr[i] > 1e-6 {
+                            l.r[i] / rr[i].sqrt()
+                        } else {
+                            0.0
+                        }
+                    }),
+                );
+                Reliability {
+                    factor: l.factor,
+                    redundancy: rr,
+                    normalised: w,
+                }
+            })
+            .collect())
+    }
+
+    /// Baarda data snooping: adjust, remove the factor with the largest |w| above `critical`
+    /// (3.29 for α = 0.1 %), repeat. Returns the removed factors in removal order.
+    pub fn data_snooping(
+        &mut self,
+        critical: f64,
+        max_iterations: usize,
+    ) -> Result<(Stats, Vec<usize>), SolveError> {
+        let mut removed = Vec::new();
+        loop {
+            let stats = self.solve(max_iterations)?;
+            let rel = self.reliability()?;
+            let worst = rel
+                .iter()
+                .map(|r| {
+                    (
+                        r.factor,
+                        r.normalised.iter().fold(0.0f64, |m, x| m.max(x.abs())),
+                    )
+                })
+                .max_by(|a, b| a.1.partial_cmp(&b.1).unwrap_or(std::cmp::Ordering::Equal));
+            match worst {
+                Some((k, w)) if w > critical => {
+                    self.removed[k] = true;
+                    removed.push(k);
+                }
+                _ => return Ok((stats, removed)),
+            }
+        }
+    }
+
+    /// Variance component estimation (Förstner): per group σ̂² = vᵀPv / r over the group,
+    /// iterated until the factors settle. Returns each group's σ multiplier (√ of its factor).
+    pub fn variance_components(
+        &mut self,
+        max_rounds: usize,
+        max_iterations: usize,
+    ) -> Result<Vec<f64>, SolveError> {
+        for _ in 0..max_rounds {
+            self.solve(max_iterations)?;
+            let (q, lin) = self.cofactors()?;
+            let ng = self.group_scale.len();
+            let mut num = vec![0.0; ng];
+            let mut red = vec![0.0; ng];
+            for l in &lin {
+                let g = self.factors[l.factor].group();
+                let h = self.hat_diag(l, &q);
+                for i in 0..l.r.len() {
+                    num[g] += l.r[i] * l.r[i];
+                    red[g] += 1.0 - h[i];
+                }
+            }
+            let mut change: f64 = 0.0;
+            for g in 0..ng {
+                if red[g] > 1.0 {
+                    let f = num[g] / red[g];
+                    self.group_scale[g] *= f;
+                    change = change.max((f - 1.0).abs());
+                }
+            }
+            if change < 1e-4 {
+                break;
+            }
+        }
+        Ok(self.group_scale.iter().map(|s| s.sqrt()).collect())
+    }
+}
+/// Upper quantile of the standard normal distribution (Acklam's rational approximation,
+/// relative error below 1.2e-9).
+pub fn normal_quantile(p: f64) -> f64 {
+    let p = p.clamp(1e-300, 1.0 - 1e-16);
+    let a = [
+        -3.969683028665376e+01,
+        2.209460984245205e+02,
+        -2.759285104469687e+02,
+        1.38357751867269e+02,
+        -3.066479806614716e+01,
+        2.506628277459239e+00,
+    ];
+    let b = [
+        -5.447609879822406e+01,
+        1.615858368580409e+02,
+        -1.556989798598866e+02,
+        6.680131188771972e+01,
+        -1.328068155288572e+01,
+    ];
+    let c = [
+        -7.784894002430293e-03,
+        -3.223964580411365e-01,
+        -2.400758277161838e+00,
+        -2.549732539343734e+00,
+        4.374664141464968e+00,
+        2.938163982698783e+00,
+    ];
+    let d = [
+        7.784695709041462e-03,
+        3.224671290700398e-01,
+        2.445134137142996e+00,
+        3.754408661907416e+00,
+    ];
+    let lo = 0.02425;
+    if p < lo {
+        let q = (-2.0 * p.ln()).sqrt();
+        (((((c[0] * q + c[1]) * q + c[2]) * q + c[3]) * q + c[4]) * q + c[5])
+            / ((((d[0] * q + d[1]) * q + d[2]) * q + d[3]) * q + 1.0)
+    } else if p <= 1.0 - lo {
+        let q = p - 0.5;
+        let r = q * q;
+        (((((a[0] * r + a[1]) * r + a[2]) * r + a[3]) * r + a[4]) * r + a[5]) * q
+            / (((((b[0] * r + b[1]) * r + b[2]) * r + b[3]) * r + b[4]) * r + 1.0)
+    } else {
+        -normal_quantile(1.0 - p)
+    }
+}
+
+/// Critical value of the normalised residual for `tests` two-sided tests at a family-wise
+/// error `alpha` (Bonferroni): with thousands of observations, Baarda's per-test 3.29
+/// (α = 0.1 %) would reject a few good observations by chance alone.
+pub fn snooping_critical(alpha: f64, tests: usize) -> f64 {
+    normal_quantile(1.0 - alpha / (2.0 * tests.max(1) as f64))
+}
+
+#[cfg(test)]
+mod quantile_tests {
+    #[test]
+    fn quantiles() {
+        assert!((super::normal_quantile(0.975) - 1.959964).abs() < 1e-5);
+        assert!((super::normal_quantile(0.9995) - 3.290527).abs() < 1e-5);
+        assert!((super::snooping_critical(0.001, 1) - 3.290527).abs() < 1e-5);
+    }
+}
