@@ -78,6 +78,8 @@ enum ExportArg {
     Odm,
     Csv,
     Pos,
+    /// Antenna positions with full covariance and segments: the GNSS input of `adjust`.
+    Antenna,
 }
 
 #[derive(Subcommand)]
@@ -414,21 +416,11 @@ fn run(cli: Cli) -> Result<()> {
                 Some(p) => Some(attitude::AttitudeTable::read_csv(&p, conv)?),
                 None => None,
             };
-            let projection = match projection.as_str() {
-                "geodetic" => export::Projection::Geodetic,
-                "utm" => export::Projection::Utm(None),
-                p if p.starts_with("utm:") => export::Projection::Utm(Some(
-                    p[4..]
-                        .parse()
-                        .with_context(|| format!("--projection {p}: utm:ZONE with a zone 1-60"))?,
-                )),
-                p if p.starts_with("gk:") => {
-                    export::Projection::GaussKruger(p[3..].parse().with_context(|| {
-                        format!("--projection {p}: gk:CENTRAL_MERIDIAN in degrees")
-                    })?)
-                }
-                p => bail!("--projection {p}: use geodetic, utm, utm:ZONE or gk:CM"),
-            };
+            let projection = export::Projection::parse(&projection).with_context(|| {
+                format!(
+                    "--projection {projection}: use geodetic, utm, utm:ZONE or gk:CENTRAL_MERIDIAN"
+                )
+            })?;
             let job = pipeline::ExposureJob {
                 trajectory,
                 events: source,
@@ -444,6 +436,7 @@ fn run(cli: Cli) -> Result<()> {
                     ExportArg::Odm => export::Format::Odm,
                     ExportArg::Csv => export::Format::Csv,
                     ExportArg::Pos => export::Format::Pos,
+                    ExportArg::Antenna => export::Format::Antenna,
                 },
                 projection,
                 out,

@@ -4,6 +4,7 @@
 //! flight simulator (later issues). Today: [`pipeline`], the whole-stage runs the `ppkat`
 //! binary calls. It uses `gnss` and `photo`; the binary uses it.
 
+pub mod adjust;
 pub mod bench;
 pub mod demo;
 pub mod exposure;

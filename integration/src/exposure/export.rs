@@ -18,6 +18,9 @@ pub enum Format {
     Odm,
     Csv,
     Pos,
+    /// Antenna positions with their full ENU covariance, ambiguity segment and attitude:
+    /// the GNSS input of `ppkat adjust` (lever arm not applied).
+    Antenna,
 }
 
 /// Horizontal coordinates of the outputs.
@@ -28,6 +31,43 @@ pub enum Projection {
     Utm(Option<u8>),
     /// Gauss–Krüger with a central meridian (degrees).
     GaussKruger(f64),
+}
+
+impl Projection {
+    /// `geodetic`, `utm`, `utm:ZONE` or `gk:CENTRAL_MERIDIAN` (degrees).
+    pub fn parse(s: &str) -> Option<Projection> {
+        match s {
+            "geodetic" => Some(Projection::Geodetic),
+            "utm" => Some(Projection::Utm(None)),
+            p if p.starts_with("utm:") => p[4..]
+                .trim_end_matches(['N', 'S', 'n', 's'])
+                .parse()
+                .ok()
+                .filter(|z| (1..=60).contains(z))
+                .map(|z| Projection::Utm(Some(z))),
+            p if p.starts_with("gk:") => p[3..].parse().ok().map(Projection::GaussKruger),
+            _ => None,
+        }
+    }
+
+    /// The transverse Mercator of this projection near `near` (None for geodetic) and its name.
+    pub fn mercator(&self, near: &gnss::frame::Geodetic) -> Option<(TransverseMercator, String)> {
+        match *self {
+            Projection::Geodetic => None,
+            Projection::Utm(z) => {
+                let zone = z.unwrap_or_else(|| TransverseMercator::utm_zone_of(near.lon));
+                let north = near.lat >= 0.0;
+                Some((
+                    TransverseMercator::utm(zone, north),
+                    format!("UTM zone {zone}{}", if north { "N" } else { "S" }),
+                ))
+            }
+            Projection::GaussKruger(cm) => Some((
+                TransverseMercator::gauss_kruger(cm),
+                format!("Gauss-Krueger CM {cm}"),
+            )),
+        }
+    }
 }
 
 struct Row {
@@ -46,24 +86,9 @@ struct Row {
 }
 
 fn rows(st: &[CameraStation], proj: Projection) -> (Vec<Row>, String) {
-    let tm = match proj {
-        Projection::Geodetic => None,
-        Projection::Utm(z) => {
-            let g = st.first().map(|s| s.centre.to_geodetic());
-            let zone = z
-                .or_else(|| g.map(|g| TransverseMercator::utm_zone_of(g.lon)))
-                .unwrap_or(31);
-            let north = g.map(|g| g.lat >= 0.0).unwrap_or(true);
-            Some((
-                TransverseMercator::utm(zone, north),
-                format!("UTM zone {zone}{}", if north { "N" } else { "S" }),
-            ))
-        }
-        Projection::GaussKruger(cm) => Some((
-            TransverseMercator::gauss_kruger(cm),
-            format!("Gauss-Krueger CM {cm}"),
-        )),
-    };
+    let tm = st
+        .first()
+        .and_then(|s| proj.mercator(&s.centre.to_geodetic()));
     let crs = tm
         .as_ref()
         .map(|t| t.1.clone())
@@ -135,6 +160,9 @@ pub fn write(path: &Path, st: &[CameraStation], format: Format, proj: Projection
             &recs,
             PosFormat::Llh,
         );
+    }
+    if format == Format::Antenna {
+        return write_antenna(path, st);
     }
     let (rows, crs) = rows(st, proj);
     let geo = proj == Projection::Geodetic;
@@ -220,7 +248,45 @@ pub fn write(path: &Path, st: &[CameraStation], format: Format, proj: Projection
                     )?;
                 }
             }
-            Format::Pos => unreachable!("handled above"),
+            Format::Pos | Format::Antenna => unreachable!("handled above"),
+        }
+        Ok(())
+    })
+}
+
+/// The antenna table read by the adjustment (`integration::adjust::gnss`).
+fn write_antenna(path: &Path, st: &[CameraStation]) -> Result<()> {
+    write_atomic(path, |w| {
+        writeln!(w, "# ppkat antenna positions at the exposures, GPST; WGS84 lat/lon (deg), ellipsoidal h (m); covariance ENU (m^2); segment = trajectory ambiguity segment; omega/phi/kappa (deg) of R camera->ENU")?;
+        writeln!(
+            w,
+            "id,week,tow,lat,lon,h,c_ee,c_en,c_eu,c_nn,c_nu,c_uu,quality,segment,omega,phi,kappa"
+        )?;
+        for s in st {
+            let g = s.antenna.to_geodetic();
+            let r = enu_rotation(&g);
+            let c = r * s.cov * r.transpose();
+            let (week, tow) = gnss::time::week_tow(s.time);
+            let opk = omega_phi_kappa(&s.rotation).map(f64::to_degrees);
+            writeln!(
+                w,
+                "{},{week},{tow:.6},{:.10},{:.10},{:.4},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{:.5},{:.5},{:.5}",
+                s.id,
+                g.lat.to_degrees(),
+                g.lon.to_degrees(),
+                g.h,
+                c[(0, 0)],
+                c[(0, 1)],
+                c[(0, 2)],
+                c[(1, 1)],
+                c[(1, 2)],
+                c[(2, 2)],
+                s.quality as u8,
+                s.segment,
+                opk[0],
+                opk[1],
+                opk[2]
+            )?;
         }
         Ok(())
     })

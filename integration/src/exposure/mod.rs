@@ -38,6 +38,8 @@ pub struct CameraStation {
     /// ECEF covariance of the centre, m² (from the trajectory).
     pub cov: Matrix3<f64>,
     pub quality: Quality,
+    /// Ambiguity segment of the trajectory at the exposure (for drift per segment).
+    pub segment: u32,
     /// Camera → ENU at the station.
     pub rotation: Matrix3<f64>,
     pub attitude: AttitudeSource,
@@ -156,6 +158,7 @@ pub fn compute(
             centre,
             cov: ip.cov,
             quality: ip.quality,
+            segment: ip.segment,
             rotation,
             attitude: source,
             flags,

@@ -25,6 +25,9 @@ pub struct Trajectory {
     pub points: Vec<TrajPoint>,
     /// Nominal interval (median spacing), seconds.
     pub interval: f64,
+    /// Ambiguity segment of each epoch: a new id whenever the solution enters or leaves the
+    /// fixed state or crosses a gap longer than 2.5 intervals (the fixed ambiguity set lost).
+    pub segments: Vec<u32>,
 }
 
 /// Why a time cannot be interpolated.
@@ -43,6 +46,8 @@ pub struct Interpolated {
     pub cov: Matrix3<f64>,
     /// Worst quality of the epochs used.
     pub quality: Quality,
+    /// Ambiguity segment of the epoch before `t`.
+    pub segment: u32,
 }
 
 fn sqvar_inv(v: f64) -> f64 {
@@ -157,7 +162,23 @@ impl Trajectory {
             .collect();
         d.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
         let interval = d.get(d.len() / 2).copied().unwrap_or(1.0);
-        Trajectory { points, interval }
+        let mut segments = Vec::with_capacity(points.len());
+        let mut id = 0u32;
+        for (i, p) in points.iter().enumerate() {
+            if i > 0 {
+                let q = &points[i - 1];
+                let gap = (p.time - q.time).to_seconds() > 2.5 * interval;
+                if gap || (p.quality == Quality::Fixed) != (q.quality == Quality::Fixed) {
+                    id += 1;
+                }
+            }
+            segments.push(id);
+        }
+        Trajectory {
+            points,
+            interval,
+            segments,
+        }
     }
 
     pub fn span(&self) -> Option<(Epoch, Epoch)> {
@@ -226,6 +247,7 @@ impl Trajectory {
             vel,
             cov: p[a].cov * (1.0 - s) + p[b].cov * s,
             quality,
+            segment: self.segments.get(a).copied().unwrap_or(0),
         })
     }
 }

@@ -3,6 +3,7 @@
 //! (antenna trajectory, projection centres and attitudes, ground points, image observations).
 //! Deterministic for a seed.
 
+pub mod block;
 pub mod camera;
 pub mod constellation;
 pub mod flight;

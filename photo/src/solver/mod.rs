@@ -157,6 +157,8 @@ pub struct Stats {
 pub enum SolveError {
     #[error("the normal equations are singular: {0}")]
     Singular(String),
+    #[error("block {0} is not determined by its observations (observed too few times, or only along one ray)")]
+    Undetermined(usize),
     #[error("more unknowns ({0}) than observations ({1})")]
     Underdetermined(usize, usize),
     #[error("factor {0} cannot be evaluated (a point behind its camera?)")]
@@ -288,7 +290,7 @@ impl Problem {
                     hi > 0.0 && lo > 1e-10 * hi
                 });
                 if !ok {
-                    return Err(SolveError::Singular(format!("block {b} is not determined by its observations (observed too few times or not at all)")));
+                    return Err(SolveError::Undetermined(b));
                 }
             }
         }

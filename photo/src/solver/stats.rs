@@ -63,6 +63,9 @@ impl Cofactors {
     }
 }
 
+/// Least redundancy of a group whose variance component is estimated.
+pub const MIN_VCE_REDUNDANCY: f64 = 10.0;
+
 impl Problem {
     /// Cofactors of the unknowns at the current values.
     pub(super) fn cofactors(&self) -> Result<(Cofactors, Vec<Lin>), SolveError> {
@@ -240,7 +243,8 @@ impl Problem {
     }
 
     /// Variance component estimation (Förstner): per group σ̂² = vᵀPv / r over the group,
-    /// iterated until the factors settle. Returns each group's σ multiplier (√ of its factor).
+    /// iterated until the factors settle; groups with a redundancy below
+    /// [`MIN_VCE_REDUNDANCY`] keep their weights. Returns each group's σ multiplier (√ of its factor).
     pub fn variance_components(
         &mut self,
         max_rounds: usize,
@@ -262,7 +266,8 @@ impl Problem {
             }
             let mut change: f64 = 0.0;
             for g in 0..ng {
-                if red[g] > 1.0 {
+                // A group with little redundancy keeps its weight: its estimate would be noise.
+                if red[g] >= MIN_VCE_REDUNDANCY {
                     let f = num[g] / red[g];
                     self.group_scale[g] *= f;
                     change = change.max((f - 1.0).abs());

@@ -1,0 +1,503 @@
+//! From a loaded project to a `photo::solver::Problem`: the local frame (ENU tangent plane at
+//! the block centre), start values (GNSS centres and attitude, compass angles refined by a
+//! three-angle resection, or nadir along the strip; points by forward intersection) and one
+//! factor per observation. Input problems are refused here with the ids that cause them.
+
+use super::factors::{DriftModel, GnssCentre, Prior};
+use super::project::{DriftGroup, Mode, PointKind, Project};
+use super::AdjustError;
+use gnss::frame::{enu_rotation, Ecef, Geodetic};
+use nalgebra::{DVector, Matrix3, Vector2, Vector3};
+use photo::camera::Pose;
+use photo::factors::{ControlPoint, ImagePoint, SelfCalibratingPoint};
+use photo::intersection::{intersect, Ray};
+use photo::resection::{resect, resect_angles, Control};
+use photo::solver::{Block, Loss, Problem};
+use std::collections::BTreeMap;
+
+/// The local adjustment frame: ENU axes at `origin`.
+#[derive(Clone, Debug)]
+pub struct LocalFrame {
+    pub origin: Ecef,
+    pub geodetic: Geodetic,
+    /// ECEF → ENU.
+    pub rot: Matrix3<f64>,
+}
+
+impl LocalFrame {
+    pub fn new(g: Geodetic) -> LocalFrame {
+        LocalFrame {
+            origin: g.to_ecef(),
+            geodetic: g,
+            rot: enu_rotation(&g),
+        }
+    }
+    pub fn to_local(&self, p: &Ecef) -> Vector3<f64> {
+        self.rot * (p.0 - self.origin.0)
+    }
+    pub fn to_ecef(&self, v: &Vector3<f64>) -> Ecef {
+        Ecef(self.origin.0 + self.rot.transpose() * v)
+    }
+    /// A matrix expressed in the ENU frame at `at` → the same in this frame.
+    pub fn from_enu_at(&self, at: &Ecef) -> Matrix3<f64> {
+        self.rot * enu_rotation(&at.to_geodetic()).transpose()
+    }
+}
+
+/// What each factor of the problem is.
+#[derive(Clone, Debug)]
+pub enum Obs {
+    /// Index into the project's measurements.
+    Image(usize),
+    /// Index into the project's ground points.
+    Control(usize),
+    /// Index into the project's antennas.
+    Gnss(usize),
+    LeverPrior(usize),
+}
+
+/// Observation groups (variance components).
+pub const GROUP_IMAGE: usize = 0;
+pub const GROUP_CONTROL: usize = 1;
+pub const GROUP_GNSS: usize = 2;
+pub const GROUP_PRIOR: usize = 3;
+pub const GROUP_NAMES: [&str; 4] = [
+    "image points",
+    "control points",
+    "GNSS centres",
+    "lever-arm prior",
+];
+
+/// A drift group: its block, model and reference time.
+#[derive(Clone, Debug)]
+pub struct DriftBlock {
+    pub name: String,
+    pub block: usize,
+    pub model: DriftModel,
+    /// Reference time t0, GPST seconds.
+    pub t0: f64,
+}
+
+/// The assembled problem and how to read it back.
+pub struct Built {
+    pub frame: LocalFrame,
+    pub problem: Problem,
+    pub obs: Vec<Obs>,
+    /// Pose block of each image.
+    pub poses: Vec<usize>,
+    /// Point blocks by id.
+    pub points: BTreeMap<String, usize>,
+    /// Lever-arm block per camera (when GNSS is used).
+    pub levers: Vec<Option<usize>>,
+    pub drifts: Vec<DriftBlock>,
+    /// Interior block per camera (self-calibration).
+    pub interiors: Vec<Option<usize>>,
+    /// Points measured in a single image (not determinable): id and its image.
+    pub single_ray: Vec<(String, String)>,
+    /// Antenna records whose image is not in the list.
+    pub unused_antennas: Vec<String>,
+}
+
+fn err(what: String) -> AdjustError {
+    AdjustError::Problem(what)
+}
+
+/// Camera → ENU of a camera looking at `azimuth` (from north), `elevation`, rolled by `roll`.
+pub fn compass_rotation(az: f64, el: f64, roll: f64) -> Matrix3<f64> {
+    let d = Vector3::new(az.sin() * el.cos(), az.cos() * el.cos(), el.sin());
+    let x0 = Vector3::new(az.cos(), -az.sin(), 0.0);
+    let z = -d;
+    let y0 = z.cross(&x0);
+    let (c, s) = (roll.cos(), roll.sin());
+    let x = x0 * c + y0 * s;
+    let y = z.cross(&x);
+    Matrix3::from_columns(&[x, y, z])
+}
+
+pub fn build(p: &Project) -> Result<Built, AdjustError> {
+    let gnss = p.file.gnss.as_ref();
+    // Measured points and images.
+    let mut rays: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+    let mut per_image = vec![0usize; p.images.len()];
+    for (k, m) in p.measurements.iter().enumerate() {
+        rays.entry(m.point.as_str()).or_default().push(k);
+        per_image[m.image] += 1;
+    }
+    let empty: Vec<&str> = p
+        .images
+        .iter()
+        .zip(&per_image)
+        .filter(|(_, n)| **n == 0)
+        .map(|(im, _)| im.id.as_str())
+        .collect();
+    if !empty.is_empty() {
+        return Err(err(format!(
+            "image(s) {} have no measured points: measure tie points in them or remove them from the image list",
+            empty.join(", ")
+        )));
+    }
+    let unmeasured: Vec<&str> = p
+        .ground
+        .iter()
+        .filter(|g| !rays.contains_key(g.id.as_str()))
+        .map(|g| g.id.as_str())
+        .collect();
+    if !unmeasured.is_empty() {
+        return Err(err(format!(
+            "ground point(s) {} are not measured in any image: check their ids against the measurements, or remove them",
+            unmeasured.join(", ")
+        )));
+    }
+    let n_control = p
+        .ground
+        .iter()
+        .filter(|g| g.kind == PointKind::Control)
+        .count();
+    // Antennas by image.
+    let image_index: BTreeMap<&str, usize> = p
+        .images
+        .iter()
+        .enumerate()
+        .map(|(i, im)| (im.id.as_str(), i))
+        .collect();
+    let mut antenna_of: Vec<Option<usize>> = vec![None; p.images.len()];
+    let mut unused_antennas = Vec::new();
+    if gnss.is_some() {
+        for (k, a) in p.antennas.iter().enumerate() {
+            match image_index.get(a.image.as_str()) {
+                Some(&i) => antenna_of[i] = Some(k),
+                None => unused_antennas.push(a.image.clone()),
+            }
+        }
+        let mut strips: BTreeMap<&str, (usize, usize)> = BTreeMap::new();
+        for (i, im) in p.images.iter().enumerate() {
+            let e = strips.entry(im.strip.as_str()).or_default();
+            e.0 += 1;
+            e.1 += antenna_of[i].is_some() as usize;
+        }
+        let bare: Vec<String> = strips
+            .iter()
+            .filter(|(_, (_, g))| *g == 0)
+            .map(|(s, (n, _))| format!("strip {s} ({n} images)"))
+            .collect();
+        if !bare.is_empty() {
+            return Err(err(format!(
+                "{} without any GNSS antenna position: check the image ids of the antenna table, or drop [gnss] and use control points",
+                bare.join(", ")
+            )));
+        }
+    }
+    let n_gnss = antenna_of.iter().flatten().count();
+    if n_gnss == 0 && n_control < 3 {
+        return Err(err(format!(
+            "datum defect: {n_control} control point(s) and no GNSS centres — the block's position, orientation and scale are not determined; give at least 3 control points or GNSS antenna positions"
+        )));
+    }
+    // The frame: tangent plane at the centre of the GNSS centres or of the control.
+    let centre_pts: Vec<Ecef> = if n_gnss > 0 {
+        p.antennas.iter().map(|a| a.pos).collect()
+    } else {
+        p.ground.iter().map(|g| g.pos).collect()
+    };
+    let mean = centre_pts.iter().fold(Vector3::zeros(), |a, x| a + x.0) / centre_pts.len() as f64;
+    let mut g0 = Ecef(mean).to_geodetic();
+    g0.h = if p.ground.is_empty() {
+        0.0
+    } else {
+        p.ground.iter().map(|g| g.pos.to_geodetic().h).sum::<f64>() / p.ground.len() as f64
+    };
+    let frame = LocalFrame::new(g0);
+    let lever0 = gnss.map(|g| Vector3::from(g.lever_arm)).unwrap_or_default();
+
+    // Start orientations.
+    let control_of = |id: &str| {
+        p.ground
+            .iter()
+            .find(|g| g.id == id && g.kind == PointKind::Control)
+    };
+    let mut start: Vec<Option<Pose>> = vec![None; p.images.len()];
+    for (i, im) in p.images.iter().enumerate() {
+        let cam = &p.cameras[im.camera].camera;
+        let antenna = antenna_of[i].map(|k| &p.antennas[k]);
+        let rot = if let Some(r) =
+            antenna.and_then(|a| a.rotation.map(|r| frame.from_enu_at(&a.pos) * r))
+        {
+            Some(r)
+        } else if let Some([az, el, roll]) = im.compass {
+            Some(compass_rotation(az, el, roll))
+        } else if let Some(a) = antenna {
+            // Nadir, x along the strip (from the neighbouring antennas of the strip).
+            let here = frame.to_local(&a.pos);
+            let mut dir = Vector2::zeros();
+            for (j, other) in p.images.iter().enumerate() {
+                if j != i && other.strip == im.strip {
+                    if let Some(b) = antenna_of[j].map(|k| &p.antennas[k]) {
+                        let d = frame.to_local(&b.pos) - here;
+                        let dt = (b.time - a.time).to_seconds();
+                        if dt != 0.0 && dt.abs() < 120.0 {
+                            dir += Vector2::new(d.x, d.y) / dt;
+                        }
+                    }
+                }
+            }
+            (dir.norm() > 0.0).then(|| photo::rotation::rot_z(dir.y.atan2(dir.x)))
+        } else {
+            None
+        };
+        let controls: Vec<Control> = p
+            .measurements
+            .iter()
+            .filter(|m| m.image == i)
+            .filter_map(|m| {
+                control_of(&m.point).map(|g| Control {
+                    object: frame.to_local(&g.pos),
+                    image: m.xy,
+                    sigma: m.sigma,
+                })
+            })
+            .collect();
+        start[i] = match (antenna, rot) {
+            (Some(a), Some(r)) => {
+                let centre = frame.to_local(&a.pos) - r * lever0;
+                // Close range: refine the compass angles on the control seen (≥ 2 points).
+                let r = if p.file.mode == Mode::CloseRange && controls.len() >= 2 {
+                    resect_angles(cam, centre, &controls, Some(r))
+                        .map(|x| x.pose.r)
+                        .unwrap_or(r)
+                } else {
+                    r
+                };
+                Some(Pose { r, centre })
+            }
+            (Some(a), None) if controls.len() >= 2 => {
+                let centre = frame.to_local(&a.pos);
+                resect_angles(cam, centre, &controls, None)
+                    .ok()
+                    .map(|x| x.pose)
+            }
+            _ if controls.len() >= 4 => resect(cam, &controls).ok().map(|x| x.pose),
+            _ => None,
+        };
+    }
+    // Images without a start: from a neighbour in the strip (same attitude, shifted by the
+    // mean base) is too fragile; refuse with the ids.
+    let lost: Vec<&str> = p
+        .images
+        .iter()
+        .zip(&start)
+        .filter(|(_, s)| s.is_none())
+        .map(|(im, _)| im.id.as_str())
+        .collect();
+    if !lost.is_empty() {
+        return Err(err(format!(
+            "no start orientation for image(s) {}: give a GNSS antenna position (with attitude or within a strip), compass angles, or at least 4 control points in each",
+            lost.join(", ")
+        )));
+    }
+    let start: Vec<Pose> = start.into_iter().flatten().collect();
+
+    // The problem.
+    let loss = match p.file.adjustment.loss.as_str() {
+        "huber" => Loss::Huber(3.0),
+        "cauchy" => Loss::Cauchy(3.0),
+        _ => Loss::Trivial,
+    };
+    let mut pr = Problem::new(loss);
+    let poses: Vec<usize> = start
+        .iter()
+        .map(|s| pr.add_block(Block::Pose(*s), false))
+        .collect();
+    let mut points = BTreeMap::new();
+    let mut single_ray = Vec::new();
+    for (id, ks) in &rays {
+        let ground = p.ground.iter().find(|g| g.id == *id);
+        let images: std::collections::BTreeSet<usize> =
+            ks.iter().map(|k| p.measurements[*k].image).collect();
+        let x = match ground {
+            Some(g) if g.kind == PointKind::Control => Some(frame.to_local(&g.pos)),
+            _ if images.len() >= 2 => {
+                let r: Vec<Ray> = ks
+                    .iter()
+                    .map(|&k| {
+                        let m = &p.measurements[k];
+                        Ray {
+                            camera: &p.cameras[p.images[m.image].camera].camera,
+                            pose: &start[m.image],
+                            xy: m.xy,
+                            sigma: m.sigma,
+                        }
+                    })
+                    .collect();
+                intersect(&r).ok().map(|x| x.point)
+            }
+            _ => None,
+        };
+        match x {
+            Some(x)
+                if images.len() >= 2 || ground.is_some_and(|g| g.kind == PointKind::Control) =>
+            {
+                points.insert(id.to_string(), pr.add_point(x, false));
+            }
+            _ => single_ray.push((
+                id.to_string(),
+                p.images[p.measurements[ks[0]].image].id.clone(),
+            )),
+        }
+    }
+    let interiors: Vec<Option<usize>> = p
+        .cameras
+        .iter()
+        .map(|c| {
+            (!c.calibrate.is_empty()).then(|| {
+                pr.add_block(
+                    Block::Vector(SelfCalibratingPoint::start(&c.camera, &c.calibrate)),
+                    false,
+                )
+            })
+        })
+        .collect();
+    let mut obs = Vec::new();
+    for (k, m) in p.measurements.iter().enumerate() {
+        let Some(&pt) = points.get(&m.point) else {
+            continue;
+        };
+        let cd = &p.cameras[p.images[m.image].camera];
+        let f: Box<dyn photo::solver::Factor> = match interiors[p.images[m.image].camera] {
+            Some(ib) => Box::new(SelfCalibratingPoint {
+                camera: cd.camera,
+                blocks: [poses[m.image], pt, ib],
+                calib: cd.calibrate.clone(),
+                xy: m.xy,
+                sigmas: DVector::from_element(2, m.sigma),
+                group: GROUP_IMAGE,
+            }),
+            None => Box::new(ImagePoint::new(
+                cd.camera,
+                poses[m.image],
+                pt,
+                m.xy,
+                m.sigma,
+                GROUP_IMAGE,
+            )),
+        };
+        pr.add_factor(f);
+        obs.push(Obs::Image(k));
+    }
+    for (k, g) in p.ground.iter().enumerate() {
+        if g.kind != PointKind::Control {
+            continue;
+        }
+        let Some(&pt) = points.get(&g.id) else {
+            continue;
+        };
+        pr.add_factor(Box::new(ControlPoint::new(
+            pt,
+            frame.to_local(&g.pos),
+            g.sigma,
+            GROUP_CONTROL,
+        )));
+        obs.push(Obs::Control(k));
+    }
+    let mut levers = vec![None; p.cameras.len()];
+    let mut drifts: Vec<DriftBlock> = Vec::new();
+    if let Some(gs) = gnss {
+        for (c, _) in p.cameras.iter().enumerate() {
+            if !p
+                .images
+                .iter()
+                .enumerate()
+                .any(|(i, im)| im.camera == c && antenna_of[i].is_some())
+            {
+                continue;
+            }
+            let b = pr.add_block(
+                Block::Vector(DVector::from_column_slice(&gs.lever_arm)),
+                !gs.estimate_lever_arm,
+            );
+            levers[c] = Some(b);
+            if let (Some(s), true) = (gs.lever_arm_sigma, gs.estimate_lever_arm) {
+                let sig = DVector::from_iterator(3, s.iter().map(|x| x.max(1e-6)));
+                pr.add_factor(Box::new(Prior::new(
+                    b,
+                    DVector::from_column_slice(&gs.lever_arm),
+                    sig,
+                    GROUP_PRIOR,
+                )));
+                obs.push(Obs::LeverPrior(c));
+            }
+        }
+        // Drift groups.
+        let key = |i: usize, k: usize| -> Option<String> {
+            match gs.drift {
+                DriftGroup::None => None,
+                DriftGroup::Block => Some("block".into()),
+                DriftGroup::Strip => Some(format!("strip {}", p.images[i].strip)),
+                DriftGroup::Segment => Some(format!("segment {}", p.antennas[k].segment)),
+            }
+        };
+        let mut groups: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+        for (i, a) in antenna_of.iter().enumerate() {
+            if let Some(k) = a {
+                if let Some(name) = key(i, *k) {
+                    groups
+                        .entry(name)
+                        .or_default()
+                        .push(p.antennas[*k].time.to_gpst_seconds());
+                }
+            }
+        }
+        for (name, times) in &groups {
+            let t0 = match gs.drift_model {
+                DriftModel::Rate => times.iter().cloned().fold(f64::INFINITY, f64::min),
+                _ => times.iter().sum::<f64>() / times.len() as f64,
+            };
+            let block = pr.add_block(Block::Vector(DVector::zeros(gs.drift_model.dim())), false);
+            drifts.push(DriftBlock {
+                name: name.clone(),
+                block,
+                model: gs.drift_model,
+                t0,
+            });
+        }
+        for (i, a) in antenna_of.iter().enumerate() {
+            let Some(k) = *a else { continue };
+            let ant = &p.antennas[k];
+            let Some(lever) = levers[p.images[i].camera] else {
+                continue;
+            };
+            let drift = key(i, k)
+                .and_then(|n| drifts.iter().find(|d| d.name == n))
+                .map(|d| (d.block, d.model, ant.time.to_gpst_seconds() - d.t0));
+            let m = frame.from_enu_at(&ant.pos);
+            let cov = m * ant.cov_enu * m.transpose();
+            let f = GnssCentre::new(
+                poses[i],
+                lever,
+                drift,
+                frame.to_local(&ant.pos),
+                &cov,
+                GROUP_GNSS,
+            )
+            .ok_or_else(|| {
+                err(format!(
+                    "antenna of image {}: the covariance is not positive definite",
+                    ant.image
+                ))
+            })?;
+            pr.add_factor(Box::new(f));
+            obs.push(Obs::Gnss(k));
+        }
+    }
+    Ok(Built {
+        frame,
+        problem: pr,
+        obs,
+        poses,
+        points,
+        levers,
+        drifts,
+        interiors,
+        single_ray,
+        unused_antennas,
+    })
+}

@@ -1,0 +1,181 @@
+//! The joint GNSS-supported bundle adjustment (`ppkat adjust`): image points, control and
+//! check points, GNSS antenna positions with their full covariance, an unknown lever arm,
+//! drift per block, strip or ambiguity segment, optional self-calibration — all factors on
+//! `photo::solver`. Then data snooping with removal, variance components, covariances,
+//! reliability and the check-point table; outputs in geodetic and UTM / Gauss–Krüger.
+//!
+//! Stages: [`project`] (TOML + tables) → [`build`] (frame, start values, factors) → [`solve`]
+//! here → [`results`] (numbers for the report) → [`report`] (CSV, JSON, HTML with SVG plots).
+
+pub mod build;
+pub mod factors;
+pub mod project;
+pub mod report;
+pub mod results;
+
+use build::Built;
+use project::Project;
+use std::path::Path;
+
+/// Why an adjustment cannot be done.
+#[derive(Debug, thiserror::Error)]
+pub enum AdjustError {
+    #[error("{path}: {what}")]
+    Project { path: String, what: String },
+    #[error("{path}, line {line}: {what}")]
+    Input {
+        path: String,
+        line: usize,
+        what: String,
+    },
+    #[error("{0}")]
+    Problem(String),
+    #[error("the adjustment failed: {0}")]
+    Solve(String),
+    #[error("{path}: cannot write: {what}")]
+    Write { path: String, what: String },
+}
+
+impl From<photo::solver::SolveError> for AdjustError {
+    fn from(e: photo::solver::SolveError) -> Self {
+        AdjustError::Solve(e.to_string())
+    }
+}
+
+/// The adjusted problem with what was removed and estimated on the way.
+pub struct Solved {
+    pub built: Built,
+    pub stats: photo::solver::Stats,
+    /// Factors removed by data snooping (indices into `built.obs`), in order, with |w|.
+    pub removed: Vec<(usize, f64)>,
+    /// σ multiplier per observation group (variance components; 1 when not estimated).
+    pub components: Vec<f64>,
+    pub critical: f64,
+}
+
+/// Adjust a loaded project.
+pub fn solve(project: &Project) -> Result<Solved, AdjustError> {
+    let built = build::build(project)?;
+    let names = block_names(project, &built);
+    let name = |e: photo::solver::SolveError| {
+        match e {
+        photo::solver::SolveError::Undetermined(b) => AdjustError::Solve(format!(
+            "{} is not determined by its observations (too few rays, or rays too close to parallel): remove it or measure it in more images",
+            names.get(b).cloned().unwrap_or_else(|| format!("block {b}"))
+        )),
+        e => AdjustError::from(e),
+    }
+    };
+    solve_built(project, built).map_err(name)
+}
+
+/// A readable name per parameter block.
+fn block_names(p: &Project, b: &Built) -> Vec<String> {
+    let mut n = vec![String::new(); b.problem.blocks.len()];
+    for (i, &k) in b.poses.iter().enumerate() {
+        n[k] = format!("the orientation of image {}", p.images[i].id);
+    }
+    for (id, &k) in &b.points {
+        n[k] = format!("point {id}");
+    }
+    for d in &b.drifts {
+        n[d.block] = format!("the drift of {}", d.name);
+    }
+    for (c, l) in b.levers.iter().enumerate() {
+        if let Some(l) = l {
+            n[*l] = format!("the lever arm of camera {}", p.cameras[c].id);
+        }
+    }
+    for (c, l) in b.interiors.iter().enumerate() {
+        if let Some(l) = l {
+            n[*l] = format!("the interior orientation of camera {}", p.cameras[c].id);
+        }
+    }
+    n
+}
+
+fn solve_built(project: &Project, mut built: Built) -> Result<Solved, photo::solver::SolveError> {
+    let opts = &project.file.adjustment;
+    let it = opts.max_iterations;
+    let tests: usize = built.problem.factors.iter().map(|f| f.sigmas().len()).sum();
+    let critical = photo::solver::snooping_critical(opts.alpha, tests);
+    let mut removed = Vec::new();
+    let pr = &mut built.problem;
+    let snoop = |pr: &mut photo::solver::Problem,
+                 removed: &mut Vec<(usize, f64)>|
+     -> Result<(), photo::solver::SolveError> {
+        if !opts.snooping {
+            pr.solve(it)?;
+            return Ok(());
+        }
+        loop {
+            pr.solve(it)?;
+            let rel = pr.reliability()?;
+            let worst = rel
+                .iter()
+                .map(|r| (r.factor, r.normalised.amax()))
+                .max_by(|a, b| a.1.total_cmp(&b.1));
+            match worst {
+                Some((k, w)) if w > critical => {
+                    pr.removed[k] = true;
+                    removed.push((k, w));
+                    drop_undetermined_points(pr, k, removed);
+                }
+                _ => return Ok(()),
+            }
+        }
+    };
+    snoop(pr, &mut removed)?;
+    let mut components = vec![1.0; pr.group_scale.len()];
+    if opts.variance_components {
+        components = pr.variance_components(20, it)?;
+        // Snoop again with the estimated weights.
+        snoop(pr, &mut removed)?;
+    }
+    let stats = pr.solve(it)?;
+    Ok(Solved {
+        built,
+        stats,
+        removed,
+        components,
+        critical,
+    })
+}
+
+/// Load, adjust and write every output into `out`; returns the report.
+pub fn run(project_path: &Path, out: &Path) -> Result<results::Results, AdjustError> {
+    let project = Project::load(project_path)?;
+    let solved = solve(&project)?;
+    let res = results::collect(&project, &solved)?;
+    report::write_all(&project, &res, out)?;
+    Ok(res)
+}
+
+/// After removing factor `k`: a point it touched that is left with fewer than two active
+/// factors can no longer be determined — its remaining factors are removed too (reported with
+/// w = 0) and the point is fixed out of the adjustment.
+fn drop_undetermined_points(
+    pr: &mut photo::solver::Problem,
+    k: usize,
+    removed: &mut Vec<(usize, f64)>,
+) {
+    let points: Vec<usize> = pr.factors[k]
+        .blocks()
+        .iter()
+        .copied()
+        .filter(|b| pr.eliminate[*b])
+        .collect();
+    for p in points {
+        let active: Vec<usize> = (0..pr.factors.len())
+            .filter(|&j| !pr.removed[j] && pr.factors[j].blocks().contains(&p))
+            .collect();
+        let rows: usize = active.iter().map(|&j| pr.factors[j].sigmas().len()).sum();
+        if rows < 4 {
+            for j in active {
+                pr.removed[j] = true;
+                removed.push((j, 0.0));
+            }
+            pr.fixed[p] = true;
+        }
+    }
+}

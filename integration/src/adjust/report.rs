@@ -1,0 +1,414 @@
+//! Outputs of `ppkat adjust`, each written atomically: `orientations.csv`, `points.csv`,
+//! `image_residuals.csv`, `gnss_residuals.csv`, `report.json` and a self-contained
+//! `report.html` with SVG plots (plotters): image residual vectors, check-point errors, GNSS
+//! centre residuals per strip, drift over time.
+
+use super::project::{Mode, Project};
+use super::results::{Estimated, Results};
+use super::AdjustError;
+use gnss::solution::write_atomic;
+use plotters::prelude::*;
+use std::fmt::Write as _;
+use std::path::Path;
+
+fn werr(path: &Path, e: impl std::fmt::Display) -> AdjustError {
+    AdjustError::Write {
+        path: path.display().to_string(),
+        what: e.to_string(),
+    }
+}
+
+fn write_text(path: &Path, text: &str) -> Result<(), AdjustError> {
+    write_atomic(path, |w| w.write_all(text.as_bytes())).map_err(|e| werr(path, e))
+}
+
+pub fn write_all(p: &Project, r: &Results, out: &Path) -> Result<(), AdjustError> {
+    std::fs::create_dir_all(out).map_err(|e| werr(out, e))?;
+    let proj_names = if r.crs.starts_with("WGS84") {
+        ("lon", "lat")
+    } else {
+        ("easting", "northing")
+    };
+    let mut s = String::new();
+    let _ = writeln!(s, "# ppkat adjust: projection centres; {}; h ellipsoidal; local = ENU at {:.8} {:.8} {:.3}; omega/phi/kappa (deg) of R camera->local ENU, R = Rw*Rp*Rk; sigmas m and deg (rotation about local E,N,U)", r.crs, r.origin_deg[0], r.origin_deg[1], r.origin_deg[2]);
+    let _ = writeln!(s, "image,strip,{},{},h,lat,lon,e_local,n_local,u_local,omega,phi,kappa,sigma_e,sigma_n,sigma_u,sigma_rx,sigma_ry,sigma_rz,points,rms_px", proj_names.0, proj_names.1);
+    for i in &r.images {
+        let _ = writeln!(
+            s,
+            "{},{},{:.4},{:.4},{:.4},{:.9},{:.9},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{},{:.3}",
+            i.id, i.strip, i.easting, i.northing, i.h, i.lat, i.lon, i.local[0], i.local[1], i.local[2],
+            i.opk_deg[0], i.opk_deg[1], i.opk_deg[2], i.sigma_centre[0], i.sigma_centre[1], i.sigma_centre[2],
+            i.sigma_angles_deg[0], i.sigma_angles_deg[1], i.sigma_angles_deg[2], i.points, i.rms_px
+        );
+    }
+    write_text(&out.join("orientations.csv"), &s)?;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# ppkat adjust: object points; {}; h ellipsoidal; sigmas local E,N,U (m)",
+        r.crs
+    );
+    let _ = writeln!(
+        s,
+        "point,kind,{},{},h,lat,lon,sigma_e,sigma_n,sigma_u,rays",
+        proj_names.0, proj_names.1
+    );
+    for q in &r.points {
+        let _ = writeln!(
+            s,
+            "{},{},{:.4},{:.4},{:.4},{:.9},{:.9},{:.4},{:.4},{:.4},{}",
+            q.id,
+            serde_json::to_value(q.kind)
+                .ok()
+                .and_then(|v| v.as_str().map(String::from))
+                .unwrap_or_default(),
+            q.easting,
+            q.northing,
+            q.h,
+            q.lat,
+            q.lon,
+            q.sigma[0],
+            q.sigma[1],
+            q.sigma[2],
+            q.rays
+        );
+    }
+    write_text(&out.join("points.csv"), &s)?;
+    let mut s = String::from("image,point,x_px,y_px,vx_px,vy_px\n");
+    for v in &r.image_residuals {
+        let _ = writeln!(
+            s,
+            "{},{},{:.2},{:.2},{:.3},{:.3}",
+            v.image, v.point, v.px[0], v.px[1], v.v_px[0], v.v_px[1]
+        );
+    }
+    write_text(&out.join("image_residuals.csv"), &s)?;
+    let mut s = String::from("image,strip,tow,ve,vn,vu\n");
+    for v in &r.gnss_residuals {
+        let _ = writeln!(
+            s,
+            "{},{},{:.3},{:.4},{:.4},{:.4}",
+            v.image, v.strip, v.tow, v.v[0], v.v[1], v.v[2]
+        );
+    }
+    write_text(&out.join("gnss_residuals.csv"), &s)?;
+    let json = serde_json::to_string_pretty(r).map_err(|e| werr(&out.join("report.json"), e))?;
+    write_text(&out.join("report.json"), &json)?;
+    write_text(&out.join("report.html"), &html(p, r))
+}
+
+fn f3(v: [f64; 3], k: f64, d: usize) -> String {
+    format!(
+        "<td>{:.d$}</td><td>{:.d$}</td><td>{:.d$}</td>",
+        v[0] * k,
+        v[1] * k,
+        v[2] * k
+    )
+}
+
+fn est_rows(s: &mut String, e: &Estimated, unit: &str) {
+    for (i, l) in e.labels.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "<tr><td>{}</td><td>{l}</td><td>{:.5}</td><td>{}</td><td>{unit}</td></tr>",
+            e.name,
+            e.values[i],
+            if e.fixed {
+                "fixed".into()
+            } else {
+                format!("{:.5}", e.sigmas[i])
+            }
+        );
+    }
+}
+
+/// The self-contained HTML report.
+pub fn html(p: &Project, r: &Results) -> String {
+    let mut s = String::new();
+    let title = if r.name.is_empty() {
+        "ppkat adjustment"
+    } else {
+        &r.name
+    };
+    let _ = writeln!(s, "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>{title}</title><style>body{{font-family:sans-serif;max-width:1100px;margin:auto}}table{{border-collapse:collapse;margin:8px 0}}td,th{{border:1px solid #bbb;padding:2px 6px;text-align:right}}th{{background:#eee}}.warn{{color:#a40}}</style></head><body>");
+    let _ = writeln!(s, "<h1>{title}</h1><p>Project <code>{}</code>; {:?} mode; output {}; local frame ENU at {:.6}°, {:.6}°, {:.2} m.</p>", p.path.display(), r.mode, r.crs, r.origin_deg[0], r.origin_deg[1], r.origin_deg[2]);
+    let _ = writeln!(s, "<h2>Summary</h2><table><tr><th>σ0</th><th>observations</th><th>unknowns</th><th>redundancy</th><th>iterations</th><th>images</th><th>points</th><th>removed</th></tr><tr><td>{:.3}</td><td>{}</td><td>{}</td><td>{:.0}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr></table>", r.sigma0, r.observations, r.unknowns, r.redundancy, r.iterations, r.images.len(), r.points.len(), r.removed.len());
+    for w in &r.warnings {
+        let _ = writeln!(s, "<p class=\"warn\">⚠ {w}</p>");
+    }
+    let _ = writeln!(s, "<h2>Observation groups</h2><table><tr><th>group</th><th>components</th><th>σ factor (VCE)</th><th>mean redundancy</th><th>min redundancy</th><th>max MDB</th></tr>");
+    for g in &r.groups {
+        let _ = writeln!(s, "<tr><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3} {}</td></tr>", g.group, g.observations, g.sigma_factor, g.mean_redundancy, g.min_redundancy, g.max_mdb, g.mdb_unit);
+    }
+    let _ = writeln!(s, "</table>");
+    if !(r.lever_arms.is_empty() && r.drifts.is_empty() && r.interiors.is_empty()) {
+        let _ = writeln!(s, "<h2>Additional parameters</h2><table><tr><th>parameter</th><th></th><th>value</th><th>σ</th><th>unit</th></tr>");
+        for e in &r.lever_arms {
+            est_rows(&mut s, e, "m");
+        }
+        for e in &r.drifts {
+            est_rows(&mut s, e, "m, m/s");
+        }
+        for e in &r.interiors {
+            est_rows(&mut s, e, "m (f, x0, y0), distortion units");
+        }
+        let _ = writeln!(s, "</table>");
+    }
+    let _ = writeln!(
+        s,
+        "<h2>Removed observations (data snooping, critical |w| = {:.2})</h2>",
+        r.critical_w
+    );
+    if r.removed.is_empty() {
+        let _ = writeln!(s, "<p>None.</p>");
+    } else {
+        let _ = writeln!(
+            s,
+            "<table><tr><th>#</th><th>kind</th><th>what</th><th>|w|</th><th>source</th></tr>"
+        );
+        for (i, x) in r.removed.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{:.1}</td><td>{}</td></tr>",
+                i + 1,
+                x.kind,
+                x.what,
+                x.w,
+                x.source
+            );
+        }
+        let _ = writeln!(s, "</table>");
+    }
+    let c = &r.checks;
+    if !c.points.is_empty() {
+        let close = r.mode == Mode::CloseRange;
+        let _ = writeln!(s, "<h2>Check points ({})</h2><table><tr><th>point</th>{}<th>σE</th><th>σN</th><th>σU</th></tr>", c.points.len(),
+            if close { "<th>ΔE m</th><th>ΔN m</th><th>ΔU m</th><th>Δlat ″</th><th>Δlon ″</th><th>Δh m</th>" } else { "<th>ΔE m</th><th>ΔN m</th><th>ΔU m</th>" });
+        for q in &c.points {
+            let extra = if close {
+                format!(
+                    "<td>{:.5}</td><td>{:.5}</td><td>{:.3}</td>",
+                    q.dlat_arcsec, q.dlon_arcsec, q.dh
+                )
+            } else {
+                String::new()
+            };
+            let _ = writeln!(
+                s,
+                "<tr><td>{}</td>{}{extra}{}</tr>",
+                q.id,
+                f3(q.d, 1.0, 3),
+                f3(q.sigma, 1.0, 3)
+            );
+        }
+        let blank = if close {
+            "<td></td><td></td><td></td>"
+        } else {
+            ""
+        };
+        let _ = writeln!(s, "<tr><th>mean</th>{}{blank}</tr><tr><th>RMS</th>{}{blank}</tr><tr><th>max |Δ|</th>{}{blank}</tr><tr><th>theoretical RMS</th>{}{blank}</tr></table>", f3(c.mean, 1.0, 3), f3(c.rms, 1.0, 3), f3(c.max, 1.0, 3), f3(c.theoretical_rms, 1.0, 3));
+    }
+    let _ = writeln!(s, "<h2>Plots</h2>");
+    s.push_str(&plot_image_residuals(p, r));
+    if !c.points.is_empty() {
+        s.push_str(&plot_checks(r));
+    }
+    if !r.gnss_residuals.is_empty() {
+        s.push_str(&plot_gnss(r));
+    }
+    if !r.drifts.is_empty() {
+        s.push_str(&plot_drift(r));
+    }
+    let _ = writeln!(s, "<h2>Images</h2><table><tr><th>image</th><th>strip</th><th>easting/lon</th><th>northing/lat</th><th>h</th><th>ω°</th><th>φ°</th><th>κ°</th><th>σE</th><th>σN</th><th>σU</th><th>points</th><th>RMS px</th></tr>");
+    for i in &r.images {
+        let _ = writeln!(s, "<tr><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{:.4}</td><td>{:.4}</td><td>{:.4}</td>{}<td>{}</td><td>{:.2}</td></tr>", i.id, i.strip, i.easting, i.northing, i.h, i.opk_deg[0], i.opk_deg[1], i.opk_deg[2], f3(i.sigma_centre, 1.0, 3), i.points, i.rms_px);
+    }
+    let _ = writeln!(
+        s,
+        "</table><p>Written by ppkat {}.</p></body></html>",
+        env!("CARGO_PKG_VERSION")
+    );
+    s
+}
+
+/// A plot into an SVG string; drawing errors leave a note instead of the plot.
+type Plot = Result<(), Box<dyn std::error::Error>>;
+
+fn svg(
+    title: &str,
+    draw: impl FnOnce(&DrawingArea<SVGBackend, plotters::coord::Shift>) -> Plot,
+) -> String {
+    let mut buf = String::new();
+    let ok = {
+        let root = SVGBackend::with_string(&mut buf, (900, 420)).into_drawing_area();
+        root.fill(&WHITE).is_ok() && draw(&root).is_ok() && root.present().is_ok()
+    };
+    if ok {
+        format!("<h3>{title}</h3>\n{buf}\n")
+    } else {
+        format!("<h3>{title}</h3><p>(plot could not be drawn)</p>\n")
+    }
+}
+
+fn range(v: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
+    let lo = v.clone().fold(f64::INFINITY, f64::min);
+    let hi = v.fold(f64::NEG_INFINITY, f64::max);
+    if lo.is_finite() && hi.is_finite() && hi > lo {
+        let m = 0.05 * (hi - lo);
+        (lo - m, hi + m)
+    } else {
+        (-1.0, 1.0)
+    }
+}
+
+/// Residual vectors of all images in the image format (pixels), exaggerated.
+fn plot_image_residuals(p: &Project, r: &Results) -> String {
+    let cam = &p.cameras[0].camera;
+    let (w, h) = (cam.width_px as f64, cam.height_px as f64);
+    let vmax = r
+        .image_residuals
+        .iter()
+        .map(|v| v.v_px[0].hypot(v.v_px[1]))
+        .fold(1e-9, f64::max);
+    let k = 0.05 * w / vmax;
+    svg(
+        &format!("Image residuals, all images (vectors × {k:.0}; largest {vmax:.2} px)"),
+        |root| {
+            let mut ch = ChartBuilder::on(root)
+                .margin(10)
+                .x_label_area_size(30)
+                .y_label_area_size(50)
+                .build_cartesian_2d(0.0..w, h..0.0)?;
+            ch.configure_mesh()
+                .x_desc("x (px)")
+                .y_desc("y (px)")
+                .draw()?;
+            ch.draw_series(r.image_residuals.iter().map(|v| {
+                let a = (v.px[0], v.px[1]);
+                let b = (v.px[0] + k * v.v_px[0], v.px[1] + k * v.v_px[1]);
+                PathElement::new(vec![a, b], BLUE.stroke_width(1))
+            }))?;
+            Ok(())
+        },
+    )
+}
+
+/// Check-point errors: horizontal vectors at the points, height error as a coloured dot.
+fn plot_checks(r: &Results) -> String {
+    let pts: Vec<(f64, f64, [f64; 3])> = r
+        .checks
+        .points
+        .iter()
+        .filter_map(|c| {
+            r.points
+                .iter()
+                .find(|p| p.id == c.id)
+                .map(|p| (p.local[0], p.local[1], c.d))
+        })
+        .collect();
+    let (x0, x1) = range(pts.iter().map(|p| p.0));
+    let (y0, y1) = range(pts.iter().map(|p| p.1));
+    let vmax = pts
+        .iter()
+        .map(|p| p.2[0].hypot(p.2[1]).max(p.2[2].abs()))
+        .fold(1e-9, f64::max);
+    let k = 0.08 * (x1 - x0) / vmax;
+    svg(&format!("Check-point errors (horizontal vectors × {k:.0}; red: up, blue: down; largest {vmax:.3} m)"), |root| {
+        let mut ch = ChartBuilder::on(root).margin(10).x_label_area_size(30).y_label_area_size(60)
+            .build_cartesian_2d(x0..x1, y0..y1)?;
+        ch.configure_mesh().x_desc("east (m, local)").y_desc("north (m, local)").draw()?;
+        ch.draw_series(pts.iter().map(|p| {
+            PathElement::new(vec![(p.0, p.1), (p.0 + k * p.2[0], p.1 + k * p.2[1])], BLACK.stroke_width(2))
+        }))?;
+        ch.draw_series(pts.iter().map(|p| {
+            let size = (3.0 + 12.0 * p.2[2].abs() / vmax) as i32;
+            let col = if p.2[2] >= 0.0 { RED } else { BLUE };
+            Circle::new((p.0, p.1), size, col.mix(0.5).filled())
+        }))?;
+        Ok(())
+    })
+}
+
+/// GNSS centre residuals against time, one colour per axis, strips marked by their images.
+fn plot_gnss(r: &Results) -> String {
+    let v = &r.gnss_residuals;
+    let (t0, t1) = range(v.iter().map(|x| x.tow));
+    let (y0, y1) = range(v.iter().flat_map(|x| x.v));
+    svg(
+        "GNSS centre residuals (predicted − observed, m) over time; strips in sequence",
+        |root| {
+            let mut ch = ChartBuilder::on(root)
+                .margin(10)
+                .x_label_area_size(30)
+                .y_label_area_size(60)
+                .build_cartesian_2d(t0..t1, y0..y1)?;
+            ch.configure_mesh()
+                .x_desc("GPS time of week (s)")
+                .y_desc("residual (m)")
+                .draw()?;
+            for (a, col, name) in [(0, RED, "E"), (1, GREEN, "N"), (2, BLUE, "U")] {
+                let mut strips: Vec<&str> = v.iter().map(|x| x.strip.as_str()).collect();
+                strips.dedup();
+                for st in strips {
+                    ch.draw_series(LineSeries::new(
+                        v.iter().filter(|x| x.strip == st).map(|x| (x.tow, x.v[a])),
+                        col,
+                    ))?;
+                }
+                ch.draw_series(
+                    v.iter()
+                        .map(|x| Circle::new((x.tow, x.v[a]), 2, col.filled())),
+                )?
+                .label(name)
+                .legend(move |(x, y)| Circle::new((x, y), 3, col.filled()));
+            }
+            ch.configure_series_labels().border_style(BLACK).draw()?;
+            Ok(())
+        },
+    )
+}
+
+/// The estimated drift per group over its exposures' time span.
+fn plot_drift(r: &Results) -> String {
+    let v = &r.gnss_residuals;
+    let (t0, t1) = range(v.iter().map(|x| x.tow));
+    let week_start = |t: f64| t - (t / 604800.0).floor() * 604800.0;
+    let mut curves: Vec<(usize, Vec<(f64, f64)>)> = Vec::new();
+    for d in &r.drifts {
+        for a in 0..3 {
+            let pts: Vec<(f64, f64)> = (0..=50)
+                .map(|i| {
+                    let tow = t0 + (t1 - t0) * i as f64 / 50.0;
+                    let dt = tow - week_start(d.t0);
+                    let val = match d.labels.len() {
+                        6 => d.values[a] + d.values[a + 3] * dt,
+                        _ if d.labels[0].starts_with('b') => d.values[a] * dt,
+                        _ => d.values[a],
+                    };
+                    (tow, val)
+                })
+                .collect();
+            curves.push((a, pts));
+        }
+    }
+    let (y0, y1) = range(curves.iter().flat_map(|c| c.1.iter().map(|p| p.1)));
+    svg(
+        "Estimated GNSS drift (m) per group: E red, N green, U blue",
+        |root| {
+            let mut ch = ChartBuilder::on(root)
+                .margin(10)
+                .x_label_area_size(30)
+                .y_label_area_size(60)
+                .build_cartesian_2d(t0..t1, y0..y1)?;
+            ch.configure_mesh()
+                .x_desc("GPS time of week (s)")
+                .y_desc("drift (m)")
+                .draw()?;
+            for (a, pts) in curves {
+                let col = [RED, GREEN, BLUE][a];
+                ch.draw_series(LineSeries::new(pts, col))?;
+            }
+            Ok(())
+        },
+    )
+}

@@ -1,0 +1,539 @@
+//! The numbers of an adjusted block, ready for the report: orientations and points with σ
+//! (local frame, geodetic, projected), lever arm, drift, self-calibration, variance components,
+//! reliability (redundancy, minimal detectable blunders), removed observations, residuals and
+//! the check-point table.
+
+use super::build::{Obs, GROUP_NAMES};
+use super::factors::DriftModel;
+use super::project::{Mode, PointKind, Project};
+use super::{AdjustError, Solved};
+use nalgebra::{DMatrix, Vector3};
+use photo::rotation::Angles;
+use serde::Serialize;
+
+/// Lower bound of the non-centrality for α0 = 0.1 % (two-sided) and power 80 %: the minimal
+/// detectable blunder is δ0·σ/√r (Baarda).
+pub const DELTA0: f64 = 4.13;
+
+#[derive(Clone, Debug, Serialize)]
+pub struct ImageResult {
+    pub id: String,
+    pub strip: String,
+    pub local: [f64; 3],
+    pub lat: f64,
+    pub lon: f64,
+    pub h: f64,
+    pub easting: f64,
+    pub northing: f64,
+    /// ω, φ, κ of R camera → local ENU, degrees.
+    pub opk_deg: [f64; 3],
+    pub sigma_centre: [f64; 3],
+    pub sigma_angles_deg: [f64; 3],
+    pub points: usize,
+    pub rms_px: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct PointResult {
+    pub id: String,
+    pub kind: PointKind,
+    pub local: [f64; 3],
+    pub lat: f64,
+    pub lon: f64,
+    pub h: f64,
+    pub easting: f64,
+    pub northing: f64,
+    pub sigma: [f64; 3],
+    pub rays: usize,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct CheckPoint {
+    pub id: String,
+    /// Adjusted − known, local E, N, U (m).
+    pub d: [f64; 3],
+    /// Theoretical σ of the adjusted point (m).
+    pub sigma: [f64; 3],
+    /// Adjusted − known as latitude and longitude (arc seconds) and height (m).
+    pub dlat_arcsec: f64,
+    pub dlon_arcsec: f64,
+    pub dh: f64,
+}
+
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct CheckTable {
+    pub points: Vec<CheckPoint>,
+    pub mean: [f64; 3],
+    pub rms: [f64; 3],
+    pub max: [f64; 3],
+    /// √(mean σ²) per axis: the RMS the adjustment's own covariance predicts.
+    pub theoretical_rms: [f64; 3],
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Estimated {
+    pub name: String,
+    pub values: Vec<f64>,
+    pub sigmas: Vec<f64>,
+    pub labels: Vec<String>,
+    /// Reference time t0 of a drift (GPST seconds), 0 otherwise.
+    pub t0: f64,
+    pub fixed: bool,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Removed {
+    pub kind: String,
+    pub what: String,
+    pub w: f64,
+    pub source: String,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct GroupQuality {
+    pub group: String,
+    pub observations: usize,
+    pub sigma_factor: f64,
+    pub mean_redundancy: f64,
+    pub min_redundancy: f64,
+    /// Largest minimal detectable blunder of the group (pixels for image points, m otherwise).
+    pub max_mdb: f64,
+    pub mdb_unit: String,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct ImageResidual {
+    pub image: String,
+    pub point: String,
+    /// Measured position and residual (predicted − measured), pixels.
+    pub px: [f64; 2],
+    pub v_px: [f64; 2],
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct GnssResidual {
+    pub image: String,
+    pub strip: String,
+    pub tow: f64,
+    /// Predicted − observed antenna, local E, N, U (m).
+    pub v: [f64; 3],
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Results {
+    pub name: String,
+    pub mode: Mode,
+    pub crs: String,
+    pub origin_deg: [f64; 3],
+    pub sigma0: f64,
+    pub redundancy: f64,
+    pub observations: usize,
+    pub unknowns: usize,
+    pub iterations: usize,
+    pub critical_w: f64,
+    pub images: Vec<ImageResult>,
+    pub points: Vec<PointResult>,
+    pub lever_arms: Vec<Estimated>,
+    pub drifts: Vec<Estimated>,
+    pub interiors: Vec<Estimated>,
+    pub groups: Vec<GroupQuality>,
+    pub removed: Vec<Removed>,
+    pub checks: CheckTable,
+    pub image_residuals: Vec<ImageResidual>,
+    pub gnss_residuals: Vec<GnssResidual>,
+    pub warnings: Vec<String>,
+}
+
+fn sig3(c: &DMatrix<f64>, o: usize) -> [f64; 3] {
+    [0, 1, 2].map(|i| c[(o + i, o + i)].max(0.0).sqrt())
+}
+
+fn estimated(
+    name: String,
+    labels: &[&str],
+    pr: &photo::solver::Problem,
+    block: usize,
+    cov: Option<&DMatrix<f64>>,
+    t0: f64,
+) -> Estimated {
+    let v = pr.blocks[block].vector().cloned().unwrap_or_default();
+    Estimated {
+        name,
+        values: v.iter().copied().collect(),
+        sigmas: (0..v.len())
+            .map(|i| cov.map(|c| c[(i, i)].max(0.0).sqrt()).unwrap_or(0.0))
+            .collect(),
+        labels: labels.iter().map(|s| s.to_string()).collect(),
+        t0,
+        fixed: pr.fixed[block],
+    }
+}
+
+pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
+    let b = &s.built;
+    let pr = &b.problem;
+    let s0 = s.stats.sigma0;
+    let frame = &b.frame;
+    let (tm, crs) = match p.output.mercator(&frame.geodetic) {
+        Some((t, n)) => (Some(t), n),
+        None => (None, "WGS84 geodetic".to_string()),
+    };
+    let project = |v: &Vector3<f64>| {
+        let g = frame.to_ecef(v).to_geodetic();
+        let (e, n) = tm
+            .as_ref()
+            .map(|t| {
+                let q = t.forward(&g);
+                (q.easting, q.northing)
+            })
+            .unwrap_or((g.lon.to_degrees(), g.lat.to_degrees()));
+        (g, e, n)
+    };
+    // Covariances of every pose, point and parameter block in one pass.
+    let mut want: Vec<usize> = b.poses.clone();
+    want.extend(b.points.values().copied());
+    want.extend(b.levers.iter().flatten().copied());
+    want.extend(b.drifts.iter().map(|d| d.block));
+    want.extend(b.interiors.iter().flatten().copied());
+    let covs = pr.covariances(&want, s0)?;
+    let cov_of = |blk: usize| {
+        want.iter()
+            .position(|w| *w == blk)
+            .and_then(|i| covs[i].as_ref())
+    };
+    // Residuals.
+    let mut image_residuals = Vec::new();
+    let mut gnss_residuals = Vec::new();
+    let mut per_image: Vec<(usize, f64)> = vec![(0, 0.0); p.images.len()];
+    for (k, f) in pr.factors.iter().enumerate() {
+        if pr.removed[k] {
+            continue;
+        }
+        let bl: Vec<&photo::solver::Block> = f.blocks().iter().map(|&i| &pr.blocks[i]).collect();
+        let Some((r, _)) = f.evaluate(&bl) else {
+            continue;
+        };
+        match &b.obs[k] {
+            Obs::Image(m) => {
+                let m = &p.measurements[*m];
+                let cam = &p.cameras[p.images[m.image].camera].camera;
+                let v = [r[0] / cam.pixel, -r[1] / cam.pixel];
+                let px = cam.image_to_pixel(m.xy);
+                per_image[m.image].0 += 1;
+                per_image[m.image].1 += v[0] * v[0] + v[1] * v[1];
+                image_residuals.push(ImageResidual {
+                    image: p.images[m.image].id.clone(),
+                    point: m.point.clone(),
+                    px: [px.x, px.y],
+                    v_px: v,
+                });
+            }
+            Obs::Gnss(a) => {
+                let ant = &p.antennas[*a];
+                let i = p
+                    .images
+                    .iter()
+                    .position(|im| im.id == ant.image)
+                    .unwrap_or(0);
+                let pose = pr.blocks[b.poses[i]].pose().copied();
+                let lever =
+                    b.levers[p.images[i].camera].and_then(|l| pr.blocks[l].vector().cloned());
+                let (Some(pose), Some(l)) = (pose, lever) else {
+                    continue;
+                };
+                let mut pred = pose.centre + pose.r * Vector3::new(l[0], l[1], l[2]);
+                let t = ant.time.to_gpst_seconds();
+                let key = match p.file.gnss.as_ref().map(|g| g.drift) {
+                    Some(super::project::DriftGroup::Block) => Some("block".to_string()),
+                    Some(super::project::DriftGroup::Strip) => {
+                        Some(format!("strip {}", p.images[i].strip))
+                    }
+                    Some(super::project::DriftGroup::Segment) => {
+                        Some(format!("segment {}", ant.segment))
+                    }
+                    _ => None,
+                };
+                if let Some(d) = key.and_then(|n| b.drifts.iter().find(|d| d.name == n)) {
+                    if let Some(v) = pr.blocks[d.block].vector() {
+                        pred += d.model.eval(v.as_slice(), t - d.t0).0;
+                    }
+                }
+                let v = pred - frame.to_local(&ant.pos);
+                gnss_residuals.push(GnssResidual {
+                    image: ant.image.clone(),
+                    strip: p.images[i].strip.clone(),
+                    tow: gnss::time::week_tow(ant.time).1,
+                    v: [v.x, v.y, v.z],
+                });
+            }
+            _ => {}
+        }
+    }
+    let images = p
+        .images
+        .iter()
+        .enumerate()
+        .map(|(i, im)| {
+            let pose = pr.blocks[b.poses[i]]
+                .pose()
+                .copied()
+                .unwrap_or(photo::camera::Pose {
+                    r: nalgebra::Matrix3::identity(),
+                    centre: Vector3::zeros(),
+                });
+            let (g, e, n) = project(&pose.centre);
+            let Angles::OmegaPhiKappa { omega, phi, kappa } = Angles::omega_phi_kappa(&pose.r)
+            else {
+                unreachable!("omega_phi_kappa returns that convention")
+            };
+            let c = cov_of(b.poses[i]);
+            let (n_pts, ss) = per_image[i];
+            ImageResult {
+                id: im.id.clone(),
+                strip: im.strip.clone(),
+                local: [pose.centre.x, pose.centre.y, pose.centre.z],
+                lat: g.lat.to_degrees(),
+                lon: g.lon.to_degrees(),
+                h: g.h,
+                easting: e,
+                northing: n,
+                opk_deg: [omega, phi, kappa].map(f64::to_degrees),
+                sigma_centre: c.map(|c| sig3(c, 3)).unwrap_or_default(),
+                sigma_angles_deg: c
+                    .map(|c| sig3(c, 0).map(f64::to_degrees))
+                    .unwrap_or_default(),
+                points: n_pts,
+                rms_px: if n_pts > 0 {
+                    (ss / (2 * n_pts) as f64).sqrt()
+                } else {
+                    0.0
+                },
+            }
+        })
+        .collect();
+    let mut rays = std::collections::BTreeMap::<&str, usize>::new();
+    for m in &p.measurements {
+        *rays.entry(m.point.as_str()).or_default() += 1;
+    }
+    let mut points = Vec::new();
+    let mut checks = CheckTable::default();
+    for (id, &blk) in &b.points {
+        let Some(x) = pr.blocks[blk].vector() else {
+            continue;
+        };
+        let x = Vector3::new(x[0], x[1], x[2]);
+        let (g, e, n) = project(&x);
+        let ground = p.ground.iter().find(|g| &g.id == id);
+        let kind = ground.map(|g| g.kind).unwrap_or(PointKind::Tie);
+        let sigma = cov_of(blk).map(|c| sig3(c, 0)).unwrap_or_default();
+        if let (Some(gp), PointKind::Check) = (ground, kind) {
+            let known = frame.to_local(&gp.pos);
+            let d = x - known;
+            let kg = gp.pos.to_geodetic();
+            checks.points.push(CheckPoint {
+                id: id.clone(),
+                d: [d.x, d.y, d.z],
+                sigma,
+                dlat_arcsec: (g.lat - kg.lat).to_degrees() * 3600.0,
+                dlon_arcsec: (g.lon - kg.lon).to_degrees() * 3600.0,
+                dh: g.h - kg.h,
+            });
+        }
+        points.push(PointResult {
+            id: id.clone(),
+            kind,
+            local: [x.x, x.y, x.z],
+            lat: g.lat.to_degrees(),
+            lon: g.lon.to_degrees(),
+            h: g.h,
+            easting: e,
+            northing: n,
+            sigma,
+            rays: rays.get(id.as_str()).copied().unwrap_or(0),
+        });
+    }
+    let nc = checks.points.len() as f64;
+    if nc > 0.0 {
+        for a in 0..3 {
+            checks.mean[a] = checks.points.iter().map(|c| c.d[a]).sum::<f64>() / nc;
+            checks.rms[a] = (checks.points.iter().map(|c| c.d[a].powi(2)).sum::<f64>() / nc).sqrt();
+            checks.max[a] = checks
+                .points
+                .iter()
+                .map(|c| c.d[a].abs())
+                .fold(0.0, f64::max);
+            checks.theoretical_rms[a] = (checks
+                .points
+                .iter()
+                .map(|c| c.sigma[a].powi(2))
+                .sum::<f64>()
+                / nc)
+                .sqrt();
+        }
+    }
+    let lever_arms = p
+        .cameras
+        .iter()
+        .zip(&b.levers)
+        .filter_map(|(c, l)| {
+            l.map(|l| {
+                estimated(
+                    format!("lever arm ({})", c.id),
+                    &["u", "v", "w"],
+                    pr,
+                    l,
+                    cov_of(l),
+                    0.0,
+                )
+            })
+        })
+        .collect();
+    let drifts = b
+        .drifts
+        .iter()
+        .map(|d| {
+            let labels: &[&str] = match d.model {
+                DriftModel::Offset => &["aE", "aN", "aU"],
+                DriftModel::Rate => &["bE", "bN", "bU"],
+                DriftModel::Linear => &["aE", "aN", "aU", "bE", "bN", "bU"],
+            };
+            estimated(d.name.clone(), labels, pr, d.block, cov_of(d.block), d.t0)
+        })
+        .collect();
+    const NAMES: [&str; 10] = ["f", "x0", "y0", "k1", "k2", "k3", "p1", "p2", "b1", "b2"];
+    let interiors = p
+        .cameras
+        .iter()
+        .zip(&b.interiors)
+        .filter_map(|(c, ib)| {
+            ib.map(|ib| {
+                let labels: Vec<&str> = c.calibrate.iter().map(|&i| NAMES[i]).collect();
+                estimated(
+                    format!("interior ({})", c.id),
+                    &labels,
+                    pr,
+                    ib,
+                    cov_of(ib),
+                    0.0,
+                )
+            })
+        })
+        .collect();
+    // Reliability per group.
+    let rel = pr.reliability()?;
+    let mut groups: Vec<GroupQuality> = GROUP_NAMES
+        .iter()
+        .enumerate()
+        .map(|(g, n)| GroupQuality {
+            group: n.to_string(),
+            observations: 0,
+            sigma_factor: s.components.get(g).copied().unwrap_or(1.0),
+            mean_redundancy: 0.0,
+            min_redundancy: f64::INFINITY,
+            max_mdb: 0.0,
+            mdb_unit: if g == 0 { "px".into() } else { "m".into() },
+        })
+        .collect();
+    for r in &rel {
+        let f = &pr.factors[r.factor];
+        let g = f.group();
+        let scale = pr.group_scale.get(g).copied().unwrap_or(1.0).sqrt() * s0;
+        let unit = match &b.obs[r.factor] {
+            Obs::Image(m) => {
+                let m = &p.measurements[*m];
+                p.cameras[p.images[m.image].camera].camera.pixel
+            }
+            _ => 1.0,
+        };
+        let q = &mut groups[g];
+        for i in 0..r.redundancy.len() {
+            let rr = r.redundancy[i];
+            q.observations += 1;
+            q.mean_redundancy += rr;
+            q.min_redundancy = q.min_redundancy.min(rr);
+            if rr > 1e-6 {
+                q.max_mdb = q
+                    .max_mdb
+                    .max(DELTA0 * f.sigmas()[i] * scale / rr.sqrt() / unit);
+            }
+        }
+    }
+    for q in &mut groups {
+        if q.observations > 0 {
+            q.mean_redundancy /= q.observations as f64;
+        } else {
+            q.min_redundancy = 0.0;
+        }
+    }
+    groups.retain(|q| q.observations > 0);
+    let removed = s
+        .removed
+        .iter()
+        .map(|&(k, w)| match &b.obs[k] {
+            Obs::Image(m) => {
+                let m = &p.measurements[*m];
+                Removed {
+                    kind: "image point".into(),
+                    what: format!("point {} in image {}", m.point, p.images[m.image].id),
+                    w,
+                    source: m.source.clone(),
+                }
+            }
+            Obs::Control(g) => Removed {
+                kind: "control point".into(),
+                what: format!("control point {} (kept as a tie point)", p.ground[*g].id),
+                w,
+                source: p.ground[*g].source.clone(),
+            },
+            Obs::Gnss(a) => Removed {
+                kind: "GNSS centre".into(),
+                what: format!("antenna of image {}", p.antennas[*a].image),
+                w,
+                source: String::new(),
+            },
+            Obs::LeverPrior(c) => Removed {
+                kind: "lever-arm prior".into(),
+                what: format!("camera {}", p.cameras[*c].id),
+                w,
+                source: String::new(),
+            },
+        })
+        .collect();
+    let mut warnings = Vec::new();
+    for (pt, im) in &b.single_ray {
+        warnings.push(format!(
+            "point {pt} is measured in one image only ({im}): not adjusted"
+        ));
+    }
+    if !b.unused_antennas.is_empty() {
+        warnings.push(format!(
+            "{} antenna record(s) name images not in the list (first: {})",
+            b.unused_antennas.len(),
+            b.unused_antennas[0]
+        ));
+    }
+    let g = &frame.geodetic;
+    Ok(Results {
+        name: p.file.name.clone(),
+        mode: p.file.mode,
+        crs,
+        origin_deg: [g.lat.to_degrees(), g.lon.to_degrees(), g.h],
+        sigma0: s0,
+        redundancy: s.stats.redundancy,
+        observations: s.stats.observations,
+        unknowns: s.stats.unknowns,
+        iterations: s.stats.iterations,
+        critical_w: s.critical,
+        images,
+        points,
+        lever_arms,
+        drifts,
+        interiors,
+        groups,
+        removed,
+        checks,
+        image_residuals,
+        gnss_residuals,
+        warnings,
+    })
+}

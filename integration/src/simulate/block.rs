@@ -1,0 +1,373 @@
+//! Simulated photogrammetric blocks with known truth, written as a ready-to-run `ppkat adjust`
+//! project: an aerial block flown in strips (the classic 2-strip test block, or a large one
+//! for benchmarks) with GNSS antenna positions carrying a lever arm, a drift and correlated
+//! noise; or a close-range pair of terrestrial stations. Deterministic per seed.
+//!
+//! Frame: ENU tangent plane at the site (`lat`, `lon`, `ground_h`); files carry geodetic
+//! coordinates, so the adjustment sees only what a user would give it.
+
+use super::rng::Rng;
+use super::SimError;
+use gnss::frame::{enu_rotation, Enu, Geodetic};
+use nalgebra::{Matrix3, Vector2, Vector3};
+use photo::camera::{Camera, Pose};
+use photo::rotation::{rot_z, Angles};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// An aerial block.
+#[derive(Clone, Debug)]
+pub struct BlockSpec {
+    pub name: String,
+    pub seed: u64,
+    pub lat_deg: f64,
+    pub lon_deg: f64,
+    pub ground_h: f64,
+    pub focal_mm: f64,
+    /// Square format side, mm.
+    pub format_mm: f64,
+    pub pixel_um: f64,
+    /// Photo scale denominator (flying height = scale · f).
+    pub scale: f64,
+    pub forward_overlap: f64,
+    pub side_overlap: f64,
+    /// Photos in each strip (alternate strips are flown in opposite directions).
+    pub strips: Vec<usize>,
+    pub speed: f64,
+    /// Time between strips (turn), seconds.
+    pub turn_s: f64,
+    /// Terrain relief amplitude, m.
+    pub relief: f64,
+    pub tilt_sigma_deg: f64,
+    pub sigma_image_um: f64,
+    /// Tie points per image on average.
+    pub ties_per_image: usize,
+    pub checks: usize,
+    /// Four corner control points.
+    pub corner_gcps: bool,
+    pub gcp_sigma: [f64; 3],
+    /// GNSS antenna σ per axis (E, N, U) and the E–N, E–U, N–U correlations.
+    pub gnss_sigma: [f64; 3],
+    pub gnss_corr: [f64; 3],
+    /// Lever arm (u, v, w), camera frame, m.
+    pub lever_arm: [f64; 3],
+    /// Drift a + b·(t − t_first) over the whole block, m and m/s.
+    pub drift_a: [f64; 3],
+    pub drift_b: [f64; 3],
+    pub image_blunders: usize,
+    /// A control point with a wrong coordinate: shift (E, N, U) in metres.
+    pub wrong_gcp: Option<[f64; 3]>,
+    /// The `[gnss]` and `[adjustment]` sections of the project written with it.
+    pub project_options: String,
+}
+
+impl BlockSpec {
+    /// The classic test block: 2 strips, 29 photos, f = 152 mm, 23 cm format, 1:8000, 60 %
+    /// forward overlap; GNSS σ 5 cm with correlations and a linear drift; 4 corner GCPs.
+    pub fn classic() -> BlockSpec {
+        BlockSpec {
+            name: "classic 2-strip block 1:8000".into(),
+            seed: 8000,
+            lat_deg: 30.52,
+            lon_deg: 114.36,
+            ground_h: 35.0,
+            focal_mm: 152.0,
+            format_mm: 230.0,
+            pixel_um: 10.0,
+            scale: 8000.0,
+            forward_overlap: 0.6,
+            side_overlap: 0.3,
+            strips: vec![15, 14],
+            speed: 70.0,
+            turn_s: 150.0,
+            relief: 40.0,
+            tilt_sigma_deg: 1.0,
+            sigma_image_um: 5.0,
+            ties_per_image: 40,
+            checks: 40,
+            corner_gcps: true,
+            gcp_sigma: [0.02, 0.02, 0.03],
+            gnss_sigma: [0.05, 0.05, 0.05],
+            gnss_corr: [0.2, 0.3, 0.1],
+            lever_arm: [0.12, -0.05, 1.45],
+            drift_a: [0.25, -0.18, 0.30],
+            drift_b: [0.0008, -0.0005, 0.0012],
+            image_blunders: 0,
+            wrong_gcp: None,
+            project_options: String::new(),
+        }
+    }
+
+    /// A large block for benchmarks: `strips` × `per_strip` photos (1:5000, 80 mm lens).
+    pub fn large(strips: usize, per_strip: usize) -> BlockSpec {
+        BlockSpec {
+            name: format!("{strips}×{per_strip} benchmark block"),
+            seed: 1000,
+            focal_mm: 80.0,
+            format_mm: 60.0,
+            pixel_um: 6.0,
+            scale: 5000.0,
+            side_overlap: 0.3,
+            strips: vec![per_strip; strips],
+            turn_s: 60.0,
+            ties_per_image: 60,
+            checks: 50,
+            drift_a: [0.0; 3],
+            ..BlockSpec::classic()
+        }
+    }
+}
+
+/// What the simulation knows.
+#[derive(Clone, Debug)]
+pub struct BlockTruth {
+    pub origin: Geodetic,
+    /// Image id, strip, pose (ENU at the origin), GPST seconds.
+    pub images: Vec<(String, usize, Pose, f64)>,
+    /// Point id, kind (gcp|check|tie), ENU.
+    pub points: Vec<(String, &'static str, Vector3<f64>)>,
+    pub t_first: f64,
+    /// (image, point) of every blundered measurement.
+    pub blunders: Vec<(String, String)>,
+    pub wrong_gcp: Option<String>,
+    pub measurements: usize,
+}
+
+fn terrain(relief: f64, x: f64, y: f64) -> f64 {
+    relief * (0.6 * (x / 1700.0).sin() * (y / 1300.0).cos() + 0.4 * ((x + y) / 2900.0).sin())
+}
+
+/// Simulate the block and write the project (`project.toml` and its tables) into `dir`.
+pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
+    let mut rng = Rng::new(spec.seed);
+    let f = spec.focal_mm * 1e-3;
+    let fmt = spec.format_mm * 1e-3;
+    let npx = (spec.format_mm * 1e3 / spec.pixel_um).round() as usize;
+    let cam = Camera::ideal(f, spec.pixel_um * 1e-6, npx, npx);
+    let hgt = spec.scale * f;
+    let foot = spec.scale * fmt;
+    let base = foot * (1.0 - spec.forward_overlap);
+    let spacing = foot * (1.0 - spec.side_overlap);
+    let origin = Geodetic::from_degrees(spec.lat_deg, spec.lon_deg, spec.ground_h);
+    let t_first = 1_400_000_000.0 + 3600.0 * 3.0;
+    let mut t = t_first;
+    let mut images = Vec::new();
+    for (s, &n) in spec.strips.iter().enumerate() {
+        let east = s % 2 == 0;
+        for k in 0..n {
+            let i = if east { k } else { n - 1 - k };
+            let (x, y) = (i as f64 * base, s as f64 * spacing);
+            let heading = if east { 0.0 } else { std::f64::consts::PI };
+            let sd = spec.tilt_sigma_deg.to_radians();
+            let tilt = Angles::OmegaPhiKappa {
+                omega: sd * rng.normal(),
+                phi: sd * rng.normal(),
+                kappa: sd * rng.normal(),
+            }
+            .matrix();
+            let z = hgt + spec.ground_h * 0.0 + 3.0 * rng.normal();
+            let pose = Pose {
+                r: rot_z(heading) * tilt,
+                centre: Vector3::new(x + 2.0 * rng.normal(), y + 2.0 * rng.normal(), z),
+            };
+            images.push((format!("{}{:02}", s + 1, i + 1), s, pose, t));
+            t += base / spec.speed;
+        }
+        t += spec.turn_s;
+    }
+    let xmax = (spec
+        .strips
+        .iter()
+        .copied()
+        .max()
+        .unwrap_or(1)
+        .saturating_sub(1)) as f64
+        * base;
+    let ymax = (spec.strips.len().saturating_sub(1)) as f64 * spacing;
+    let margin = 0.45 * foot;
+    let mut points: Vec<(String, &'static str, Vector3<f64>)> = Vec::new();
+    let ground = |x: f64, y: f64| Vector3::new(x, y, terrain(spec.relief, x, y));
+    if spec.corner_gcps {
+        let inset = 0.06 * foot;
+        let last = spec.strips.len().saturating_sub(1);
+        let end =
+            |s: usize| spec.strips.get(s).copied().unwrap_or(1).saturating_sub(1) as f64 * base;
+        for (k, (x, y)) in [
+            (inset, -margin),
+            (end(0) - inset, -margin),
+            (inset, ymax + margin),
+            (end(last) - inset, ymax + margin),
+        ]
+        .iter()
+        .enumerate()
+        {
+            points.push((format!("G{}", k + 1), "gcp", ground(*x, *y)));
+        }
+    }
+    for k in 0..spec.checks {
+        let (x, y) = (
+            rng.range(0.0, xmax),
+            rng.range(-0.3 * foot, ymax + 0.3 * foot),
+        );
+        points.push((format!("C{}", k + 1), "check", ground(x, y)));
+    }
+    let n_ties = spec.ties_per_image * images.len() / 3;
+    for k in 0..n_ties {
+        let (x, y) = (
+            rng.range(-0.4 * foot, xmax + 0.4 * foot),
+            rng.range(-margin, ymax + margin),
+        );
+        points.push((format!("T{}", k + 1), "tie", ground(x, y)));
+    }
+    // Measurements.
+    let sig = spec.sigma_image_um * 1e-6;
+    let lim = fmt / 2.0 - 0.005;
+    let mut meas: Vec<(usize, usize, Vector2<f64>)> = Vec::new();
+    for (i, im) in images.iter().enumerate() {
+        for (k, p) in points.iter().enumerate() {
+            if let Some(xy) = cam.project(&im.2, &p.2) {
+                if xy.x.abs() < lim && xy.y.abs() < lim {
+                    meas.push((i, k, xy + Vector2::new(rng.normal(), rng.normal()) * sig));
+                }
+            }
+        }
+    }
+    // Keep points seen at least twice.
+    let mut count = vec![0usize; points.len()];
+    for m in &meas {
+        count[m.1] += 1;
+    }
+    meas.retain(|m| count[m.1] >= 2);
+    let mut blunders = Vec::new();
+    for b in 0..spec.image_blunders {
+        let ties: Vec<usize> = (0..meas.len())
+            .filter(|&j| points[meas[j].1].1 == "tie" && count[meas[j].1] >= 4)
+            .collect();
+        if ties.is_empty() {
+            break;
+        }
+        let j = ties[(b * 7919 + 101) % ties.len()];
+        let size = (40.0 + 10.0 * b as f64) * 1e-6;
+        let a = rng.range(0.0, std::f64::consts::TAU);
+        meas[j].2 += Vector2::new(a.cos(), a.sin()) * size;
+        blunders.push((images[meas[j].0].0.clone(), points[meas[j].1].0.clone()));
+    }
+    let g_ecef = |v: &Vector3<f64>| Enu(*v).to_ecef(&origin.to_ecef()).to_geodetic();
+    // Tables.
+    let mut s = String::from("image,camera,strip\n");
+    for im in &images {
+        let _ = writeln!(s, "{},cam,{}", im.0, im.1 + 1);
+    }
+    write(dir, "images.csv", &s)?;
+    let mut s = String::from("image,point,x_px,y_px,sigma_px\n");
+    for (i, k, xy) in &meas {
+        let px = cam.image_to_pixel(*xy);
+        let _ = writeln!(
+            s,
+            "{},{},{:.3},{:.3},{}",
+            images[*i].0,
+            points[*k].0,
+            px.x,
+            px.y,
+            spec.sigma_image_um / spec.pixel_um
+        );
+    }
+    write(dir, "image_observations.csv", &s)?;
+    let mut s = String::from("point,kind,lat,lon,h,sigma_xy,sigma_z\n");
+    let mut wrong = None;
+    for (id, kind, x) in &points {
+        if *kind == "tie" || count[points.iter().position(|p| &p.0 == id).unwrap_or(0)] < 2 {
+            continue;
+        }
+        let mut v = *x;
+        let (sx, sz) = (spec.gcp_sigma[0], spec.gcp_sigma[2]);
+        if *kind == "gcp" {
+            v += Vector3::new(sx * rng.normal(), sx * rng.normal(), sz * rng.normal());
+            if let (Some(d), None) = (spec.wrong_gcp, &wrong) {
+                v += Vector3::from(d);
+                wrong = Some(id.clone());
+            }
+        }
+        let g = g_ecef(&v);
+        let _ = writeln!(
+            s,
+            "{id},{kind},{:.10},{:.10},{:.4},{sx},{sz}",
+            g.lat.to_degrees(),
+            g.lon.to_degrees(),
+            g.h
+        );
+    }
+    write(dir, "ground_points.csv", &s)?;
+    // GNSS antennas.
+    let [se, sn, su] = spec.gnss_sigma;
+    let [ren, reu, rnu] = spec.gnss_corr;
+    let cov = Matrix3::new(
+        se * se,
+        ren * se * sn,
+        reu * se * su,
+        ren * se * sn,
+        sn * sn,
+        rnu * sn * su,
+        reu * se * su,
+        rnu * sn * su,
+        su * su,
+    );
+    let l = cov
+        .cholesky()
+        .map(|c| c.l())
+        .unwrap_or_else(|| Matrix3::from_diagonal(&Vector3::from(spec.gnss_sigma)));
+    let mut s = String::from("# simulated: antenna = centre + R*lever + drift + noise\nid,week,tow,lat,lon,h,c_ee,c_en,c_eu,c_nn,c_nu,c_uu,quality,segment\n");
+    for im in &images {
+        let dt = im.3 - t_first;
+        let drift = Vector3::from(spec.drift_a) + Vector3::from(spec.drift_b) * dt;
+        let noise = l * Vector3::new(rng.normal(), rng.normal(), rng.normal());
+        let a = im.2.centre + im.2.r * Vector3::from(spec.lever_arm) + drift + noise;
+        let g = g_ecef(&a);
+        // Noise drawn in the site ENU: express the covariance in the ENU at the antenna.
+        let m = enu_rotation(&g) * enu_rotation(&origin).transpose();
+        let c = m * cov * m.transpose();
+        let (week, tow) = (
+            (im.3 / 604800.0).floor(),
+            im.3 - (im.3 / 604800.0).floor() * 604800.0,
+        );
+        let _ = writeln!(
+            s,
+            "{},{week},{tow:.6},{:.10},{:.10},{:.4},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},1,0",
+            im.0,
+            g.lat.to_degrees(),
+            g.lon.to_degrees(),
+            g.h,
+            c[(0, 0)],
+            c[(0, 1)],
+            c[(0, 2)],
+            c[(1, 1)],
+            c[(1, 2)],
+            c[(2, 2)]
+        );
+    }
+    write(dir, "antennas.csv", &s)?;
+    let project = format!(
+        "name = \"{}\"\noutput = \"utm\"\n\n[[camera]]\nid = \"cam\"\nfocal_mm = {}\npixel_um = {}\nwidth_px = {npx}\nheight_px = {npx}\nsigma_px = {}\n\n[images]\nlist = \"images.csv\"\nmeasurements = \"image_observations.csv\"\n\n[ground]\nfile = \"ground_points.csv\"\n\n{}",
+        spec.name, spec.focal_mm, spec.pixel_um, spec.sigma_image_um / spec.pixel_um, spec.project_options
+    );
+    write(dir, "project.toml", &project)?;
+    let measurements = meas.len();
+    Ok(BlockTruth {
+        origin,
+        images,
+        points,
+        t_first,
+        blunders,
+        wrong_gcp: wrong,
+        measurements,
+    })
+}
+
+pub(crate) fn write(dir: &Path, name: &str, text: &str) -> Result<(), SimError> {
+    std::fs::create_dir_all(dir).map_err(|source| gnss::Error::Io {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    gnss::solution::write_atomic(&dir.join(name), |w| w.write_all(text.as_bytes()))?;
+    Ok(())
+}
