@@ -163,3 +163,98 @@ fn classic_block_without_gcps() {
     let s = monte_carlo(false, 101..165);
     check(&s, "no GCP");
 }
+
+/// Five image blunders and one wrong control point, default options (variance components,
+/// data snooping at 5 % family-wise): exactly those six are removed.
+#[test]
+fn blunders_and_a_wrong_gcp_are_found() {
+    let mut spec = BlockSpec::classic();
+    spec.image_blunders = 5;
+    // A control point 1 m off in height (a wrong antenna height in its survey): about twice
+    // the minimal detectable blunder of a control point in this block (≈ 0.5 m).
+    spec.wrong_gcp = Some([0.0, 0.0, 1.0]);
+    spec.project_options = gnss_options("linear");
+    let (truth, r) = run(&spec, "blunders");
+    let mut found: Vec<String> = r.removed.iter().map(|x| x.what.clone()).collect();
+    found.sort();
+    let mut want: Vec<String> = truth
+        .blunders
+        .iter()
+        .map(|(im, pt)| format!("point {pt} in image {im}"))
+        .collect();
+    want.push(format!(
+        "control point {} (kept as a tie point)",
+        truth.wrong_gcp.clone().unwrap()
+    ));
+    want.sort();
+    assert_eq!(want.len(), 6);
+    assert_eq!(found, want, "removed: {:#?}", r.removed);
+    // After the removals the block is as good as a clean one.
+    assert!((r.sigma0 - 1.0).abs() < 0.1, "σ0 {}", r.sigma0);
+    for a in 0..3 {
+        assert!(r.checks.rms[a] < 2.0 * r.checks.theoretical_rms[a], "{:?}", r.checks);
+    }
+    // Reliability is reported per group, with the minimal detectable blunders.
+    let img = r.groups.iter().find(|g| g.group == "image points").unwrap();
+    assert!(img.mean_redundancy > 0.2 && img.mean_redundancy < 0.8, "{img:?}");
+    assert!(img.max_mdb > 1.0 && img.max_mdb < 50.0, "{img:?}");
+}
+
+/// A written classic project to break in one way.
+fn project_dir(name: &str) -> PathBuf {
+    let dir = tmp(name);
+    let mut spec = BlockSpec::classic();
+    spec.project_options = gnss_options("linear");
+    block::aerial(&spec, &dir).unwrap();
+    dir
+}
+
+fn edit(dir: &std::path::Path, file: &str, f: impl Fn(&str) -> String) {
+    let p = dir.join(file);
+    let t = std::fs::read_to_string(&p).unwrap();
+    std::fs::write(&p, f(&t)).unwrap();
+}
+
+fn fails(dir: &std::path::Path) -> String {
+    let e = adjust::run(&dir.join("project.toml"), &dir.join("out")).err().expect("must fail");
+    assert!(!dir.join("out/report.json").exists(), "no output on failure");
+    e.to_string()
+}
+
+#[test]
+fn bad_input_gives_clear_errors() {
+    // A strip without GNSS: its antenna records are missing.
+    let d = project_dir("bad-strip");
+    edit(&d, "antennas.csv", |t| t.lines().filter(|l| !l.starts_with('2')).collect::<Vec<_>>().join("\n"));
+    let e = fails(&d);
+    assert!(e.contains("strip 2 (14 images) without any GNSS"), "{e}");
+    // An image with no points.
+    let d = project_dir("bad-image");
+    edit(&d, "images.csv", |t| format!("{t}999,cam,1\n"));
+    let e = fails(&d);
+    assert!(e.contains("image(s) 999 have no measured points"), "{e}");
+    // Control ids that are not in the measurements.
+    let d = project_dir("bad-gcp");
+    edit(&d, "ground_points.csv", |t| t.replacen("G2,", "G2x,", 1));
+    let e = fails(&d);
+    assert!(e.contains("G2x are not measured in any image"), "{e}");
+    // A datum defect: no control, no GNSS.
+    let d = project_dir("bad-datum");
+    edit(&d, "project.toml", |t| t[..t.find("[gnss]").unwrap()].to_string());
+    edit(&d, "ground_points.csv", |t| t.lines().filter(|l| !l.contains(",gcp,")).collect::<Vec<_>>().join("\n"));
+    let e = fails(&d);
+    assert!(e.contains("datum defect: 0 control point(s) and no GNSS"), "{e}");
+    // A measurement naming an unknown image: file and line.
+    let d = project_dir("bad-meas");
+    edit(&d, "image_observations.csv", |t| format!("{t}777,T1,10,10,0.5\n"));
+    let e = fails(&d);
+    assert!(e.contains("image_observations.csv, line") && e.contains("image `777` is not in the image list"), "{e}");
+    // An unknown key in the project file.
+    let d = project_dir("bad-key");
+    edit(&d, "project.toml", |t| t.replace("drift_model", "drift_modle"));
+    let e = fails(&d);
+    assert!(e.contains("drift_modle"), "{e}");
+    for n in ["bad-strip", "bad-image", "bad-gcp", "bad-datum", "bad-meas", "bad-key"] {
+        let _ = std::fs::remove_dir_all(tmp(n));
+    }
+}

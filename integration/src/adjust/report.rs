@@ -136,9 +136,9 @@ pub fn html(p: &Project, r: &Results) -> String {
     for w in &r.warnings {
         let _ = writeln!(s, "<p class=\"warn\">⚠ {w}</p>");
     }
-    let _ = writeln!(s, "<h2>Observation groups</h2><table><tr><th>group</th><th>components</th><th>σ factor (VCE)</th><th>mean redundancy</th><th>min redundancy</th><th>max MDB</th></tr>");
+    let _ = writeln!(s, "<h2>Observation groups</h2><table><tr><th>group</th><th>components</th><th>σ factor (VCE)</th><th>mean redundancy</th><th>min redundancy</th><th>uncontrolled (r &lt; 0.1)</th><th>max MDB (r ≥ 0.1)</th></tr>");
     for g in &r.groups {
-        let _ = writeln!(s, "<tr><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3} {}</td></tr>", g.group, g.observations, g.sigma_factor, g.mean_redundancy, g.min_redundancy, g.max_mdb, g.mdb_unit);
+        let _ = writeln!(s, "<tr><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{}</td><td>{:.3} {}</td></tr>", g.group, g.observations, g.sigma_factor, g.mean_redundancy, g.min_redundancy, g.uncontrolled, g.max_mdb, g.mdb_unit);
     }
     let _ = writeln!(s, "</table>");
     if !(r.lever_arms.is_empty() && r.drifts.is_empty() && r.interiors.is_empty()) {

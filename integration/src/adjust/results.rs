@@ -96,7 +96,10 @@ pub struct GroupQuality {
     pub sigma_factor: f64,
     pub mean_redundancy: f64,
     pub min_redundancy: f64,
-    /// Largest minimal detectable blunder of the group (pixels for image points, m otherwise).
+    /// Components with a redundancy below 0.1: a blunder there is (nearly) undetectable.
+    pub uncontrolled: usize,
+    /// Largest minimal detectable blunder among the controlled components (redundancy ≥ 0.1),
+    /// pixels for image points, metres otherwise.
     pub max_mdb: f64,
     pub mdb_unit: String,
 }
@@ -430,6 +433,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
             sigma_factor: s.components.get(g).copied().unwrap_or(1.0),
             mean_redundancy: 0.0,
             min_redundancy: f64::INFINITY,
+            uncontrolled: 0,
             max_mdb: 0.0,
             mdb_unit: if g == 0 { "px".into() } else { "m".into() },
         })
@@ -451,7 +455,9 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
             q.observations += 1;
             q.mean_redundancy += rr;
             q.min_redundancy = q.min_redundancy.min(rr);
-            if rr > 1e-6 {
+            if rr < 0.1 {
+                q.uncontrolled += 1;
+            } else {
                 q.max_mdb = q
                     .max_mdb
                     .max(DELTA0 * f.sigmas()[i] * scale / rr.sqrt() / unit);
