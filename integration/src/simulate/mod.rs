@@ -5,6 +5,7 @@
 
 pub mod block;
 pub mod camera;
+pub mod closerange;
 pub mod constellation;
 pub mod flight;
 pub mod gnss_obs;
