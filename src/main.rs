@@ -211,10 +211,19 @@ enum Cmd {
         /// Scenario file (TOML).
         #[arg(long, conflicts_with = "builtin")]
         scenario: Option<PathBuf>,
-        /// Built-in scenario: demo, block20 or long.
+        /// Built-in scenario: demo, block20 or long (flights), or classic-block, close-range or
+        /// block1000 (adjustment projects).
         #[arg(long)]
         builtin: Option<String>,
         #[arg(long)]
+        out: PathBuf,
+    },
+    /// Joint GNSS-supported bundle adjustment of a project (TOML): writes orientations, points,
+    /// residuals, report.json and report.html into the output folder.
+    Adjust {
+        #[arg(long)]
+        project: PathBuf,
+        #[arg(short, long)]
         out: PathBuf,
     },
     /// The whole chain on a built-in simulated flight, with an accuracy summary against truth.
@@ -233,6 +242,15 @@ enum Cmd {
 enum BenchCmd {
     /// Stream an observation file through the parser and report MB/s and peak RSS.
     Ingest { file: PathBuf },
+    /// Simulate a block of STRIPS × PER_STRIP photos and time its joint adjustment.
+    Adjust {
+        #[arg(long, default_value_t = 20)]
+        strips: usize,
+        #[arg(long, default_value_t = 50)]
+        per_strip: usize,
+        #[arg(long, default_value = "ppkat-bench-adjust")]
+        out: PathBuf,
+    },
 }
 
 fn main() {
@@ -503,6 +521,13 @@ fn run(cli: Cli) -> Result<()> {
             out,
         } => {
             use integration::simulate;
+            if let Some(r) = builtin
+                .as_deref()
+                .and_then(|b| simulate::block::builtin(b, &out))
+            {
+                println!("{}", r?);
+                return Ok(());
+            }
             let s = match (scenario, builtin) {
                 (Some(p), _) => {
                     let text = std::fs::read_to_string(&p)
@@ -523,6 +548,11 @@ fn run(cli: Cli) -> Result<()> {
             };
             print!("{}", simulate::run(&s, &out)?);
         }
+        Cmd::Adjust { project, out } => {
+            let r = integration::adjust::run(&project, &out)?;
+            print!("{}", r.summary());
+            println!("outputs in {}", out.display());
+        }
         Cmd::Demo { out } => {
             print!("{}", integration::demo::run(&out)?);
         }
@@ -530,6 +560,13 @@ fn run(cli: Cli) -> Result<()> {
             BenchCmd::Ingest { file } => {
                 let b = integration::bench::ingest(&file)?;
                 print!("{b}");
+            }
+            BenchCmd::Adjust {
+                strips,
+                per_strip,
+                out,
+            } => {
+                print!("{}", integration::bench::adjust(strips, per_strip, &out)?);
             }
         },
     }

@@ -86,3 +86,62 @@ fn ingest_plain(path: &Path) -> Result<IngestBench> {
         peak_rss_kib: peak_rss_kib(),
     })
 }
+
+/// Wall time and peak memory of the joint adjustment of a simulated block.
+#[derive(Clone, Debug)]
+pub struct AdjustBench {
+    pub images: usize,
+    pub points: usize,
+    pub observations: usize,
+    pub unknowns: usize,
+    pub simulate_s: f64,
+    pub adjust_s: f64,
+    pub sigma0: f64,
+    pub peak_rss_kib: Option<u64>,
+}
+
+impl std::fmt::Display for AdjustBench {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "adjust: {} images, {} points, {} observations, {} unknowns",
+            self.images, self.points, self.observations, self.unknowns
+        )?;
+        writeln!(
+            f,
+            "simulated in {:.2} s; adjusted (snooping, variance components, statistics, reports) in {:.2} s; σ0 {:.3}",
+            self.simulate_s, self.adjust_s, self.sigma0
+        )?;
+        match self.peak_rss_kib {
+            Some(k) => writeln!(f, "peak RSS {:.1} MiB", k as f64 / 1024.0),
+            None => writeln!(f, "peak RSS unknown"),
+        }
+    }
+}
+
+/// Simulate a block of `strips` × `per_strip` photos into `dir` and adjust it.
+pub fn adjust(
+    strips: usize,
+    per_strip: usize,
+    dir: &Path,
+) -> std::result::Result<AdjustBench, crate::adjust::AdjustError> {
+    let t0 = std::time::Instant::now();
+    let mut spec = crate::simulate::block::BlockSpec::large(strips, per_strip);
+    let l = spec.lever_arm;
+    spec.project_options = format!("[gnss]\nantennas = \"antennas.csv\"\nlever_arm = [{}, {}, {}]\nlever_arm_sigma = [0.02, 0.02, 0.02]\ndrift = \"strip\"\ndrift_model = \"offset\"\n", l[0], l[1], l[2]);
+    crate::simulate::block::aerial(&spec, dir)
+        .map_err(|e| crate::adjust::AdjustError::Problem(e.to_string()))?;
+    let simulate_s = t0.elapsed().as_secs_f64();
+    let t1 = std::time::Instant::now();
+    let r = crate::adjust::run(&dir.join("project.toml"), &dir.join("out"))?;
+    Ok(AdjustBench {
+        images: r.images.len(),
+        points: r.points.len(),
+        observations: r.observations,
+        unknowns: r.unknowns,
+        simulate_s,
+        adjust_s: t1.elapsed().as_secs_f64(),
+        sigma0: r.sigma0,
+        peak_rss_kib: peak_rss_kib(),
+    })
+}

@@ -133,6 +133,9 @@ pub struct DemoReport {
     pub stations: usize,
     pub stations_refused: usize,
     pub centre_3d_rms: f64,
+    /// The joint adjustment of the flight's photographs (None when it could not run).
+    pub adjust: Option<crate::adjust::results::Results>,
+    pub adjust_error: Option<String>,
     pub seconds: f64,
 }
 
@@ -160,7 +163,49 @@ impl fmt::Display for DemoReport {
             self.stations_refused,
             self.centre_3d_rms * 1000.0
         )?;
-        writeln!(f, "(the joint adjustment joins the demo with its issue)")?;
+        match (&self.adjust, &self.adjust_error) {
+            (Some(r), _) => {
+                let c = &r.checks;
+                writeln!(
+                    f,
+                    "adjustment: {} images, {} points, σ0 {:.2}, {} observations removed by data snooping",
+                    r.images.len(),
+                    r.points.len(),
+                    r.sigma0,
+                    r.removed.len()
+                )?;
+                writeln!(
+                    f,
+                    "check points: {}, RMS E/N/U {:.3} {:.3} {:.3} m (theoretical {:.3} {:.3} {:.3} m)",
+                    c.points.len(),
+                    c.rms[0],
+                    c.rms[1],
+                    c.rms[2],
+                    c.theoretical_rms[0],
+                    c.theoretical_rms[1],
+                    c.theoretical_rms[2]
+                )?;
+                for l in &r.lever_arms {
+                    writeln!(
+                        f,
+                        "lever arm: {:.3} {:.3} {:.3} m (σ {:.3} {:.3} {:.3})",
+                        l.values[0],
+                        l.values[1],
+                        l.values[2],
+                        l.sigmas[0],
+                        l.sigmas[1],
+                        l.sigmas[2]
+                    )?;
+                }
+                writeln!(
+                    f,
+                    "report: {}",
+                    self.sim.dir.join("adjust/report.html").display()
+                )?;
+            }
+            (None, Some(e)) => writeln!(f, "adjustment failed: {e}")?,
+            _ => {}
+        }
         writeln!(
             f,
             "demo finished in {:.1} s; outputs in {}",
@@ -267,7 +312,44 @@ pub fn run(out: &Path) -> Result<DemoReport, ChainError> {
             ce.push((st.centre.0 - c).norm());
         }
     }
+    // The joint adjustment: the antenna table of the exposures stage, the flight plan's
+    // strips, the simulated image measurements and ground points.
+    crate::exposure::export::write(
+        &out.join("antennas.csv"),
+        &ex.stations,
+        crate::exposure::export::Format::Antenna,
+        crate::exposure::export::Projection::Geodetic,
+    )?;
+    // Photographs in which nothing was measured (over the turns' edges) stay out of the list.
+    let measured: std::collections::BTreeSet<String> = truth_text("image_observations.csv")?
+        .lines()
+        .filter_map(|l| l.split(',').next().map(str::to_string))
+        .collect();
+    let mut images = String::from("image,strip\n");
+    for l in truth_text("truth_exposures.csv")?.lines() {
+        let f: Vec<&str> = l.split(',').collect();
+        if f.len() > 2 && f[0].chars().all(|c| c.is_ascii_digit()) && measured.contains(f[0]) {
+            images.push_str(&format!("{},{}\n", f[0], f[1]));
+        }
+    }
+    gnss::solution::write_atomic(&out.join("images.csv"), |w| w.write_all(images.as_bytes()))?;
+    let c = &scenario.camera;
+    let l = c.lever_arm;
+    let project = format!(
+        "name = \"ppkat demo flight\"\noutput = \"utm\"\n\n[[camera]]\nid = \"demo\"\nfocal_mm = {}\npixel_um = {}\nwidth_px = {}\nheight_px = {}\n\n[images]\nlist = \"images.csv\"\nmeasurements = \"image_observations.csv\"\n\n[ground]\nfile = \"ground_points.csv\"\n\n[gnss]\nantennas = \"antennas.csv\"\nlever_arm = [{}, {}, {}]\nlever_arm_sigma = [0.02, 0.02, 0.02]\ndrift = \"segment\"\ndrift_model = \"offset\"\n",
+        c.focal_mm, c.pixel_um, c.width_px, c.height_px, l[0], l[1], l[2]
+    );
+    gnss::solution::write_atomic(&out.join("project.toml"), |w| {
+        w.write_all(project.as_bytes())
+    })?;
+    let (adjust, adjust_error) =
+        match crate::adjust::run(&out.join("project.toml"), &out.join("adjust")) {
+            Ok(r) => (Some(r), None),
+            Err(e) => (None, Some(e.to_string())),
+        };
     Ok(DemoReport {
+        adjust,
+        adjust_error,
         stations: ex.stations.len(),
         stations_refused: ex.refused.len(),
         centre_3d_rms: rms(&ce),

@@ -2,10 +2,7 @@
 //! rotated by the attitude, and the whole chain RINEX events → PPK → projection centres.
 
 use gnss::frame::Ecef;
-use gnss::orbit::{Ephemerides, Orbits};
-use gnss::ppk::{self, BasePosition, PpkOptions};
-use gnss::rinex::nav::NavFile;
-use gnss::rinex::ObsFile;
+use gnss::ppk::PpkOptions;
 use gnss::solution::{write_pos, PosFormat, PosRecord, Quality};
 use gnss::time::from_week_tow;
 use integration::demo::SimInputs;
@@ -332,6 +329,7 @@ fn photos_are_matched_and_geotagged_copies_written() {
             centre: c,
             cov: Matrix3::identity() * 1e-4,
             quality: Quality::Fixed,
+            segment: 0,
             rotation: Matrix3::identity(),
             attitude: AttitudeSource::Heading,
             flags: vec![],

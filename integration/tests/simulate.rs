@@ -3,7 +3,7 @@
 
 use gnss::frame::Ecef;
 use gnss::orbit::{Ephemerides, Orbits, C};
-use gnss::ppk::{self, BasePosition, PpkOptions};
+use gnss::ppk::PpkOptions;
 use gnss::rinex::nav::NavFile;
 use gnss::rinex::ObsFile;
 use gnss::solution::Quality;
@@ -194,7 +194,6 @@ fn injected_slips_and_gaps_are_survived() {
     assert!(rep.rover_stats.slips > 0 && rep.rover_stats.gap_records > 0);
     let truth = read_truth(&dir.join("truth_trajectory.csv")).unwrap();
     let inputs = SimInputs::read(&rep).unwrap();
-    let (rover, orbits) = (&inputs.rover, &inputs.orbits);
     let r = inputs.ppk(&rep, &PpkOptions::default()).unwrap();
     let fw = r.forward.as_ref().unwrap();
     let lli = fw

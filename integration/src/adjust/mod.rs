@@ -63,6 +63,10 @@ pub fn solve(project: &Project) -> Result<Solved, AdjustError> {
             "{} is not determined by its observations (too few rays, or rays too close to parallel): remove it or measure it in more images",
             names.get(b).cloned().unwrap_or_else(|| format!("block {b}"))
         )),
+        photo::solver::SolveError::Dependent(b) => AdjustError::Solve(format!(
+            "the normal equations are singular at {}: a datum defect (too little control or GNSS) or unknowns that cannot be told apart (e.g. a drift offset without control, or offsets per strip with a free lever arm)",
+            names.get(b).cloned().unwrap_or_else(|| format!("block {b}"))
+        )),
         e => AdjustError::from(e),
     }
     };
@@ -128,7 +132,7 @@ fn solve_built(project: &Project, mut built: Built) -> Result<Solved, photo::sol
     snoop(pr, &mut removed)?;
     let mut components = vec![1.0; pr.group_scale.len()];
     if opts.variance_components {
-        components = pr.variance_components(20, it)?;
+        components = pr.variance_components(10, it)?;
         // Snoop again with the estimated weights.
         snoop(pr, &mut removed)?;
     }

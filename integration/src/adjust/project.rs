@@ -591,7 +591,9 @@ fn read_ground(path: &Path, g: &GroundSection) -> Result<Vec<GroundPoint>, Adjus
         Xyz(usize, usize, usize),
         Proj(usize, usize, usize),
     }
-    let coords = if let (Some(a), Some(b), Some(c)) = (t.col("lat"), t.col("lon"), t.col("h")) {
+    let lat = t.col("lat").or(t.col("lat_deg"));
+    let lon = t.col("lon").or(t.col("lon_deg"));
+    let coords = if let (Some(a), Some(b), Some(c)) = (lat, lon, t.col("h")) {
         Coords::Geo(a, b, c)
     } else if let (Some(a), Some(b), Some(c)) = (t.col("x"), t.col("y"), t.col("z")) {
         Coords::Xyz(a, b, c)

@@ -198,7 +198,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
     want.extend(b.levers.iter().flatten().copied());
     want.extend(b.drifts.iter().map(|d| d.block));
     want.extend(b.interiors.iter().flatten().copied());
-    let covs = pr.covariances(&want, s0)?;
+    let (covs, rel) = pr.statistics(&want, s0)?;
     let cov_of = |blk: usize| {
         want.iter()
             .position(|w| *w == blk)
@@ -423,7 +423,6 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         })
         .collect();
     // Reliability per group.
-    let rel = pr.reliability()?;
     let mut groups: Vec<GroupQuality> = GROUP_NAMES
         .iter()
         .enumerate()
@@ -506,9 +505,18 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         })
         .collect();
     let mut warnings = Vec::new();
-    for (pt, im) in &b.single_ray {
+    if !b.single_ray.is_empty() {
+        let list: Vec<String> = b
+            .single_ray
+            .iter()
+            .take(10)
+            .map(|(pt, im)| format!("{pt} ({im})"))
+            .collect();
         warnings.push(format!(
-            "point {pt} is measured in one image only ({im}): not adjusted"
+            "{} point(s) measured in one image only are not adjusted: {}{}",
+            b.single_ray.len(),
+            list.join(", "),
+            if b.single_ray.len() > 10 { ", …" } else { "" }
         ));
     }
     if !b.unused_antennas.is_empty() {
@@ -542,4 +550,55 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         gnss_residuals,
         warnings,
     })
+}
+
+impl Results {
+    /// A few lines for the terminal.
+    pub fn summary(&self) -> String {
+        let mut s = format!(
+            "{} images, {} points; {} observations, {} unknowns, redundancy {:.0}; σ0 {:.3}\n",
+            self.images.len(),
+            self.points.len(),
+            self.observations,
+            self.unknowns,
+            self.redundancy,
+            self.sigma0
+        );
+        for g in &self.groups {
+            s += &format!(
+                "  {}: {} components, σ factor {:.3}, mean redundancy {:.2}\n",
+                g.group, g.observations, g.sigma_factor, g.mean_redundancy
+            );
+        }
+        for e in self
+            .lever_arms
+            .iter()
+            .chain(&self.drifts)
+            .chain(&self.interiors)
+        {
+            let v: Vec<String> = e
+                .labels
+                .iter()
+                .zip(e.values.iter().zip(&e.sigmas))
+                .map(|(l, (v, sg))| format!("{l} {v:.4} ± {sg:.4}"))
+                .collect();
+            s += &format!("  {}: {}\n", e.name, v.join(", "));
+        }
+        s += &format!("removed by data snooping: {}\n", self.removed.len());
+        for r in &self.removed {
+            s += &format!("  {} (|w| {:.1}) {}\n", r.what, r.w, r.source);
+        }
+        let c = &self.checks;
+        if !c.points.is_empty() {
+            s += &format!(
+                "check points: {}, RMS E/N/U {:.3} {:.3} {:.3} m, max {:.3} {:.3} {:.3} m, theoretical {:.3} {:.3} {:.3} m\n",
+                c.points.len(), c.rms[0], c.rms[1], c.rms[2], c.max[0], c.max[1], c.max[2],
+                c.theoretical_rms[0], c.theoretical_rms[1], c.theoretical_rms[2]
+            );
+        }
+        for w in &self.warnings {
+            s += &format!("warning: {w}\n");
+        }
+        s
+    }
 }

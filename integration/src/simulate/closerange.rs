@@ -85,7 +85,11 @@ pub fn close_range(spec: &CloseRangeSpec, dir: &Path) -> Result<CloseRangeTruth,
         // Spread the control: left, right, top of the target.
         let a = k as f64 / spec.controls.max(1) as f64 * std::f64::consts::TAU + 0.3;
         let (e, u) = (0.8 * half_w * a.cos(), 25.0 + 0.8 * half_h * a.sin());
-        points.push((format!("P{}", k + 1), "gcp", Vector3::new(e, d + 15.0 * (e / 40.0).sin() + 0.2 * u, u)));
+        points.push((
+            format!("P{}", k + 1),
+            "gcp",
+            Vector3::new(e, d + 15.0 * (e / 40.0).sin() + 0.2 * u, u),
+        ));
     }
     for k in 0..spec.checks {
         points.push((format!("C{}", k + 1), "check", target(&mut rng)));
@@ -102,16 +106,28 @@ pub fn close_range(spec: &CloseRangeSpec, dir: &Path) -> Result<CloseRangeTruth,
         let v = aim - c;
         let (az, el) = (v.x.atan2(v.y), v.z.atan2(v.x.hypot(v.y)));
         let roll = 0.01 * rng.normal();
-        poses.push(Pose { r: compass_rotation(az, el, roll), centre: c });
+        poses.push(Pose {
+            r: compass_rotation(az, el, roll),
+            centre: c,
+        });
         let s = spec.compass_sigma_deg.to_radians();
-        compass.push([az + s * rng.normal(), el + 0.5 * s * rng.normal(), roll + 0.5 * s * rng.normal()]);
+        compass.push([
+            az + s * rng.normal(),
+            el + 0.5 * s * rng.normal(),
+            roll + 0.5 * s * rng.normal(),
+        ]);
     }
     let mut s = String::from("image,point,x_px,y_px,sigma_px\n");
     for (i, pose) in poses.iter().enumerate() {
         for (id, _, x) in &points {
             if let Some(xy) = cam.project(pose, x) {
-                let p = cam.image_to_pixel(xy) + Vector2::new(rng.normal(), rng.normal()) * spec.sigma_px;
-                if p.x > 0.0 && p.y > 0.0 && p.x < spec.width_px as f64 && p.y < spec.height_px as f64 {
+                let p = cam.image_to_pixel(xy)
+                    + Vector2::new(rng.normal(), rng.normal()) * spec.sigma_px;
+                if p.x > 0.0
+                    && p.y > 0.0
+                    && p.x < spec.width_px as f64
+                    && p.y < spec.height_px as f64
+                {
                     let _ = writeln!(s, "S{},{id},{:.3},{:.3},{}", i + 1, p.x, p.y, spec.sigma_px);
                 }
             }
@@ -121,17 +137,34 @@ pub fn close_range(spec: &CloseRangeSpec, dir: &Path) -> Result<CloseRangeTruth,
     let geo = |v: &Vector3<f64>| Enu(*v).to_ecef(&origin.to_ecef()).to_geodetic();
     let mut s = String::from("image,camera,strip,azimuth,elevation,roll\n");
     for (i, c) in compass.iter().enumerate() {
-        let _ = writeln!(s, "S{},cam,1,{:.4},{:.4},{:.4}", i + 1, c[0].to_degrees(), c[1].to_degrees(), c[2].to_degrees());
+        let _ = writeln!(
+            s,
+            "S{},cam,1,{:.4},{:.4},{:.4}",
+            i + 1,
+            c[0].to_degrees(),
+            c[1].to_degrees(),
+            c[2].to_degrees()
+        );
     }
     write(dir, "images.csv", &s)?;
     let mut s = String::from("point,kind,lat,lon,h,sigma_xy,sigma_z\n");
     for (id, kind, x) in points.iter().filter(|p| p.1 != "tie") {
         let mut x = *x;
         if *kind == "gcp" {
-            x += Vector3::new(0.01 * rng.normal(), 0.01 * rng.normal(), 0.015 * rng.normal());
+            x += Vector3::new(
+                0.01 * rng.normal(),
+                0.01 * rng.normal(),
+                0.015 * rng.normal(),
+            );
         }
         let g = geo(&x);
-        let _ = writeln!(s, "{id},{kind},{:.10},{:.10},{:.4},0.01,0.015", g.lat.to_degrees(), g.lon.to_degrees(), g.h);
+        let _ = writeln!(
+            s,
+            "{id},{kind},{:.10},{:.10},{:.4},0.01,0.015",
+            g.lat.to_degrees(),
+            g.lon.to_degrees(),
+            g.h
+        );
     }
     write(dir, "ground_points.csv", &s)?;
     let [se, sn, su] = spec.gnss_sigma;
@@ -139,7 +172,18 @@ pub fn close_range(spec: &CloseRangeSpec, dir: &Path) -> Result<CloseRangeTruth,
     for (i, p) in poses.iter().enumerate() {
         let a = p.centre + Vector3::new(se * rng.normal(), sn * rng.normal(), su * rng.normal());
         let g = geo(&a);
-        let _ = writeln!(s, "S{},2300,{},{:.10},{:.10},{:.4},{:e},0,0,{:e},0,{:e}", i + 1, 200000 + 60 * i, g.lat.to_degrees(), g.lon.to_degrees(), g.h, se * se, sn * sn, su * su);
+        let _ = writeln!(
+            s,
+            "S{},2300,{},{:.10},{:.10},{:.4},{:e},0,0,{:e},0,{:e}",
+            i + 1,
+            200000 + 60 * i,
+            g.lat.to_degrees(),
+            g.lon.to_degrees(),
+            g.h,
+            se * se,
+            sn * sn,
+            su * su
+        );
     }
     write(dir, "antennas.csv", &s)?;
     let project = format!(
@@ -147,5 +191,9 @@ pub fn close_range(spec: &CloseRangeSpec, dir: &Path) -> Result<CloseRangeTruth,
         spec.focal_mm, spec.pixel_um, spec.width_px, spec.height_px, spec.sigma_px
     );
     write(dir, "project.toml", &project)?;
-    Ok(CloseRangeTruth { origin, poses, points })
+    Ok(CloseRangeTruth {
+        origin,
+        poses,
+        points,
+    })
 }

@@ -229,7 +229,7 @@ interval_s = 1.0
 [ground]
 gcps = 5
 checks = 6
-ties = 200
+ties = 1500
 relief = 15.0
 "#;
 

@@ -118,6 +118,9 @@ pub struct Problem {
     pub dense_limit: usize,
     /// Symbolic factorisation of the sparse reduced system, with the block pattern it is for.
     symbolic: std::sync::Mutex<Option<SymbolicCache>>,
+    /// The removed/fixed flags for which the normals were last found regular: the check (a
+    /// dense factorisation) is repeated only when they change.
+    regular_for: Option<(Vec<bool>, Vec<bool>)>,
 }
 
 /// One linearised factor: whitened residual and Jacobian blocks at their column offsets.
@@ -159,6 +162,8 @@ pub enum SolveError {
     Singular(String),
     #[error("block {0} is not determined by its observations (observed too few times, or only along one ray)")]
     Undetermined(usize),
+    #[error("the normal equations are singular at block {0}: a datum defect (no control, nothing fixed) or unknowns that cannot be told apart")]
+    Dependent(usize),
     #[error("more unknowns ({0}) than observations ({1})")]
     Underdetermined(usize, usize),
     #[error("factor {0} cannot be evaluated (a point behind its camera?)")]
@@ -177,6 +182,7 @@ impl Problem {
             loss,
             dense_limit: 3000,
             symbolic: std::sync::Mutex::new(None),
+            regular_for: None,
         }
     }
     pub fn add_block(&mut self, b: Block, fixed: bool) -> usize {
@@ -265,6 +271,16 @@ impl Problem {
     }
     /// Gauss–Newton with Levenberg damping until the step is tiny.
     pub fn solve(&mut self, max_iterations: usize) -> Result<Stats, SolveError> {
+        let t = std::time::Instant::now();
+        let r = self.solve_inner(max_iterations);
+        if std::env::var_os("PPKAT_TRACE").is_some() {
+            let it = r.as_ref().map(|s| s.iterations).unwrap_or(0);
+            eprintln!("solve: {it} iterations, {:.2} s", t.elapsed().as_secs_f64());
+        }
+        r
+    }
+
+    fn solve_inner(&mut self, max_iterations: usize) -> Result<Stats, SolveError> {
         let (off, n) = self.layout();
         let mut lambda = 1e-6;
         let mut stats = Stats::default();
@@ -329,11 +345,20 @@ impl Problem {
             return Err(SolveError::Underdetermined(n, m));
         }
         // The undamped normals must be regular: otherwise a datum defect (no control, nothing fixed).
-        let regular = self.regular(&lin, &off, n);
-        if !regular {
-            return Err(SolveError::Singular(format!(
-                "{n} unknowns: a datum defect (no control points, nothing fixed)"
-            )));
+        let flags = (self.removed.clone(), self.fixed.clone());
+        let known = self.regular_for.as_ref() == Some(&flags);
+        match if known {
+            Ok(())
+        } else {
+            self.regular(&lin, &off, n)
+        } {
+            Ok(()) => self.regular_for = Some(flags),
+            Err(Some(b)) => return Err(SolveError::Dependent(b)),
+            Err(None) => {
+                return Err(SolveError::Singular(format!(
+                    "{n} unknowns: a datum defect (no control points, nothing fixed)"
+                )))
+            }
         }
         stats.observations = m;
         stats.unknowns = n;

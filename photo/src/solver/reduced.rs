@@ -26,33 +26,53 @@ pub(super) struct Reduced {
 }
 
 impl Reduced {
-    /// The reduced matrix as one dense symmetric matrix.
-    pub fn dense(&self) -> DMatrix<f64> {
-        let mut m = DMatrix::<f64>::zeros(self.nr, self.nr);
+    /// The reduced matrix as one dense symmetric faer matrix.
+    pub fn dense(&self) -> faer::Mat<f64> {
+        let mut m = faer::Mat::<f64>::zeros(self.nr, self.nr);
         for (&(r, c), b) in &self.u {
-            m.view_mut((r, c), (b.nrows(), b.ncols())).copy_from(b);
+            for j in 0..b.ncols() {
+                for i in 0..b.nrows() {
+                    m[(r + i, c + j)] = b[(i, j)];
+                }
+            }
         }
         m
     }
 }
 
-/// Dense Cholesky of a symmetric positive matrix, through faer when it is large. Returns the
-/// inverse when asked, and whether every pivot is significant (no datum defect).
+/// Dense Cholesky (faer) of a symmetric positive matrix. Returns the first column whose pivot
+/// is not significant (a datum defect or dependency there; `None`: regular) and the inverse
+/// when asked. `None` when the matrix is not positive definite at all.
 pub(super) fn dense_factor(
-    m: &DMatrix<f64>,
+    m: faer::Mat<f64>,
     inverse: bool,
-) -> Option<(bool, Option<DMatrix<f64>>)> {
+) -> Option<(Option<usize>, Option<faer::Mat<f64>>)> {
     let n = m.nrows();
-    let max_diag = m.diagonal().iter().fold(0.0f64, |a, b| a.max(*b));
-    let fm = faer::Mat::<f64>::from_fn(n, n, |i, j| m[(i, j)]);
-    let llt = fm.llt(faer::Side::Lower).ok()?;
+    let Ok(llt) = m.llt(faer::Side::Lower) else {
+        // Not positive definite: find the first leading minor that is not (bisection), to
+        // name the unknowns that depend on the others.
+        let (mut lo, mut hi) = (0usize, n);
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if m.as_ref()
+                .submatrix(0, 0, mid, mid)
+                .llt(faer::Side::Lower)
+                .is_ok()
+            {
+                lo = mid
+            } else {
+                hi = mid
+            }
+        }
+        return Some((Some(hi - 1), None));
+    };
     let l = llt.L();
-    let regular = (0..n).all(|i| l[(i, i)] * l[(i, i)] > 1e-12 * max_diag);
-    let inv = inverse.then(|| {
-        let q = llt.inverse();
-        DMatrix::from_fn(n, n, |i, j| q[(i, j)])
-    });
-    Some((regular, inv))
+    // Each pivot against its own diagonal entry: a (near-)dependent unknown loses all its
+    // significant digits there, however the unknowns are scaled.
+    let weak = (0..n).find(|&i| l[(i, i)] * l[(i, i)] <= 1e-11 * m[(i, i)]);
+    drop(m);
+    let inv = inverse.then(|| llt.inverse());
+    Some((weak, inv))
 }
 
 impl Problem {
@@ -166,7 +186,10 @@ impl Problem {
     fn solve_reduced(&self, red: &Reduced) -> Option<DVector<f64>> {
         let nr = red.nr;
         if nr <= self.dense_limit {
-            return Some(red.dense().cholesky()?.solve(&(-&red.gr)));
+            let llt = red.dense().llt(faer::Side::Lower).ok()?;
+            let mut rhs = faer::Mat::<f64>::from_fn(nr, 1, |i, _| -red.gr[i]);
+            llt.solve_in_place(rhs.as_mut());
+            return Some(DVector::from_fn(nr, |i, _| rhs[(i, 0)]));
         }
         let mut t = Vec::new();
         for (&(r0, c0), b) in &red.u {

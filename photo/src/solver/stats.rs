@@ -25,7 +25,7 @@ pub(super) enum Cofactors {
     /// orientations it is tied to.
     Schur {
         red: Reduced,
-        qcc: DMatrix<f64>,
+        qcc: faer::Mat<f64>,
         off: Vec<Option<usize>>,
         points: BTreeMap<usize, PointQ>,
     },
@@ -34,6 +34,11 @@ pub(super) enum Cofactors {
 pub(super) struct PointQ {
     qpp: Matrix3<f64>,
     qpc: BTreeMap<usize, DMatrix<f64>>,
+}
+
+/// A block of a faer matrix as a small nalgebra matrix.
+fn sub(m: &faer::Mat<f64>, r: usize, c: usize, dims: (usize, usize)) -> DMatrix<f64> {
+    DMatrix::from_fn(dims.0, dims.1, |i, j| m[(r + i, c + j)])
 }
 
 impl Cofactors {
@@ -45,7 +50,7 @@ impl Cofactors {
             Cofactors::Schur {
                 red, qcc, points, ..
             } => match (points.get(&a), points.get(&b)) {
-                (None, None) => Some(qcc.view((red.roff[a]?, red.roff[b]?), dims).into_owned()),
+                (None, None) => Some(sub(qcc, red.roff[a]?, red.roff[b]?, dims)),
                 (Some(pa), None) => pa.qpc.get(&b).cloned(),
                 (None, Some(pb)) => pb.qpc.get(&a).map(|m| m.transpose()),
                 (Some(pa), Some(_)) if a == b => {
@@ -63,12 +68,24 @@ impl Cofactors {
     }
 }
 
+/// Covariance of each requested block (`None` for a fixed block).
+pub type Covariances = Vec<Option<DMatrix<f64>>>;
+
 /// Least redundancy of a group whose variance component is estimated.
 pub const MIN_VCE_REDUNDANCY: f64 = 10.0;
 
 impl Problem {
     /// Cofactors of the unknowns at the current values.
     pub(super) fn cofactors(&self) -> Result<(Cofactors, Vec<Lin>), SolveError> {
+        let t = std::time::Instant::now();
+        let r = self.cofactors_inner();
+        if std::env::var_os("PPKAT_TRACE").is_some() {
+            eprintln!("cofactors: {:.2} s", t.elapsed().as_secs_f64());
+        }
+        r
+    }
+
+    fn cofactors_inner(&self) -> Result<(Cofactors, Vec<Lin>), SolveError> {
         let (off, n) = self.layout();
         let lin = self.linearise(&off)?;
         let singular = || SolveError::Singular(format!("{n} unknowns"));
@@ -79,9 +96,9 @@ impl Problem {
         }
         let red = self.reduce(&lin, &off, 0.0, false).ok_or_else(singular)?;
         let qcc = if red.nr == 0 {
-            DMatrix::zeros(0, 0)
+            faer::Mat::zeros(0, 0)
         } else {
-            dense_factor(&red.dense(), true)
+            dense_factor(red.dense(), true)
                 .and_then(|(_, q)| q)
                 .ok_or_else(singular)?
         };
@@ -98,7 +115,7 @@ impl Problem {
                     let mut s = DMatrix::<f64>::zeros(3, wc.ncols());
                     for (c2, w2) in ws {
                         let r2 = red.roff[*c2].unwrap_or(0);
-                        s += w2 * qcc.view((r2, rc), (w2.ncols(), wc.ncols()));
+                        s += w2 * sub(&qcc, r2, rc, (w2.ncols(), wc.ncols()));
                     }
                     let q = -(&vi_d * s);
                     acc += &q * wc.transpose();
@@ -125,19 +142,37 @@ impl Problem {
         ))
     }
 
-    /// Whether the undamped normal equations are regular at the current values (otherwise a
-    /// datum defect).
-    pub(super) fn regular(&self, lin: &[Lin], off: &[Option<usize>], n: usize) -> bool {
+    /// Whether the undamped normal equations are regular at the current values. `Err` names
+    /// the first block whose unknowns depend on the others (a datum defect), when known.
+    pub(super) fn regular(
+        &self,
+        lin: &[Lin],
+        off: &[Option<usize>],
+        n: usize,
+    ) -> Result<(), Option<usize>> {
+        let block_at = |layout: &[Option<usize>], col: usize| {
+            layout.iter().enumerate().find_map(|(b, o)| {
+                o.filter(|o| col >= *o && col < o + self.blocks[b].dim())
+                    .map(|_| b)
+            })
+        };
         if self.points_tied(lin) {
             let (nm, _) = Self::normal_matrix(lin, n, None);
-            return dense_factor(&nm, false).map(|x| x.0).unwrap_or(false);
+            let nm = faer::Mat::<f64>::from_fn(n, n, |i, j| nm[(i, j)]);
+            return match dense_factor(nm, false) {
+                Some((None, _)) => Ok(()),
+                Some((Some(c), _)) => Err(block_at(off, c)),
+                None => Err(None),
+            };
         }
         match self.reduce(lin, off, 0.0, false) {
-            Some(red) if red.nr == 0 => true,
-            Some(red) => dense_factor(&red.dense(), false)
-                .map(|x| x.0)
-                .unwrap_or(false),
-            None => false,
+            Some(red) if red.nr == 0 => Ok(()),
+            Some(red) => match dense_factor(red.dense(), false) {
+                Some((None, _)) => Ok(()),
+                Some((Some(c), _)) => Err(block_at(&red.roff, c)),
+                None => Err(None),
+            },
+            None => Err(None),
         }
     }
 
@@ -187,10 +222,34 @@ impl Problem {
     /// components.
     pub fn reliability(&self) -> Result<Vec<Reliability>, SolveError> {
         let (q, lin) = self.cofactors()?;
-        Ok(lin
-            .par_iter()
+        Ok(self.reliability_with(&q, &lin))
+    }
+
+    /// Covariances of `blocks` and the reliability of every factor from one computation of
+    /// the cofactors (the expensive part on large blocks).
+    pub fn statistics(
+        &self,
+        blocks: &[usize],
+        sigma0: f64,
+    ) -> Result<(Covariances, Vec<Reliability>), SolveError> {
+        let (q, lin) = self.cofactors()?;
+        let covs = blocks
+            .iter()
+            .map(|&b| {
+                if !q.free(b) {
+                    return None;
+                }
+                let d = self.blocks[b].dim();
+                q.block(b, b, (d, d)).map(|m| m * (sigma0 * sigma0))
+            })
+            .collect();
+        Ok((covs, self.reliability_with(&q, &lin)))
+    }
+
+    fn reliability_with(&self, q: &Cofactors, lin: &[Lin]) -> Vec<Reliability> {
+        lin.par_iter()
             .map(|l| {
-                let h = self.hat_diag(l, &q);
+                let h = self.hat_diag(l, q);
                 let m = l.r.len();
                 let rr = DVector::from_iterator(m, (0..m).map(|i| (1.0 - h[i]).max(0.0)));
                 let w = DVector::from_iterator(
@@ -209,7 +268,7 @@ impl Problem {
                     normalised: w,
                 }
             })
-            .collect())
+            .collect()
     }
 
     /// Baarda data snooping: adjust, remove the factor with the largest |w| above `critical`
@@ -273,7 +332,7 @@ impl Problem {
                     change = change.max((f - 1.0).abs());
                 }
             }
-            if change < 1e-4 {
+            if change < 0.01 {
                 break;
             }
         }
