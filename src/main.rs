@@ -537,8 +537,9 @@ fn run(cli: Cli) -> Result<()> {
                 }
                 (None, Some(name)) => simulate::builtin(&name).with_context(|| {
                     format!(
-                        "no built-in scenario '{name}' (there are: {})",
-                        simulate::BUILTINS.join(", ")
+                        "no built-in scenario '{name}' (flights: {}; adjustment projects: {})",
+                        simulate::BUILTINS.join(", "),
+                        simulate::block::BUILTINS.join(", ")
                     )
                 })?,
                 (None, None) => bail!(

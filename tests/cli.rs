@@ -560,9 +560,66 @@ fn demo_runs_the_chain_and_reports_accuracy() {
         "truth_exposures.csv",
         "image_observations.csv",
         "rover_ppk.pos",
+        "antennas.csv",
+        "project.toml",
+        "adjust/report.html",
+        "adjust/report.json",
+        "adjust/orientations.csv",
+        "adjust/points.csv",
     ] {
         assert!(out.join(f).exists(), "{f} written");
     }
+    // "check points: N, RMS E/N/U a b c m (theoretical d e f m)": the demo's adjustment is
+    // as good as its own precision says (6 check points: within 2×).
+    let line = t
+        .lines()
+        .find(|l| l.starts_with("check points:"))
+        .expect("a check-point line");
+    let nums: Vec<f64> = line
+        .replace(['(', ')', ','], " ")
+        .split_whitespace()
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    assert_eq!(nums.len(), 7, "{line}");
+    for a in 0..3 {
+        assert!(nums[1 + a] < 2.0 * nums[4 + a] + 0.01, "{line}");
+    }
+}
+
+/// A simulated project through `ppkat adjust`: outputs, summary, and a broken project.
+#[test]
+fn adjust_a_simulated_block_end_to_end() {
+    let dir = tmp("adjust-classic");
+    let o = ppkat(&["simulate", "--builtin", "classic-block", "--out", p(&dir)]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(text(&o).contains("29 images"), "{}", text(&o));
+    let out = dir.join("out");
+    let o = ppkat(&[
+        "adjust",
+        "--project",
+        p(&dir.join("project.toml")),
+        "-o",
+        p(&out),
+    ]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(
+        t.contains("29 images") && t.contains("lever arm (cam)") && t.contains("check points:"),
+        "{t}"
+    );
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert_eq!(html.matches("<svg").count(), 4, "four plots");
+    let json = std::fs::read_to_string(out.join("report.json")).unwrap();
+    assert!(json.contains("\"checks\"") && json.contains("\"removed\""));
+    let orient = std::fs::read_to_string(out.join("orientations.csv")).unwrap();
+    assert_eq!(orient.lines().filter(|l| !l.starts_with('#')).count(), 30);
+    // A project naming a missing table: the file is named, no outputs.
+    let bad = dir.join("bad.toml");
+    let src = std::fs::read_to_string(dir.join("project.toml")).unwrap();
+    std::fs::write(&bad, src.replace("antennas.csv", "nosuch.csv")).unwrap();
+    let o = ppkat(&["adjust", "--project", p(&bad), "-o", p(&dir.join("out2"))]);
+    fails_with(&o, &["nosuch.csv", "cannot read"]);
+    assert!(!dir.join("out2/report.json").exists());
 }
 
 #[test]
@@ -579,7 +636,7 @@ fn simulate_rejects_a_bad_scenario_naming_the_key() {
         "--out",
         p(&tmp("bad-sim2")),
     ]);
-    fails_with(&o, &["nosuch", "demo"]);
+    fails_with(&o, &["nosuch", "demo", "classic-block"]);
 }
 
 #[test]

@@ -12,6 +12,7 @@ pub mod factors;
 pub mod project;
 pub mod report;
 pub mod results;
+mod tables;
 
 use build::Built;
 use project::Project;

@@ -57,6 +57,13 @@ pub struct BlockSpec {
     pub image_blunders: usize,
     /// A control point with a wrong coordinate: shift (E, N, U) in metres.
     pub wrong_gcp: Option<[f64; 3]>,
+    /// The true camera differs from the nominal one written to the project: principal
+    /// distance (mm), principal point (mm), radial k1 (1/m²) — for self-calibration.
+    pub true_focal_delta_mm: f64,
+    pub true_principal_point_mm: [f64; 2],
+    pub true_k1: f64,
+    /// Extra lines for the project's `[[camera]]` (e.g. `self_calibrate = [...]`).
+    pub camera_options: String,
     /// The `[gnss]` and `[adjustment]` sections of the project written with it.
     pub project_options: String,
 }
@@ -94,6 +101,10 @@ impl BlockSpec {
             drift_b: [0.0008, -0.0005, 0.0012],
             image_blunders: 0,
             wrong_gcp: None,
+            true_focal_delta_mm: 0.0,
+            true_principal_point_mm: [0.0; 2],
+            true_k1: 0.0,
+            camera_options: String::new(),
             project_options: String::new(),
         }
     }
@@ -143,7 +154,12 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
     let f = spec.focal_mm * 1e-3;
     let fmt = spec.format_mm * 1e-3;
     let npx = (spec.format_mm * 1e3 / spec.pixel_um).round() as usize;
-    let cam = Camera::ideal(f, spec.pixel_um * 1e-6, npx, npx);
+    let nominal = Camera::ideal(f, spec.pixel_um * 1e-6, npx, npx);
+    let mut cam = nominal;
+    cam.f += spec.true_focal_delta_mm * 1e-3;
+    cam.x0 = spec.true_principal_point_mm[0] * 1e-3;
+    cam.y0 = spec.true_principal_point_mm[1] * 1e-3;
+    cam.k[0] = spec.true_k1;
     let hgt = spec.scale * f;
     let foot = spec.scale * fmt;
     let base = foot * (1.0 - spec.forward_overlap);
@@ -262,7 +278,7 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
     write(dir, "images.csv", &s)?;
     let mut s = String::from("image,point,x_px,y_px,sigma_px\n");
     for (i, k, xy) in &meas {
-        let px = cam.image_to_pixel(*xy);
+        let px = nominal.image_to_pixel(*xy);
         let _ = writeln!(
             s,
             "{},{},{:.3},{:.3},{}",
@@ -348,8 +364,8 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
     }
     write(dir, "antennas.csv", &s)?;
     let project = format!(
-        "name = \"{}\"\noutput = \"utm\"\n\n[[camera]]\nid = \"cam\"\nfocal_mm = {}\npixel_um = {}\nwidth_px = {npx}\nheight_px = {npx}\nsigma_px = {}\n\n[images]\nlist = \"images.csv\"\nmeasurements = \"image_observations.csv\"\n\n[ground]\nfile = \"ground_points.csv\"\n\n{}",
-        spec.name, spec.focal_mm, spec.pixel_um, spec.sigma_image_um / spec.pixel_um, spec.project_options
+        "name = \"{}\"\noutput = \"utm\"\n\n[[camera]]\nid = \"cam\"\nfocal_mm = {}\npixel_um = {}\nwidth_px = {npx}\nheight_px = {npx}\nsigma_px = {}\n{}\n[images]\nlist = \"images.csv\"\nmeasurements = \"image_observations.csv\"\n\n[ground]\nfile = \"ground_points.csv\"\n\n{}",
+        spec.name, spec.focal_mm, spec.pixel_um, spec.sigma_image_um / spec.pixel_um, spec.camera_options, spec.project_options
     );
     write(dir, "project.toml", &project)?;
     let measurements = meas.len();

@@ -1,0 +1,412 @@
+//! The tables a project names: image list, image measurements (CSV or PATB), ground points,
+//! GNSS antenna table. Each problem names the file and the line.
+
+use super::project::{
+    Antenna, CameraDef, GroundPoint, GroundSection, ImageDef, Measurement, PointKind,
+};
+use super::AdjustError;
+use crate::exposure::export::Projection;
+use gnss::frame::{Ecef, Geodetic};
+use nalgebra::{Matrix3, Vector2};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+pub(super) fn perr(path: &Path, what: impl Into<String>) -> AdjustError {
+    AdjustError::Project {
+        path: path.display().to_string(),
+        what: what.into(),
+    }
+}
+
+/// A CSV table: header names, then rows with their line numbers (comments `#` skipped).
+struct Table {
+    path: PathBuf,
+    cols: Vec<String>,
+    rows: Vec<(usize, Vec<String>)>,
+}
+
+impl Table {
+    fn read(path: &Path) -> Result<Table, AdjustError> {
+        let text =
+            std::fs::read_to_string(path).map_err(|e| perr(path, format!("cannot read: {e}")))?;
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
+        let (_, head) = lines
+            .next()
+            .ok_or_else(|| perr(path, "empty table: a header line is needed"))?;
+        let cols = head
+            .split(',')
+            .map(|c| c.trim().trim_start_matches('#').to_ascii_lowercase())
+            .collect();
+        let rows = lines.map(|(i, l)| (i + 1, split_csv(l))).collect();
+        Ok(Table {
+            path: path.to_path_buf(),
+            cols,
+            rows,
+        })
+    }
+    fn col(&self, name: &str) -> Option<usize> {
+        self.cols.iter().position(|c| c == name)
+    }
+    fn need(&self, name: &str) -> Result<usize, AdjustError> {
+        self.col(name).ok_or_else(|| {
+            perr(
+                &self.path,
+                format!("no `{name}` column (header: {})", self.cols.join(",")),
+            )
+        })
+    }
+    fn num(&self, line: usize, row: &[String], c: usize) -> Result<f64, AdjustError> {
+        let s = row.get(c).map(|s| s.trim()).unwrap_or("");
+        s.parse::<f64>().map_err(|_| AdjustError::Input {
+            path: self.path.display().to_string(),
+            line,
+            what: format!("`{s}` is not a number (column {})", self.cols[c]),
+        })
+    }
+    fn text(&self, row: &[String], c: usize) -> String {
+        row.get(c).map(|s| s.trim().to_string()).unwrap_or_default()
+    }
+}
+
+fn split_csv(l: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut cur = String::new();
+    let mut quoted = false;
+    for ch in l.chars() {
+        match ch {
+            '"' => quoted = !quoted,
+            ',' if !quoted => out.push(std::mem::take(&mut cur)),
+            c => cur.push(c),
+        }
+    }
+    out.push(cur);
+    out
+}
+
+pub(super) fn read_images(
+    path: &Path,
+    cameras: &[CameraDef],
+) -> Result<Vec<ImageDef>, AdjustError> {
+    let t = Table::read(path)?;
+    let ci = t.need("image")?;
+    let cc = t.col("camera");
+    let cs = t.col("strip");
+    let compass = match (t.col("azimuth"), t.col("elevation"), t.col("roll")) {
+        (Some(a), Some(e), Some(r)) => Some([a, e, r]),
+        _ => None,
+    };
+    let mut out: Vec<ImageDef> = Vec::new();
+    for (line, row) in &t.rows {
+        let id = t.text(row, ci);
+        let camera = match cc {
+            Some(c) => {
+                let name = t.text(row, c);
+                cameras
+                    .iter()
+                    .position(|x| x.id == name)
+                    .ok_or_else(|| AdjustError::Input {
+                        path: path.display().to_string(),
+                        line: *line,
+                        what: format!("image {id}: unknown camera `{name}`"),
+                    })?
+            }
+            None if cameras.len() == 1 => 0,
+            None => return Err(perr(path, "several cameras: a `camera` column is needed")),
+        };
+        if out.iter().any(|x| x.id == id) {
+            return Err(AdjustError::Input {
+                path: path.display().to_string(),
+                line: *line,
+                what: format!("image {id} listed twice"),
+            });
+        }
+        let compass = match compass {
+            Some(c) => Some([
+                t.num(*line, row, c[0])?.to_radians(),
+                t.num(*line, row, c[1])?.to_radians(),
+                t.num(*line, row, c[2])?.to_radians(),
+            ]),
+            None => None,
+        };
+        out.push(ImageDef {
+            id,
+            camera,
+            strip: cs.map(|c| t.text(row, c)).unwrap_or_else(|| "1".into()),
+            compass,
+        });
+    }
+    if out.is_empty() {
+        return Err(perr(path, "no images listed"));
+    }
+    Ok(out)
+}
+
+pub(super) fn read_measurements(
+    path: &Path,
+    index: &BTreeMap<&str, usize>,
+    images: &[ImageDef],
+    cameras: &[CameraDef],
+) -> Result<Vec<Measurement>, AdjustError> {
+    let t = Table::read(path)?;
+    let (ci, cp, cx, cy) = (
+        t.need("image")?,
+        t.need("point")?,
+        t.need("x_px")?,
+        t.need("y_px")?,
+    );
+    let cs = t.col("sigma_px");
+    let mut out = Vec::new();
+    for (line, row) in &t.rows {
+        let im = t.text(row, ci);
+        let &i = index.get(im.as_str()).ok_or_else(|| AdjustError::Input {
+            path: path.display().to_string(),
+            line: *line,
+            what: format!("image `{im}` is not in the image list"),
+        })?;
+        let cam = &cameras[images[i].camera];
+        let px = Vector2::new(t.num(*line, row, cx)?, t.num(*line, row, cy)?);
+        let sigma_px = match cs {
+            Some(c) if !t.text(row, c).is_empty() => t.num(*line, row, c)?,
+            _ => cam.sigma_px,
+        };
+        out.push(Measurement {
+            image: i,
+            point: t.text(row, cp),
+            xy: cam.camera.pixel_to_image(px),
+            sigma: sigma_px * cam.camera.pixel,
+            source: format!("{}:{line}", path.display()),
+        });
+    }
+    Ok(out)
+}
+
+/// PATB-style image coordinates: a line with the photo id, then `point x y` in millimetres
+/// (x right, y up, from the principal point's origin), closed by `-99`.
+pub(super) fn read_patb(
+    path: &Path,
+    index: &BTreeMap<&str, usize>,
+    images: &[ImageDef],
+    cameras: &[CameraDef],
+) -> Result<Vec<Measurement>, AdjustError> {
+    let text =
+        std::fs::read_to_string(path).map_err(|e| perr(path, format!("cannot read: {e}")))?;
+    let bad = |line: usize, what: String| AdjustError::Input {
+        path: path.display().to_string(),
+        line,
+        what,
+    };
+    let mut out = Vec::new();
+    let mut current: Option<usize> = None;
+    for (n, l) in text.lines().enumerate() {
+        let line = n + 1;
+        let f: Vec<&str> = l.split_whitespace().collect();
+        match (current, f.as_slice()) {
+            (_, []) => {}
+            (_, ["-99", ..]) => current = None,
+            (None, [id, ..]) => {
+                current =
+                    Some(*index.get(id).ok_or_else(|| {
+                        bad(line, format!("photo `{id}` is not in the image list"))
+                    })?)
+            }
+            (Some(i), [p, x, y, ..]) => {
+                let num = |s: &str| {
+                    s.parse::<f64>()
+                        .map_err(|_| bad(line, format!("`{s}` is not a number")))
+                };
+                let cam = &cameras[images[i].camera];
+                out.push(Measurement {
+                    image: i,
+                    point: p.to_string(),
+                    xy: Vector2::new(num(x)? * 1e-3, num(y)? * 1e-3),
+                    sigma: cam.sigma_px * cam.camera.pixel,
+                    source: format!("{}:{line}", path.display()),
+                });
+            }
+            (Some(_), _) => {
+                return Err(bad(line, "expected `point x y` (mm) or -99".into()));
+            }
+        }
+    }
+    Ok(out)
+}
+
+pub(super) fn read_ground(path: &Path, g: &GroundSection) -> Result<Vec<GroundPoint>, AdjustError> {
+    let t = Table::read(path)?;
+    let (cp, ck) = (t.need("point")?, t.need("kind")?);
+    enum Coords {
+        Geo(usize, usize, usize),
+        Xyz(usize, usize, usize),
+        Proj(usize, usize, usize),
+    }
+    let lat = t.col("lat").or(t.col("lat_deg"));
+    let lon = t.col("lon").or(t.col("lon_deg"));
+    let coords = if let (Some(a), Some(b), Some(c)) = (lat, lon, t.col("h")) {
+        Coords::Geo(a, b, c)
+    } else if let (Some(a), Some(b), Some(c)) = (t.col("x"), t.col("y"), t.col("z")) {
+        Coords::Xyz(a, b, c)
+    } else if let (Some(a), Some(b), Some(c)) = (t.col("easting"), t.col("northing"), t.col("h")) {
+        Coords::Proj(a, b, c)
+    } else {
+        return Err(perr(path, "coordinates: give lat,lon,h or x,y,z (ECEF) or easting,northing,h (with crs in [ground])"));
+    };
+    let tm = match (&coords, &g.crs) {
+        (Coords::Proj(..), Some(c)) => {
+            let p = Projection::parse(c)
+                .ok_or_else(|| perr(path, format!("crs `{c}`: use utm:ZONE or gk:CM")))?;
+            match p {
+                Projection::Utm(None) | Projection::Geodetic => {
+                    return Err(perr(path, "crs: give the UTM zone (utm:ZONE) or gk:CM"))
+                }
+                _ => {
+                    let lat = if c.ends_with(['S', 's']) { -1.0 } else { 1.0 };
+                    p.mercator(&Geodetic::from_degrees(lat, 0.0, 0.0))
+                }
+            }
+        }
+        (Coords::Proj(..), None) => {
+            return Err(perr(
+                path,
+                "easting/northing columns need `crs` in [ground]",
+            ))
+        }
+        _ => None,
+    };
+    let sig = |row: &[String], line: usize| -> Result<[f64; 3], AdjustError> {
+        if let (Some(a), Some(b)) = (t.col("sigma_xy"), t.col("sigma_z")) {
+            let (h, v) = (t.num(line, row, a)?, t.num(line, row, b)?);
+            return Ok([h, h, v]);
+        }
+        if let (Some(a), Some(b), Some(c)) = (t.col("sigma_e"), t.col("sigma_n"), t.col("sigma_u"))
+        {
+            return Ok([
+                t.num(line, row, a)?,
+                t.num(line, row, b)?,
+                t.num(line, row, c)?,
+            ]);
+        }
+        Ok([0.02, 0.02, 0.03])
+    };
+    let mut out = Vec::new();
+    for (line, row) in &t.rows {
+        let id = t.text(row, cp);
+        let kind = match t.text(row, ck).to_ascii_lowercase().as_str() {
+            "gcp" | "control" => PointKind::Control,
+            "check" => PointKind::Check,
+            "tie" => continue,
+            k => {
+                return Err(AdjustError::Input {
+                    path: path.display().to_string(),
+                    line: *line,
+                    what: format!("point {id}: kind `{k}`: use gcp, check or tie"),
+                })
+            }
+        };
+        let kind = if kind == PointKind::Control && g.as_check.contains(&id) {
+            PointKind::Check
+        } else {
+            kind
+        };
+        let pos = match coords {
+            Coords::Geo(a, b, c) => Geodetic::from_degrees(
+                t.num(*line, row, a)?,
+                t.num(*line, row, b)?,
+                t.num(*line, row, c)?,
+            )
+            .to_ecef(),
+            Coords::Xyz(a, b, c) => Ecef::new(
+                t.num(*line, row, a)?,
+                t.num(*line, row, b)?,
+                t.num(*line, row, c)?,
+            ),
+            Coords::Proj(a, b, c) => {
+                let (tm, _) = tm.as_ref().ok_or_else(|| perr(path, "crs missing"))?;
+                let p = gnss::tmerc::Projected {
+                    easting: t.num(*line, row, a)?,
+                    northing: t.num(*line, row, b)?,
+                };
+                tm.inverse(&p, t.num(*line, row, c)?).to_ecef()
+            }
+        };
+        let sigma = sig(row, *line)?;
+        if sigma.iter().any(|s| s.is_nan() || *s <= 0.0) && kind == PointKind::Control {
+            return Err(AdjustError::Input {
+                path: path.display().to_string(),
+                line: *line,
+                what: format!("control point {id}: σ must be positive"),
+            });
+        }
+        if out.iter().any(|p: &GroundPoint| p.id == id) {
+            return Err(AdjustError::Input {
+                path: path.display().to_string(),
+                line: *line,
+                what: format!("point {id} listed twice"),
+            });
+        }
+        out.push(GroundPoint {
+            id,
+            kind,
+            pos,
+            sigma,
+            source: format!("{}:{line}", path.display()),
+        });
+    }
+    Ok(out)
+}
+
+pub(super) fn read_antennas(path: &Path, scale: f64) -> Result<Vec<Antenna>, AdjustError> {
+    let t = Table::read(path)?;
+    let need: Vec<usize> = [
+        "id", "week", "tow", "lat", "lon", "h", "c_ee", "c_en", "c_eu", "c_nn", "c_nu", "c_uu",
+    ]
+    .iter()
+    .map(|c| t.need(c))
+    .collect::<Result<_, _>>()?;
+    let seg = t.col("segment");
+    let opk = match (t.col("omega"), t.col("phi"), t.col("kappa")) {
+        (Some(a), Some(b), Some(c)) => Some([a, b, c]),
+        _ => None,
+    };
+    let mut out = Vec::new();
+    for (line, row) in &t.rows {
+        let v: Vec<f64> = need[1..]
+            .iter()
+            .map(|&c| t.num(*line, row, c))
+            .collect::<Result<_, _>>()?;
+        let cov =
+            Matrix3::new(v[5], v[6], v[7], v[6], v[8], v[9], v[7], v[9], v[10]) * (scale * scale);
+        if cov.cholesky().is_none() {
+            return Err(AdjustError::Input {
+                path: path.display().to_string(),
+                line: *line,
+                what: "the covariance is not positive definite".into(),
+            });
+        }
+        let rotation = match opk {
+            Some(c) => Some(
+                photo::rotation::Angles::OmegaPhiKappa {
+                    omega: t.num(*line, row, c[0])?.to_radians(),
+                    phi: t.num(*line, row, c[1])?.to_radians(),
+                    kappa: t.num(*line, row, c[2])?.to_radians(),
+                }
+                .matrix(),
+            ),
+            None => None,
+        };
+        out.push(Antenna {
+            image: t.text(row, need[0]),
+            time: gnss::time::from_week_tow(v[0] as u32, v[1]),
+            pos: Geodetic::from_degrees(v[2], v[3], v[4]).to_ecef(),
+            cov_enu: cov,
+            segment: match seg {
+                Some(c) => t.num(*line, row, c)? as u32,
+                None => 0,
+            },
+            rotation,
+        });
+    }
+    Ok(out)
+}
