@@ -398,3 +398,48 @@ fn self_calibration_recovers_the_camera() {
         cal.sigma0
     );
 }
+
+/// Drift per ambiguity segment: the trajectory re-fixed its ambiguities in the middle of strip
+/// 1, and the antenna positions after that carry another bias (25, −20, 35 cm). A drift offset
+/// per segment (ids from the PPK output) absorbs it; one offset per block cannot.
+#[test]
+fn drift_per_ambiguity_segment() {
+    let mut spec = BlockSpec::classic();
+    spec.drift_b = [0.0; 3];
+    spec.segment_jump = Some((8, [0.25, -0.20, 0.35]));
+    spec.project_options =
+        gnss_options("offset").replace("drift = \"block\"", "drift = \"segment\"");
+    let (_, seg) = run(&spec, "segments");
+    spec.project_options = gnss_options("offset");
+    let (_, block) = run(&spec, "segments-block");
+    assert_eq!(seg.drifts.len(), 2);
+    let (d0, d1) = (&seg.drifts[0], &seg.drifts[1]);
+    assert_eq!(
+        (d0.name.as_str(), d1.name.as_str()),
+        ("segment 0", "segment 1")
+    );
+    for a in 0..3 {
+        let jump = d1.values[a] - d0.values[a];
+        let sigma = d1.sigmas[a].hypot(d0.sigmas[a]);
+        let truth = [0.25, -0.20, 0.35][a];
+        assert!(
+            (jump - truth).abs() < 3.0 * sigma,
+            "axis {a}: jump {jump} ± {sigma}"
+        );
+    }
+    let g = |r: &Results| {
+        r.groups
+            .iter()
+            .find(|g| g.group == "GNSS centres")
+            .unwrap()
+            .sigma_factor
+    };
+    let rms3 = |r: &Results| (r.checks.rms.iter().map(|x| x * x).sum::<f64>()).sqrt();
+    let theo3 = |r: &Results| (r.checks.theoretical_rms.iter().map(|x| x * x).sum::<f64>()).sqrt();
+    eprintln!(
+        "segments: check 3D RMS {:.3} m (theoretical {:.3}), GNSS σ factor {:.2}; one offset per block: {:.3} m (theoretical {:.3}), σ factor {:.2}, {} removed",
+        rms3(&seg), theo3(&seg), g(&seg), rms3(&block), theo3(&block), g(&block), block.removed.len()
+    );
+    assert!(rms3(&seg) < 1.5 * theo3(&seg));
+    assert!(rms3(&block) > 1.3 * rms3(&seg));
+}

@@ -280,3 +280,32 @@ pub fn parse_time(date: &str, time: &str) -> Option<Epoch> {
     .ok()?;
     Some(base + hifitime::Duration::from_seconds(s))
 }
+
+#[cfg(test)]
+mod segment_tests {
+    use super::*;
+
+    /// A new ambiguity segment whenever the fixed state is entered or left, or across a gap.
+    #[test]
+    fn segments_follow_fix_state_and_gaps() {
+        let t0 = gnss::time::from_week_tow(2300, 1000.0);
+        let q = [1u8, 1, 2, 2, 1, 1, 1, 1];
+        let dt = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 10.0, 11.0];
+        let pts = q
+            .iter()
+            .zip(dt)
+            .map(|(&q, d)| TrajPoint {
+                time: t0 + hifitime::Duration::from_seconds(d),
+                pos: Ecef::new(4.2e6, 6.4e5, 4.7e6),
+                cov: Matrix3::identity(),
+                quality: quality_of(q),
+            })
+            .collect();
+        let t = Trajectory::from_points(pts);
+        assert_eq!(t.segments, vec![0, 0, 1, 1, 2, 2, 3, 3]);
+        let ip = t
+            .interpolate(t0 + hifitime::Duration::from_seconds(4.5), 3.0)
+            .unwrap();
+        assert_eq!(ip.segment, 2);
+    }
+}

@@ -62,6 +62,9 @@ pub struct BlockSpec {
     pub true_focal_delta_mm: f64,
     pub true_principal_point_mm: [f64; 2],
     pub true_k1: f64,
+    /// An ambiguity re-fix in the trajectory: from this image on (in flight order) the
+    /// antenna positions carry this extra offset (m) and a new segment id.
+    pub segment_jump: Option<(usize, [f64; 3])>,
     /// Extra lines for the project's `[[camera]]` (e.g. `self_calibrate = [...]`).
     pub camera_options: String,
     /// The `[gnss]` and `[adjustment]` sections of the project written with it.
@@ -104,6 +107,7 @@ impl BlockSpec {
             true_focal_delta_mm: 0.0,
             true_principal_point_mm: [0.0; 2],
             true_k1: 0.0,
+            segment_jump: None,
             camera_options: String::new(),
             project_options: String::new(),
         }
@@ -334,9 +338,16 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
         .map(|c| c.l())
         .unwrap_or_else(|| Matrix3::from_diagonal(&Vector3::from(spec.gnss_sigma)));
     let mut s = String::from("# simulated: antenna = centre + R*lever + drift + noise\nid,week,tow,lat,lon,h,c_ee,c_en,c_eu,c_nn,c_nu,c_uu,quality,segment\n");
-    for im in &images {
+    for (k, im) in images.iter().enumerate() {
         let dt = im.3 - t_first;
-        let drift = Vector3::from(spec.drift_a) + Vector3::from(spec.drift_b) * dt;
+        let mut drift = Vector3::from(spec.drift_a) + Vector3::from(spec.drift_b) * dt;
+        let segment = match spec.segment_jump {
+            Some((from, jump)) if k >= from => {
+                drift += Vector3::from(jump);
+                1
+            }
+            _ => 0,
+        };
         let noise = l * Vector3::new(rng.normal(), rng.normal(), rng.normal());
         let a = im.2.centre + im.2.r * Vector3::from(spec.lever_arm) + drift + noise;
         let g = g_ecef(&a);
@@ -349,7 +360,7 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
         );
         let _ = writeln!(
             s,
-            "{},{week},{tow:.6},{:.10},{:.10},{:.4},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},1,0",
+            "{},{week},{tow:.6},{:.10},{:.10},{:.4},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},1,{segment}",
             im.0,
             g.lat.to_degrees(),
             g.lon.to_degrees(),
