@@ -254,6 +254,12 @@ enum BenchCmd {
 }
 
 fn main() {
+    // `ppkat … | head` must end quietly, as other command-line tools do, not panic in print!.
+    #[cfg(unix)]
+    // SAFETY: restoring the default disposition of SIGPIPE before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     if let Err(e) = run(cli) {
         eprintln!("error: {e:#}");

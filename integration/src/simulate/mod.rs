@@ -3,6 +3,8 @@
 //! (antenna trajectory, projection centres and attitudes, ground points, image observations).
 //! Deterministic for a seed.
 
+mod builtin;
+pub use builtin::{builtin, BUILTINS};
 pub mod block;
 pub mod camera;
 pub mod closerange;
@@ -196,65 +198,6 @@ impl ErrorModel {
         }
     }
 }
-
-const DEMO: &str = r#"
-name = "demo"
-seed = 7
-start = "2024-06-12T09:00:00"
-[site]
-lat_deg = 47.30
-lon_deg = 8.55
-ground_height = 480.0
-[flight]
-altitude = 350.0
-speed = 55.0
-strips = 3
-strip_length = 2500.0
-strip_spacing = 160.0
-heading_deg = 20.0
-rate_hz = 10.0
-static_start_s = 60.0
-[camera]
-focal_mm = 35.0
-width_px = 4000
-height_px = 6000
-pixel_um = 3.9
-forward_overlap = 0.8
-lever_arm = [0.10, -0.05, 0.45]
-[base]
-east = 300.0
-north = -2500.0
-height_above_ground = 2.0
-interval_s = 1.0
-[ground]
-gcps = 5
-checks = 6
-ties = 1500
-relief = 15.0
-"#;
-
-/// A built-in scenario by name: `demo` (about 4 minutes), `block20` (20 minutes, 10 Hz) or
-/// `long` (one hour, 10 Hz, for benchmarks).
-pub fn builtin(name: &str) -> Option<Scenario> {
-    let mut s: Scenario = toml::from_str(DEMO).ok()?;
-    match name {
-        "demo" => {}
-        "block20" => {
-            s.name = "block20".into();
-            s.flight.strips = 8;
-            s.flight.strip_length = 7500.0;
-        }
-        "long" => {
-            s.name = "long".into();
-            s.flight.strips = 21;
-            s.flight.strip_length = 9000.0;
-        }
-        _ => return None,
-    }
-    Some(s)
-}
-
-pub const BUILTINS: [&str; 3] = ["demo", "block20", "long"];
 
 impl Scenario {
     pub fn from_toml(text: &str) -> Result<Scenario, SimError> {
