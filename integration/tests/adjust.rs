@@ -443,3 +443,50 @@ fn drift_per_ambiguity_segment() {
     assert!(rms3(&seg) < 1.5 * theo3(&seg));
     assert!(rms3(&block) > 1.3 * rms3(&seg));
 }
+
+/// The same measurements as a PATB-style image-coordinate file (mm, y up) give the same
+/// adjustment as the CSV in pixels.
+#[test]
+fn patb_measurements_equal_csv() {
+    let dir = project_dir("patb");
+    let csv = adjust::run(&dir.join("project.toml"), &dir.join("out-csv")).unwrap();
+    let text = std::fs::read_to_string(dir.join("image_observations.csv")).unwrap();
+    let (w, h, px) = (23000.0 / 2.0, 23000.0 / 2.0, 0.010);
+    let mut by_image: std::collections::BTreeMap<String, Vec<String>> = Default::default();
+    for l in text.lines().skip(1) {
+        let f: Vec<&str> = l.split(',').collect();
+        let (x, y): (f64, f64) = (f[2].parse().unwrap(), f[3].parse().unwrap());
+        by_image.entry(f[0].to_string()).or_default().push(format!(
+            "{} {:.4} {:.4}",
+            f[1],
+            (x - w) * px,
+            (h - y) * px
+        ));
+    }
+    let mut patb = String::new();
+    for (im, rows) in &by_image {
+        patb += &format!("{im}\n{}\n-99\n", rows.join("\n"));
+    }
+    std::fs::write(dir.join("block.im"), patb).unwrap();
+    edit(&dir, "project.toml", |t| {
+        t.replace(
+            "measurements = \"image_observations.csv\"",
+            "patb = \"block.im\"",
+        )
+    });
+    let pat = adjust::run(&dir.join("project.toml"), &dir.join("out-patb")).unwrap();
+    assert_eq!(pat.observations, csv.observations);
+    for (a, b) in pat.points.iter().zip(&csv.points) {
+        assert_eq!(a.id, b.id);
+        for k in 0..3 {
+            assert!(
+                (a.local[k] - b.local[k]).abs() < 2e-3,
+                "{} {:?} {:?}",
+                a.id,
+                a.local,
+                b.local
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
