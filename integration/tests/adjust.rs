@@ -137,6 +137,10 @@ fn check(s: &Summary, what: &str) {
     let within2 =
         s.drift_z.iter().filter(|z| z.abs() < 2.0).count() as f64 / s.drift_z.len() as f64;
     let mean_sq = s.drift_z.iter().map(|z| z * z).sum::<f64>() / s.drift_z.len() as f64;
+    eprintln!(
+        "{what}: drift parameters within 2σ of truth: {:.1} %, mean square of error/σ {mean_sq:.2}",
+        within2 * 100.0
+    );
     assert!(
         within2 >= 0.85,
         "{what}: drift within 2σ in {:.0} % only",
