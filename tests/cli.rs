@@ -613,6 +613,27 @@ fn adjust_a_simulated_block_end_to_end() {
     assert!(json.contains("\"checks\"") && json.contains("\"removed\""));
     let orient = std::fs::read_to_string(out.join("orientations.csv")).unwrap();
     assert_eq!(orient.lines().filter(|l| !l.starts_with('#')).count(), 30);
+    // The same bits on one thread.
+    let one = dir.join("out-1");
+    let o = Command::new(env!("CARGO_BIN_EXE_ppkat"))
+        .args([
+            "adjust",
+            "--project",
+            p(&dir.join("project.toml")),
+            "-o",
+            p(&one),
+        ])
+        .env("RAYON_NUM_THREADS", "1")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0));
+    for f in ["report.json", "orientations.csv", "points.csv"] {
+        assert_eq!(
+            std::fs::read(out.join(f)).unwrap(),
+            std::fs::read(one.join(f)).unwrap(),
+            "{f} differs on one thread"
+        );
+    }
     // A project naming a missing table: the file is named, no outputs.
     let bad = dir.join("bad.toml");
     let src = std::fs::read_to_string(dir.join("project.toml")).unwrap();

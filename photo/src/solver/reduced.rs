@@ -209,7 +209,6 @@ impl Problem {
         let pattern: Vec<(usize, usize)> = red.u.keys().copied().collect();
         let mut cache = self.symbolic.lock().ok()?;
         if cache.as_ref().map(|c| c.0 != pattern).unwrap_or(true) {
-            faer::set_global_parallelism(faer::Par::Seq);
             *cache = Some((
                 pattern,
                 SymbolicLlt::try_new(m.symbolic(), faer::Side::Lower).ok()?,
