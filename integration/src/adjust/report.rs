@@ -24,19 +24,24 @@ fn write_text(path: &Path, text: &str) -> Result<(), AdjustError> {
 
 pub fn write_all(p: &Project, r: &Results, out: &Path) -> Result<(), AdjustError> {
     std::fs::create_dir_all(out).map_err(|e| werr(out, e))?;
-    let proj_names = if r.crs.starts_with("WGS84") {
-        ("lon", "lat")
-    } else {
-        ("easting", "northing")
+    // Projected coordinates first when there is a projection; geodetic always.
+    let geo = r.crs.starts_with("WGS84");
+    let proj_head = if geo { "" } else { "easting,northing," };
+    let proj = |e: f64, n: f64| {
+        if geo {
+            String::new()
+        } else {
+            format!("{e:.4},{n:.4},")
+        }
     };
     let mut s = String::new();
     let _ = writeln!(s, "# ppkat adjust: projection centres; {}; h ellipsoidal; local = ENU at {:.8} {:.8} {:.3}; omega/phi/kappa (deg) of R camera->local ENU, R = Rw*Rp*Rk; sigmas m and deg (rotation about local E,N,U)", r.crs, r.origin_deg[0], r.origin_deg[1], r.origin_deg[2]);
-    let _ = writeln!(s, "image,strip,{},{},h,lat,lon,e_local,n_local,u_local,omega,phi,kappa,sigma_e,sigma_n,sigma_u,sigma_rx,sigma_ry,sigma_rz,points,rms_px", proj_names.0, proj_names.1);
+    let _ = writeln!(s, "image,strip,{proj_head}lat,lon,h,e_local,n_local,u_local,omega,phi,kappa,sigma_e,sigma_n,sigma_u,sigma_rx,sigma_ry,sigma_rz,points,rms_px");
     for i in &r.images {
         let _ = writeln!(
             s,
-            "{},{},{:.4},{:.4},{:.4},{:.9},{:.9},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{},{:.3}",
-            i.id, i.strip, i.easting, i.northing, i.h, i.lat, i.lon, i.local[0], i.local[1], i.local[2],
+            "{},{},{}{:.9},{:.9},{:.4},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{},{:.3}",
+            i.id, i.strip, proj(i.easting, i.northing), i.lat, i.lon, i.h, i.local[0], i.local[1], i.local[2],
             i.opk_deg[0], i.opk_deg[1], i.opk_deg[2], i.sigma_centre[0], i.sigma_centre[1], i.sigma_centre[2],
             i.sigma_angles_deg[0], i.sigma_angles_deg[1], i.sigma_angles_deg[2], i.points, i.rms_px
         );
@@ -50,23 +55,21 @@ pub fn write_all(p: &Project, r: &Results, out: &Path) -> Result<(), AdjustError
     );
     let _ = writeln!(
         s,
-        "point,kind,{},{},h,lat,lon,sigma_e,sigma_n,sigma_u,rays",
-        proj_names.0, proj_names.1
+        "point,kind,{proj_head}lat,lon,h,sigma_e,sigma_n,sigma_u,rays"
     );
     for q in &r.points {
         let _ = writeln!(
             s,
-            "{},{},{:.4},{:.4},{:.4},{:.9},{:.9},{:.4},{:.4},{:.4},{}",
+            "{},{},{}{:.9},{:.9},{:.4},{:.4},{:.4},{:.4},{}",
             q.id,
             serde_json::to_value(q.kind)
                 .ok()
                 .and_then(|v| v.as_str().map(String::from))
                 .unwrap_or_default(),
-            q.easting,
-            q.northing,
-            q.h,
+            proj(q.easting, q.northing),
             q.lat,
             q.lon,
+            q.h,
             q.sigma[0],
             q.sigma[1],
             q.sigma[2],
@@ -219,9 +222,15 @@ pub fn html(p: &Project, r: &Results) -> String {
     if !r.drifts.is_empty() {
         s.push_str(&plot_drift(r));
     }
-    let _ = writeln!(s, "<h2>Images</h2><table><tr><th>image</th><th>strip</th><th>easting/lon</th><th>northing/lat</th><th>h</th><th>ω°</th><th>φ°</th><th>κ°</th><th>σE</th><th>σN</th><th>σU</th><th>points</th><th>RMS px</th></tr>");
+    let geo = r.crs.starts_with("WGS84");
+    let _ = writeln!(s, "<h2>Images</h2><table><tr><th>image</th><th>strip</th>{}<th>h</th><th>ω°</th><th>φ°</th><th>κ°</th><th>σE</th><th>σN</th><th>σU</th><th>points</th><th>RMS px</th></tr>", if geo { "<th>lat°</th><th>lon°</th>" } else { "<th>easting</th><th>northing</th>" });
     for i in &r.images {
-        let _ = writeln!(s, "<tr><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{:.4}</td><td>{:.4}</td><td>{:.4}</td>{}<td>{}</td><td>{:.2}</td></tr>", i.id, i.strip, i.easting, i.northing, i.h, i.opk_deg[0], i.opk_deg[1], i.opk_deg[2], f3(i.sigma_centre, 1.0, 3), i.points, i.rms_px);
+        let xy = if geo {
+            format!("<td>{:.9}</td><td>{:.9}</td>", i.lat, i.lon)
+        } else {
+            format!("<td>{:.3}</td><td>{:.3}</td>", i.easting, i.northing)
+        };
+        let _ = writeln!(s, "<tr><td>{}</td><td>{}</td>{xy}<td>{:.3}</td><td>{:.4}</td><td>{:.4}</td><td>{:.4}</td>{}<td>{}</td><td>{:.2}</td></tr>", i.id, i.strip, i.h, i.opk_deg[0], i.opk_deg[1], i.opk_deg[2], f3(i.sigma_centre, 1.0, 3), i.points, i.rms_px);
     }
     let _ = writeln!(
         s,
