@@ -503,31 +503,67 @@ fn ground_point_formats_agree() {
     let base = adjust::run(&dir.join("project.toml"), &dir.join("out-geo")).unwrap();
     let text = std::fs::read_to_string(dir.join("ground_points.csv")).unwrap();
     let tm = gnss::tmerc::TransverseMercator::utm(50, true);
-    let (mut utm, mut xyz) = (String::from("point,kind,easting,northing,h,sigma_xy,sigma_z\n"), String::from("point,kind,x,y,z,sigma_xy,sigma_z\n"));
+    let (mut utm, mut xyz) = (
+        String::from("point,kind,easting,northing,h,sigma_xy,sigma_z\n"),
+        String::from("point,kind,x,y,z,sigma_xy,sigma_z\n"),
+    );
     for l in text.lines().skip(1) {
         let f: Vec<&str> = l.split(',').collect();
-        let g = gnss::frame::Geodetic::from_degrees(f[2].parse().unwrap(), f[3].parse().unwrap(), f[4].parse().unwrap());
+        let g = gnss::frame::Geodetic::from_degrees(
+            f[2].parse().unwrap(),
+            f[3].parse().unwrap(),
+            f[4].parse().unwrap(),
+        );
         let p = tm.forward(&g);
         let e = g.to_ecef();
-        utm += &format!("{},{},{:.4},{:.4},{},{},{}\n", f[0], f[1], p.easting, p.northing, f[4], f[5], f[6]);
-        xyz += &format!("{},{},{:.4},{:.4},{:.4},{},{}\n", f[0], f[1], e.0.x, e.0.y, e.0.z, f[5], f[6]);
+        utm += &format!(
+            "{},{},{:.4},{:.4},{},{},{}\n",
+            f[0], f[1], p.easting, p.northing, f[4], f[5], f[6]
+        );
+        xyz += &format!(
+            "{},{},{:.4},{:.4},{:.4},{},{}\n",
+            f[0], f[1], e.0.x, e.0.y, e.0.z, f[5], f[6]
+        );
     }
     std::fs::write(dir.join("utm.csv"), utm).unwrap();
     std::fs::write(dir.join("xyz.csv"), xyz).unwrap();
     let src = std::fs::read_to_string(dir.join("project.toml")).unwrap();
-    for (name, ground) in [("utm", "file = \"utm.csv\"\ncrs = \"utm:50N\""), ("xyz", "file = \"xyz.csv\"")] {
-        std::fs::write(dir.join("project.toml"), src.replace("file = \"ground_points.csv\"", ground)).unwrap();
+    for (name, ground) in [
+        ("utm", "file = \"utm.csv\"\ncrs = \"utm:50N\""),
+        ("xyz", "file = \"xyz.csv\""),
+    ] {
+        std::fs::write(
+            dir.join("project.toml"),
+            src.replace("file = \"ground_points.csv\"", ground),
+        )
+        .unwrap();
         let r = adjust::run(&dir.join("project.toml"), &dir.join(format!("out-{name}"))).unwrap();
         for a in 0..3 {
-            assert!((r.checks.rms[a] - base.checks.rms[a]).abs() < 2e-3, "{name}: {:?} vs {:?}", r.checks.rms, base.checks.rms);
+            assert!(
+                (r.checks.rms[a] - base.checks.rms[a]).abs() < 2e-3,
+                "{name}: {:?} vs {:?}",
+                r.checks.rms,
+                base.checks.rms
+            );
         }
     }
     // G1 as a check point: one more check point, three control points left.
-    std::fs::write(dir.join("project.toml"), src.replace("file = \"ground_points.csv\"", "file = \"ground_points.csv\"\nas_check = [\"G1\"]")).unwrap();
+    std::fs::write(
+        dir.join("project.toml"),
+        src.replace(
+            "file = \"ground_points.csv\"",
+            "file = \"ground_points.csv\"\nas_check = [\"G1\"]",
+        ),
+    )
+    .unwrap();
     let r = adjust::run(&dir.join("project.toml"), &dir.join("out-ascheck")).unwrap();
     assert_eq!(r.checks.points.len(), base.checks.points.len() + 1);
     assert!(r.checks.points.iter().any(|c| c.id == "G1"));
-    let ctl = r.groups.iter().find(|g| g.group == "control points").unwrap();
+    let ctl = r
+        .groups
+        .iter()
+        .find(|g| g.group == "control points")
+        .unwrap();
     assert_eq!(ctl.observations, 9);
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -121,6 +121,8 @@ pub struct Problem {
     /// The removed/fixed flags for which the normals were last found regular: the check (a
     /// dense factorisation) is repeated only when they change.
     regular_for: Option<(Vec<bool>, Vec<bool>)>,
+    /// The last cofactors and the state (hash) they are for.
+    cofactor_cache: std::sync::Mutex<Option<(u64, stats::Shared)>>,
 }
 
 /// One linearised factor: whitened residual and Jacobian blocks at their column offsets.
@@ -186,6 +188,7 @@ impl Problem {
             dense_limit: 3000,
             symbolic: std::sync::Mutex::new(None),
             regular_for: None,
+            cofactor_cache: std::sync::Mutex::new(None),
         }
     }
     pub fn add_block(&mut self, b: Block, fixed: bool) -> usize {
@@ -329,6 +332,12 @@ impl Problem {
             let new_cost = self.cost(&off)?;
             if new_cost <= cost {
                 let rel = (cost - new_cost) / cost.max(1e-300);
+                if rel < 1e-14 {
+                    // No gain at all: keep the values as they were (a converged problem solved
+                    // again stays bit for bit where it was, so its statistics can be reused).
+                    self.blocks = saved;
+                    break;
+                }
                 cost = new_cost;
                 lambda = (lambda / 10.0).max(1e-12);
                 if rel < 1e-12 || dx.norm() < 1e-12 {
@@ -336,6 +345,10 @@ impl Problem {
                 }
             } else {
                 self.blocks = saved;
+                // A step that loses only round-off: converged.
+                if (new_cost - cost) < 1e-12 * cost {
+                    break;
+                }
                 lambda *= 10.0;
                 if lambda > 1e8 {
                     break;

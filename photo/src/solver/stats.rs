@@ -14,6 +14,9 @@ use nalgebra::{DMatrix, DVector, Matrix3};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 
+/// Cofactors with the linearisation they were computed at, shared by the cache.
+pub(super) type Shared = std::sync::Arc<(Cofactors, Vec<Lin>)>;
+
 /// Cofactor blocks of the free unknowns (in units of σ0²).
 pub(super) enum Cofactors {
     /// The full inverse (factors tie points together).
@@ -76,13 +79,56 @@ pub const MIN_VCE_REDUNDANCY: f64 = 10.0;
 
 impl Problem {
     /// Cofactors of the unknowns at the current values.
-    pub(super) fn cofactors(&self) -> Result<(Cofactors, Vec<Lin>), SolveError> {
+    /// Cofactors at the current state, reused while blocks, weights, removals and fixings are
+    /// bit for bit those they were computed for (snooping, variance components and the report
+    /// each ask for them; on a large block each computation is an inverse of the reduced
+    /// system).
+    pub(super) fn cofactors(&self) -> Result<Shared, SolveError> {
+        let key = self.state_hash();
+        if let Ok(cache) = self.cofactor_cache.lock() {
+            if let Some((k, c)) = cache.as_ref() {
+                if *k == key {
+                    return Ok(c.clone());
+                }
+            }
+        }
+        // Free the old one before building the new (they can be hundreds of MB).
+        if let Ok(mut cache) = self.cofactor_cache.lock() {
+            *cache = None;
+        }
         let t = std::time::Instant::now();
-        let r = self.cofactors_inner();
+        let r = std::sync::Arc::new(self.cofactors_inner()?);
         if std::env::var_os("PPKAT_TRACE").is_some() {
             eprintln!("cofactors: {:.2} s", t.elapsed().as_secs_f64());
         }
-        r
+        if let Ok(mut cache) = self.cofactor_cache.lock() {
+            *cache = Some((key, r.clone()));
+        }
+        Ok(r)
+    }
+
+    /// A hash of everything the cofactors depend on.
+    fn state_hash(&self) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        for b in &self.blocks {
+            match b {
+                super::Block::Pose(p) => {
+                    p.r.iter()
+                        .chain(p.centre.iter())
+                        .for_each(|x| x.to_bits().hash(&mut h))
+                }
+                super::Block::Vector(v) => v.iter().for_each(|x| x.to_bits().hash(&mut h)),
+            }
+        }
+        self.fixed.hash(&mut h);
+        self.eliminate.hash(&mut h);
+        self.removed.hash(&mut h);
+        self.factors.len().hash(&mut h);
+        self.group_scale
+            .iter()
+            .for_each(|x| x.to_bits().hash(&mut h));
+        h.finish()
     }
 
     fn cofactors_inner(&self) -> Result<(Cofactors, Vec<Lin>), SolveError> {
@@ -205,7 +251,8 @@ impl Problem {
         blocks: &[usize],
         sigma0: f64,
     ) -> Result<Vec<Option<DMatrix<f64>>>, SolveError> {
-        let (q, _) = self.cofactors()?;
+        let shared = self.cofactors()?;
+        let q = &shared.0;
         Ok(blocks
             .iter()
             .map(|&b| {
@@ -221,8 +268,9 @@ impl Problem {
     /// Per active factor: redundancy numbers and normalised residuals w = v/(σ·√r) of its
     /// components.
     pub fn reliability(&self) -> Result<Vec<Reliability>, SolveError> {
-        let (q, lin) = self.cofactors()?;
-        Ok(self.reliability_with(&q, &lin))
+        let shared = self.cofactors()?;
+        let (q, lin) = (&shared.0, &shared.1);
+        Ok(self.reliability_with(q, lin))
     }
 
     /// Covariances of `blocks` and the reliability of every factor from one computation of
@@ -232,7 +280,8 @@ impl Problem {
         blocks: &[usize],
         sigma0: f64,
     ) -> Result<(Covariances, Vec<Reliability>), SolveError> {
-        let (q, lin) = self.cofactors()?;
+        let shared = self.cofactors()?;
+        let (q, lin) = (&shared.0, &shared.1);
         let covs = blocks
             .iter()
             .map(|&b| {
@@ -243,7 +292,7 @@ impl Problem {
                 q.block(b, b, (d, d)).map(|m| m * (sigma0 * sigma0))
             })
             .collect();
-        Ok((covs, self.reliability_with(&q, &lin)))
+        Ok((covs, self.reliability_with(q, lin)))
     }
 
     fn reliability_with(&self, q: &Cofactors, lin: &[Lin]) -> Vec<Reliability> {
@@ -311,11 +360,12 @@ impl Problem {
     ) -> Result<Vec<f64>, SolveError> {
         for _ in 0..max_rounds {
             self.solve(max_iterations)?;
-            let (q, lin) = self.cofactors()?;
+            let shared = self.cofactors()?;
+            let (q, lin) = (&shared.0, &shared.1);
             let ng = self.group_scale.len();
             let mut num = vec![0.0; ng];
             let mut red = vec![0.0; ng];
-            for l in &lin {
+            for l in lin.iter() {
                 let g = self.factors[l.factor].group();
                 let h = self.hat_diag(l, &q);
                 for i in 0..l.r.len() {
