@@ -367,7 +367,7 @@ impl Problem {
             let mut red = vec![0.0; ng];
             for l in lin.iter() {
                 let g = self.factors[l.factor].group();
-                let h = self.hat_diag(l, &q);
+                let h = self.hat_diag(l, q);
                 for i in 0..l.r.len() {
                     num[g] += l.r[i] * l.r[i];
                     red[g] += 1.0 - h[i];
