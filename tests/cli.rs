@@ -690,6 +690,10 @@ fn exposures_in_every_format() {
         ("pix4d", "imagename,latitude"),
         ("odm", "EPSG:4326"),
         ("pos", "latitude(deg)"),
+        (
+            "antenna",
+            "id,week,tow,lat,lon,h,c_ee,c_en,c_eu,c_nn,c_nu,c_uu,quality,segment",
+        ),
     ] {
         let out = dir.join(format!("stations.{fmt}"));
         let o = ppkat(&[

@@ -110,11 +110,20 @@ fn f3(v: [f64; 3], k: f64, d: usize) -> String {
 }
 
 fn est_rows(s: &mut String, e: &Estimated, unit: &str) {
+    let name = if e.t0 > 0.0 {
+        let week = (e.t0 / 604800.0).floor();
+        format!(
+            "{} (t0: GPS week {week}, {:.1} s)",
+            e.name,
+            e.t0 - week * 604800.0
+        )
+    } else {
+        e.name.clone()
+    };
     for (i, l) in e.labels.iter().enumerate() {
         let _ = writeln!(
             s,
-            "<tr><td>{}</td><td>{l}</td><td>{:.5}</td><td>{}</td><td>{unit}</td></tr>",
-            e.name,
+            "<tr><td>{name}</td><td>{l}</td><td>{:.5}</td><td>{}</td><td>{unit}</td></tr>",
             e.values[i],
             if e.fixed {
                 "fixed".into()
@@ -141,7 +150,12 @@ pub fn html(p: &Project, r: &Results) -> String {
     }
     let _ = writeln!(s, "<h2>Observation groups</h2><table><tr><th>group</th><th>components</th><th>σ factor (VCE)</th><th>mean redundancy</th><th>min redundancy</th><th>uncontrolled (r &lt; 0.1)</th><th>max MDB (r ≥ 0.1)</th></tr>");
     for g in &r.groups {
-        let _ = writeln!(s, "<tr><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{}</td><td>{:.3} {}</td></tr>", g.group, g.observations, g.sigma_factor, g.mean_redundancy, g.min_redundancy, g.uncontrolled, g.max_mdb, g.mdb_unit);
+        let mdb = if g.uncontrolled == g.observations {
+            "— (none controlled)".to_string()
+        } else {
+            format!("{:.3} {}", g.max_mdb, g.mdb_unit)
+        };
+        let _ = writeln!(s, "<tr><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{}</td><td>{mdb}</td></tr>", g.group, g.observations, g.sigma_factor, g.mean_redundancy, g.min_redundancy, g.uncontrolled);
     }
     let _ = writeln!(s, "</table>");
     if !(r.lever_arms.is_empty() && r.drifts.is_empty() && r.interiors.is_empty()) {

@@ -355,6 +355,9 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
             rays: rays.get(id.as_str()).copied().unwrap_or(0),
         });
     }
+    checks
+        .points
+        .sort_by(|a, b| natural(&a.id).cmp(&natural(&b.id)));
     let nc = checks.points.len() as f64;
     if nc > 0.0 {
         for a in 0..3 {
@@ -601,4 +604,18 @@ impl Results {
         }
         s
     }
+}
+
+/// A sort key that puts C2 before C10: the text before the first digit, then the number.
+fn natural(id: &str) -> (String, u64, String) {
+    let i = id.find(|c: char| c.is_ascii_digit()).unwrap_or(id.len());
+    let j = id[i..]
+        .find(|c: char| !c.is_ascii_digit())
+        .map(|k| i + k)
+        .unwrap_or(id.len());
+    (
+        id[..i].to_string(),
+        id[i..j].parse().unwrap_or(0),
+        id[j..].to_string(),
+    )
 }
