@@ -355,9 +355,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
             rays: rays.get(id.as_str()).copied().unwrap_or(0),
         });
     }
-    checks
-        .points
-        .sort_by(|a, b| natural(&a.id).cmp(&natural(&b.id)));
+    checks.points.sort_by_key(|c| natural(&c.id));
     let nc = checks.points.len() as f64;
     if nc > 0.0 {
         for a in 0..3 {
