@@ -290,6 +290,19 @@ fn bad_input_gives_clear_errors() {
             && e.contains("image `777` is not in the image list"),
         "{e}"
     );
+    // A coordinate that is not a finite number.
+    let d = project_dir("bad-nan");
+    edit(&d, "ground_points.csv", |t| {
+        let mut l: Vec<String> = t.lines().map(String::from).collect();
+        let f: Vec<&str> = l[1].split(',').collect();
+        l[1] = format!("{},{},NaN,{}", f[0], f[1], f[3..].join(","));
+        l.join("\n")
+    });
+    let e = fails(&d);
+    assert!(
+        e.contains("ground_points.csv, line 2") && e.contains("`NaN` is not a number"),
+        "{e}"
+    );
     // An unknown key in the project file.
     let d = project_dir("bad-key");
     edit(&d, "project.toml", |t| {

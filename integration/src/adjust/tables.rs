@@ -60,11 +60,14 @@ impl Table {
     }
     fn num(&self, line: usize, row: &[String], c: usize) -> Result<f64, AdjustError> {
         let s = row.get(c).map(|s| s.trim()).unwrap_or("");
-        s.parse::<f64>().map_err(|_| AdjustError::Input {
-            path: self.path.display().to_string(),
-            line,
-            what: format!("`{s}` is not a number (column {})", self.cols[c]),
-        })
+        s.parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| AdjustError::Input {
+                path: self.path.display().to_string(),
+                line,
+                what: format!("`{s}` is not a number (column {})", self.cols[c]),
+            })
     }
     fn text(&self, row: &[String], c: usize) -> String {
         row.get(c).map(|s| s.trim().to_string()).unwrap_or_default()
@@ -215,7 +218,9 @@ pub(super) fn read_patb(
             (Some(i), [p, x, y, ..]) => {
                 let num = |s: &str| {
                     s.parse::<f64>()
-                        .map_err(|_| bad(line, format!("`{s}` is not a number")))
+                        .ok()
+                        .filter(|x| x.is_finite())
+                        .ok_or_else(|| bad(line, format!("`{s}` is not a number")))
                 };
                 let cam = &cameras[images[i].camera];
                 out.push(Measurement {
