@@ -580,3 +580,64 @@ fn ground_point_formats_agree() {
     assert_eq!(ctl.observations, 9);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The GNSS input as a trajectory (`.pos`) interpolated at the image times of the image list
+/// gives the adjustment of the antenna table; images outside the trajectory are reported.
+#[test]
+fn trajectory_input_equals_the_antenna_table() {
+    let dir = project_dir("trajectory");
+    let table = adjust::run(&dir.join("project.toml"), &dir.join("out-table")).unwrap();
+    edit(&dir, "project.toml", |t| {
+        t.replace(
+            "antennas = \"antennas.csv\"",
+            "trajectory = \"trajectory.pos\"",
+        )
+    });
+    let traj = adjust::run(&dir.join("project.toml"), &dir.join("out-traj")).unwrap();
+    assert!(
+        traj.warnings
+            .iter()
+            .all(|w| !w.contains("without a GNSS position")),
+        "{:?}",
+        traj.warnings
+    );
+    for (a, b) in traj.images.iter().zip(&table.images) {
+        for k in 0..3 {
+            assert!(
+                (a.local[k] - b.local[k]).abs() < 2e-3,
+                "{} {:?} {:?}",
+                a.id,
+                a.local,
+                b.local
+            );
+        }
+    }
+    for a in 0..3 {
+        assert!((traj.checks.rms[a] - table.checks.rms[a]).abs() < 2e-3);
+    }
+    // An image later than the trajectory: named in a warning, adjusted without GNSS.
+    edit(&dir, "images.csv", |t| {
+        let mut l: Vec<String> = t.lines().map(String::from).collect();
+        let last = l.len() - 1;
+        let f: Vec<String> = l[last].split(',').map(String::from).collect();
+        l[last] = format!(
+            "{},{},{},{},{}",
+            f[0],
+            f[1],
+            f[2],
+            f[3],
+            f[4].parse::<f64>().unwrap() + 500.0
+        );
+        l.join("\n")
+    });
+    let late = adjust::run(&dir.join("project.toml"), &dir.join("out-late")).unwrap();
+    assert!(
+        late.warnings
+            .iter()
+            .any(|w| w.contains("1 image(s) without a GNSS position")
+                && w.contains("outside the trajectory")),
+        "{:?}",
+        late.warnings
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

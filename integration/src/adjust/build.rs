@@ -279,8 +279,56 @@ pub fn build(p: &Project) -> Result<Built, AdjustError> {
             _ => None,
         };
     }
-    // Images without a start: from a neighbour in the strip (same attitude, shifted by the
-    // mean base) is too fragile; refuse with the ids.
+    // Images still without a start (no GNSS, no control): resect them on tie points
+    // intersected from the images that have one.
+    if start.iter().any(|s| s.is_none()) {
+        let mut by_point: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+        for (k, m) in p.measurements.iter().enumerate() {
+            by_point.entry(m.point.as_str()).or_default().push(k);
+        }
+        let mut known: BTreeMap<&str, Vector3<f64>> = BTreeMap::new();
+        for (id, ks) in &by_point {
+            let r: Vec<Ray> = ks
+                .iter()
+                .filter_map(|&k| {
+                    let m = &p.measurements[k];
+                    start[m.image].as_ref().map(|pose| Ray {
+                        camera: &p.cameras[p.images[m.image].camera].camera,
+                        pose,
+                        xy: m.xy,
+                        sigma: m.sigma,
+                    })
+                })
+                .collect();
+            if r.len() >= 2 {
+                if let Ok(x) = intersect(&r) {
+                    known.insert(id, x.point);
+                }
+            }
+        }
+        for (i, st) in start.iter_mut().enumerate() {
+            if st.is_some() {
+                continue;
+            }
+            let cam = &p.cameras[p.images[i].camera].camera;
+            let pts: Vec<Control> = p
+                .measurements
+                .iter()
+                .filter(|m| m.image == i)
+                .filter_map(|m| {
+                    known.get(m.point.as_str()).map(|x| Control {
+                        object: *x,
+                        image: m.xy,
+                        sigma: m.sigma,
+                    })
+                })
+                .collect();
+            if pts.len() >= 4 {
+                *st = resect(cam, &pts).ok().map(|x| x.pose);
+            }
+        }
+    }
+    // Images without any start: refuse with the ids.
     let lost: Vec<&str> = p
         .images
         .iter()
@@ -290,7 +338,7 @@ pub fn build(p: &Project) -> Result<Built, AdjustError> {
         .collect();
     if !lost.is_empty() {
         return Err(err(format!(
-            "no start orientation for image(s) {}: give a GNSS antenna position (with attitude or within a strip), compass angles, or at least 4 control points in each",
+            "no start orientation for image(s) {}: give a GNSS antenna position (with attitude or within a strip), compass angles, or at least 4 control or tie points in each that other images also see",
             lost.join(", ")
         )));
     }

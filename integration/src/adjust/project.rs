@@ -4,7 +4,10 @@
 //! Every problem names the file, the line and what to do.
 
 use super::factors::DriftModel;
-use super::tables::{perr, read_antennas, read_ground, read_images, read_measurements, read_patb};
+use super::tables::{
+    antennas_from_trajectory, perr, read_antennas, read_ground, read_images, read_measurements,
+    read_patb,
+};
 use super::AdjustError;
 use crate::exposure::export::Projection;
 use gnss::frame::Ecef;
@@ -105,8 +108,13 @@ pub struct GroundSection {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GnssSection {
-    /// The antenna table of `ppkat exposures --format antenna`.
-    pub antennas: PathBuf,
+    /// The antenna table of `ppkat exposures --format antenna`…
+    #[serde(default)]
+    pub antennas: Option<PathBuf>,
+    /// …or a trajectory (`.pos` of `ppkat ppk` or RTKLIB) interpolated at the image times of
+    /// the image list (`week,tow` columns, GPST).
+    #[serde(default)]
+    pub trajectory: Option<PathBuf>,
     /// Multiplier of the trajectory σ (default 1).
     #[serde(default = "one")]
     pub sigma_scale: f64,
@@ -202,6 +210,8 @@ pub struct ImageDef {
     pub strip: String,
     /// Approximate viewing direction from a compass: azimuth, elevation, roll (radians).
     pub compass: Option<[f64; 3]>,
+    /// Exposure time (GPST), when the list gives `week,tow`.
+    pub time: Option<hifitime::Epoch>,
 }
 
 /// One image measurement, metric image coordinates.
@@ -259,6 +269,8 @@ pub struct Project {
     pub measurements: Vec<Measurement>,
     pub ground: Vec<GroundPoint>,
     pub antennas: Vec<Antenna>,
+    /// What loading noticed (images outside the trajectory, …), for the report.
+    pub warnings: Vec<String>,
 }
 
 const INTERIOR_NAMES: [&str; 10] = ["f", "x0", "y0", "k1", "k2", "k3", "p1", "p2", "b1", "b2"];
@@ -347,8 +359,20 @@ impl Project {
             Some(g) => read_ground(&dir.join(&g.file), g)?,
             None => Vec::new(),
         };
+        let mut warnings = Vec::new();
         let antennas = match &file.gnss {
-            Some(g) => read_antennas(&dir.join(&g.antennas), g.sigma_scale)?,
+            Some(g) => match (&g.antennas, &g.trajectory) {
+                (Some(a), None) => read_antennas(&dir.join(a), g.sigma_scale)?,
+                (None, Some(t)) => {
+                    antennas_from_trajectory(&dir.join(t), &images, g.sigma_scale, &mut warnings)?
+                }
+                _ => {
+                    return Err(perr(
+                        path,
+                        "[gnss]: give exactly one of `antennas` (table) or `trajectory` (.pos)",
+                    ))
+                }
+            },
             None => Vec::new(),
         };
         Ok(Project {
@@ -360,6 +384,7 @@ impl Project {
             measurements,
             ground,
             antennas,
+            warnings,
         })
     }
 }

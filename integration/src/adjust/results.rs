@@ -505,7 +505,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
             },
         })
         .collect();
-    let mut warnings = Vec::new();
+    let mut warnings = p.warnings.clone();
     if !b.single_ray.is_empty() {
         let list: Vec<String> = b
             .single_ray

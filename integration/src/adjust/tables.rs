@@ -101,6 +101,7 @@ pub(super) fn read_images(
         (Some(a), Some(e), Some(r)) => Some([a, e, r]),
         _ => None,
     };
+    let times = t.col("week").zip(t.col("tow"));
     let mut out: Vec<ImageDef> = Vec::new();
     for (line, row) in &t.rows {
         let id = t.text(row, ci);
@@ -134,11 +135,31 @@ pub(super) fn read_images(
             ]),
             None => None,
         };
+        let time = match times {
+            // Both cells empty: this image's time is unknown.
+            Some((w, s)) if t.text(row, w).is_empty() && t.text(row, s).is_empty() => None,
+            Some((w, s)) => {
+                let week = t.num(*line, row, w)?;
+                if !(0.0..10000.0).contains(&week) {
+                    return Err(AdjustError::Input {
+                        path: path.display().to_string(),
+                        line: *line,
+                        what: format!("GPS week {week} out of range"),
+                    });
+                }
+                Some(gnss::time::from_week_tow(
+                    week as u32,
+                    t.num(*line, row, s)?,
+                ))
+            }
+            None => None,
+        };
         out.push(ImageDef {
             id,
             camera,
             strip: cs.map(|c| t.text(row, c)).unwrap_or_else(|| "1".into()),
             compass,
+            time,
         });
     }
     if out.is_empty() {
@@ -412,6 +433,61 @@ pub(super) fn read_antennas(path: &Path, scale: f64) -> Result<Vec<Antenna>, Adj
             },
             rotation,
         });
+    }
+    Ok(out)
+}
+
+/// Antenna positions interpolated on a trajectory at the image times: covariance and
+/// ambiguity segment from the trajectory; images outside it or in its gaps are listed.
+pub(super) fn antennas_from_trajectory(
+    path: &Path,
+    images: &[ImageDef],
+    scale: f64,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<Antenna>, AdjustError> {
+    let traj = crate::exposure::trajectory::Trajectory::read_pos(path)
+        .map_err(|e| perr(path, e.to_string()))?;
+    if images.iter().all(|im| im.time.is_none()) {
+        return Err(perr(
+            path,
+            "a trajectory needs the image times: add `week,tow` (GPST) columns to the image list",
+        ));
+    }
+    let max_gap = 2.5 * traj.interval;
+    let mut out = Vec::new();
+    let mut missed = Vec::new();
+    for im in images {
+        let Some(t) = im.time else {
+            missed.push(format!("{} (no time)", im.id));
+            continue;
+        };
+        match traj.interpolate(t, max_gap) {
+            Ok(ip) => {
+                let r = gnss::frame::enu_rotation(&ip.pos.to_geodetic());
+                out.push(Antenna {
+                    image: im.id.clone(),
+                    time: t,
+                    pos: ip.pos,
+                    cov_enu: r * ip.cov * r.transpose() * (scale * scale),
+                    segment: ip.segment,
+                    rotation: None,
+                });
+            }
+            Err(crate::exposure::trajectory::InterpError::Outside) => {
+                missed.push(format!("{} (outside the trajectory)", im.id))
+            }
+            Err(crate::exposure::trajectory::InterpError::Gap(g)) => {
+                missed.push(format!("{} (in a {g:.1} s gap)", im.id))
+            }
+        }
+    }
+    if !missed.is_empty() {
+        warnings.push(format!(
+            "{} image(s) without a GNSS position from {}: {}",
+            missed.len(),
+            path.display(),
+            missed.join(", ")
+        ));
     }
     Ok(out)
 }

@@ -275,9 +275,16 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
     }
     let g_ecef = |v: &Vector3<f64>| Enu(*v).to_ecef(&origin.to_ecef()).to_geodetic();
     // Tables.
-    let mut s = String::from("image,camera,strip\n");
+    let mut s = String::from("image,camera,strip,week,tow\n");
     for im in &images {
-        let _ = writeln!(s, "{},cam,{}", im.0, im.1 + 1);
+        let week = (im.3 / 604800.0).floor();
+        let _ = writeln!(
+            s,
+            "{},cam,{},{week},{:.6}",
+            im.0,
+            im.1 + 1,
+            im.3 - week * 604800.0
+        );
     }
     write(dir, "images.csv", &s)?;
     let mut s = String::from("image,point,x_px,y_px,sigma_px\n");
@@ -338,6 +345,7 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
         .map(|c| c.l())
         .unwrap_or_else(|| Matrix3::from_diagonal(&Vector3::from(spec.gnss_sigma)));
     let mut s = String::from("# simulated: antenna = centre + R*lever + drift + noise\nid,week,tow,lat,lon,h,c_ee,c_en,c_eu,c_nn,c_nu,c_uu,quality,segment\n");
+    let mut track: Vec<gnss::solution::PosRecord> = Vec::new();
     for (k, im) in images.iter().enumerate() {
         let dt = im.3 - t_first;
         let mut drift = Vector3::from(spec.drift_a) + Vector3::from(spec.drift_b) * dt;
@@ -354,6 +362,31 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
         // Noise drawn in the site ENU: express the covariance in the ENU at the antenna.
         let m = enu_rotation(&g) * enu_rotation(&origin).transpose();
         let c = m * cov * m.transpose();
+        let ra = enu_rotation(&g);
+        let rec = gnss::solution::PosRecord {
+            time: gnss::time::from_week_tow(0, im.3),
+            pos: g.to_ecef(),
+            quality: gnss::solution::Quality::Fixed,
+            nsat: 12,
+            cov: ra.transpose() * c * ra,
+            age: 0.0,
+            ratio: 99.0,
+        };
+        // Through the turns: epochs every base/speed seconds on the straight line (their
+        // positions matter to nobody, they keep the trajectory free of gaps).
+        if let Some(prev) = track.last().cloned() {
+            let gap = (rec.time - prev.time).to_seconds();
+            let step = base / spec.speed;
+            let n = (gap / step).floor() as usize;
+            for j in 1..n {
+                let f = j as f64 / n as f64;
+                let mut mid = prev.clone();
+                mid.time = prev.time + hifitime::Duration::from_seconds(gap * f);
+                mid.pos = gnss::frame::Ecef(prev.pos.0 * (1.0 - f) + rec.pos.0 * f);
+                track.push(mid);
+            }
+        }
+        track.push(rec);
         let (week, tow) = (
             (im.3 / 604800.0).floor(),
             im.3 - (im.3 / 604800.0).floor() * 604800.0,
@@ -374,6 +407,12 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
         );
     }
     write(dir, "antennas.csv", &s)?;
+    gnss::solution::write_pos(
+        &dir.join("trajectory.pos"),
+        &["program   : ppkat simulate (block antenna trajectory)".to_string()],
+        &track,
+        gnss::solution::PosFormat::Llh,
+    )?;
     let project = format!(
         "name = \"{}\"\noutput = \"utm\"\n\n[[camera]]\nid = \"cam\"\nfocal_mm = {}\npixel_um = {}\nwidth_px = {npx}\nheight_px = {npx}\nsigma_px = {}\n{}\n[images]\nlist = \"images.csv\"\nmeasurements = \"image_observations.csv\"\n\n[ground]\nfile = \"ground_points.csv\"\n\n{}",
         spec.name, spec.focal_mm, spec.pixel_um, spec.sigma_image_um / spec.pixel_um, spec.camera_options, spec.project_options
