@@ -371,6 +371,25 @@ fn close_range_pair() {
     for r in &ratio {
         assert!(*r < 1.25 && *r > 0.75, "check RMS / theoretical {ratio:?}");
     }
+    // Three stations (−60, 0, +60 m): the middle one adds rays, the depth error shrinks.
+    let spec = CloseRangeSpec {
+        seed: 3,
+        stations: vec![-60.0, 0.0, 60.0],
+        ..Default::default()
+    };
+    let dir = tmp("cr-three");
+    close_range(&spec, &dir).unwrap();
+    let r = adjust::run(&dir.join("project.toml"), &dir.join("out")).unwrap();
+    assert_eq!(r.images.len(), 3);
+    assert!(r.checks.theoretical_rms[1] < (t2[1] / n).sqrt());
+    for a in 0..3 {
+        assert!(
+            r.checks.rms[a] < 2.0 * r.checks.theoretical_rms[a],
+            "{:?}",
+            r.checks
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Self-calibration: the true camera has its principal distance 30 µm longer, the principal
@@ -638,6 +657,34 @@ fn trajectory_input_equals_the_antenna_table() {
                 && w.contains("outside the trajectory")),
         "{:?}",
         late.warnings
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Float GNSS positions are used with their covariance, and the report says how many.
+#[test]
+fn float_positions_are_reported() {
+    let dir = project_dir("float");
+    edit(&dir, "antennas.csv", |t| {
+        t.lines()
+            .map(|l| {
+                if l.starts_with("103,") || l.starts_with("207,") {
+                    l.replace(",1,0", ",2,0")
+                } else {
+                    l.to_string()
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+    });
+    let r = adjust::run(&dir.join("project.toml"), &dir.join("out")).unwrap();
+    assert!(
+        r.warnings.iter().any(
+            |w| w.starts_with("2 of 29 GNSS positions are not ambiguity-fixed")
+                && w.contains("103, 207")
+        ),
+        "{:?}",
+        r.warnings
     );
     let _ = std::fs::remove_dir_all(&dir);
 }

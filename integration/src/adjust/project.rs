@@ -254,6 +254,8 @@ pub struct Antenna {
     /// Covariance in the local ENU at the antenna, m².
     pub cov_enu: Matrix3<f64>,
     pub segment: u32,
+    /// Solution quality as RTKLIB's Q (1 fixed, 2 float, 5 single).
+    pub quality: u8,
     /// Camera → local ENU at the antenna, when the table carries an attitude.
     pub rotation: Option<Matrix3<f64>>,
 }
@@ -375,6 +377,19 @@ impl Project {
             },
             None => Vec::new(),
         };
+        let unfixed: Vec<&str> = antennas
+            .iter()
+            .filter(|a| a.quality != 1)
+            .map(|a| a.image.as_str())
+            .collect();
+        if !unfixed.is_empty() {
+            warnings.push(format!(
+                "{} of {} GNSS positions are not ambiguity-fixed (Q ≠ 1; first: {}): they enter with their larger covariance",
+                unfixed.len(),
+                antennas.len(),
+                unfixed[..unfixed.len().min(5)].join(", ")
+            ));
+        }
         Ok(Project {
             path: path.to_path_buf(),
             file,

@@ -392,6 +392,7 @@ pub(super) fn read_antennas(path: &Path, scale: f64) -> Result<Vec<Antenna>, Adj
     .map(|c| t.need(c))
     .collect::<Result<_, _>>()?;
     let seg = t.col("segment");
+    let qcol = t.col("quality");
     let opk = match (t.col("omega"), t.col("phi"), t.col("kappa")) {
         (Some(a), Some(b), Some(c)) => Some([a, b, c]),
         _ => None,
@@ -430,6 +431,10 @@ pub(super) fn read_antennas(path: &Path, scale: f64) -> Result<Vec<Antenna>, Adj
             segment: match seg {
                 Some(c) => t.num(*line, row, c)? as u32,
                 None => 0,
+            },
+            quality: match qcol {
+                Some(c) => t.num(*line, row, c)? as u8,
+                None => 1,
             },
             rotation,
         });
@@ -470,6 +475,7 @@ pub(super) fn antennas_from_trajectory(
                     pos: ip.pos,
                     cov_enu: r * ip.cov * r.transpose() * (scale * scale),
                     segment: ip.segment,
+                    quality: ip.quality as u8,
                     rotation: None,
                 });
             }
