@@ -40,6 +40,8 @@ struct Summary {
     lever_rms: [f64; 3],
     lever_sigma: [f64; 3],
     drift_z: Vec<f64>,
+    /// Mean square of (ω, φ, κ error)/σ over all images and realisations.
+    angle_z2: [f64; 3],
     removed: usize,
 }
 
@@ -50,6 +52,7 @@ fn monte_carlo(gcps: bool, seeds: std::ops::Range<u64>) -> Summary {
     let mut drift_z = Vec::new();
     let mut removed = 0;
     let mut runs = 0.0;
+    let (mut az2, mut an) = ([0.0; 3], 0.0);
     for seed in seeds {
         let mut spec = BlockSpec::classic();
         spec.seed = seed;
@@ -91,6 +94,23 @@ fn monte_carlo(gcps: bool, seeds: std::ops::Range<u64>) -> Summary {
             }
         }
         removed += r.removed.len();
+        // Orientation angles against truth, the truth rotated into the adjustment's frame.
+        let o = r.origin_deg;
+        let frame = gnss::frame::Geodetic::from_degrees(o[0], o[1], o[2]);
+        let f = gnss::frame::enu_rotation(&frame)
+            * gnss::frame::enu_rotation(&truth.origin).transpose();
+        for (im, (_, _, pose, _)) in r.images.iter().zip(&truth.images) {
+            let photo::rotation::Angles::OmegaPhiKappa { omega, phi, kappa } =
+                photo::rotation::Angles::omega_phi_kappa(&(f * pose.r))
+            else {
+                unreachable!()
+            };
+            for (a, t) in [omega, phi, kappa].iter().enumerate() {
+                let d = (im.opk_deg[a] - t.to_degrees() + 180.0).rem_euclid(360.0) - 180.0;
+                az2[a] += (d / im.sigma_angles_deg[a]).powi(2);
+            }
+            an += 1.0;
+        }
     }
     let rms = e2.map(|x| (x / n).sqrt());
     let theo = t2.map(|x| (x / n).sqrt());
@@ -102,6 +122,7 @@ fn monte_carlo(gcps: bool, seeds: std::ops::Range<u64>) -> Summary {
         lever_rms: l2.map(|x| (x / runs).sqrt()),
         lever_sigma: ls.map(|x| (x / runs).sqrt()),
         drift_z,
+        angle_z2: az2.map(|x| x / an),
         removed,
     }
 }
@@ -150,6 +171,17 @@ fn check(s: &Summary, what: &str) {
         mean_sq < 1.6,
         "{what}: drift errors/σ mean square {mean_sq}"
     );
+    eprintln!(
+        "{what}: mean square of angle error/σ (ω, φ, κ): {:.2} {:.2} {:.2}",
+        s.angle_z2[0], s.angle_z2[1], s.angle_z2[2]
+    );
+    for z2 in s.angle_z2 {
+        assert!(
+            z2 > 0.6 && z2 < 1.5,
+            "{what}: angle errors/σ {:?}",
+            s.angle_z2
+        );
+    }
     assert_eq!(s.removed, 0, "{what}: good observations removed");
 }
 

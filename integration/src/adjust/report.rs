@@ -35,8 +35,8 @@ pub fn write_all(p: &Project, r: &Results, out: &Path) -> Result<(), AdjustError
         }
     };
     let mut s = String::new();
-    let _ = writeln!(s, "# ppkat adjust: projection centres; {}; h ellipsoidal; local = ENU at {:.8} {:.8} {:.3}; omega/phi/kappa (deg) of R camera->local ENU, R = Rw*Rp*Rk; sigmas m and deg (rotation about local E,N,U)", r.crs, r.origin_deg[0], r.origin_deg[1], r.origin_deg[2]);
-    let _ = writeln!(s, "image,strip,{proj_head}lat,lon,h,e_local,n_local,u_local,omega,phi,kappa,sigma_e,sigma_n,sigma_u,sigma_rx,sigma_ry,sigma_rz,points,rms_px");
+    let _ = writeln!(s, "# ppkat adjust: projection centres; {}; h ellipsoidal; local = ENU at {:.8} {:.8} {:.3}; omega/phi/kappa (deg) of R camera->local ENU, R = Rw*Rp*Rk; sigmas m and deg", r.crs, r.origin_deg[0], r.origin_deg[1], r.origin_deg[2]);
+    let _ = writeln!(s, "image,strip,{proj_head}lat,lon,h,e_local,n_local,u_local,omega,phi,kappa,sigma_e,sigma_n,sigma_u,sigma_omega,sigma_phi,sigma_kappa,points,rms_px");
     for i in &r.images {
         let _ = writeln!(
             s,
@@ -237,14 +237,14 @@ pub fn html(p: &Project, r: &Results) -> String {
         s.push_str(&plot_drift(r));
     }
     let geo = r.crs.starts_with("WGS84");
-    let _ = writeln!(s, "<h2>Images</h2><table><tr><th>image</th><th>strip</th>{}<th>h</th><th>ω°</th><th>φ°</th><th>κ°</th><th>σE</th><th>σN</th><th>σU</th><th>points</th><th>RMS px</th></tr>", if geo { "<th>lat°</th><th>lon°</th>" } else { "<th>easting</th><th>northing</th>" });
+    let _ = writeln!(s, "<h2>Images</h2><table><tr><th>image</th><th>strip</th>{}<th>h</th><th>ω°</th><th>φ°</th><th>κ°</th><th>σE</th><th>σN</th><th>σU</th><th>σω°</th><th>σφ°</th><th>σκ°</th><th>points</th><th>RMS px</th></tr>", if geo { "<th>lat°</th><th>lon°</th>" } else { "<th>easting</th><th>northing</th>" });
     for i in &r.images {
         let xy = if geo {
             format!("<td>{:.9}</td><td>{:.9}</td>", i.lat, i.lon)
         } else {
             format!("<td>{:.3}</td><td>{:.3}</td>", i.easting, i.northing)
         };
-        let _ = writeln!(s, "<tr><td>{}</td><td>{}</td>{xy}<td>{:.3}</td><td>{:.4}</td><td>{:.4}</td><td>{:.4}</td>{}<td>{}</td><td>{:.2}</td></tr>", i.id, i.strip, i.h, i.opk_deg[0], i.opk_deg[1], i.opk_deg[2], f3(i.sigma_centre, 1.0, 3), i.points, i.rms_px);
+        let _ = writeln!(s, "<tr><td>{}</td><td>{}</td>{xy}<td>{:.3}</td><td>{:.4}</td><td>{:.4}</td><td>{:.4}</td>{}{}<td>{}</td><td>{:.2}</td></tr>", i.id, i.strip, i.h, i.opk_deg[0], i.opk_deg[1], i.opk_deg[2], f3(i.sigma_centre, 1.0, 3), f3(i.sigma_angles_deg, 1.0, 4), i.points, i.rms_px);
     }
     let _ = writeln!(
         s,

@@ -28,6 +28,7 @@ pub struct ImageResult {
     /// ω, φ, κ of R camera → local ENU, degrees.
     pub opk_deg: [f64; 3],
     pub sigma_centre: [f64; 3],
+    /// σ of ω, φ, κ, degrees (the rotation covariance carried through the angle conversion).
     pub sigma_angles_deg: [f64; 3],
     pub points: usize,
     pub rms_px: f64,
@@ -145,6 +146,32 @@ pub struct Results {
     pub image_residuals: Vec<ImageResidual>,
     pub gnss_residuals: Vec<GnssResidual>,
     pub warnings: Vec<String>,
+}
+
+/// σ of ω, φ, κ from the covariance of the rotation's left perturbation (first 3×3 of the
+/// pose covariance): J·Σ·Jᵀ with J = ∂(ω, φ, κ)/∂δ by central differences.
+fn opk_sigmas(r: &nalgebra::Matrix3<f64>, c: &DMatrix<f64>) -> [f64; 3] {
+    let angles = |m: &nalgebra::Matrix3<f64>| match Angles::omega_phi_kappa(m) {
+        Angles::OmegaPhiKappa { omega, phi, kappa } => [omega, phi, kappa],
+        _ => [0.0; 3],
+    };
+    let wrap = |a: f64| {
+        (a + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
+    };
+    let h = 1e-6;
+    let mut j = nalgebra::Matrix3::<f64>::zeros();
+    for k in 0..3 {
+        let mut d = Vector3::zeros();
+        d[k] = h;
+        let a = angles(&(photo::rotation::exp_so3(&d) * r));
+        let b = angles(&(photo::rotation::exp_so3(&-d) * r));
+        for i in 0..3 {
+            j[(i, k)] = wrap(a[i] - b[i]) / (2.0 * h);
+        }
+    }
+    let s = nalgebra::Matrix3::from_fn(|i, k| c[(i, k)]);
+    let q = j * s * j.transpose();
+    [0, 1, 2].map(|i| q[(i, i)].max(0.0).sqrt())
 }
 
 fn sig3(c: &DMatrix<f64>, o: usize) -> [f64; 3] {
@@ -303,7 +330,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
                 opk_deg: [omega, phi, kappa].map(f64::to_degrees),
                 sigma_centre: c.map(|c| sig3(c, 3)).unwrap_or_default(),
                 sigma_angles_deg: c
-                    .map(|c| sig3(c, 0).map(f64::to_degrees))
+                    .map(|c| opk_sigmas(&pose.r, c).map(f64::to_degrees))
                     .unwrap_or_default(),
                 points: n_pts,
                 rms_px: if n_pts > 0 {
