@@ -510,6 +510,22 @@ fn drift_per_ambiguity_segment() {
     );
     assert!(rms3(&seg) < 1.5 * theo3(&seg));
     assert!(rms3(&block) > 1.3 * rms3(&seg));
+    // The same bias from the first photograph of strip 2 on: one offset per strip absorbs it.
+    spec.segment_jump = Some((15, [0.25, -0.20, 0.35]));
+    spec.project_options = gnss_options("offset").replace("drift = \"block\"", "drift = \"strip\"");
+    let (_, strip) = run(&spec, "segments-strip");
+    let (s1, s2) = (&strip.drifts[0], &strip.drifts[1]);
+    assert_eq!((s1.name.as_str(), s2.name.as_str()), ("strip 1", "strip 2"));
+    for a in 0..3 {
+        let jump = s2.values[a] - s1.values[a];
+        let sigma = s2.sigmas[a].hypot(s1.sigmas[a]);
+        let truth = [0.25, -0.20, 0.35][a];
+        assert!(
+            (jump - truth).abs() < 3.0 * sigma,
+            "strip axis {a}: jump {jump} ± {sigma}"
+        );
+    }
+    assert!(rms3(&strip) < 1.5 * theo3(&strip));
 }
 
 /// The same measurements as a PATB-style image-coordinate file (mm, y up) give the same
