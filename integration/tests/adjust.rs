@@ -245,6 +245,21 @@ fn blunders_and_a_wrong_gcp_are_found() {
         "{img:?}"
     );
     assert!(img.max_mdb > 1.0 && img.max_mdb < 50.0, "{img:?}");
+    // Per observation: what remains passes the test; the control's MDB says which GCP errors
+    // this block can see (the 1 m one was well above it).
+    let wmax = r
+        .image_residuals
+        .iter()
+        .flat_map(|v| v.w)
+        .fold(0.0f64, |m, w| m.max(w.abs()));
+    assert!(wmax < r.critical_w, "{wmax}");
+    assert_eq!(r.control_residuals.len(), 3);
+    for c in &r.control_residuals {
+        for m in c.mdb {
+            let m = m.expect("a control point's MDB");
+            assert!(m > 0.2 && m < 1.2, "{c:?}");
+        }
+    }
 }
 
 /// A written classic project to break in one way.

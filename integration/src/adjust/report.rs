@@ -77,12 +77,21 @@ pub fn write_all(p: &Project, r: &Results, out: &Path) -> Result<(), AdjustError
         );
     }
     write_text(&out.join("points.csv"), &s)?;
-    let mut s = String::from("image,point,x_px,y_px,vx_px,vy_px\n");
+    let mut s = String::from("# residual = predicted - measured (px); r = redundancy number; w = normalised residual\nimage,point,x_px,y_px,vx_px,vy_px,rx,ry,wx,wy\n");
     for v in &r.image_residuals {
         let _ = writeln!(
             s,
-            "{},{},{:.2},{:.2},{:.3},{:.3}",
-            v.image, v.point, v.px[0], v.px[1], v.v_px[0], v.v_px[1]
+            "{},{},{:.2},{:.2},{:.3},{:.3},{:.3},{:.3},{:.2},{:.2}",
+            v.image,
+            v.point,
+            v.px[0],
+            v.px[1],
+            v.v_px[0],
+            v.v_px[1],
+            v.r[0],
+            v.r[1],
+            v.w[0],
+            v.w[1]
         );
     }
     write_text(&out.join("image_residuals.csv"), &s)?;
@@ -168,6 +177,26 @@ pub fn html(p: &Project, r: &Results) -> String {
         }
         for e in &r.interiors {
             est_rows(&mut s, e, "m (f, x0, y0), distortion units");
+        }
+        let _ = writeln!(s, "</table>");
+    }
+    if !r.control_residuals.is_empty() {
+        let _ = writeln!(s, "<h2>Control points</h2><table><tr><th>point</th><th>vE m</th><th>vN m</th><th>vU m</th><th>rE</th><th>rN</th><th>rU</th><th>wE</th><th>wN</th><th>wU</th><th>MDB E/N/U m</th></tr>");
+        for c in &r.control_residuals {
+            let mdb: Vec<String> = c
+                .mdb
+                .iter()
+                .map(|m| m.map(|x| format!("{x:.3}")).unwrap_or_else(|| "—".into()))
+                .collect();
+            let _ = writeln!(
+                s,
+                "<tr><td>{}</td>{}{}{}<td>{}</td></tr>",
+                c.id,
+                f3(c.v, 1.0, 3),
+                f3(c.r, 1.0, 3),
+                f3(c.w, 1.0, 2),
+                mdb.join(" / ")
+            );
         }
         let _ = writeln!(s, "</table>");
     }

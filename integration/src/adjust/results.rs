@@ -112,6 +112,20 @@ pub struct ImageResidual {
     /// Measured position and residual (predicted − measured), pixels.
     pub px: [f64; 2],
     pub v_px: [f64; 2],
+    /// Redundancy numbers and normalised residuals (Baarda's w) of x and y.
+    pub r: [f64; 2],
+    pub w: [f64; 2],
+}
+
+/// A control point's residual (adjusted − given, local E, N, U) with its reliability.
+#[derive(Clone, Debug, Serialize)]
+pub struct ControlResidual {
+    pub id: String,
+    pub v: [f64; 3],
+    pub r: [f64; 3],
+    pub w: [f64; 3],
+    /// Minimal detectable blunder per axis (m), None where the redundancy is ~0.
+    pub mdb: [Option<f64>; 3],
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -144,6 +158,7 @@ pub struct Results {
     pub removed: Vec<Removed>,
     pub checks: CheckTable,
     pub image_residuals: Vec<ImageResidual>,
+    pub control_residuals: Vec<ControlResidual>,
     pub gnss_residuals: Vec<GnssResidual>,
     pub warnings: Vec<String>,
 }
@@ -231,7 +246,16 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
             .position(|w| *w == blk)
             .and_then(|i| covs[i].as_ref())
     };
-    // Residuals.
+    // Residuals, with each factor's reliability.
+    let rel_of: std::collections::BTreeMap<usize, &photo::solver::Reliability> =
+        rel.iter().map(|r| (r.factor, r)).collect();
+    let rw = |k: usize, i: usize| {
+        rel_of
+            .get(&k)
+            .map(|x| (x.redundancy[i], x.normalised[i]))
+            .unwrap_or((0.0, 0.0))
+    };
+    let mut control_residuals = Vec::new();
     let mut image_residuals = Vec::new();
     let mut gnss_residuals = Vec::new();
     let mut per_image: Vec<(usize, f64)> = vec![(0, 0.0); p.images.len()];
@@ -251,12 +275,33 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
                 let px = cam.image_to_pixel(m.xy);
                 per_image[m.image].0 += 1;
                 per_image[m.image].1 += v[0] * v[0] + v[1] * v[1];
+                let ((rx, wx), (ry, wy)) = (rw(k, 0), rw(k, 1));
                 image_residuals.push(ImageResidual {
                     image: p.images[m.image].id.clone(),
                     point: m.point.clone(),
                     px: [px.x, px.y],
                     v_px: v,
+                    r: [rx, ry],
+                    w: [wx, wy],
                 });
+            }
+            Obs::Control(g) => {
+                let gp = &p.ground[*g];
+                let scale = pr.group_scale.get(f.group()).copied().unwrap_or(1.0).sqrt() * s0;
+                let mut c = ControlResidual {
+                    id: gp.id.clone(),
+                    v: [r[0], r[1], r[2]],
+                    r: [0.0; 3],
+                    w: [0.0; 3],
+                    mdb: [None; 3],
+                };
+                for a in 0..3 {
+                    let (ra, wa) = rw(k, a);
+                    c.r[a] = ra;
+                    c.w[a] = wa;
+                    c.mdb[a] = (ra > 1e-3).then(|| DELTA0 * f.sigmas()[a] * scale / ra.sqrt());
+                }
+                control_residuals.push(c);
             }
             Obs::Gnss(a) => {
                 let ant = &p.antennas[*a];
@@ -575,6 +620,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         removed,
         checks,
         image_residuals,
+        control_residuals,
         gnss_residuals,
         warnings,
     })
