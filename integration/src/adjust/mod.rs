@@ -11,6 +11,7 @@ pub mod build;
 pub mod factors;
 pub mod project;
 pub mod report;
+pub mod residuals;
 pub mod results;
 mod tables;
 
