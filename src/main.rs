@@ -221,8 +221,10 @@ enum Cmd {
     /// Joint GNSS-supported bundle adjustment of a project (TOML): writes orientations, points,
     /// residuals, report.json and report.html into the output folder.
     Adjust {
+        /// The project file (see README: cameras, images, measurements, ground points, GNSS).
         #[arg(long)]
         project: PathBuf,
+        /// Output folder (created; existing files of the same names are replaced atomically).
         #[arg(short, long)]
         out: PathBuf,
     },
