@@ -246,14 +246,13 @@ impl Problem {
     }
 
     /// Covariances of several blocks from one computation of the cofactors.
-    pub fn covariances(
-        &self,
-        blocks: &[usize],
-        sigma0: f64,
-    ) -> Result<Vec<Option<DMatrix<f64>>>, SolveError> {
+    pub fn covariances(&self, blocks: &[usize], sigma0: f64) -> Result<Covariances, SolveError> {
         let shared = self.cofactors()?;
-        let q = &shared.0;
-        Ok(blocks
+        Ok(self.block_covariances(&shared.0, blocks, sigma0))
+    }
+
+    fn block_covariances(&self, q: &Cofactors, blocks: &[usize], sigma0: f64) -> Covariances {
+        blocks
             .iter()
             .map(|&b| {
                 if !q.free(b) {
@@ -262,7 +261,7 @@ impl Problem {
                 let d = self.blocks[b].dim();
                 q.block(b, b, (d, d)).map(|m| m * (sigma0 * sigma0))
             })
-            .collect())
+            .collect()
     }
 
     /// Per active factor: redundancy numbers and normalised residuals w = v/(σ·√r) of its
@@ -282,17 +281,10 @@ impl Problem {
     ) -> Result<(Covariances, Vec<Reliability>), SolveError> {
         let shared = self.cofactors()?;
         let (q, lin) = (&shared.0, &shared.1);
-        let covs = blocks
-            .iter()
-            .map(|&b| {
-                if !q.free(b) {
-                    return None;
-                }
-                let d = self.blocks[b].dim();
-                q.block(b, b, (d, d)).map(|m| m * (sigma0 * sigma0))
-            })
-            .collect();
-        Ok((covs, self.reliability_with(q, lin)))
+        Ok((
+            self.block_covariances(q, blocks, sigma0),
+            self.reliability_with(q, lin),
+        ))
     }
 
     fn reliability_with(&self, q: &Cofactors, lin: &[Lin]) -> Vec<Reliability> {
