@@ -51,8 +51,13 @@ pub enum Obs {
     Image(usize),
     /// Index into the project's ground points.
     Control(usize),
-    /// Index into the project's antennas.
-    Gnss(usize),
+    /// An antenna (index into the project's antennas) of an image, with the matrix that
+    /// turns the factor's whitened residual back into metres.
+    Gnss {
+        antenna: usize,
+        image: usize,
+        unwhiten: Matrix3<f64>,
+    },
     LeverPrior(usize),
 }
 
@@ -112,6 +117,51 @@ pub fn compass_rotation(az: f64, el: f64, roll: f64) -> Matrix3<f64> {
     let x = x0 * c + y0 * s;
     let y = z.cross(&x);
     Matrix3::from_columns(&[x, y, z])
+}
+
+/// A point intersected from its measurements (indices) in the images that have a pose; `None`
+/// with fewer than two such rays or when the rays do not meet.
+fn intersect_point<'a>(
+    p: &'a Project,
+    measurements: &[usize],
+    pose_of: impl Fn(usize) -> Option<&'a Pose>,
+) -> Option<Vector3<f64>> {
+    let rays: Vec<Ray> = measurements
+        .iter()
+        .filter_map(|&k| {
+            let m = &p.measurements[k];
+            pose_of(m.image).map(|pose| Ray {
+                camera: &p.cameras[p.images[m.image].camera].camera,
+                pose,
+                xy: m.xy,
+                sigma: m.sigma,
+            })
+        })
+        .collect();
+    if rays.len() < 2 {
+        return None;
+    }
+    intersect(&rays).ok().map(|x| x.point)
+}
+
+/// The measurements of image `i` whose points have object coordinates (`object_of`), for a
+/// resection.
+fn controls_in(
+    p: &Project,
+    i: usize,
+    object_of: impl Fn(&str) -> Option<Vector3<f64>>,
+) -> Vec<Control> {
+    p.measurements
+        .iter()
+        .filter(|m| m.image == i)
+        .filter_map(|m| {
+            object_of(&m.point).map(|object| Control {
+                object,
+                image: m.xy,
+                sigma: m.sigma,
+            })
+        })
+        .collect()
 }
 
 pub fn build(p: &Project) -> Result<Built, AdjustError> {
@@ -244,18 +294,7 @@ pub fn build(p: &Project) -> Result<Built, AdjustError> {
         } else {
             None
         };
-        let controls: Vec<Control> = p
-            .measurements
-            .iter()
-            .filter(|m| m.image == i)
-            .filter_map(|m| {
-                control_of(&m.point).map(|g| Control {
-                    object: frame.to_local(&g.pos),
-                    image: m.xy,
-                    sigma: m.sigma,
-                })
-            })
-            .collect();
+        let controls = controls_in(p, i, |id| control_of(id).map(|g| frame.to_local(&g.pos)));
         start[i] = match (antenna, rot) {
             (Some(a), Some(r)) => {
                 let centre = frame.to_local(&a.pos) - r * lever0;
@@ -282,48 +321,17 @@ pub fn build(p: &Project) -> Result<Built, AdjustError> {
     // Images still without a start (no GNSS, no control): resect them on tie points
     // intersected from the images that have one.
     if start.iter().any(|s| s.is_none()) {
-        let mut by_point: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
-        for (k, m) in p.measurements.iter().enumerate() {
-            by_point.entry(m.point.as_str()).or_default().push(k);
-        }
-        let mut known: BTreeMap<&str, Vector3<f64>> = BTreeMap::new();
-        for (id, ks) in &by_point {
-            let r: Vec<Ray> = ks
-                .iter()
-                .filter_map(|&k| {
-                    let m = &p.measurements[k];
-                    start[m.image].as_ref().map(|pose| Ray {
-                        camera: &p.cameras[p.images[m.image].camera].camera,
-                        pose,
-                        xy: m.xy,
-                        sigma: m.sigma,
-                    })
-                })
-                .collect();
-            if r.len() >= 2 {
-                if let Ok(x) = intersect(&r) {
-                    known.insert(id, x.point);
-                }
-            }
-        }
+        let known: BTreeMap<&str, Vector3<f64>> = rays
+            .iter()
+            .filter_map(|(id, ks)| intersect_point(p, ks, |i| start[i].as_ref()).map(|x| (*id, x)))
+            .collect();
         for (i, st) in start.iter_mut().enumerate() {
             if st.is_some() {
                 continue;
             }
-            let cam = &p.cameras[p.images[i].camera].camera;
-            let pts: Vec<Control> = p
-                .measurements
-                .iter()
-                .filter(|m| m.image == i)
-                .filter_map(|m| {
-                    known.get(m.point.as_str()).map(|x| Control {
-                        object: *x,
-                        image: m.xy,
-                        sigma: m.sigma,
-                    })
-                })
-                .collect();
+            let pts = controls_in(p, i, |id| known.get(id).copied());
             if pts.len() >= 4 {
+                let cam = &p.cameras[p.images[i].camera].camera;
                 *st = resect(cam, &pts).ok().map(|x| x.pose);
             }
         }
@@ -363,21 +371,7 @@ pub fn build(p: &Project) -> Result<Built, AdjustError> {
             ks.iter().map(|k| p.measurements[*k].image).collect();
         let x = match ground {
             Some(g) if g.kind == PointKind::Control => Some(frame.to_local(&g.pos)),
-            _ if images.len() >= 2 => {
-                let r: Vec<Ray> = ks
-                    .iter()
-                    .map(|&k| {
-                        let m = &p.measurements[k];
-                        Ray {
-                            camera: &p.cameras[p.images[m.image].camera].camera,
-                            pose: &start[m.image],
-                            xy: m.xy,
-                            sigma: m.sigma,
-                        }
-                    })
-                    .collect();
-                intersect(&r).ok().map(|x| x.point)
-            }
+            _ if images.len() >= 2 => intersect_point(p, ks, |i| Some(&start[i])),
             _ => None,
         };
         match x {
@@ -532,8 +526,13 @@ pub fn build(p: &Project) -> Result<Built, AdjustError> {
                     ant.image
                 ))
             })?;
+            let unwhiten = f.unwhiten();
             pr.add_factor(Box::new(f));
-            obs.push(Obs::Gnss(k));
+            obs.push(Obs::Gnss {
+                antenna: k,
+                image: i,
+                unwhiten,
+            });
         }
     }
     Ok(Built {

@@ -58,6 +58,8 @@ pub struct GnssCentre {
     antenna: Vector3<f64>,
     /// Inverse of the lower Cholesky factor of the covariance (whitening).
     whiten: Matrix3<f64>,
+    /// The lower Cholesky factor itself: whitened residual → metres.
+    unwhiten: Matrix3<f64>,
     drift: Option<(DriftModel, f64)>,
     ones: DVector<f64>,
     group: usize,
@@ -84,10 +86,18 @@ impl GnssCentre {
             blocks,
             antenna,
             whiten,
+            unwhiten: l,
             drift: drift.map(|(_, m, dt)| (m, dt)),
             ones: DVector::from_element(3, 1.0),
             group,
         })
+    }
+}
+
+impl GnssCentre {
+    /// Maps the whitened residual back to predicted − observed antenna, metres.
+    pub fn unwhiten(&self) -> Matrix3<f64> {
+        self.unwhiten
     }
 }
 

@@ -52,7 +52,6 @@ pub fn collect(p: &Project, s: &Solved, rel: &[photo::solver::Reliability]) -> R
     let b = &s.built;
     let pr = &b.problem;
     let s0 = s.stats.sigma0;
-    let frame = &b.frame;
     // Residuals, with each factor's reliability.
     let rel_of: std::collections::BTreeMap<usize, &photo::solver::Reliability> =
         rel.iter().map(|r| (r.factor, r)).collect();
@@ -110,40 +109,16 @@ pub fn collect(p: &Project, s: &Solved, rel: &[photo::solver::Reliability]) -> R
                 }
                 control_residuals.push(c);
             }
-            Obs::Gnss(a) => {
-                let ant = &p.antennas[*a];
-                let i = p
-                    .images
-                    .iter()
-                    .position(|im| im.id == ant.image)
-                    .unwrap_or(0);
-                let pose = pr.blocks[b.poses[i]].pose().copied();
-                let lever =
-                    b.levers[p.images[i].camera].and_then(|l| pr.blocks[l].vector().cloned());
-                let (Some(pose), Some(l)) = (pose, lever) else {
-                    continue;
-                };
-                let mut pred = pose.centre + pose.r * Vector3::new(l[0], l[1], l[2]);
-                let t = ant.time.to_gpst_seconds();
-                let key = match p.file.gnss.as_ref().map(|g| g.drift) {
-                    Some(super::project::DriftGroup::Block) => Some("block".to_string()),
-                    Some(super::project::DriftGroup::Strip) => {
-                        Some(format!("strip {}", p.images[i].strip))
-                    }
-                    Some(super::project::DriftGroup::Segment) => {
-                        Some(format!("segment {}", ant.segment))
-                    }
-                    _ => None,
-                };
-                if let Some(d) = key.and_then(|n| b.drifts.iter().find(|d| d.name == n)) {
-                    if let Some(v) = pr.blocks[d.block].vector() {
-                        pred += d.model.eval(v.as_slice(), t - d.t0).0;
-                    }
-                }
-                let v = pred - frame.to_local(&ant.pos);
+            Obs::Gnss {
+                antenna,
+                image,
+                unwhiten,
+            } => {
+                let ant = &p.antennas[*antenna];
+                let v = unwhiten * Vector3::new(r[0], r[1], r[2]);
                 gnss_residuals.push(GnssResidual {
                     image: ant.image.clone(),
-                    strip: p.images[i].strip.clone(),
+                    strip: p.images[*image].strip.clone(),
                     tow: gnss::time::week_tow(ant.time).1,
                     v: [v.x, v.y, v.z],
                 });

@@ -436,7 +436,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
                 w,
                 source: p.ground[*g].source.clone(),
             },
-            Obs::Gnss(a) => Removed {
+            Obs::Gnss { antenna: a, .. } => Removed {
                 kind: "GNSS centre".into(),
                 what: format!("antenna of image {}", p.antennas[*a].image),
                 w,
