@@ -254,40 +254,77 @@ pub fn write(path: &Path, st: &[CameraStation], format: Format, proj: Projection
     })
 }
 
-/// The antenna table read by the adjustment (`integration::adjust::gnss`).
+/// One row of the antenna table read by `ppkat adjust` (`adjust::tables::read_antennas`).
+pub struct AntennaRow<'a> {
+    pub id: &'a str,
+    pub time: hifitime::Epoch,
+    pub pos: gnss::frame::Geodetic,
+    /// Covariance in the ENU frame at `pos`, m².
+    pub cov_enu: nalgebra::Matrix3<f64>,
+    /// RTKLIB's Q (1 fixed).
+    pub quality: u8,
+    pub segment: u32,
+    /// ω, φ, κ (degrees) of R camera → ENU, when known.
+    pub opk_deg: Option<[f64; 3]>,
+}
+
+/// The antenna table as text: a comment line, the header, the rows. The attitude columns
+/// are written when every row has an attitude.
+pub fn antenna_table(comment: &str, rows: &[AntennaRow]) -> String {
+    use std::fmt::Write as _;
+    let with_opk = !rows.is_empty() && rows.iter().all(|r| r.opk_deg.is_some());
+    let mut s = format!(
+        "# {comment}; GPST; WGS84 lat/lon (deg), ellipsoidal h (m); covariance ENU (m^2); segment = trajectory ambiguity segment{}\nid,week,tow,lat,lon,h,c_ee,c_en,c_eu,c_nn,c_nu,c_uu,quality,segment{}\n",
+        if with_opk { "; omega/phi/kappa (deg) of R camera->ENU" } else { "" },
+        if with_opk { ",omega,phi,kappa" } else { "" }
+    );
+    for r in rows {
+        let (week, tow) = gnss::time::week_tow(r.time);
+        let c = &r.cov_enu;
+        let _ = write!(
+            s,
+            "{},{week},{tow:.6},{:.10},{:.10},{:.4},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{}",
+            r.id,
+            r.pos.lat.to_degrees(),
+            r.pos.lon.to_degrees(),
+            r.pos.h,
+            c[(0, 0)],
+            c[(0, 1)],
+            c[(0, 2)],
+            c[(1, 1)],
+            c[(1, 2)],
+            c[(2, 2)],
+            r.quality,
+            r.segment
+        );
+        match (with_opk, r.opk_deg) {
+            (true, Some(o)) => {
+                let _ = writeln!(s, ",{:.5},{:.5},{:.5}", o[0], o[1], o[2]);
+            }
+            _ => s.push('\n'),
+        }
+    }
+    s
+}
+
+/// The antenna table of camera stations (lever arm not applied).
 fn write_antenna(path: &Path, st: &[CameraStation]) -> Result<()> {
-    write_atomic(path, |w| {
-        writeln!(w, "# ppkat antenna positions at the exposures, GPST; WGS84 lat/lon (deg), ellipsoidal h (m); covariance ENU (m^2); segment = trajectory ambiguity segment; omega/phi/kappa (deg) of R camera->ENU")?;
-        writeln!(
-            w,
-            "id,week,tow,lat,lon,h,c_ee,c_en,c_eu,c_nn,c_nu,c_uu,quality,segment,omega,phi,kappa"
-        )?;
-        for s in st {
+    let rows: Vec<AntennaRow> = st
+        .iter()
+        .map(|s| {
             let g = s.antenna.to_geodetic();
             let r = enu_rotation(&g);
-            let c = r * s.cov * r.transpose();
-            let (week, tow) = gnss::time::week_tow(s.time);
-            let opk = omega_phi_kappa(&s.rotation).map(f64::to_degrees);
-            writeln!(
-                w,
-                "{},{week},{tow:.6},{:.10},{:.10},{:.4},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{:.5},{:.5},{:.5}",
-                s.id,
-                g.lat.to_degrees(),
-                g.lon.to_degrees(),
-                g.h,
-                c[(0, 0)],
-                c[(0, 1)],
-                c[(0, 2)],
-                c[(1, 1)],
-                c[(1, 2)],
-                c[(2, 2)],
-                s.quality as u8,
-                s.segment,
-                opk[0],
-                opk[1],
-                opk[2]
-            )?;
-        }
-        Ok(())
-    })
+            AntennaRow {
+                id: &s.id,
+                time: s.time,
+                pos: g,
+                cov_enu: r * s.cov * r.transpose(),
+                quality: s.quality as u8,
+                segment: s.segment,
+                opk_deg: Some(omega_phi_kappa(&s.rotation).map(f64::to_degrees)),
+            }
+        })
+        .collect();
+    let text = antenna_table("ppkat antenna positions at the exposures", &rows);
+    write_atomic(path, |w| w.write_all(text.as_bytes()))
 }

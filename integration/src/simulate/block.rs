@@ -8,6 +8,7 @@
 
 use super::rng::Rng;
 use super::SimError;
+use crate::exposure::export::{antenna_table, AntennaRow};
 use gnss::frame::{enu_rotation, Enu, Geodetic};
 use nalgebra::{Matrix3, Vector2, Vector3};
 use photo::camera::{Camera, Pose};
@@ -277,14 +278,8 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
     // Tables.
     let mut s = String::from("image,camera,strip,week,tow\n");
     for im in &images {
-        let week = (im.3 / 604800.0).floor();
-        let _ = writeln!(
-            s,
-            "{},cam,{},{week},{:.6}",
-            im.0,
-            im.1 + 1,
-            im.3 - week * 604800.0
-        );
+        let (week, tow) = gnss::time::week_tow(gnss::time::from_week_tow(0, im.3));
+        let _ = writeln!(s, "{},cam,{},{week},{tow:.6}", im.0, im.1 + 1);
     }
     write(dir, "images.csv", &s)?;
     let mut s = String::from("image,point,x_px,y_px,sigma_px\n");
@@ -344,7 +339,7 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
         .cholesky()
         .map(|c| c.l())
         .unwrap_or_else(|| Matrix3::from_diagonal(&Vector3::from(spec.gnss_sigma)));
-    let mut s = String::from("# simulated: antenna = centre + R*lever + drift + noise\nid,week,tow,lat,lon,h,c_ee,c_en,c_eu,c_nn,c_nu,c_uu,quality,segment\n");
+    let mut rows = Vec::new();
     let mut track: Vec<gnss::solution::PosRecord> = Vec::new();
     for (k, im) in images.iter().enumerate() {
         let dt = im.3 - t_first;
@@ -360,11 +355,12 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
         let a = im.2.centre + im.2.r * Vector3::from(spec.lever_arm) + drift + noise;
         let g = g_ecef(&a);
         // Noise drawn in the site ENU: express the covariance in the ENU at the antenna.
-        let m = enu_rotation(&g) * enu_rotation(&origin).transpose();
-        let c = m * cov * m.transpose();
         let ra = enu_rotation(&g);
+        let m = ra * enu_rotation(&origin).transpose();
+        let c = m * cov * m.transpose();
+        let time = gnss::time::from_week_tow(0, im.3);
         let rec = gnss::solution::PosRecord {
-            time: gnss::time::from_week_tow(0, im.3),
+            time,
             pos: g.to_ecef(),
             quality: gnss::solution::Quality::Fixed,
             nsat: 12,
@@ -387,26 +383,24 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
             }
         }
         track.push(rec);
-        let (week, tow) = (
-            (im.3 / 604800.0).floor(),
-            im.3 - (im.3 / 604800.0).floor() * 604800.0,
-        );
-        let _ = writeln!(
-            s,
-            "{},{week},{tow:.6},{:.10},{:.10},{:.4},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},1,{segment}",
-            im.0,
-            g.lat.to_degrees(),
-            g.lon.to_degrees(),
-            g.h,
-            c[(0, 0)],
-            c[(0, 1)],
-            c[(0, 2)],
-            c[(1, 1)],
-            c[(1, 2)],
-            c[(2, 2)]
-        );
+        rows.push(AntennaRow {
+            id: &im.0,
+            time,
+            pos: g,
+            cov_enu: c,
+            quality: 1,
+            segment,
+            opk_deg: None,
+        });
     }
-    write(dir, "antennas.csv", &s)?;
+    write(
+        dir,
+        "antennas.csv",
+        &antenna_table(
+            "simulated: antenna = centre + R*lever + drift + noise",
+            &rows,
+        ),
+    )?;
     gnss::solution::write_pos(
         &dir.join("trajectory.pos"),
         &["program   : ppkat simulate (block antenna trajectory)".to_string()],

@@ -6,8 +6,9 @@ use super::block::write;
 use super::rng::Rng;
 use super::SimError;
 use crate::adjust::build::compass_rotation;
+use crate::exposure::export::{antenna_table, AntennaRow};
 use gnss::frame::{Enu, Geodetic};
-use nalgebra::{Vector2, Vector3};
+use nalgebra::{Matrix3, Vector2, Vector3};
 use photo::camera::{Camera, Pose};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -168,24 +169,30 @@ pub fn close_range(spec: &CloseRangeSpec, dir: &Path) -> Result<CloseRangeTruth,
     }
     write(dir, "ground_points.csv", &s)?;
     let [se, sn, su] = spec.gnss_sigma;
-    let mut s = String::from("id,week,tow,lat,lon,h,c_ee,c_en,c_eu,c_nn,c_nu,c_uu\n");
-    for (i, p) in poses.iter().enumerate() {
-        let a = p.centre + Vector3::new(se * rng.normal(), sn * rng.normal(), su * rng.normal());
-        let g = geo(&a);
-        let _ = writeln!(
-            s,
-            "S{},2300,{},{:.10},{:.10},{:.4},{:e},0,0,{:e},0,{:e}",
-            i + 1,
-            200000 + 60 * i,
-            g.lat.to_degrees(),
-            g.lon.to_degrees(),
-            g.h,
-            se * se,
-            sn * sn,
-            su * su
-        );
-    }
-    write(dir, "antennas.csv", &s)?;
+    let ids: Vec<String> = (1..=poses.len()).map(|i| format!("S{i}")).collect();
+    let rows: Vec<AntennaRow> = poses
+        .iter()
+        .zip(&ids)
+        .enumerate()
+        .map(|(i, (p, id))| {
+            let a =
+                p.centre + Vector3::new(se * rng.normal(), sn * rng.normal(), su * rng.normal());
+            AntennaRow {
+                id,
+                time: gnss::time::from_week_tow(2300, 200000.0 + 60.0 * i as f64),
+                pos: geo(&a),
+                cov_enu: Matrix3::from_diagonal(&Vector3::new(se * se, sn * sn, su * su)),
+                quality: 1,
+                segment: 0,
+                opk_deg: None,
+            }
+        })
+        .collect();
+    write(
+        dir,
+        "antennas.csv",
+        &antenna_table("simulated station positions", &rows),
+    )?;
     let project = format!(
         "name = \"close-range pair\"\nmode = \"close-range\"\noutput = \"geodetic\"\n\n[[camera]]\nid = \"cam\"\nfocal_mm = {}\npixel_um = {}\nwidth_px = {}\nheight_px = {}\nsigma_px = {}\n\n[images]\nlist = \"images.csv\"\nmeasurements = \"image_observations.csv\"\n\n[ground]\nfile = \"ground_points.csv\"\n\n[gnss]\nantennas = \"antennas.csv\"\nestimate_lever_arm = false\n",
         spec.focal_mm, spec.pixel_um, spec.width_px, spec.height_px, spec.sigma_px
