@@ -302,6 +302,29 @@ fn svg(
     }
 }
 
+type Chart<'a, 'b> = ChartContext<
+    'a,
+    SVGBackend<'b>,
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+>;
+
+/// The report's axes: margins, label areas, a mesh with the axis descriptions.
+fn axes<'a, 'b>(
+    root: &'a DrawingArea<SVGBackend<'b>, plotters::coord::Shift>,
+    x: std::ops::Range<f64>,
+    y: std::ops::Range<f64>,
+    desc: (&str, &str),
+    y_label_px: u32,
+) -> Result<Chart<'a, 'b>, Box<dyn std::error::Error>> {
+    let mut ch = ChartBuilder::on(root)
+        .margin(10)
+        .x_label_area_size(30)
+        .y_label_area_size(y_label_px)
+        .build_cartesian_2d(x, y)?;
+    ch.configure_mesh().x_desc(desc.0).y_desc(desc.1).draw()?;
+    Ok(ch)
+}
+
 fn range(v: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
     let lo = v.clone().fold(f64::INFINITY, f64::min);
     let hi = v.fold(f64::NEG_INFINITY, f64::max);
@@ -326,15 +349,7 @@ fn plot_image_residuals(p: &Project, r: &Results) -> String {
     svg(
         &format!("Image residuals, all images (vectors × {k:.0}; largest {vmax:.2} px)"),
         |root| {
-            let mut ch = ChartBuilder::on(root)
-                .margin(10)
-                .x_label_area_size(30)
-                .y_label_area_size(50)
-                .build_cartesian_2d(0.0..w, h..0.0)?;
-            ch.configure_mesh()
-                .x_desc("x (px)")
-                .y_desc("y (px)")
-                .draw()?;
+            let mut ch = axes(root, 0.0..w, h..0.0, ("x (px)", "y (px)"), 50)?;
             ch.draw_series(r.image_residuals.iter().map(|v| {
                 let a = (v.px[0], v.px[1]);
                 let b = (v.px[0] + k * v.v_px[0], v.px[1] + k * v.v_px[1]);
@@ -366,9 +381,7 @@ fn plot_checks(r: &Results) -> String {
         .fold(1e-9, f64::max);
     let k = 0.08 * (x1 - x0) / vmax;
     svg(&format!("Check-point errors (horizontal vectors × {k:.0}; red: up, blue: down; largest {vmax:.3} m)"), |root| {
-        let mut ch = ChartBuilder::on(root).margin(10).x_label_area_size(30).y_label_area_size(60)
-            .build_cartesian_2d(x0..x1, y0..y1)?;
-        ch.configure_mesh().x_desc("east (m, local)").y_desc("north (m, local)").draw()?;
+        let mut ch = axes(root, x0..x1, y0..y1, ("east (m, local)", "north (m, local)"), 60)?;
         ch.draw_series(pts.iter().map(|p| {
             PathElement::new(vec![(p.0, p.1), (p.0 + k * p.2[0], p.1 + k * p.2[1])], BLACK.stroke_width(2))
         }))?;
@@ -389,21 +402,19 @@ fn plot_gnss(r: &Results) -> String {
     svg(
         "GNSS centre residuals (predicted − observed, m) over time; strips in sequence",
         |root| {
-            let mut ch = ChartBuilder::on(root)
-                .margin(10)
-                .x_label_area_size(30)
-                .y_label_area_size(60)
-                .build_cartesian_2d(t0..t1, y0..y1)?;
-            ch.configure_mesh()
-                .x_desc("GPS time of week (s)")
-                .y_desc("residual (m)")
-                .draw()?;
+            let mut ch = axes(
+                root,
+                t0..t1,
+                y0..y1,
+                ("GPS time of week (s)", "residual (m)"),
+                60,
+            )?;
+            let mut strips: Vec<&str> = v.iter().map(|x| x.strip.as_str()).collect();
+            strips.dedup();
             for (a, col, name) in [(0, RED, "E"), (1, GREEN, "N"), (2, BLUE, "U")] {
-                let mut strips: Vec<&str> = v.iter().map(|x| x.strip.as_str()).collect();
-                strips.dedup();
-                for st in strips {
+                for st in &strips {
                     ch.draw_series(LineSeries::new(
-                        v.iter().filter(|x| x.strip == st).map(|x| (x.tow, x.v[a])),
+                        v.iter().filter(|x| x.strip == *st).map(|x| (x.tow, x.v[a])),
                         col,
                     ))?;
                 }
@@ -447,15 +458,13 @@ fn plot_drift(r: &Results) -> String {
     svg(
         "Estimated GNSS drift (m) per group: E red, N green, U blue",
         |root| {
-            let mut ch = ChartBuilder::on(root)
-                .margin(10)
-                .x_label_area_size(30)
-                .y_label_area_size(60)
-                .build_cartesian_2d(t0..t1, y0..y1)?;
-            ch.configure_mesh()
-                .x_desc("GPS time of week (s)")
-                .y_desc("drift (m)")
-                .draw()?;
+            let mut ch = axes(
+                root,
+                t0..t1,
+                y0..y1,
+                ("GPS time of week (s)", "drift (m)"),
+                60,
+            )?;
             for (a, pts) in curves {
                 let col = [RED, GREEN, BLUE][a];
                 ch.draw_series(LineSeries::new(pts, col))?;
