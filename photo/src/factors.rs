@@ -1,4 +1,5 @@
-//! Observation factors of a photogrammetric block: image points and ground control.
+//! Observation factors of a photogrammetric block: image points (with or without
+//! self-calibration) and direct observations of a block (ground control, priors).
 
 use crate::camera::{Camera, N_INTERIOR};
 use crate::solver::{Block, Factor};
@@ -60,33 +61,44 @@ impl Factor for ImagePoint {
     }
 }
 
-/// A ground control point: the point block observed directly, σ per axis.
-pub struct ControlPoint {
-    pub blocks: [usize; 1],
-    pub xyz: Vector3<f64>,
-    pub sigmas: DVector<f64>,
-    pub group: usize,
+/// A direct observation of a vector block, σ per component: a ground control point (the
+/// point block observed), a measured lever arm, any prior.
+pub struct Prior {
+    blocks: [usize; 1],
+    value: DVector<f64>,
+    sigmas: DVector<f64>,
+    group: usize,
 }
 
-impl ControlPoint {
-    pub fn new(point: usize, xyz: Vector3<f64>, sigma_xyz: [f64; 3], group: usize) -> Self {
-        ControlPoint {
-            blocks: [point],
-            xyz,
-            sigmas: DVector::from_column_slice(&sigma_xyz),
+impl Prior {
+    pub fn new(block: usize, value: DVector<f64>, sigmas: DVector<f64>, group: usize) -> Prior {
+        Prior {
+            blocks: [block],
+            value,
+            sigmas,
             group,
         }
     }
+
+    /// A ground control point: the point block observed with σ per axis.
+    pub fn point(point: usize, xyz: Vector3<f64>, sigma_xyz: [f64; 3], group: usize) -> Prior {
+        Prior::new(
+            point,
+            DVector::from_column_slice(xyz.as_slice()),
+            DVector::from_column_slice(&sigma_xyz),
+            group,
+        )
+    }
 }
 
-impl Factor for ControlPoint {
+impl Factor for Prior {
     fn blocks(&self) -> &[usize] {
         &self.blocks
     }
     fn evaluate(&self, b: &[&Block]) -> Option<(DVector<f64>, Vec<DMatrix<f64>>)> {
         let x = b[0].vector()?;
-        let r = DVector::from_iterator(3, (0..3).map(|i| x[i] - self.xyz[i]));
-        Some((r, vec![DMatrix::identity(3, 3)]))
+        let n = self.value.len();
+        Some((x - &self.value, vec![DMatrix::identity(n, n)]))
     }
     fn sigmas(&self) -> &DVector<f64> {
         &self.sigmas

@@ -3,7 +3,7 @@
 
 use nalgebra::{DVector, Vector2, Vector3};
 use photo::camera::{Camera, Pose};
-use photo::factors::{ControlPoint, ImagePoint};
+use photo::factors::{ImagePoint, Prior};
 use photo::rotation::Angles;
 use photo::solver::{Block, Loss, Problem};
 
@@ -125,7 +125,7 @@ fn problem(
         }
     }
     for k in 0..12 {
-        p.add_factor(Box::new(ControlPoint::new(
+        p.add_factor(Box::new(Prior::point(
             pt_ids[k * 25],
             b.points[k * 25],
             [0.02; 3],

@@ -3,13 +3,13 @@
 //! three-angle resection, or nadir along the strip; points by forward intersection) and one
 //! factor per observation. Input problems are refused here with the ids that cause them.
 
-use super::factors::{DriftModel, GnssCentre, Prior};
+use super::factors::{DriftModel, GnssCentre};
 use super::project::{DriftGroup, Mode, PointKind, Project};
 use super::AdjustError;
 use gnss::frame::{enu_rotation, Ecef, Geodetic};
 use nalgebra::{DVector, Matrix3, Vector2, Vector3};
 use photo::camera::Pose;
-use photo::factors::{ControlPoint, ImagePoint, SelfCalibratingPoint};
+use photo::factors::{ImagePoint, Prior, SelfCalibratingPoint};
 use photo::intersection::{intersect, Ray};
 use photo::resection::{resect, resect_angles, Control};
 use photo::solver::{Block, Loss, Problem};
@@ -432,7 +432,7 @@ pub fn build(p: &Project) -> Result<Built, AdjustError> {
         let Some(&pt) = points.get(&g.id) else {
             continue;
         };
-        pr.add_factor(Box::new(ControlPoint::new(
+        pr.add_factor(Box::new(Prior::point(
             pt,
             frame.to_local(&g.pos),
             g.sigma,

@@ -139,42 +139,6 @@ impl Factor for GnssCentre {
     }
 }
 
-/// A direct observation of a vector block (a prior: measured lever arm, …), σ per component.
-pub struct Prior {
-    blocks: [usize; 1],
-    value: DVector<f64>,
-    sigmas: DVector<f64>,
-    group: usize,
-}
-
-impl Prior {
-    pub fn new(block: usize, value: DVector<f64>, sigmas: DVector<f64>, group: usize) -> Prior {
-        Prior {
-            blocks: [block],
-            value,
-            sigmas,
-            group,
-        }
-    }
-}
-
-impl Factor for Prior {
-    fn blocks(&self) -> &[usize] {
-        &self.blocks
-    }
-    fn evaluate(&self, b: &[&Block]) -> Option<(DVector<f64>, Vec<DMatrix<f64>>)> {
-        let x = b[0].vector()?;
-        let n = self.value.len();
-        Some((x - &self.value, vec![DMatrix::identity(n, n)]))
-    }
-    fn sigmas(&self) -> &DVector<f64> {
-        &self.sigmas
-    }
-    fn group(&self) -> usize {
-        self.group
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
