@@ -143,6 +143,7 @@ fn data_snooping_finds_five_blunders_among_two_thousand_points() {
     // 5 % family-wise over all image coordinates (Bonferroni), not 0.1 % per test.
     let critical = photo::solver::snooping_critical(0.05, 2 * n_image);
     let (stats, removed) = p.data_snooping(critical, 30).unwrap();
+    let removed: Vec<usize> = removed.iter().map(|x| x.0).collect();
     let mut r = removed.clone();
     r.sort();
     let mut want = blunders.clone();

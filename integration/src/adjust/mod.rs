@@ -110,26 +110,12 @@ fn solve_built(project: &Project, mut built: Built) -> Result<Solved, photo::sol
     let snoop = |pr: &mut photo::solver::Problem,
                  removed: &mut Vec<(usize, f64)>|
      -> Result<(), photo::solver::SolveError> {
-        if !opts.snooping {
+        if opts.snooping {
+            removed.extend(pr.data_snooping(critical, it)?.1);
+        } else {
             pr.solve(it)?;
-            return Ok(());
         }
-        loop {
-            pr.solve(it)?;
-            let rel = pr.reliability()?;
-            let worst = rel
-                .iter()
-                .map(|r| (r.factor, r.normalised.amax()))
-                .max_by(|a, b| a.1.total_cmp(&b.1));
-            match worst {
-                Some((k, w)) if w > critical => {
-                    pr.removed[k] = true;
-                    removed.push((k, w));
-                    drop_undetermined_points(pr, k, removed);
-                }
-                _ => return Ok(()),
-            }
-        }
+        Ok(())
     };
     snoop(pr, &mut removed)?;
     let mut components = vec![1.0; pr.group_scale.len()];
@@ -155,33 +141,4 @@ pub fn run(project_path: &Path, out: &Path) -> Result<results::Results, AdjustEr
     let res = results::collect(&project, &solved)?;
     report::write_all(&project, &res, out)?;
     Ok(res)
-}
-
-/// After removing factor `k`: a point it touched that is left with fewer than two active
-/// factors can no longer be determined — its remaining factors are removed too (reported with
-/// w = 0) and the point is fixed out of the adjustment.
-fn drop_undetermined_points(
-    pr: &mut photo::solver::Problem,
-    k: usize,
-    removed: &mut Vec<(usize, f64)>,
-) {
-    let points: Vec<usize> = pr.factors[k]
-        .blocks()
-        .iter()
-        .copied()
-        .filter(|b| pr.eliminate[*b])
-        .collect();
-    for p in points {
-        let active: Vec<usize> = (0..pr.factors.len())
-            .filter(|&j| !pr.removed[j] && pr.factors[j].blocks().contains(&p))
-            .collect();
-        let rows: usize = active.iter().map(|&j| pr.factors[j].sigmas().len()).sum();
-        if rows < 4 {
-            for j in active {
-                pr.removed[j] = true;
-                removed.push((j, 0.0));
-            }
-            pr.fixed[p] = true;
-        }
-    }
 }

@@ -313,31 +313,54 @@ impl Problem {
     }
 
     /// Baarda data snooping: adjust, remove the factor with the largest |w| above `critical`
-    /// (3.29 for α = 0.1 %), repeat. Returns the removed factors in removal order.
+    /// (3.29 for α = 0.1 %), repeat. Returns the removed factors in removal order with their
+    /// |w|; a point that a removal leaves undetermined (fewer than two rays) is fixed out and
+    /// its remaining factors follow with w = 0.
     pub fn data_snooping(
         &mut self,
         critical: f64,
         max_iterations: usize,
-    ) -> Result<(Stats, Vec<usize>), SolveError> {
+    ) -> Result<(Stats, Vec<(usize, f64)>), SolveError> {
         let mut removed = Vec::new();
         loop {
             let stats = self.solve(max_iterations)?;
             let rel = self.reliability()?;
             let worst = rel
                 .iter()
-                .map(|r| {
-                    (
-                        r.factor,
-                        r.normalised.iter().fold(0.0f64, |m, x| m.max(x.abs())),
-                    )
-                })
-                .max_by(|a, b| a.1.partial_cmp(&b.1).unwrap_or(std::cmp::Ordering::Equal));
+                .map(|r| (r.factor, r.normalised.amax()))
+                .max_by(|a, b| a.1.total_cmp(&b.1));
             match worst {
                 Some((k, w)) if w > critical => {
                     self.removed[k] = true;
-                    removed.push(k);
+                    removed.push((k, w));
+                    self.drop_undetermined_points(k, &mut removed);
                 }
                 _ => return Ok((stats, removed)),
+            }
+        }
+    }
+
+    /// After removing factor `k`: a point it touched that is left with fewer than four
+    /// residual rows (two rays) cannot be determined — its remaining factors are removed too
+    /// (reported with w = 0) and the point is fixed out of the adjustment.
+    fn drop_undetermined_points(&mut self, k: usize, removed: &mut Vec<(usize, f64)>) {
+        let points: Vec<usize> = self.factors[k]
+            .blocks()
+            .iter()
+            .copied()
+            .filter(|b| self.eliminate[*b])
+            .collect();
+        for p in points {
+            let active: Vec<usize> = (0..self.factors.len())
+                .filter(|&j| !self.removed[j] && self.factors[j].blocks().contains(&p))
+                .collect();
+            let rows: usize = active.iter().map(|&j| self.factors[j].sigmas().len()).sum();
+            if rows < 4 {
+                for j in active {
+                    self.removed[j] = true;
+                    removed.push((j, 0.0));
+                }
+                self.fixed[p] = true;
             }
         }
     }
