@@ -7,7 +7,7 @@
 //! coordinates, so the adjustment sees only what a user would give it.
 
 use super::rng::Rng;
-use super::SimError;
+use super::{write, SimError};
 use crate::exposure::export::{antenna_table, AntennaRow};
 use gnss::frame::{enu_rotation, Enu, Geodetic};
 use nalgebra::{Matrix3, Vector2, Vector3};
@@ -422,15 +422,6 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
         wrong_gcp: wrong,
         measurements,
     })
-}
-
-pub(crate) fn write(dir: &Path, name: &str, text: &str) -> Result<(), SimError> {
-    std::fs::create_dir_all(dir).map_err(|source| gnss::Error::Io {
-        path: dir.to_path_buf(),
-        source,
-    })?;
-    gnss::solution::write_atomic(&dir.join(name), |w| w.write_all(text.as_bytes()))?;
-    Ok(())
 }
 
 /// Built-in simulated adjustment projects: `classic-block` (the 2-strip block, 4 corner GCPs,

@@ -2,9 +2,8 @@
 //! GNSS, approximate angles from a compass, a distant target with control, check and feature
 //! points. Written as a `mode = "close-range"` project for `ppkat adjust`.
 
-use super::block::write;
 use super::rng::Rng;
-use super::SimError;
+use super::{write, SimError};
 use crate::adjust::build::compass_rotation;
 use crate::exposure::export::{antenna_table, AntennaRow};
 use gnss::frame::{Enu, Geodetic};

@@ -395,7 +395,12 @@ impl std::fmt::Display for SimReport {
     }
 }
 
+/// Write a simulated file atomically, creating its folder.
 fn write(dir: &Path, name: &str, text: &str) -> Result<PathBuf, SimError> {
+    std::fs::create_dir_all(dir).map_err(|source| gnss::Error::Io {
+        path: dir.to_path_buf(),
+        source,
+    })?;
     let p = dir.join(name);
     gnss::solution::write_atomic(&p, |w| w.write_all(text.as_bytes()))?;
     Ok(p)
