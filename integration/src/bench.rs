@@ -127,8 +127,7 @@ pub fn adjust(
 ) -> std::result::Result<AdjustBench, crate::adjust::AdjustError> {
     let t0 = std::time::Instant::now();
     let mut spec = crate::simulate::block::BlockSpec::large(strips, per_strip);
-    let l = spec.lever_arm;
-    spec.project_options = format!("[gnss]\nantennas = \"antennas.csv\"\nlever_arm = [{}, {}, {}]\nlever_arm_sigma = [0.02, 0.02, 0.02]\ndrift = \"strip\"\ndrift_model = \"offset\"\n", l[0], l[1], l[2]);
+    spec.project_options = crate::simulate::block::gnss_section(&spec, [0.0; 3], "strip", "offset");
     crate::simulate::block::aerial(&spec, dir)
         .map_err(|e| crate::adjust::AdjustError::Problem(e.to_string()))?;
     let simulate_s = t0.elapsed().as_secs_f64();

@@ -21,12 +21,11 @@ fn run(spec: &BlockSpec, name: &str) -> (BlockTruth, Results) {
 
 /// The tape-measured lever arm: truth + (1.5, −1.0, 1.5) cm, σ 2 cm.
 fn gnss_options(drift_model: &str) -> String {
-    let l = BlockSpec::classic().lever_arm;
-    format!(
-        "[gnss]\nantennas = \"antennas.csv\"\nlever_arm = [{}, {}, {}]\nlever_arm_sigma = [0.02, 0.02, 0.02]\ndrift = \"block\"\ndrift_model = \"{drift_model}\"\n",
-        l[0] + 0.015,
-        l[1] - 0.010,
-        l[2] + 0.015
+    block::gnss_section(
+        &BlockSpec::classic(),
+        block::TAPE_ERROR,
+        "block",
+        drift_model,
     )
 }
 

@@ -424,19 +424,26 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
     })
 }
 
+/// How far the simulated tape measurement of the lever arm is off truth (m).
+pub const TAPE_ERROR: [f64; 3] = [0.015, -0.010, 0.015];
+
+/// The `[gnss]` section of a simulated project: the antenna table, the lever arm as a tape
+/// measurement `tape_error` off truth with a 2 cm prior, drift per `group` with `model`.
+pub fn gnss_section(spec: &BlockSpec, tape_error: [f64; 3], group: &str, model: &str) -> String {
+    let l = spec.lever_arm;
+    format!(
+        "[gnss]\nantennas = \"antennas.csv\"\nlever_arm = [{}, {}, {}]\nlever_arm_sigma = [0.02, 0.02, 0.02]\ndrift = \"{group}\"\ndrift_model = \"{model}\"\n",
+        l[0] + tape_error[0],
+        l[1] + tape_error[1],
+        l[2] + tape_error[2]
+    )
+}
+
 /// Built-in simulated adjustment projects: `classic-block` (the 2-strip block, 4 corner GCPs,
 /// tape-measured lever arm, linear drift), `close-range` (two stations) and `block1000`
 /// (20 strips × 50 photos for benchmarks). Returns a one-line summary.
 pub fn builtin(name: &str, dir: &Path) -> Option<Result<String, SimError>> {
-    let classic_gnss = |spec: &BlockSpec| {
-        let l = spec.lever_arm;
-        format!(
-            "[gnss]\nantennas = \"antennas.csv\"\nlever_arm = [{}, {}, {}]\nlever_arm_sigma = [0.02, 0.02, 0.02]\ndrift = \"block\"\ndrift_model = \"linear\"\n",
-            l[0] + 0.015,
-            l[1] - 0.010,
-            l[2] + 0.015
-        )
-    };
+    let classic_gnss = |spec: &BlockSpec| gnss_section(spec, TAPE_ERROR, "block", "linear");
     let aerial_summary = |spec: BlockSpec| {
         aerial(&spec, dir).map(|t| {
             format!(
