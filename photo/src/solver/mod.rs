@@ -174,9 +174,6 @@ pub enum SolveError {
 
 impl Problem {
     pub fn new(loss: Loss) -> Problem {
-        // faer's dense kernels split their work by this fixed count, not by the size of
-        // rayon's pool: the same bits whatever RAYON_NUM_THREADS says.
-        faer::set_global_parallelism(faer::Par::rayon(2));
         Problem {
             blocks: Vec::new(),
             fixed: Vec::new(),

@@ -40,6 +40,13 @@ impl Reduced {
     }
 }
 
+/// faer's kernels split their work by this fixed count, not by the size of rayon's pool: the
+/// same bits whatever RAYON_NUM_THREADS says. Set before every factorisation, as the setting
+/// is process-wide (the BAL solver sets its own).
+fn fixed_split() {
+    faer::set_global_parallelism(faer::Par::rayon(2));
+}
+
 /// Dense Cholesky (faer) of a symmetric positive matrix. Returns the first column whose pivot
 /// is not significant (a datum defect or dependency there; `None`: regular) and the inverse
 /// when asked. `None` when the matrix is not positive definite at all.
@@ -47,6 +54,7 @@ pub(super) fn dense_factor(
     m: faer::Mat<f64>,
     inverse: bool,
 ) -> Option<(Option<usize>, Option<faer::Mat<f64>>)> {
+    fixed_split();
     let n = m.nrows();
     let Ok(llt) = m.llt(faer::Side::Lower) else {
         // Not positive definite: find the first leading minor that is not (bisection), to
@@ -184,6 +192,7 @@ impl Problem {
     /// Solve the reduced system for −g: dense when small, faer's sparse Cholesky when large,
     /// its symbolic factorisation kept while the pattern is unchanged.
     fn solve_reduced(&self, red: &Reduced) -> Option<DVector<f64>> {
+        fixed_split();
         let nr = red.nr;
         if nr <= self.dense_limit {
             let llt = red.dense().llt(faer::Side::Lower).ok()?;
