@@ -485,7 +485,11 @@ fn run(cli: Cli) -> Result<()> {
                 problem.points.len(),
                 problem.obs.len()
             );
-            let r = pool.install(|| bal::solve(&mut problem, &bal::LmOptions::default()));
+            let opts = bal::LmOptions {
+                threads,
+                ..bal::LmOptions::default()
+            };
+            let r = pool.install(|| bal::solve(&mut problem, &opts))?;
             println!("initial cost: {:.6e}", r.initial_cost);
             println!("iterations: {} ({} successful)", r.iterations, r.successful);
             println!(

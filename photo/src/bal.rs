@@ -1,17 +1,16 @@
-//! "Bundle Adjustment in the Large" problems: reader, writer of the cost, and a
-//! Levenberg–Marquardt bundle adjuster with Schur elimination of the points.
+//! "Bundle Adjustment in the Large" problems: the file format and the BAL camera factor; the
+//! adjustment itself runs on [`crate::lsq`], the solver of every ppkat adjustment.
 //!
 //! BAL camera: Rodrigues rotation, translation, f, k1, k2; P = R·X + t, p = −P/P.z,
-//! r(p) = 1 + k1‖p‖² + k2‖p‖⁴, predicted = f·r(p)·p. Inside the solver a rotation is updated
-//! by a left perturbation R ← exp(δ)·R; the cost is the file's, ½Σr².
+//! r(p) = 1 + k1‖p‖² + k2‖p‖⁴, predicted = f·r(p)·p. In the solver a camera is one block
+//! `Key::Camera` holding the rotation (updated by a left perturbation R ← exp(δ)·R) and the
+//! vector (t, f, k1, k2); points are `Key::Point` blocks, Schur-eliminated. The cost is the
+//! file's, ½Σr² (unit weights).
 
+use crate::lsq::{self, CameraId, Factor, Group, Key, Loss, Noise, Params, PointId, Value};
 use crate::rotation::{exp_so3, log_so3, skew};
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
-use faer::sparse::{SparseColMat, Triplet};
-use nalgebra::{DMatrix, DVector, Matrix2x3, Matrix3, SMatrix, SVector, Vector2, Vector3};
+use nalgebra::{DMatrixViewMut, DVector, Matrix2x3, Matrix3, SMatrix, Vector2, Vector3};
 use rayon::prelude::*;
-use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Errors reading a BAL file.
@@ -24,6 +23,8 @@ pub enum BalError {
     },
     #[error("{path}: {what}")]
     Format { path: String, what: String },
+    #[error("the adjustment failed: {0}")]
+    Solve(String),
 }
 
 /// A BAL camera as the solver holds it.
@@ -154,8 +155,8 @@ impl BalProblem {
 
 type CamJ = SMatrix<f64, 2, 9>;
 
-/// Prediction and, when asked, the Jacobians with respect to (δ, t, f, k1, k2) and X.
-fn project(c: &BalCamera, x: &Vector3<f64>) -> (Vector2<f64>, Option<(CamJ, Matrix2x3<f64>)>) {
+/// Prediction and the Jacobians with respect to (δ, t, f, k1, k2) and X.
+fn project(c: &BalCamera, x: &Vector3<f64>) -> (Vector2<f64>, CamJ, Matrix2x3<f64>) {
     let rx = c.r * x;
     let pc = rx + c.t;
     let z = pc.z;
@@ -175,12 +176,80 @@ fn project(c: &BalCamera, x: &Vector3<f64>) -> (Vector2<f64>, Option<(CamJ, Matr
     jc.set_column(6, &(p * r));
     jc.set_column(7, &(p * (c.f * n)));
     jc.set_column(8, &(p * (c.f * n * n)));
-    (pred, Some((jc, a * c.r)))
+    (pred, jc, a * c.r)
 }
 
-/// Options of the Levenberg–Marquardt solver.
+/// One BAL observation as a factor: r = predicted − measured (pixels), blocks
+/// `Key::Camera(cam)` and `Key::Point(pt)`.
+pub struct BalFactor {
+    keys: [Key; 2],
+    uv: Vector2<f64>,
+}
+
+impl BalFactor {
+    /// The factor of an observation.
+    pub fn new(o: &BalObs) -> BalFactor {
+        BalFactor {
+            keys: [
+                Key::Camera(CameraId::from(o.cam)),
+                Key::Point(PointId::from(o.pt)),
+            ],
+            uv: o.uv,
+        }
+    }
+}
+
+/// A camera block's value: the rotation and (t, f, k1, k2).
+fn camera_value(c: &BalCamera) -> Value {
+    Value::Rotated {
+        r: c.r,
+        v: DVector::from_column_slice(&[c.t.x, c.t.y, c.t.z, c.f, c.k1, c.k2]),
+    }
+}
+
+/// A camera from its block's value.
+fn camera_of(r: &Matrix3<f64>, v: &DVector<f64>) -> BalCamera {
+    BalCamera {
+        r: *r,
+        t: Vector3::new(v[0], v[1], v[2]),
+        f: v[3],
+        k1: v[4],
+        k2: v[5],
+    }
+}
+
+impl Factor for BalFactor {
+    fn keys(&self) -> &[Key] {
+        &self.keys
+    }
+    fn dim(&self) -> usize {
+        2
+    }
+    fn evaluate(
+        &self,
+        x: &Params<'_>,
+        r: &mut [f64],
+        j: &mut [Option<DMatrixViewMut<'_, f64>>],
+    ) -> bool {
+        let (Some((rot, v)), Some(pt)) = (x.rotated(0), x.point(1)) else {
+            return false;
+        };
+        let (pred, jc, jp) = project(&camera_of(rot, v), &pt);
+        r.copy_from_slice((pred - self.uv).as_slice());
+        if let Some(m) = &mut j[0] {
+            m.copy_from(&jc);
+        }
+        if let Some(m) = &mut j[1] {
+            m.copy_from(&jp);
+        }
+        true
+    }
+}
+
+/// Options of a BAL adjustment.
 #[derive(Clone, Debug)]
 pub struct LmOptions {
+    /// Iterations, accepted or not.
     pub max_iterations: usize,
     /// Stop when the relative cost decrease of an accepted step falls below this.
     pub function_tolerance: f64,
@@ -189,6 +258,8 @@ pub struct LmOptions {
     /// Largest reduced camera system solved densely; larger ones go to faer's sparse
     /// Cholesky with the symbolic factorisation computed once.
     pub dense_limit: usize,
+    /// Threads for the factorisations (`None`: rayon's pool).
+    pub threads: Option<usize>,
 }
 
 impl Default for LmOptions {
@@ -198,6 +269,7 @@ impl Default for LmOptions {
             function_tolerance: 1e-6,
             initial_radius: 1e4,
             dense_limit: 2000,
+            threads: None,
         }
     }
 }
@@ -205,257 +277,70 @@ impl Default for LmOptions {
 /// What the solver did.
 #[derive(Clone, Debug)]
 pub struct LmReport {
+    /// ½Σr² before.
     pub initial_cost: f64,
+    /// ½Σr² after.
     pub final_cost: f64,
+    /// Iterations, accepted or not.
     pub iterations: usize,
+    /// Accepted steps.
     pub successful: usize,
+    /// Wall time of the adjustment, seconds.
     pub seconds: f64,
+    /// RMS reprojection error per coordinate, pixels.
     pub rms_px: f64,
 }
 
-fn apply(p: &BalProblem, dc: &[SVector<f64, 9>], dp: &[Vector3<f64>]) -> BalProblem {
-    let mut q = p.clone();
-    for (c, d) in q.cameras.iter_mut().zip(dc) {
-        c.r = exp_so3(&Vector3::new(d[0], d[1], d[2])) * c.r;
-        c.t += Vector3::new(d[3], d[4], d[5]);
-        c.f += d[6];
-        c.k1 += d[7];
-        c.k2 += d[8];
+/// The problem on the least-squares core.
+fn to_problem(p: &BalProblem, opts: &LmOptions) -> Result<lsq::Problem, lsq::BuildError> {
+    let mut pr = lsq::Problem::new(lsq::Options {
+        max_iterations: opts.max_iterations,
+        function_tolerance: opts.function_tolerance,
+        initial_radius: opts.initial_radius,
+        dense_limit: opts.dense_limit,
+        threads: opts.threads,
+        unique: false,
+        ..lsq::Options::default()
+    });
+    for (i, c) in p.cameras.iter().enumerate() {
+        pr.add_block(Key::Camera(CameraId::from(i)), camera_value(c))?;
     }
-    for (x, d) in q.points.iter_mut().zip(dp) {
-        *x += d;
+    for (j, x) in p.points.iter().enumerate() {
+        pr.add_block(Key::Point(PointId::from(j)), Value::point(x))?;
     }
-    q
+    for o in &p.obs {
+        pr.add_factor(BalFactor::new(o), Noise::Unit, Loss::Trivial, Group(0))?;
+    }
+    Ok(pr)
 }
 
-type Blocks = BTreeMap<(usize, usize), SMatrix<f64, 9, 9>>;
-
-fn solve_dense(n: usize, blocks: &Blocks, b: &DVector<f64>) -> Option<DVector<f64>> {
-    let mut s = DMatrix::<f64>::zeros(n, n);
-    for (&(i, k), m) in blocks {
-        s.view_mut((9 * i, 9 * k), (9, 9)).copy_from(m);
-        if i != k {
-            s.view_mut((9 * k, 9 * i), (9, 9)).copy_from(&m.transpose());
+/// Minimise ½Σr² by Levenberg–Marquardt on [`crate::lsq`] (points eliminated by the Schur
+/// complement) and write the adjusted cameras and points back into `problem`.
+pub fn solve(problem: &mut BalProblem, opts: &LmOptions) -> Result<LmReport, BalError> {
+    let mut pr = to_problem(problem, opts).map_err(|e| BalError::Solve(e.to_string()))?;
+    let s = pr.solve().map_err(|e| BalError::Solve(e.to_string()))?;
+    for (i, c) in problem.cameras.iter_mut().enumerate() {
+        if let Some((r, v)) = pr
+            .value(Key::Camera(CameraId::from(i)))
+            .and_then(Value::rotated)
+        {
+            *c = camera_of(r, v);
         }
     }
-    Some(s.cholesky()?.solve(b))
-}
-
-/// Lower-triangle triplets of the block matrix (in a fixed order).
-fn triplets(blocks: &Blocks) -> Vec<Triplet<usize, usize, f64>> {
-    let mut t = Vec::with_capacity(blocks.len() * 81);
-    for (&(i, k), m) in blocks {
-        for r in 0..9 {
-            for c in 0..9 {
-                let (row, col) = (9 * i + r, 9 * k + c);
-                if row >= col {
-                    t.push(Triplet {
-                        row,
-                        col,
-                        val: m[(r, c)],
-                    });
-                }
-            }
+    for (j, x) in problem.points.iter_mut().enumerate() {
+        if let Some(v) = pr
+            .value(Key::Point(PointId::from(j)))
+            .and_then(Value::as_point)
+        {
+            *x = v;
         }
     }
-    t
-}
-
-fn sparse_symbolic(n: usize, blocks: &Blocks) -> Option<SymbolicLlt<usize>> {
-    // Sequential factorisation: bit-identical results whatever the thread count.
-    faer::set_global_parallelism(faer::Par::Seq);
-    let m = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets(blocks)).ok()?;
-    SymbolicLlt::try_new(m.symbolic(), faer::Side::Lower).ok()
-}
-
-fn solve_sparse(
-    sym: &SymbolicLlt<usize>,
-    n: usize,
-    blocks: &Blocks,
-    b: &DVector<f64>,
-) -> Option<DVector<f64>> {
-    let m = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets(blocks)).ok()?;
-    let llt = Llt::try_new_with_symbolic(sym.clone(), m.as_ref(), faer::Side::Lower).ok()?;
-    let mut rhs = faer::Mat::<f64>::from_fn(n, 1, |i, _| b[i]);
-    llt.solve_in_place(rhs.as_mut());
-    Some(DVector::from_fn(n, |i, _| rhs[(i, 0)]))
-}
-
-/// Minimise ½Σr² by Levenberg–Marquardt; the points are eliminated by the Schur complement
-/// and the reduced camera system is solved by dense Cholesky when small, by faer's sparse
-/// Cholesky (symbolic factorisation reused across iterations) when large.
-pub fn solve(problem: &mut BalProblem, opts: &LmOptions) -> LmReport {
-    let t0 = std::time::Instant::now();
-    let nc = problem.cameras.len();
-    let np = problem.points.len();
-    // Observations grouped by point (fixed order: deterministic sums).
-    let mut by_point: Vec<Vec<usize>> = vec![Vec::new(); np];
-    for (k, o) in problem.obs.iter().enumerate() {
-        by_point[o.pt].push(k);
-    }
-    let initial = problem.cost();
-    let mut cost = initial;
-    let mut radius = opts.initial_radius;
-    let mut nu = 2.0;
-    let (mut iterations, mut successful) = (0, 0);
-    // The sparsity of the reduced system never changes: its symbolic factorisation is reused.
-    let mut symbolic: Option<SymbolicLlt<usize>> = None;
-    while iterations < opts.max_iterations {
-        iterations += 1;
-        // Jacobians and residuals, in parallel.
-        let lin: Vec<(CamJ, Matrix2x3<f64>, Vector2<f64>)> = problem
-            .obs
-            .par_iter()
-            .map(|o| {
-                let (pred, j) = project(&problem.cameras[o.cam], &problem.points[o.pt]);
-                let (jc, jp) = j.expect("asked for Jacobians");
-                (jc, jp, pred - o.uv)
-            })
-            .collect();
-        let mut u = vec![SMatrix::<f64, 9, 9>::zeros(); nc];
-        let mut gc = vec![SVector::<f64, 9>::zeros(); nc];
-        for (o, (jc, _, r)) in problem.obs.iter().zip(&lin) {
-            u[o.cam] += jc.transpose() * jc;
-            gc[o.cam] += jc.transpose() * r;
-        }
-        let lambda = 1.0 / radius;
-        // Damped point blocks and their inverses.
-        let vinv: Vec<Option<Matrix3<f64>>> = by_point
-            .par_iter()
-            .map(|ks| {
-                let mut v = Matrix3::zeros();
-                for &k in ks {
-                    v += lin[k].1.transpose() * lin[k].1;
-                }
-                for d in 0..3 {
-                    v[(d, d)] += lambda * v[(d, d)].clamp(1e-6, 1e32);
-                }
-                v.try_inverse()
-            })
-            .collect();
-        let gp: Vec<Vector3<f64>> = by_point
-            .iter()
-            .map(|ks| ks.iter().map(|&k| lin[k].1.transpose() * lin[k].2).sum())
-            .collect();
-        // Reduced camera system S·Δc = b, kept as 9×9 blocks of its lower triangle.
-        let n = 9 * nc;
-        let mut blocks: Blocks = BTreeMap::new();
-        let mut b = DVector::<f64>::zeros(n);
-        for i in 0..nc {
-            let mut ui = u[i];
-            for d in 0..9 {
-                ui[(d, d)] += lambda * ui[(d, d)].clamp(1e-6, 1e32);
-            }
-            blocks.insert((i, i), ui);
-            b.rows_mut(9 * i, 9).copy_from(&(-gc[i]));
-        }
-        for (j, ks) in by_point.iter().enumerate() {
-            let Some(vi) = vinv[j] else {
-                // Keep the sparsity pattern fixed (the symbolic factorisation is reused).
-                for &a in ks {
-                    for &c in ks {
-                        let (ci, ck) = (problem.obs[a].cam, problem.obs[c].cam);
-                        if ck <= ci {
-                            blocks.entry((ci, ck)).or_insert_with(SMatrix::zeros);
-                        }
-                    }
-                }
-                continue;
-            };
-            let ws: Vec<(usize, SMatrix<f64, 9, 3>)> = ks
-                .iter()
-                .map(|&k| (problem.obs[k].cam, lin[k].0.transpose() * lin[k].1))
-                .collect();
-            let vg = vi * gp[j];
-            for (ci, wi) in &ws {
-                let wv = wi * vi;
-                let mut bv = b.rows_mut(9 * ci, 9);
-                bv += wi * vg;
-                for (ck, wk) in &ws {
-                    if ck <= ci {
-                        *blocks.entry((*ci, *ck)).or_insert_with(SMatrix::zeros) -=
-                            wv * wk.transpose();
-                    }
-                }
-            }
-        }
-        let solved = if n <= opts.dense_limit {
-            solve_dense(n, &blocks, &b)
-        } else {
-            if symbolic.is_none() {
-                symbolic = sparse_symbolic(n, &blocks);
-            }
-            symbolic
-                .as_ref()
-                .and_then(|sym| solve_sparse(sym, n, &blocks, &b))
-        };
-        let Some(dc_all) = solved else {
-            radius /= nu;
-            nu *= 2.0;
-            continue;
-        };
-        let dc: Vec<SVector<f64, 9>> = (0..nc)
-            .map(|i| SVector::<f64, 9>::from_iterator(dc_all.rows(9 * i, 9).iter().copied()))
-            .collect();
-        let dp: Vec<Vector3<f64>> = by_point
-            .iter()
-            .enumerate()
-            .map(|(j, ks)| {
-                let Some(vi) = vinv[j] else {
-                    return Vector3::zeros();
-                };
-                let mut rhs = -gp[j];
-                for &k in ks {
-                    rhs -= (lin[k].0.transpose() * lin[k].1).transpose() * dc[problem.obs[k].cam];
-                }
-                vi * rhs
-            })
-            .collect();
-        let candidate = apply(problem, &dc, &dp);
-        let new_cost = candidate.cost();
-        // Predicted decrease of the linear model: −(Δᵀg) − ½ΔᵀJᵀJΔ = ½Δᵀ(λD·Δ − g) in effect.
-        let mut model = 0.0;
-        for (i, d) in dc.iter().enumerate() {
-            model -= d.dot(&gc[i]);
-        }
-        for (j, d) in dp.iter().enumerate() {
-            model -= d.dot(&gp[j]);
-        }
-        let mut jd2 = 0.0;
-        for (o, (jc, jp, _)) in problem.obs.iter().zip(&lin) {
-            let v = jc * dc[o.cam] + jp * dp[o.pt];
-            jd2 += v.norm_squared();
-        }
-        model -= 0.5 * jd2;
-        let rho = if model > 0.0 {
-            (cost - new_cost) / model
-        } else {
-            -1.0
-        };
-        if new_cost.is_finite() && rho > 1e-3 {
-            let rel = (cost - new_cost) / cost;
-            *problem = candidate;
-            cost = new_cost;
-            successful += 1;
-            radius /= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
-            nu = 2.0;
-            if rel < opts.function_tolerance {
-                break;
-            }
-        } else {
-            radius /= nu;
-            nu *= 2.0;
-            if radius < 1e-32 {
-                break;
-            }
-        }
-    }
-    LmReport {
-        initial_cost: initial,
-        final_cost: cost,
-        iterations,
-        successful,
-        seconds: t0.elapsed().as_secs_f64(),
-        rms_px: (2.0 * cost / problem.obs.len().max(1) as f64).sqrt(),
-    }
+    Ok(LmReport {
+        initial_cost: s.initial_cost,
+        final_cost: s.final_cost,
+        iterations: s.iterations,
+        successful: s.successful,
+        seconds: s.seconds,
+        rms_px: (2.0 * s.final_cost / problem.obs.len().max(1) as f64).sqrt(),
+    })
 }

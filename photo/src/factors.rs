@@ -1,163 +1,300 @@
-//! Observation factors of a photogrammetric block: image points (with or without
-//! self-calibration) and direct observations of a block (ground control, priors).
+//! Observation factors of a photogrammetric block on [`crate::lsq`]: image points (with or
+//! without self-calibration), direct observations of a block (ground control, priors) and
+//! distances between two points. Each keeps its own bookkeeping: its keys say which image,
+//! point or camera it observes, `source` where the observation came from (file:line).
 
 use crate::camera::{Camera, N_INTERIOR};
-use crate::solver::{Block, Factor};
-use nalgebra::{DMatrix, DVector, Vector2, Vector3};
+use crate::lsq::{CameraId, Factor, ImageId, Key, Params, PointId};
+use nalgebra::{DMatrixViewMut, DVector, Vector2, Vector3};
 
-/// An image measurement of an object point by a camera at a pose (interior fixed).
+/// An image measurement of an object point: r = projected − measured (image coordinates,
+/// metres). With self-calibration, the interior parameters listed in `calib` (indices into f,
+/// x0, y0, k1, k2, k3, p1, p2, b1, b2) form a third block, shared by every image of the camera;
+/// the others stay at the camera's values.
+#[derive(Clone, Debug)]
 pub struct ImagePoint {
+    /// The camera's interior orientation (start values when self-calibrating).
     pub camera: Camera,
-    /// [pose block, point block]
-    pub blocks: [usize; 2],
+    keys: Vec<Key>,
+    /// Interior parameters estimated (empty: none).
+    pub calib: Vec<usize>,
+    /// Measured image coordinates.
     pub xy: Vector2<f64>,
-    pub sigmas: DVector<f64>,
-    pub group: usize,
+    /// Where the measurement came from (file:line), empty when not known.
+    pub source: String,
 }
 
 impl ImagePoint {
-    pub fn new(
-        camera: Camera,
-        pose: usize,
-        point: usize,
-        xy: Vector2<f64>,
-        sigma: f64,
-        group: usize,
-    ) -> Self {
+    /// A measurement `xy` of `point` in `image`, interior orientation fixed.
+    pub fn new(camera: Camera, image: ImageId, point: PointId, xy: Vector2<f64>) -> Self {
         ImagePoint {
             camera,
-            blocks: [pose, point],
+            keys: vec![Key::Pose(image), Key::Point(point)],
+            calib: Vec::new(),
             xy,
-            sigmas: DVector::from_element(2, sigma),
-            group,
-        }
-    }
-}
-
-impl Factor for ImagePoint {
-    fn blocks(&self) -> &[usize] {
-        &self.blocks
-    }
-    fn evaluate(&self, b: &[&Block]) -> Option<(DVector<f64>, Vec<DMatrix<f64>>)> {
-        let pose = b[0].pose()?;
-        let x = b[1].vector()?;
-        let (p, j) = self
-            .camera
-            .project_with_jacobians(pose, &Vector3::new(x[0], x[1], x[2]))?;
-        let r = DVector::from_column_slice((p - self.xy).as_slice());
-        Some((
-            r,
-            vec![
-                DMatrix::from_column_slice(2, 6, j.pose.as_slice()),
-                DMatrix::from_column_slice(2, 3, j.point.as_slice()),
-            ],
-        ))
-    }
-    fn sigmas(&self) -> &DVector<f64> {
-        &self.sigmas
-    }
-    fn group(&self) -> usize {
-        self.group
-    }
-}
-
-/// A direct observation of a vector block, σ per component: a ground control point (the
-/// point block observed), a measured lever arm, any prior.
-pub struct Prior {
-    blocks: [usize; 1],
-    value: DVector<f64>,
-    sigmas: DVector<f64>,
-    group: usize,
-}
-
-impl Prior {
-    pub fn new(block: usize, value: DVector<f64>, sigmas: DVector<f64>, group: usize) -> Prior {
-        Prior {
-            blocks: [block],
-            value,
-            sigmas,
-            group,
+            source: String::new(),
         }
     }
 
-    /// A ground control point: the point block observed with σ per axis.
-    pub fn point(point: usize, xyz: Vector3<f64>, sigma_xyz: [f64; 3], group: usize) -> Prior {
-        Prior::new(
-            point,
-            DVector::from_column_slice(xyz.as_slice()),
-            DVector::from_column_slice(&sigma_xyz),
-            group,
-        )
+    /// The same with the interior parameters `calib` estimated in block `Key::Camera(cam)`.
+    pub fn self_calibrating(
+        camera: Camera,
+        image: ImageId,
+        point: PointId,
+        cam: CameraId,
+        calib: Vec<usize>,
+        xy: Vector2<f64>,
+    ) -> Self {
+        let mut f = ImagePoint::new(camera, image, point, xy);
+        if !calib.is_empty() {
+            f.keys.push(Key::Camera(cam));
+            f.calib = calib;
+        }
+        f
     }
-}
 
-impl Factor for Prior {
-    fn blocks(&self) -> &[usize] {
-        &self.blocks
+    /// With its source (file:line).
+    pub fn with_source(mut self, source: String) -> Self {
+        self.source = source;
+        self
     }
-    fn evaluate(&self, b: &[&Block]) -> Option<(DVector<f64>, Vec<DMatrix<f64>>)> {
-        let x = b[0].vector()?;
-        let n = self.value.len();
-        Some((x - &self.value, vec![DMatrix::identity(n, n)]))
-    }
-    fn sigmas(&self) -> &DVector<f64> {
-        &self.sigmas
-    }
-    fn group(&self) -> usize {
-        self.group
-    }
-}
 
-/// An image measurement with self-calibration: the interior parameters listed in `calib`
-/// (indices into f, x0, y0, k1, k2, k3, p1, p2, b1, b2) form a third block shared by every
-/// image of the camera; the others stay at the camera's values.
-pub struct SelfCalibratingPoint {
-    pub camera: Camera,
-    /// [pose block, point block, interior block]
-    pub blocks: [usize; 3],
-    pub calib: Vec<usize>,
-    pub xy: Vector2<f64>,
-    pub sigmas: DVector<f64>,
-    pub group: usize,
-}
+    /// The image measured.
+    pub fn image(&self) -> ImageId {
+        match self.keys[0] {
+            Key::Pose(i) => i,
+            _ => unreachable!("the first key is the pose"),
+        }
+    }
 
-impl SelfCalibratingPoint {
+    /// The point measured.
+    pub fn point(&self) -> PointId {
+        match self.keys[1] {
+            Key::Point(p) => p,
+            _ => unreachable!("the second key is the point"),
+        }
+    }
+
     /// The interior block's start values for a camera and a parameter selection.
-    pub fn start(camera: &Camera, calib: &[usize]) -> DVector<f64> {
+    pub fn interior_start(camera: &Camera, calib: &[usize]) -> DVector<f64> {
         let all = camera.interior();
         DVector::from_iterator(calib.len(), calib.iter().map(|&i| all[i]))
     }
 }
 
-impl Factor for SelfCalibratingPoint {
-    fn blocks(&self) -> &[usize] {
-        &self.blocks
+impl Factor for ImagePoint {
+    fn keys(&self) -> &[Key] {
+        &self.keys
     }
-    fn evaluate(&self, b: &[&Block]) -> Option<(DVector<f64>, Vec<DMatrix<f64>>)> {
-        let pose = b[0].pose()?;
-        let x = b[1].vector()?;
-        let iv = b[2].vector()?;
-        let mut all: [f64; N_INTERIOR] = self.camera.interior();
-        for (k, &i) in self.calib.iter().enumerate() {
-            all[i] = iv[k];
+    fn dim(&self) -> usize {
+        2
+    }
+    fn evaluate(
+        &self,
+        x: &Params<'_>,
+        r: &mut [f64],
+        j: &mut [Option<DMatrixViewMut<'_, f64>>],
+    ) -> bool {
+        let (Some(pose), Some(pt)) = (x.pose(0), x.point(1)) else {
+            return false;
+        };
+        let cam = if self.calib.is_empty() {
+            self.camera
+        } else {
+            let Some(iv) = x.vector(2) else { return false };
+            let mut all: [f64; N_INTERIOR] = self.camera.interior();
+            for (k, &i) in self.calib.iter().enumerate() {
+                all[i] = iv[k];
+            }
+            self.camera.with_interior(&all)
+        };
+        let Some((p, jac)) = cam.project_with_jacobians(pose, &pt) else {
+            return false;
+        };
+        r.copy_from_slice((p - self.xy).as_slice());
+        if let Some(m) = &mut j[0] {
+            m.copy_from(&jac.pose);
         }
-        let cam = self.camera.with_interior(&all);
-        let (p, j) = cam.project_with_jacobians(pose, &Vector3::new(x[0], x[1], x[2]))?;
-        let r = DVector::from_column_slice((p - self.xy).as_slice());
-        let ji = DMatrix::from_fn(2, self.calib.len(), |r, c| j.interior[(r, self.calib[c])]);
-        Some((
-            r,
-            vec![
-                DMatrix::from_column_slice(2, 6, j.pose.as_slice()),
-                DMatrix::from_column_slice(2, 3, j.point.as_slice()),
-                ji,
-            ],
-        ))
+        if let Some(m) = &mut j[1] {
+            m.copy_from(&jac.point);
+        }
+        if let Some(Some(m)) = j.get_mut(2) {
+            for (c, &i) in self.calib.iter().enumerate() {
+                m.set_column(c, &jac.interior.column(i));
+            }
+        }
+        true
     }
-    fn sigmas(&self) -> &DVector<f64> {
-        &self.sigmas
+}
+
+/// A direct observation of a vector block: r = x − value (a ground control point, a measured
+/// lever arm, any prior).
+#[derive(Clone, Debug)]
+pub struct Prior {
+    keys: [Key; 1],
+    /// The observed value.
+    pub value: DVector<f64>,
+    /// Where the observation came from, empty when not known.
+    pub source: String,
+}
+
+impl Prior {
+    /// Block `key` observed as `value`.
+    pub fn new(key: Key, value: DVector<f64>) -> Prior {
+        Prior {
+            keys: [key],
+            value,
+            source: String::new(),
+        }
     }
-    fn group(&self) -> usize {
-        self.group
+
+    /// A ground control point: the point block observed.
+    pub fn point(point: PointId, xyz: Vector3<f64>) -> Prior {
+        Prior::new(
+            Key::Point(point),
+            DVector::from_column_slice(xyz.as_slice()),
+        )
+    }
+
+    /// With its source (file:line).
+    pub fn with_source(mut self, source: String) -> Self {
+        self.source = source;
+        self
+    }
+
+    /// The block observed.
+    pub fn key(&self) -> Key {
+        self.keys[0]
+    }
+}
+
+impl Factor for Prior {
+    fn keys(&self) -> &[Key] {
+        &self.keys
+    }
+    fn dim(&self) -> usize {
+        self.value.len()
+    }
+    fn evaluate(
+        &self,
+        x: &Params<'_>,
+        r: &mut [f64],
+        j: &mut [Option<DMatrixViewMut<'_, f64>>],
+    ) -> bool {
+        let Some(v) = x.vector(0).filter(|v| v.len() == self.value.len()) else {
+            return false;
+        };
+        for (i, ri) in r.iter_mut().enumerate() {
+            *ri = v[i] - self.value[i];
+        }
+        if let Some(m) = &mut j[0] {
+            m.fill_with_identity();
+        }
+        true
+    }
+}
+
+/// A measured distance between two points: r = ‖a − b‖ − d.
+#[derive(Clone, Debug)]
+pub struct Distance {
+    keys: [Key; 2],
+    /// The measured distance (metres).
+    pub distance: f64,
+    /// Where the measurement came from, empty when not known.
+    pub source: String,
+}
+
+impl Distance {
+    /// The distance `d` between points `a` and `b`.
+    pub fn new(a: PointId, b: PointId, d: f64) -> Distance {
+        Distance {
+            keys: [Key::Point(a), Key::Point(b)],
+            distance: d,
+            source: String::new(),
+        }
+    }
+
+    /// With its source (file:line).
+    pub fn with_source(mut self, source: String) -> Self {
+        self.source = source;
+        self
+    }
+
+    /// The two points.
+    pub fn points(&self) -> [Key; 2] {
+        self.keys
+    }
+}
+
+impl Factor for Distance {
+    fn keys(&self) -> &[Key] {
+        &self.keys
+    }
+    fn dim(&self) -> usize {
+        1
+    }
+    fn evaluate(
+        &self,
+        x: &Params<'_>,
+        r: &mut [f64],
+        j: &mut [Option<DMatrixViewMut<'_, f64>>],
+    ) -> bool {
+        let (Some(a), Some(b)) = (x.point(0), x.point(1)) else {
+            return false;
+        };
+        let d = a - b;
+        let n = d.norm();
+        if n == 0.0 {
+            return false;
+        }
+        r[0] = n - self.distance;
+        let u = d / n;
+        if let Some(m) = &mut j[0] {
+            m.copy_from(&u.transpose());
+        }
+        if let Some(m) = &mut j[1] {
+            m.copy_from(&(-u.transpose()));
+        }
+        true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lsq::Value;
+
+    /// Every analytic Jacobian of the distance factor against central differences.
+    #[test]
+    fn distance_jacobians_match_finite_differences() {
+        let f = Distance::new(PointId(0), PointId(1), 10.0);
+        let a = Vector3::new(3.0, -1.0, 2.0);
+        let b = Vector3::new(-4.0, 2.5, 0.5);
+        let eval = |a: &Vector3<f64>, b: &Vector3<f64>| {
+            let v = [Value::point(a), Value::point(b)];
+            let mut r = [0.0];
+            let mut j = [
+                Some(nalgebra::DMatrix::zeros(1, 3)),
+                Some(nalgebra::DMatrix::zeros(1, 3)),
+            ];
+            let mut views: Vec<Option<DMatrixViewMut<f64>>> = j
+                .iter_mut()
+                .map(|m| m.as_mut().map(|m| m.as_view_mut()))
+                .collect();
+            assert!(f.evaluate(&Params::in_order(&v), &mut r, &mut views));
+            drop(views);
+            (r[0], j)
+        };
+        let (r0, j) = eval(&a, &b);
+        assert!((r0 - ((a - b).norm() - 10.0)).abs() < 1e-12);
+        let h = 1e-6;
+        for k in 0..3 {
+            let e = Vector3::ith(k, h);
+            let na = (eval(&(a + e), &b).0 - eval(&(a - e), &b).0) / (2.0 * h);
+            let nb = (eval(&a, &(b + e)).0 - eval(&a, &(b - e)).0) / (2.0 * h);
+            let (ja, jb) = (j[0].as_ref().unwrap(), j[1].as_ref().unwrap());
+            assert!((na - ja[(0, k)]).abs() < 1e-8, "a {k}");
+            assert!((nb - jb[(0, k)]).abs() < 1e-8, "b {k}");
+        }
     }
 }

@@ -9,6 +9,6 @@ pub mod bal;
 pub mod camera;
 pub mod factors;
 pub mod intersection;
+pub mod lsq;
 pub mod resection;
 pub mod rotation;
-pub mod solver;

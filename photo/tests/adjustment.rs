@@ -1,11 +1,13 @@
 //! The general adjustment on a synthetic block with exact truth: data snooping finds injected
 //! blunders without removing good observations; variance components recover group sigmas.
 
-use nalgebra::{DVector, Vector2, Vector3};
+use nalgebra::{Vector2, Vector3};
 use photo::camera::{Camera, Pose};
 use photo::factors::{ImagePoint, Prior};
+use photo::lsq::{
+    FactorId, Group, ImageId, Key, KeyKind, Loss, Noise, Options, PointId, Problem, Value,
+};
 use photo::rotation::Angles;
-use photo::solver::{Block, Loss, Problem};
 
 /// Deterministic normal numbers (SplitMix64 + Box–Muller).
 struct Rng(u64);
@@ -60,39 +62,34 @@ fn block() -> Block3 {
 }
 
 /// Build the problem: image points (σ_true per camera, in groups), 12 control points, a
-/// perturbed start, `blunders` image points shifted by 10–30 px. Returns the problem, the
-/// blunders' factor indices and the number of image points.
-fn problem(
+/// perturbed start, `blunders` image points shifted by 10–30 px, every factor with `loss`.
+/// Returns the problem, the blunders' factors and the number of image points.
+fn problem_with(
     b: &Block3,
     sigma_true: impl Fn(usize) -> f64,
     group_of: impl Fn(usize) -> usize,
     blunders: usize,
-) -> (Problem, Vec<usize>, usize) {
+    loss: Loss,
+) -> (Problem, Vec<FactorId>, usize) {
     let mut rng = Rng(5);
-    let mut p = Problem::new(Loss::Trivial);
-    let pose_ids: Vec<usize> = b
-        .poses
-        .iter()
-        .map(|t| {
-            let r = photo::rotation::exp_so3(&Vector3::new(
-                0.005 * rng.n(),
-                0.005 * rng.n(),
-                0.005 * rng.n(),
-            )) * t.r;
-            p.add_block(
-                Block::Pose(Pose {
-                    r,
-                    centre: t.centre + Vector3::new(rng.n(), rng.n(), rng.n()),
-                }),
-                false,
-            )
-        })
-        .collect();
-    let pt_ids: Vec<usize> = b
-        .points
-        .iter()
-        .map(|x| p.add_point(x + Vector3::new(rng.n(), rng.n(), rng.n()), false))
-        .collect();
+    let mut p = Problem::new(Options::default());
+    for (i, t) in b.poses.iter().enumerate() {
+        let r = photo::rotation::exp_so3(&Vector3::new(
+            0.005 * rng.n(),
+            0.005 * rng.n(),
+            0.005 * rng.n(),
+        )) * t.r;
+        let pose = Pose {
+            r,
+            centre: t.centre + Vector3::new(rng.n(), rng.n(), rng.n()),
+        };
+        p.add_block(Key::Pose(ImageId::from(i)), Value::Pose(pose))
+            .unwrap();
+    }
+    for (k, x) in b.points.iter().enumerate() {
+        let v = Value::point(&(x + Vector3::new(rng.n(), rng.n(), rng.n())));
+        p.add_block(Key::Point(PointId::from(k)), v).unwrap();
+    }
     // Observations first, so that blunders can be placed before the factors are built.
     let mut obs: Vec<(usize, usize, Vector2<f64>)> = Vec::new();
     for (c, pose) in b.poses.iter().enumerate() {
@@ -112,27 +109,29 @@ fn problem(
     }
     let mut bl = Vec::new();
     for (i, (c, k, xy)) in obs.iter().enumerate() {
-        let f = p.add_factor(Box::new(ImagePoint::new(
-            b.cam,
-            pose_ids[*c],
-            pt_ids[*k],
-            *xy,
-            PX,
-            group_of(*c),
-        )));
+        let f = ImagePoint::new(b.cam, ImageId::from(*c), PointId::from(*k), *xy);
+        let g = Group(group_of(*c));
+        let f = p.add_factor(f, Noise::isotropic(2, PX), loss, g).unwrap();
         if chosen.contains(&i) {
             bl.push(f);
         }
     }
     for k in 0..12 {
-        p.add_factor(Box::new(Prior::point(
-            pt_ids[k * 25],
-            b.points[k * 25],
-            [0.02; 3],
-            1,
-        )));
+        let f = Prior::point(PointId::from(k * 25), b.points[k * 25]);
+        p.add_factor(f, Noise::isotropic(3, 0.02), loss, Group(1))
+            .unwrap();
     }
     (p, bl, obs.len())
+}
+
+/// [`problem_with`] in plain least squares.
+fn problem(
+    b: &Block3,
+    sigma_true: impl Fn(usize) -> f64,
+    group_of: impl Fn(usize) -> usize,
+    blunders: usize,
+) -> (Problem, Vec<FactorId>, usize) {
+    problem_with(b, sigma_true, group_of, blunders, Loss::Trivial)
 }
 
 #[test]
@@ -141,9 +140,10 @@ fn data_snooping_finds_five_blunders_among_two_thousand_points() {
     let (mut p, blunders, n_image) = problem(&b, |_| PX, |_| 0, 5);
     assert!(n_image >= 1900, "{n_image} image points");
     // 5 % family-wise over all image coordinates (Bonferroni), not 0.1 % per test.
-    let critical = photo::solver::snooping_critical(0.05, 2 * n_image);
-    let (stats, removed) = p.data_snooping(critical, 30).unwrap();
-    let removed: Vec<usize> = removed.iter().map(|x| x.0).collect();
+    let critical = photo::lsq::snooping_critical(0.05, 2 * n_image);
+    p.options.max_iterations = 30;
+    let (stats, removed) = p.data_snooping(critical).unwrap();
+    let removed: Vec<FactorId> = removed.iter().map(|x| x.0).collect();
     let mut r = removed.clone();
     r.sort();
     let mut want = blunders.clone();
@@ -163,7 +163,8 @@ fn variance_components_recover_two_group_sigmas() {
         |c| if c < 5 { 0 } else { 2 },
         0,
     );
-    let s = p.variance_components(10, 30).unwrap();
+    p.options.max_iterations = 30;
+    let s = p.variance_components(10).unwrap();
     eprintln!("variance components: σ multipliers {s:?}");
     assert!((s[0] - 1.0).abs() < 0.1, "group 0: {}", s[0]);
     assert!((s[2] - 2.0).abs() < 0.2, "group 2: {}", s[2]);
@@ -174,41 +175,50 @@ fn bad_problems_give_clear_errors() {
     let b = block();
     let (mut p, _, _) = problem(&b, |_| PX, |_| 0, 0);
     // A point seen once (an extra point block with a single ray): not determined.
-    let lonely = p.add_block(
-        Block::Vector(DVector::from_column_slice(&[50.0, 50.0, 0.0])),
-        false,
-    );
+    let lonely = PointId(9999);
+    p.add_block(
+        Key::Point(lonely),
+        Value::point(&Vector3::new(50.0, 50.0, 0.0)),
+    )
+    .unwrap();
     let xy = b
         .cam
         .project(&b.poses[4], &Vector3::new(50.0, 50.0, 0.0))
         .unwrap();
-    p.add_factor(Box::new(ImagePoint::new(b.cam, 4, lonely, xy, PX, 0)));
-    let e = p.solve(10).unwrap_err().to_string();
-    assert!(e.contains("not determined"), "{e}");
+    let f = ImagePoint::new(b.cam, ImageId(4), lonely, xy);
+    p.add_factor(f, Noise::isotropic(2, PX), Loss::Trivial, Group(0))
+        .unwrap();
+    let e = p.solve().unwrap_err().to_string();
+    assert!(
+        e.contains("not determined") && e.contains("point 9999"),
+        "{e}"
+    );
     // A camera with no observations: not determined either.
     let (mut q, _, _) = problem(&b, |_| PX, |_| 0, 0);
-    q.add_block(Block::Pose(b.poses[0]), false);
-    assert!(q
-        .solve(10)
-        .unwrap_err()
-        .to_string()
-        .contains("not determined"));
-    // No control and nothing fixed: a datum defect.
-    let mut d = Problem::new(Loss::Huber(2.0));
-    let pose = d.add_block(Block::Pose(b.poses[0]), false);
-    let pt = d.add_block(
-        Block::Vector(DVector::from_column_slice(b.points[0].as_slice())),
-        false,
+    q.add_block(Key::Pose(ImageId(99)), Value::Pose(b.poses[0]))
+        .unwrap();
+    let e = q.solve().unwrap_err().to_string();
+    assert!(
+        e.contains("not determined") && e.contains("image 99"),
+        "{e}"
     );
-    d.add_factor(Box::new(ImagePoint::new(
-        b.cam,
-        pose,
-        pt,
-        b.cam.project(&b.poses[0], &b.points[0]).unwrap(),
-        PX,
-        0,
-    )));
-    assert!(d.solve(10).is_err());
+    // No control and nothing fixed: a datum defect.
+    let mut d = Problem::new(Options::default());
+    d.add_block(Key::Pose(ImageId(0)), Value::Pose(b.poses[0]))
+        .unwrap();
+    d.add_block(Key::Point(PointId(0)), Value::point(&b.points[0]))
+        .unwrap();
+    let xy = b.cam.project(&b.poses[0], &b.points[0]).unwrap();
+    let f = ImagePoint::new(b.cam, ImageId(0), PointId(0), xy);
+    d.add_factor(f, Noise::isotropic(2, PX), Loss::Huber(2.0), Group(0))
+        .unwrap();
+    assert!(d.solve().is_err());
+    // Bad construction: a factor naming an unknown block, a key added twice.
+    let f = ImagePoint::new(b.cam, ImageId(0), PointId(1), xy);
+    let e = d.add_factor(f, Noise::isotropic(2, PX), Loss::Trivial, Group(0));
+    assert!(e.unwrap_err().to_string().contains("point 1"));
+    let e = d.add_block(Key::Point(PointId(0)), Value::point(&b.points[0]));
+    assert!(e.unwrap_err().to_string().contains("twice"));
 }
 
 #[test]
@@ -230,17 +240,15 @@ fn bal_files_with_bad_numbers_are_refused() {
 fn robust_losses_resist_blunders() {
     let b = block();
     let point_rms = |loss: Loss| -> f64 {
-        let (mut p, _, _) = problem(&b, |_| PX, |_| 0, 5);
-        p.loss = loss;
-        p.solve(50).unwrap();
-        let first_point = b.poses.len();
+        let (mut p, _, _) = problem_with(&b, |_| PX, |_| 0, 5, loss);
+        p.solve().unwrap();
         let e: Vec<f64> = b
             .points
             .iter()
             .enumerate()
             .map(|(k, t)| {
-                let v = p.blocks[first_point + k].vector().unwrap();
-                (Vector3::new(v[0], v[1], v[2]) - t).norm_squared()
+                let v = p.value(Key::Point(PointId::from(k))).unwrap();
+                (v.as_point().unwrap() - t).norm_squared()
             })
             .collect();
         (e.iter().sum::<f64>() / e.len() as f64).sqrt()
@@ -265,17 +273,20 @@ fn sparse_and_dense_reduced_systems_agree() {
     let b = block();
     let (mut dense, _, _) = problem(&b, |_| PX, |_| 0, 0);
     let (mut sparse, _, _) = problem(&b, |_| PX, |_| 0, 0);
-    sparse.dense_limit = 0;
-    let a = dense.solve(30).unwrap();
-    let s = sparse.solve(30).unwrap();
+    sparse.options.dense_limit = 0;
+    let a = dense.solve().unwrap();
+    let s = sparse.solve().unwrap();
     assert!(
         (a.sigma0 - s.sigma0).abs() < 1e-9 * a.sigma0,
         "{} {}",
         a.sigma0,
         s.sigma0
     );
-    for (x, y) in dense.blocks.iter().zip(&sparse.blocks) {
-        if let (Some(x), Some(y)) = (x.vector(), y.vector()) {
+    for k in dense.keys().to_vec() {
+        if let (Some(x), Some(y)) = (
+            dense.value(k).and_then(Value::vector),
+            sparse.value(k).and_then(Value::vector),
+        ) {
             assert!((x - y).norm() < 1e-6, "{x} {y}");
         }
     }
@@ -288,10 +299,15 @@ fn schur_cofactors_equal_the_full_inverse() {
     let b = block();
     let (mut schur, _, _) = problem(&b, |_| PX, |_| 0, 0);
     let (mut full, _, _) = problem(&b, |_| PX, |_| 0, 0);
-    full.eliminate = vec![false; full.blocks.len()];
-    let s0 = schur.solve(30).unwrap().sigma0;
-    full.solve(30).unwrap();
-    let probe: Vec<usize> = vec![0, 4, 8, 9, 60, 200, 348];
+    full.options.eliminate = Vec::new();
+    let s0 = schur.solve().unwrap().sigma0;
+    full.solve().unwrap();
+    assert_eq!(schur.options.eliminate, vec![KeyKind::Point]);
+    let probe: Vec<Key> = [0, 4, 8]
+        .map(|i| Key::Pose(ImageId(i)))
+        .into_iter()
+        .chain([0, 51, 191, 339].map(|k| Key::Point(PointId(k))))
+        .collect();
     let a = schur.covariances(&probe, s0).unwrap();
     let c = full.covariances(&probe, s0).unwrap();
     for (x, y) in a.iter().zip(&c) {

@@ -30,7 +30,7 @@ fn ladybug_49_cameras_reach_the_reference_cost() {
     ] {
         let Some(p) = data(file) else { return };
         let mut prob = BalProblem::read(&p).unwrap();
-        let r = solve(&mut prob, &LmOptions::default());
+        let r = solve(&mut prob, &LmOptions::default()).unwrap();
         eprintln!(
             "{file}: cost {:.6e} → {:.6e} in {} iterations ({} successful), {:.2} s, RMS {:.3} px",
             r.initial_cost, r.final_cost, r.iterations, r.successful, r.seconds, r.rms_px
@@ -47,14 +47,15 @@ fn sparse_reduced_system_matches_dense() {
     };
     let mut dense = BalProblem::read(&p).unwrap();
     let mut sparse = dense.clone();
-    let a = solve(&mut dense, &LmOptions::default());
+    let a = solve(&mut dense, &LmOptions::default()).unwrap();
     let b = solve(
         &mut sparse,
         &LmOptions {
             dense_limit: 0,
             ..LmOptions::default()
         },
-    );
+    )
+    .unwrap();
     eprintln!(
         "dense {:.9e} in {} iterations, sparse {:.9e} in {}",
         a.final_cost, a.iterations, b.final_cost, b.iterations

@@ -1,18 +1,25 @@
-//! From a loaded project to a `photo::solver::Problem`: the local frame (ENU tangent plane at
+//! From a loaded project to a `photo::lsq::Problem`: the local frame (ENU tangent plane at
 //! the block centre), start values (GNSS centres and attitude, compass angles refined by a
 //! three-angle resection, or nadir along the strip; points by forward intersection) and one
-//! factor per observation. Input problems are refused here with the ids that cause them.
+//! factor per observation, each keeping its own bookkeeping (image, point, antenna record,
+//! source line). Input problems are refused here with the ids that cause them.
+//!
+//! Keys: `Pose(ImageId(i))` for the i-th image of the list, `Point(PointId(k))` for the k-th
+//! measured point id in sorted order (`Built::point_names`), `LeverArm(CameraId(c))` and
+//! `Camera(CameraId(c))` for camera c, `Drift(DriftId(d))` for `Built::drifts[d]`.
 
 use super::factors::{DriftModel, GnssCentre};
 use super::project::{DriftGroup, Mode, PointKind, Project};
 use super::AdjustError;
 use gnss::frame::{enu_rotation, Ecef, Geodetic};
-use nalgebra::{DVector, Matrix3, Vector2, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector2, Vector3};
 use photo::camera::Pose;
-use photo::factors::{ImagePoint, Prior, SelfCalibratingPoint};
+use photo::factors::{ImagePoint, Prior};
 use photo::intersection::{intersect, Ray};
+use photo::lsq::{
+    CameraId, DriftId, Group, ImageId, Key, Loss, Noise, Options, PointId, Problem, Value,
+};
 use photo::resection::{resect, resect_angles, Control};
-use photo::solver::{Block, Loss, Problem};
 use std::collections::BTreeMap;
 
 /// The local adjustment frame: ENU axes at `origin`.
@@ -44,40 +51,29 @@ impl LocalFrame {
     }
 }
 
-/// What each factor of the problem is.
-#[derive(Clone, Debug)]
-pub enum Obs {
-    /// Index into the project's measurements.
-    Image(usize),
-    /// Index into the project's ground points.
-    Control(usize),
-    /// An antenna (index into the project's antennas) of an image, with the matrix that
-    /// turns the factor's whitened residual back into metres.
-    Gnss {
-        antenna: usize,
-        image: usize,
-        unwhiten: Matrix3<f64>,
-    },
-    LeverPrior(usize),
-}
-
 /// Observation groups (variance components).
-pub const GROUP_IMAGE: usize = 0;
-pub const GROUP_CONTROL: usize = 1;
-pub const GROUP_GNSS: usize = 2;
-pub const GROUP_PRIOR: usize = 3;
-pub const GROUP_NAMES: [&str; 4] = [
+pub const GROUP_IMAGE: Group = Group(0);
+/// Control points.
+pub const GROUP_CONTROL: Group = Group(1);
+/// GNSS antenna positions.
+pub const GROUP_GNSS: Group = Group(2);
+/// Lever-arm priors.
+pub const GROUP_PRIOR: Group = Group(3);
+/// Measured distances.
+pub const GROUP_DISTANCE: Group = Group(4);
+/// Names of the groups, by index.
+pub const GROUP_NAMES: [&str; 5] = [
     "image points",
     "control points",
     "GNSS centres",
     "lever-arm prior",
+    "distances",
 ];
 
-/// A drift group: its block, model and reference time.
+/// A drift group (key `Drift(DriftId(index))`): its name, model and reference time.
 #[derive(Clone, Debug)]
 pub struct DriftBlock {
     pub name: String,
-    pub block: usize,
     pub model: DriftModel,
     /// Reference time t0, GPST seconds.
     pub t0: f64,
@@ -87,16 +83,9 @@ pub struct DriftBlock {
 pub struct Built {
     pub frame: LocalFrame,
     pub problem: Problem,
-    pub obs: Vec<Obs>,
-    /// Pose block of each image.
-    pub poses: Vec<usize>,
-    /// Point blocks by id.
-    pub points: BTreeMap<String, usize>,
-    /// Lever-arm block per camera (when GNSS is used).
-    pub levers: Vec<Option<usize>>,
+    /// Measured point ids by `PointId` (sorted); those with a block are adjusted.
+    pub point_names: Vec<String>,
     pub drifts: Vec<DriftBlock>,
-    /// Interior block per camera (self-calibration).
-    pub interiors: Vec<Option<usize>>,
     /// Points measured in a single image (not determinable): id and its image.
     pub single_ray: Vec<(String, String)>,
     /// Antenna records whose image is not in the list.
@@ -352,199 +341,230 @@ pub fn build(p: &Project) -> Result<Built, AdjustError> {
     }
     let start: Vec<Pose> = start.into_iter().flatten().collect();
 
-    // The problem.
-    let loss = match p.file.adjustment.loss.as_str() {
+    let (pr, point_names, single_ray, drifts) = problem(p, &frame, &rays, &start, &antenna_of)?;
+    Ok(Built {
+        frame,
+        problem: pr,
+        point_names,
+        drifts,
+        single_ray,
+        unused_antennas,
+    })
+}
+
+/// Blocks and factors; returns the problem, the point names by `PointId`, the points left
+/// out for having a single ray (id, image) and the drift groups.
+#[allow(clippy::type_complexity)]
+fn problem(
+    p: &Project,
+    frame: &LocalFrame,
+    rays: &BTreeMap<&str, Vec<usize>>,
+    start: &[Pose],
+    antenna_of: &[Option<usize>],
+) -> Result<(Problem, Vec<String>, Vec<(String, String)>, Vec<DriftBlock>), AdjustError> {
+    let opts = &p.file.adjustment;
+    let loss = match opts.loss.as_str() {
         "huber" => Loss::Huber(3.0),
         "cauchy" => Loss::Cauchy(3.0),
         _ => Loss::Trivial,
     };
-    let mut pr = Problem::new(loss);
-    let poses: Vec<usize> = start
-        .iter()
-        .map(|s| pr.add_block(Block::Pose(*s), false))
-        .collect();
-    let mut points = BTreeMap::new();
+    let mut pr = Problem::new(Options {
+        max_iterations: opts.max_iterations,
+        ..Options::default()
+    });
+    let built = |e: photo::lsq::BuildError| err(e.to_string());
+    for (i, s) in start.iter().enumerate() {
+        pr.add_block(Key::Pose(ImageId::from(i)), Value::Pose(*s))
+            .map_err(built)?;
+    }
+    let point_names: Vec<String> = rays.keys().map(|s| s.to_string()).collect();
     let mut single_ray = Vec::new();
-    for (id, ks) in &rays {
+    for (k, (id, ks)) in rays.iter().enumerate() {
         let ground = p.ground.iter().find(|g| g.id == *id);
+        let control = ground.is_some_and(|g| g.kind == PointKind::Control);
         let images: std::collections::BTreeSet<usize> =
             ks.iter().map(|k| p.measurements[*k].image).collect();
         let x = match ground {
-            Some(g) if g.kind == PointKind::Control => Some(frame.to_local(&g.pos)),
+            Some(g) if control => Some(frame.to_local(&g.pos)),
             _ if images.len() >= 2 => intersect_point(p, ks, |i| Some(&start[i])),
             _ => None,
         };
         match x {
-            Some(x)
-                if images.len() >= 2 || ground.is_some_and(|g| g.kind == PointKind::Control) =>
-            {
-                points.insert(id.to_string(), pr.add_point(x, false));
-            }
+            Some(x) if images.len() >= 2 || control => pr
+                .add_block(Key::Point(PointId::from(k)), Value::point(&x))
+                .map_err(built)?,
             _ => single_ray.push((
                 id.to_string(),
                 p.images[p.measurements[ks[0]].image].id.clone(),
             )),
         }
     }
-    let interiors: Vec<Option<usize>> = p
-        .cameras
+    for (c, cd) in p.cameras.iter().enumerate() {
+        if !cd.calibrate.is_empty() {
+            let v = ImagePoint::interior_start(&cd.camera, &cd.calibrate);
+            pr.add_block(Key::Camera(CameraId::from(c)), Value::Vector(v))
+                .map_err(built)?;
+        }
+    }
+    let index: BTreeMap<&str, PointId> = point_names
         .iter()
-        .map(|c| {
-            (!c.calibrate.is_empty()).then(|| {
-                pr.add_block(
-                    Block::Vector(SelfCalibratingPoint::start(&c.camera, &c.calibrate)),
-                    false,
-                )
-            })
-        })
+        .enumerate()
+        .map(|(k, n)| (n.as_str(), PointId::from(k)))
         .collect();
-    let mut obs = Vec::new();
-    for (k, m) in p.measurements.iter().enumerate() {
-        let Some(&pt) = points.get(&m.point) else {
+    image_factors(p, &mut pr, &index, loss).map_err(built)?;
+    control_factors(p, frame, &mut pr, &index, loss).map_err(built)?;
+    let drifts = match p.file.gnss.as_ref() {
+        Some(_) => gnss_factors(p, frame, &mut pr, antenna_of, loss)?,
+        None => Vec::new(),
+    };
+    Ok((pr, point_names, single_ray, drifts))
+}
+
+/// One factor per image measurement of an adjusted point.
+fn image_factors(
+    p: &Project,
+    pr: &mut Problem,
+    index: &BTreeMap<&str, PointId>,
+    loss: Loss,
+) -> Result<(), photo::lsq::BuildError> {
+    for m in &p.measurements {
+        let Some(&pt) = index.get(m.point.as_str()) else {
             continue;
         };
-        let cd = &p.cameras[p.images[m.image].camera];
-        let f: Box<dyn photo::solver::Factor> = match interiors[p.images[m.image].camera] {
-            Some(ib) => Box::new(SelfCalibratingPoint {
-                camera: cd.camera,
-                blocks: [poses[m.image], pt, ib],
-                calib: cd.calibrate.clone(),
-                xy: m.xy,
-                sigmas: DVector::from_element(2, m.sigma),
-                group: GROUP_IMAGE,
-            }),
-            None => Box::new(ImagePoint::new(
-                cd.camera,
-                poses[m.image],
-                pt,
-                m.xy,
-                m.sigma,
-                GROUP_IMAGE,
-            )),
-        };
-        pr.add_factor(f);
-        obs.push(Obs::Image(k));
-    }
-    for (k, g) in p.ground.iter().enumerate() {
-        if g.kind != PointKind::Control {
+        if !pr.contains(Key::Point(pt)) {
             continue;
         }
-        let Some(&pt) = points.get(&g.id) else {
-            continue;
-        };
-        pr.add_factor(Box::new(Prior::point(
+        let c = p.images[m.image].camera;
+        let cd = &p.cameras[c];
+        let f = ImagePoint::self_calibrating(
+            cd.camera,
+            ImageId::from(m.image),
             pt,
-            frame.to_local(&g.pos),
-            g.sigma,
-            GROUP_CONTROL,
-        )));
-        obs.push(Obs::Control(k));
+            CameraId::from(c),
+            cd.calibrate.clone(),
+            m.xy,
+        )
+        .with_source(m.source.clone());
+        pr.add_factor(f, Noise::isotropic(2, m.sigma), loss, GROUP_IMAGE)?;
     }
-    let mut levers = vec![None; p.cameras.len()];
-    let mut drifts: Vec<DriftBlock> = Vec::new();
-    if let Some(gs) = gnss {
-        for (c, _) in p.cameras.iter().enumerate() {
-            if !p
-                .images
-                .iter()
-                .enumerate()
-                .any(|(i, im)| im.camera == c && antenna_of[i].is_some())
-            {
-                continue;
-            }
-            let b = pr.add_block(
-                Block::Vector(DVector::from_column_slice(&gs.lever_arm)),
-                !gs.estimate_lever_arm,
-            );
-            levers[c] = Some(b);
-            if let (Some(s), true) = (gs.lever_arm_sigma, gs.estimate_lever_arm) {
-                let sig = DVector::from_iterator(3, s.iter().map(|x| x.max(1e-6)));
-                pr.add_factor(Box::new(Prior::new(
-                    b,
-                    DVector::from_column_slice(&gs.lever_arm),
-                    sig,
-                    GROUP_PRIOR,
-                )));
-                obs.push(Obs::LeverPrior(c));
-            }
-        }
-        // Drift groups.
-        let key = |i: usize, k: usize| -> Option<String> {
-            match gs.drift {
-                DriftGroup::None => None,
-                DriftGroup::Block => Some("block".into()),
-                DriftGroup::Strip => Some(format!("strip {}", p.images[i].strip)),
-                DriftGroup::Segment => Some(format!("segment {}", p.antennas[k].segment)),
-            }
+    Ok(())
+}
+
+/// One prior per control point (σ per axis).
+fn control_factors(
+    p: &Project,
+    frame: &LocalFrame,
+    pr: &mut Problem,
+    index: &BTreeMap<&str, PointId>,
+    loss: Loss,
+) -> Result<(), photo::lsq::BuildError> {
+    for g in p.ground.iter().filter(|g| g.kind == PointKind::Control) {
+        let Some(&pt) = index.get(g.id.as_str()) else {
+            continue;
         };
-        let mut groups: BTreeMap<String, Vec<f64>> = BTreeMap::new();
-        for (i, a) in antenna_of.iter().enumerate() {
-            if let Some(k) = a {
-                if let Some(name) = key(i, *k) {
-                    groups
-                        .entry(name)
-                        .or_default()
-                        .push(p.antennas[*k].time.to_gpst_seconds());
-                }
+        if !pr.contains(Key::Point(pt)) {
+            continue;
+        }
+        let f = Prior::point(pt, frame.to_local(&g.pos)).with_source(g.source.clone());
+        pr.add_factor(f, Noise::sigmas(&g.sigma), loss, GROUP_CONTROL)?;
+    }
+    Ok(())
+}
+
+/// Lever arms (with their priors), drift groups and one GNSS factor per image with an antenna.
+fn gnss_factors(
+    p: &Project,
+    frame: &LocalFrame,
+    pr: &mut Problem,
+    antenna_of: &[Option<usize>],
+    loss: Loss,
+) -> Result<Vec<DriftBlock>, AdjustError> {
+    let Some(gs) = p.file.gnss.as_ref() else {
+        return Ok(Vec::new());
+    };
+    let built = |e: photo::lsq::BuildError| err(e.to_string());
+    for (c, _) in p.cameras.iter().enumerate() {
+        if !p
+            .images
+            .iter()
+            .enumerate()
+            .any(|(i, im)| im.camera == c && antenna_of[i].is_some())
+        {
+            continue;
+        }
+        let key = Key::LeverArm(CameraId::from(c));
+        pr.add_block(
+            key,
+            Value::Vector(DVector::from_column_slice(&gs.lever_arm)),
+        )
+        .map_err(built)?;
+        pr.set_fixed(key, !gs.estimate_lever_arm).map_err(built)?;
+        if let (Some(s), true) = (gs.lever_arm_sigma, gs.estimate_lever_arm) {
+            let sig: Vec<f64> = s.iter().map(|x| x.max(1e-6)).collect();
+            let f = Prior::new(key, DVector::from_column_slice(&gs.lever_arm));
+            pr.add_factor(f, Noise::sigmas(&sig), loss, GROUP_PRIOR)
+                .map_err(built)?;
+        }
+    }
+    // Drift groups.
+    let key = |i: usize, k: usize| -> Option<String> {
+        match gs.drift {
+            DriftGroup::None => None,
+            DriftGroup::Block => Some("block".into()),
+            DriftGroup::Strip => Some(format!("strip {}", p.images[i].strip)),
+            DriftGroup::Segment => Some(format!("segment {}", p.antennas[k].segment)),
+        }
+    };
+    let mut groups: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    for (i, a) in antenna_of.iter().enumerate() {
+        if let Some(k) = a {
+            if let Some(name) = key(i, *k) {
+                groups
+                    .entry(name)
+                    .or_default()
+                    .push(p.antennas[*k].time.to_gpst_seconds());
             }
         }
-        for (name, times) in &groups {
-            let t0 = match gs.drift_model {
-                DriftModel::Rate => times.iter().cloned().fold(f64::INFINITY, f64::min),
-                _ => times.iter().sum::<f64>() / times.len() as f64,
-            };
-            let block = pr.add_block(Block::Vector(DVector::zeros(gs.drift_model.dim())), false);
-            drifts.push(DriftBlock {
-                name: name.clone(),
-                block,
-                model: gs.drift_model,
-                t0,
-            });
+    }
+    let mut drifts: Vec<DriftBlock> = Vec::new();
+    for (name, times) in &groups {
+        let t0 = match gs.drift_model {
+            DriftModel::Rate => times.iter().cloned().fold(f64::INFINITY, f64::min),
+            _ => times.iter().sum::<f64>() / times.len() as f64,
+        };
+        let v = Value::Vector(DVector::zeros(gs.drift_model.dim()));
+        pr.add_block(Key::Drift(DriftId::from(drifts.len())), v)
+            .map_err(built)?;
+        drifts.push(DriftBlock {
+            name: name.clone(),
+            model: gs.drift_model,
+            t0,
+        });
+    }
+    for (i, a) in antenna_of.iter().enumerate() {
+        let Some(k) = *a else { continue };
+        let ant = &p.antennas[k];
+        let cam = CameraId::from(p.images[i].camera);
+        if !pr.contains(Key::LeverArm(cam)) {
+            continue;
         }
-        for (i, a) in antenna_of.iter().enumerate() {
-            let Some(k) = *a else { continue };
-            let ant = &p.antennas[k];
-            let Some(lever) = levers[p.images[i].camera] else {
-                continue;
-            };
-            let drift = key(i, k)
-                .and_then(|n| drifts.iter().find(|d| d.name == n))
-                .map(|d| (d.block, d.model, ant.time.to_gpst_seconds() - d.t0));
-            let m = frame.from_enu_at(&ant.pos);
-            let cov = m * ant.cov_enu * m.transpose();
-            let f = GnssCentre::new(
-                poses[i],
-                lever,
-                drift,
-                frame.to_local(&ant.pos),
-                &cov,
-                GROUP_GNSS,
-            )
+        let drift = key(i, k)
+            .and_then(|n| drifts.iter().position(|d| d.name == n))
+            .map(|d| {
+                let dt = ant.time.to_gpst_seconds() - drifts[d].t0;
+                (DriftId::from(d), drifts[d].model, dt)
+            });
+        let m = frame.from_enu_at(&ant.pos);
+        let cov = m * ant.cov_enu * m.transpose();
+        let noise = Noise::covariance(&DMatrix::from_column_slice(3, 3, cov.as_slice()))
             .ok_or_else(|| {
                 err(format!(
                     "antenna of image {}: the covariance is not positive definite",
                     ant.image
                 ))
             })?;
-            let unwhiten = f.unwhiten();
-            pr.add_factor(Box::new(f));
-            obs.push(Obs::Gnss {
-                antenna: k,
-                image: i,
-                unwhiten,
-            });
-        }
+        let f = GnssCentre::new(ImageId::from(i), cam, drift, frame.to_local(&ant.pos), k);
+        pr.add_factor(f, noise, loss, GROUP_GNSS).map_err(built)?;
     }
-    Ok(Built {
-        frame,
-        problem: pr,
-        obs,
-        poses,
-        points,
-        levers,
-        drifts,
-        interiors,
-        single_ray,
-        unused_antennas,
-    })
+    Ok(drifts)
 }

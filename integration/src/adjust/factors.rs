@@ -1,11 +1,11 @@
 //! The GNSS projection-centre factor: the antenna observed by GNSS is the projection centre
 //! plus the lever arm rotated by the camera attitude plus a drift,
-//! `X_A,obs = X_S + R·(u, v, w) + a + b·(t − t0)`, weighted by the trajectory's full 3×3
-//! covariance (the residual and Jacobians are whitened here, so the solver sees unit σ).
+//! `X_A,obs = X_S + R·(u, v, w) + a + b·(t − t0)`; r = predicted − observed antenna (metres,
+//! adjustment frame), weighted by the trajectory's full 3×3 covariance (its noise model).
 
-use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use nalgebra::{DMatrix, DMatrixViewMut, Matrix3, Vector3};
+use photo::lsq::{CameraId, DriftId, Factor, ImageId, Key, Params};
 use photo::rotation::skew;
-use photo::solver::{Block, Factor};
 
 /// Which drift terms a drift block holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
@@ -54,88 +54,82 @@ impl DriftModel {
 /// One GNSS antenna position at an exposure.
 pub struct GnssCentre {
     /// [pose, lever arm] or [pose, lever arm, drift].
-    blocks: Vec<usize>,
-    antenna: Vector3<f64>,
-    /// Inverse of the lower Cholesky factor of the covariance (whitening).
-    whiten: Matrix3<f64>,
-    /// The lower Cholesky factor itself: whitened residual → metres.
-    unwhiten: Matrix3<f64>,
+    keys: Vec<Key>,
+    /// The observed antenna position (adjustment frame).
+    pub antenna: Vector3<f64>,
     drift: Option<(DriftModel, f64)>,
-    ones: DVector<f64>,
-    group: usize,
+    /// The antenna record it comes from (index into the project's antennas).
+    pub record: usize,
 }
 
 impl GnssCentre {
-    /// `cov`: covariance of the antenna position in the adjustment frame, m². `None` when it
-    /// is not positive definite.
+    /// The antenna of `image` (camera `camera`) observed at `antenna`; with a drift group, its
+    /// model and the time since the group's t0 (s).
     pub fn new(
-        pose: usize,
-        lever: usize,
-        drift: Option<(usize, DriftModel, f64)>,
+        image: ImageId,
+        camera: CameraId,
+        drift: Option<(DriftId, DriftModel, f64)>,
         antenna: Vector3<f64>,
-        cov: &Matrix3<f64>,
-        group: usize,
-    ) -> Option<GnssCentre> {
-        let l = cov.cholesky()?.l();
-        let whiten = l.try_inverse()?;
-        let mut blocks = vec![pose, lever];
-        if let Some((b, _, _)) = drift {
-            blocks.push(b);
+        record: usize,
+    ) -> GnssCentre {
+        let mut keys = vec![Key::Pose(image), Key::LeverArm(camera)];
+        if let Some((d, _, _)) = drift {
+            keys.push(Key::Drift(d));
         }
-        Some(GnssCentre {
-            blocks,
+        GnssCentre {
+            keys,
             antenna,
-            whiten,
-            unwhiten: l,
             drift: drift.map(|(_, m, dt)| (m, dt)),
-            ones: DVector::from_element(3, 1.0),
-            group,
-        })
+            record,
+        }
     }
-}
 
-impl GnssCentre {
-    /// Maps the whitened residual back to predicted − observed antenna, metres.
-    pub fn unwhiten(&self) -> Matrix3<f64> {
-        self.unwhiten
+    /// The image whose projection centre it observes.
+    pub fn image(&self) -> ImageId {
+        match self.keys[0] {
+            Key::Pose(i) => i,
+            _ => unreachable!("the first key is the pose"),
+        }
     }
 }
 
 impl Factor for GnssCentre {
-    fn blocks(&self) -> &[usize] {
-        &self.blocks
+    fn keys(&self) -> &[Key] {
+        &self.keys
     }
-    fn evaluate(&self, b: &[&Block]) -> Option<(DVector<f64>, Vec<DMatrix<f64>>)> {
-        let pose = b[0].pose()?;
-        let l = b[1].vector()?;
-        let rl = pose.r * Vector3::new(l[0], l[1], l[2]);
+    fn dim(&self) -> usize {
+        3
+    }
+    fn evaluate(
+        &self,
+        x: &Params<'_>,
+        r: &mut [f64],
+        j: &mut [Option<DMatrixViewMut<'_, f64>>],
+    ) -> bool {
+        let (Some(pose), Some(l)) = (x.pose(0), x.point(1)) else {
+            return false;
+        };
+        let rl = pose.r * l;
         let mut pred = pose.centre + rl;
         let mut jd = None;
         if let Some((model, dt)) = self.drift {
-            let (d, j) = model.eval(b[2].vector()?.as_slice(), dt);
-            pred += d;
-            jd = Some(j);
+            let Some(d) = x.vector(2) else { return false };
+            let (v, jac) = model.eval(d.as_slice(), dt);
+            pred += v;
+            jd = Some(jac);
         }
-        let w = &self.whiten;
-        let r = w * (pred - self.antenna);
-        let mut jp = DMatrix::zeros(3, 6);
-        jp.view_mut((0, 0), (3, 3)).copy_from(&(w * -skew(&rl)));
-        jp.view_mut((0, 3), (3, 3)).copy_from(w);
-        let wd = DMatrix::from_column_slice(3, 3, w.as_slice());
-        let mut js = vec![
-            jp,
-            &wd * DMatrix::from_column_slice(3, 3, pose.r.as_slice()),
-        ];
-        if let Some(j) = jd {
-            js.push(&wd * j);
+        r.copy_from_slice((pred - self.antenna).as_slice());
+        if let Some(m) = &mut j[0] {
+            m.view_mut((0, 0), (3, 3)).copy_from(&(-skew(&rl)));
+            m.view_mut((0, 3), (3, 3)).copy_from(&Matrix3::identity());
         }
-        Some((DVector::from_column_slice(r.as_slice()), js))
-    }
-    fn sigmas(&self) -> &DVector<f64> {
-        &self.ones
-    }
-    fn group(&self) -> usize {
-        self.group
+        if let Some(m) = &mut j[1] {
+            m.copy_from(&pose.r);
+        }
+        if let (Some(Some(m)), Some(jd)) = (j.get_mut(2), jd) {
+            m.copy_from(&jd);
+        }
+        true
     }
 }
 
@@ -143,7 +137,19 @@ impl Factor for GnssCentre {
 mod tests {
     use super::*;
     use photo::camera::Pose;
+    use photo::lsq::Value;
     use photo::rotation::{exp_so3, Angles};
+
+    /// Evaluate with every Jacobian.
+    fn eval(f: &GnssCentre, v: &[Value]) -> (Vec<f64>, Vec<DMatrix<f64>>) {
+        let mut r = vec![0.0; 3];
+        let mut js: Vec<DMatrix<f64>> = v.iter().map(|b| DMatrix::zeros(3, b.dim())).collect();
+        let mut views: Vec<Option<DMatrixViewMut<f64>>> =
+            js.iter_mut().map(|m| Some(m.as_view_mut())).collect();
+        assert!(f.evaluate(&Params::in_order(v), &mut r, &mut views));
+        drop(views);
+        (r, js)
+    }
 
     /// Analytic Jacobians against central differences, every block, every drift model.
     #[test]
@@ -157,33 +163,29 @@ mod tests {
             .matrix(),
             centre: Vector3::new(10.0, -4.0, 1200.0),
         };
-        let cov = Matrix3::new(25e-4, 5e-4, 7e-4, 5e-4, 25e-4, 2e-4, 7e-4, 2e-4, 36e-4);
         for model in [DriftModel::Offset, DriftModel::Linear, DriftModel::Rate] {
             let f = GnssCentre::new(
-                0,
-                1,
-                Some((2, model, 37.5)),
+                ImageId(0),
+                CameraId(0),
+                Some((DriftId(0), model, 37.5)),
                 Vector3::new(10.2, -4.1, 1201.3),
-                &cov,
                 0,
-            )
-            .unwrap();
+            );
             let blocks = vec![
-                Block::Pose(pose),
-                Block::Vector(DVector::from_vec(vec![0.1, -0.05, 1.4])),
-                Block::Vector(DVector::from_fn(model.dim(), |i, _| {
+                Value::Pose(pose),
+                Value::Vector(nalgebra::DVector::from_vec(vec![0.1, -0.05, 1.4])),
+                Value::Vector(nalgebra::DVector::from_fn(model.dim(), |i, _| {
                     0.01 * (i as f64 + 1.0)
                 })),
             ];
-            let refs: Vec<&Block> = blocks.iter().collect();
-            let (_, js) = f.evaluate(&refs).unwrap();
+            let (_, js) = eval(&f, &blocks);
             for (bi, j) in js.iter().enumerate() {
                 for c in 0..j.ncols() {
                     let h = 1e-6;
                     let shifted = |s: f64| {
                         let mut bl = blocks.clone();
                         match &mut bl[bi] {
-                            Block::Pose(p) => {
+                            Value::Pose(p) => {
                                 if c < 3 {
                                     let mut d = Vector3::zeros();
                                     d[c] = s;
@@ -192,10 +194,10 @@ mod tests {
                                     p.centre[c - 3] += s;
                                 }
                             }
-                            Block::Vector(v) => v[c] += s,
+                            Value::Vector(v) => v[c] += s,
+                            Value::Rotated { .. } => unreachable!(),
                         }
-                        let refs: Vec<&Block> = bl.iter().collect();
-                        f.evaluate(&refs).unwrap().0
+                        nalgebra::DVector::from_vec(eval(&f, &bl).0)
                     };
                     let num = (shifted(h) - shifted(-h)) / (2.0 * h);
                     assert!(

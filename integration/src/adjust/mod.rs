@@ -1,7 +1,7 @@
 //! The joint GNSS-supported bundle adjustment (`ppkat adjust`): image points, control and
 //! check points, GNSS antenna positions with their full covariance, an unknown lever arm,
 //! drift per block, strip or ambiguity segment, optional self-calibration — all factors on
-//! `photo::solver`. Then data snooping with removal, variance components, covariances,
+//! `photo::lsq`, the one least-squares core. Then data snooping with removal, variance components, covariances,
 //! reliability and the check-point table; outputs in geodetic and UTM / Gauss–Krüger.
 //!
 //! Stages: [`project`] (TOML + tables) → [`build`] (frame, start values, factors) → [`solve`]
@@ -38,8 +38,8 @@ pub enum AdjustError {
     Write { path: String, what: String },
 }
 
-impl From<photo::solver::SolveError> for AdjustError {
-    fn from(e: photo::solver::SolveError) -> Self {
+impl From<photo::lsq::SolveError> for AdjustError {
+    fn from(e: photo::lsq::SolveError) -> Self {
         AdjustError::Solve(e.to_string())
     }
 }
@@ -47,9 +47,9 @@ impl From<photo::solver::SolveError> for AdjustError {
 /// The adjusted problem with what was removed and estimated on the way.
 pub struct Solved {
     pub built: Built,
-    pub stats: photo::solver::Stats,
-    /// Factors removed by data snooping (indices into `built.obs`), in order, with |w|.
-    pub removed: Vec<(usize, f64)>,
+    pub stats: photo::lsq::Summary,
+    /// Factors removed by data snooping, in order, with |w|.
+    pub removed: Vec<(photo::lsq::FactorId, f64)>,
     /// σ multiplier per observation group (variance components; 1 when not estimated).
     pub components: Vec<f64>,
     pub critical: f64,
@@ -57,82 +57,107 @@ pub struct Solved {
 
 /// Adjust a loaded project.
 pub fn solve(project: &Project) -> Result<Solved, AdjustError> {
-    let built = build::build(project)?;
-    let names = block_names(project, &built);
-    let name = |e: photo::solver::SolveError| {
+    let mut built = build::build(project)?;
+    let result = solve_built(project, &mut built);
+    let name = |e: photo::lsq::SolveError| {
+        use photo::lsq::SolveError;
         match e {
-        photo::solver::SolveError::Undetermined(b) => AdjustError::Solve(format!(
+        SolveError::Undetermined(k) => AdjustError::Solve(format!(
             "{} is not determined by its observations (too few rays, or rays too close to parallel): remove it or measure it in more images",
-            names.get(b).cloned().unwrap_or_else(|| format!("block {b}"))
+            block_name(project, &built, k)
         )),
-        photo::solver::SolveError::Dependent(b) => AdjustError::Solve(format!(
+        SolveError::Dependent(k) => AdjustError::Solve(format!(
             "the normal equations are singular at {}: a datum defect (too little control or GNSS) or unknowns that cannot be told apart (e.g. a drift offset without control, or offsets per strip with a free lever arm)",
-            names.get(b).cloned().unwrap_or_else(|| format!("block {b}"))
+            block_name(project, &built, k)
         )),
         e => AdjustError::from(e),
     }
     };
-    solve_built(project, built).map_err(name)
+    match result {
+        Ok((stats, removed, components, critical)) => Ok(Solved {
+            built,
+            stats,
+            removed,
+            components,
+            critical,
+        }),
+        Err(e) => Err(name(e)),
+    }
 }
 
-/// A readable name per parameter block.
-fn block_names(p: &Project, b: &Built) -> Vec<String> {
-    let mut n = vec![String::new(); b.problem.blocks.len()];
-    for (i, &k) in b.poses.iter().enumerate() {
-        n[k] = format!("the orientation of image {}", p.images[i].id);
+/// A readable name of a parameter block, with the project's ids.
+fn block_name(p: &Project, b: &Built, key: photo::lsq::Key) -> String {
+    use photo::lsq::Key;
+    let camera = |c: photo::lsq::CameraId| {
+        p.cameras
+            .get(c.index())
+            .map_or(c.to_string(), |c| c.id.clone())
+    };
+    match key {
+        Key::Pose(i) => format!(
+            "the orientation of image {}",
+            p.images
+                .get(i.index())
+                .map_or(i.to_string(), |x| x.id.clone())
+        ),
+        Key::Point(k) => format!(
+            "point {}",
+            b.point_names.get(k.index()).cloned().unwrap_or_default()
+        ),
+        Key::Drift(d) => format!(
+            "the drift of {}",
+            b.drifts
+                .get(d.index())
+                .map_or(d.to_string(), |x| x.name.clone())
+        ),
+        Key::LeverArm(c) => format!("the lever arm of camera {}", camera(c)),
+        Key::Camera(c) => format!("the interior orientation of camera {}", camera(c)),
+        k => k.to_string(),
     }
-    for (id, &k) in &b.points {
-        n[k] = format!("point {id}");
-    }
-    for d in &b.drifts {
-        n[d.block] = format!("the drift of {}", d.name);
-    }
-    for (c, l) in b.levers.iter().enumerate() {
-        if let Some(l) = l {
-            n[*l] = format!("the lever arm of camera {}", p.cameras[c].id);
-        }
-    }
-    for (c, l) in b.interiors.iter().enumerate() {
-        if let Some(l) = l {
-            n[*l] = format!("the interior orientation of camera {}", p.cameras[c].id);
-        }
-    }
-    n
 }
 
-fn solve_built(project: &Project, mut built: Built) -> Result<Solved, photo::solver::SolveError> {
+/// Snooping, variance components, snooping again, final solve.
+#[allow(clippy::type_complexity)]
+fn solve_built(
+    project: &Project,
+    built: &mut Built,
+) -> Result<
+    (
+        photo::lsq::Summary,
+        Vec<(photo::lsq::FactorId, f64)>,
+        Vec<f64>,
+        f64,
+    ),
+    photo::lsq::SolveError,
+> {
     let opts = &project.file.adjustment;
-    let it = opts.max_iterations;
-    let tests: usize = built.problem.factors.iter().map(|f| f.sigmas().len()).sum();
-    let critical = photo::solver::snooping_critical(opts.alpha, tests);
-    let mut removed = Vec::new();
     let pr = &mut built.problem;
-    let snoop = |pr: &mut photo::solver::Problem,
-                 removed: &mut Vec<(usize, f64)>|
-     -> Result<(), photo::solver::SolveError> {
+    let tests: usize = pr.factors().map(|(_, f)| f.dim()).sum();
+    let critical = photo::lsq::snooping_critical(opts.alpha, tests);
+    let mut removed = Vec::new();
+    let snoop = |pr: &mut photo::lsq::Problem,
+                 removed: &mut Vec<(photo::lsq::FactorId, f64)>|
+     -> Result<(), photo::lsq::SolveError> {
         if opts.snooping {
-            removed.extend(pr.data_snooping(critical, it)?.1);
+            removed.extend(pr.data_snooping(critical)?.1);
         } else {
-            pr.solve(it)?;
+            pr.solve()?;
         }
         Ok(())
     };
     snoop(pr, &mut removed)?;
-    let mut components = vec![1.0; pr.group_scale.len()];
+    let mut components = vec![1.0; GROUPS];
     if opts.variance_components {
-        components = pr.variance_components(10, it)?;
+        components = pr.variance_components(10)?;
         // Snoop again with the estimated weights.
         snoop(pr, &mut removed)?;
     }
-    let stats = pr.solve(it)?;
-    Ok(Solved {
-        built,
-        stats,
-        removed,
-        components,
-        critical,
-    })
+    let stats = pr.solve()?;
+    Ok((stats, removed, components, critical))
 }
+
+/// Number of observation groups (see `build::GROUP_NAMES`).
+const GROUPS: usize = build::GROUP_NAMES.len();
 
 /// Load, adjust and write every output into `out`; returns the report.
 pub fn run(project_path: &Path, out: &Path) -> Result<results::Results, AdjustError> {

@@ -3,12 +3,15 @@
 //! reliability (redundancy, minimal detectable blunders), removed observations, residuals and
 //! the check-point table.
 
-use super::build::{Obs, GROUP_NAMES};
+use super::build::GROUP_NAMES;
 use super::factors::DriftModel;
+use super::factors::GnssCentre;
 use super::project::{Mode, PointKind, Project};
 pub use super::residuals::{ControlResidual, GnssResidual, ImageResidual};
 use super::{AdjustError, Solved};
 use nalgebra::{DMatrix, Vector3};
+use photo::factors::{Distance, ImagePoint, Prior};
+use photo::lsq::{CameraId, DriftId, FactorId, ImageId, Key, PointId, Problem, Value};
 use photo::rotation::Angles;
 use serde::Serialize;
 
@@ -165,12 +168,16 @@ fn sig3(c: &DMatrix<f64>, o: usize) -> [f64; 3] {
 fn estimated(
     name: String,
     labels: &[&str],
-    pr: &photo::solver::Problem,
-    block: usize,
+    pr: &Problem,
+    key: Key,
     cov: Option<&DMatrix<f64>>,
     t0: f64,
 ) -> Estimated {
-    let v = pr.blocks[block].vector().cloned().unwrap_or_default();
+    let v = pr
+        .value(key)
+        .and_then(Value::vector)
+        .cloned()
+        .unwrap_or_default();
     Estimated {
         name,
         values: v.iter().copied().collect(),
@@ -179,7 +186,7 @@ fn estimated(
             .collect(),
         labels: labels.iter().map(|s| s.to_string()).collect(),
         t0,
-        fixed: pr.fixed[block],
+        fixed: pr.is_fixed(key),
     }
 }
 
@@ -203,16 +210,12 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
             .unwrap_or((g.lon.to_degrees(), g.lat.to_degrees()));
         (g, e, n)
     };
-    // Covariances of every pose, point and parameter block in one pass.
-    let mut want: Vec<usize> = b.poses.clone();
-    want.extend(b.points.values().copied());
-    want.extend(b.levers.iter().flatten().copied());
-    want.extend(b.drifts.iter().map(|d| d.block));
-    want.extend(b.interiors.iter().flatten().copied());
+    // Covariances of every block in one pass.
+    let want: Vec<Key> = pr.keys().to_vec();
     let (covs, rel) = pr.statistics(&want, s0)?;
-    let cov_of = |blk: usize| {
+    let cov_of = |key: Key| {
         want.iter()
-            .position(|w| *w == blk)
+            .position(|w| *w == key)
             .and_then(|i| covs[i].as_ref())
     };
     let res = super::residuals::collect(p, s, &rel);
@@ -222,19 +225,21 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         .iter()
         .enumerate()
         .map(|(i, im)| {
-            let pose = pr.blocks[b.poses[i]]
-                .pose()
-                .copied()
-                .unwrap_or(photo::camera::Pose {
-                    r: nalgebra::Matrix3::identity(),
-                    centre: Vector3::zeros(),
-                });
+            let key = Key::Pose(ImageId::from(i));
+            let pose =
+                pr.value(key)
+                    .and_then(Value::pose)
+                    .copied()
+                    .unwrap_or(photo::camera::Pose {
+                        r: nalgebra::Matrix3::identity(),
+                        centre: Vector3::zeros(),
+                    });
             let (g, e, n) = project(&pose.centre);
             let Angles::OmegaPhiKappa { omega, phi, kappa } = Angles::omega_phi_kappa(&pose.r)
             else {
                 unreachable!("omega_phi_kappa returns that convention")
             };
-            let c = cov_of(b.poses[i]);
+            let c = cov_of(key);
             let (n_pts, ss) = per_image[i];
             ImageResult {
                 id: im.id.clone(),
@@ -265,15 +270,15 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
     }
     let mut points = Vec::new();
     let mut checks = CheckTable::default();
-    for (id, &blk) in &b.points {
-        let Some(x) = pr.blocks[blk].vector() else {
+    for (k, id) in b.point_names.iter().enumerate() {
+        let key = Key::Point(PointId::from(k));
+        let Some(x) = pr.value(key).and_then(Value::as_point) else {
             continue;
         };
-        let x = Vector3::new(x[0], x[1], x[2]);
         let (g, e, n) = project(&x);
         let ground = p.ground.iter().find(|g| &g.id == id);
         let kind = ground.map(|g| g.kind).unwrap_or(PointKind::Tie);
-        let sigma = cov_of(blk).map(|c| sig3(c, 0)).unwrap_or_default();
+        let sigma = cov_of(key).map(|c| sig3(c, 0)).unwrap_or_default();
         if let (Some(gp), PointKind::Check) = (ground, kind) {
             let known = frame.to_local(&gp.pos);
             let d = x - known;
@@ -323,49 +328,45 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
     let lever_arms = p
         .cameras
         .iter()
-        .zip(&b.levers)
-        .filter_map(|(c, l)| {
-            l.map(|l| {
-                estimated(
-                    format!("lever arm ({})", c.id),
-                    &["u", "v", "w"],
-                    pr,
-                    l,
-                    cov_of(l),
-                    0.0,
-                )
-            })
+        .enumerate()
+        .map(|(i, c)| (c, Key::LeverArm(CameraId::from(i))))
+        .filter(|(_, k)| pr.contains(*k))
+        .map(|(c, k)| {
+            let name = format!("lever arm ({})", c.id);
+            estimated(name, &["u", "v", "w"], pr, k, cov_of(k), 0.0)
         })
         .collect();
     let drifts = b
         .drifts
         .iter()
-        .map(|d| {
+        .enumerate()
+        .map(|(i, d)| {
+            let key = Key::Drift(DriftId::from(i));
             let labels: &[&str] = match d.model {
                 DriftModel::Offset => &["aE", "aN", "aU"],
                 DriftModel::Rate => &["bE", "bN", "bU"],
                 DriftModel::Linear => &["aE", "aN", "aU", "bE", "bN", "bU"],
             };
-            estimated(d.name.clone(), labels, pr, d.block, cov_of(d.block), d.t0)
+            estimated(d.name.clone(), labels, pr, key, cov_of(key), d.t0)
         })
         .collect();
     const NAMES: [&str; 10] = ["f", "x0", "y0", "k1", "k2", "k3", "p1", "p2", "b1", "b2"];
     let interiors = p
         .cameras
         .iter()
-        .zip(&b.interiors)
-        .filter_map(|(c, ib)| {
-            ib.map(|ib| {
-                let labels: Vec<&str> = c.calibrate.iter().map(|&i| NAMES[i]).collect();
-                estimated(
-                    format!("interior ({})", c.id),
-                    &labels,
-                    pr,
-                    ib,
-                    cov_of(ib),
-                    0.0,
-                )
-            })
+        .enumerate()
+        .map(|(i, c)| (c, Key::Camera(CameraId::from(i))))
+        .filter(|(_, k)| pr.contains(*k))
+        .map(|(c, k)| {
+            let labels: Vec<&str> = c.calibrate.iter().map(|&i| NAMES[i]).collect();
+            estimated(
+                format!("interior ({})", c.id),
+                &labels,
+                pr,
+                k,
+                cov_of(k),
+                0.0,
+            )
         })
         .collect();
     // Reliability per group.
@@ -384,17 +385,14 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         })
         .collect();
     for r in &rel {
-        let f = &pr.factors[r.factor];
-        let g = f.group();
-        let scale = pr.group_scale.get(g).copied().unwrap_or(1.0).sqrt() * s0;
-        let unit = match &b.obs[r.factor] {
-            Obs::Image(m) => {
-                let m = &p.measurements[*m];
-                p.cameras[p.images[m.image].camera].camera.pixel
-            }
-            _ => 1.0,
+        let g = pr.group(r.factor);
+        let scale = pr.group_sigma(g) * s0;
+        let noise = pr.noise(r.factor);
+        let unit = match pr.factor_as::<ImagePoint>(r.factor) {
+            Some(f) => p.cameras[p.images[f.image().index()].camera].camera.pixel,
+            None => 1.0,
         };
-        let q = &mut groups[g];
+        let q = &mut groups[g.0];
         for i in 0..r.redundancy.len() {
             let rr = r.redundancy[i];
             q.observations += 1;
@@ -405,7 +403,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
             } else {
                 q.max_mdb = q
                     .max_mdb
-                    .max(DELTA0 * f.sigmas()[i] * scale / rr.sqrt() / unit);
+                    .max(DELTA0 * noise.sigma(i) * scale / rr.sqrt() / unit);
             }
         }
     }
@@ -420,35 +418,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
     let removed = s
         .removed
         .iter()
-        .map(|&(k, w)| match &b.obs[k] {
-            Obs::Image(m) => {
-                let m = &p.measurements[*m];
-                Removed {
-                    kind: "image point".into(),
-                    what: format!("point {} in image {}", m.point, p.images[m.image].id),
-                    w,
-                    source: m.source.clone(),
-                }
-            }
-            Obs::Control(g) => Removed {
-                kind: "control point".into(),
-                what: format!("control point {} (kept as a tie point)", p.ground[*g].id),
-                w,
-                source: p.ground[*g].source.clone(),
-            },
-            Obs::Gnss { antenna: a, .. } => Removed {
-                kind: "GNSS centre".into(),
-                what: format!("antenna of image {}", p.antennas[*a].image),
-                w,
-                source: String::new(),
-            },
-            Obs::LeverPrior(c) => Removed {
-                kind: "lever-arm prior".into(),
-                what: format!("camera {}", p.cameras[*c].id),
-                w,
-                source: String::new(),
-            },
-        })
+        .map(|&(k, w)| removed_observation(p, b, k, w))
         .collect();
     let mut warnings = p.warnings.clone();
     if !b.single_ray.is_empty() {
@@ -497,6 +467,43 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         gnss_residuals: res.gnss,
         warnings,
     })
+}
+
+/// What a factor removed by data snooping was, read from the factor itself.
+fn removed_observation(p: &Project, b: &super::build::Built, k: FactorId, w: f64) -> Removed {
+    let pr = &b.problem;
+    let point = |id: PointId| b.point_names.get(id.index()).cloned().unwrap_or_default();
+    let (kind, what, source) = if let Some(f) = pr.factor_as::<ImagePoint>(k) {
+        let image = &p.images[f.image().index()].id;
+        let what = format!("point {} in image {image}", point(f.point()));
+        ("image point", what, f.source.clone())
+    } else if let Some(f) = pr.factor_as::<Prior>(k) {
+        match f.key() {
+            Key::Point(id) => {
+                let what = format!("control point {} (kept as a tie point)", point(id));
+                ("control point", what, f.source.clone())
+            }
+            Key::LeverArm(c) => {
+                let what = format!("camera {}", p.cameras[c.index()].id);
+                ("lever-arm prior", what, f.source.clone())
+            }
+            other => ("prior", other.to_string(), f.source.clone()),
+        }
+    } else if let Some(f) = pr.factor_as::<GnssCentre>(k) {
+        let what = format!("antenna of image {}", p.antennas[f.record].image);
+        ("GNSS centre", what, String::new())
+    } else if let Some(f) = pr.factor_as::<Distance>(k) {
+        let [a, c] = f.points();
+        ("distance", format!("{a} – {c}"), f.source.clone())
+    } else {
+        ("observation", format!("factor {}", k.0), String::new())
+    };
+    Removed {
+        kind: kind.into(),
+        what,
+        w,
+        source,
+    }
 }
 
 /// A sort key that puts C2 before C10: the text before the first digit, then the number.

@@ -1,0 +1,330 @@
+//! Evaluating factors: whitened residuals and Jacobians of every active factor (in
+//! parallel, into buffers kept between steps), the cost, and the small column-major
+//! products the reduced system is built from.
+
+use super::factor::Params;
+use super::problem::{Entry, Problem, MAX_FACTOR_KEYS};
+use super::structure::{Slot, Structure};
+use super::value::Value;
+use super::FactorId;
+use super::SolveError;
+use nalgebra::{DMatrixViewMut, SMatrixView, SMatrixViewMut};
+use rayon::prelude::*;
+
+/// Every active factor linearised, in one buffer laid out by the structure: per factor its
+/// whitened residual, then its whitened Jacobian blocks (column-major, at the slots'
+/// offsets); and the robust weight ρ′ at each residual.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Linearisation {
+    pub j: Vec<f64>,
+    pub w: Vec<f64>,
+}
+
+impl Linearisation {
+    /// The residual of active factor `k`.
+    pub fn res<'a>(&'a self, st: &Structure, k: usize) -> &'a [f64] {
+        &self.j[st.base[k]..st.base[k] + st.m[k]]
+    }
+
+    /// The Jacobian block of slot `s` of active factor `k`.
+    pub fn jac<'a>(&'a self, st: &Structure, k: usize, s: &Slot) -> Option<&'a [f64]> {
+        s.joff.map(|o| &self.j[o..o + st.m[k] * s.dim])
+    }
+
+    /// The robust weight of active factor `k` (1 when no factor is robust).
+    pub fn weight(&self, st: &Structure, k: usize) -> f64 {
+        if st.robust {
+            self.w[k]
+        } else {
+            1.0
+        }
+    }
+}
+
+/// Cost ½Σρ and plain sum of squared whitened residuals.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Cost {
+    pub cost: f64,
+    pub squares: f64,
+}
+
+/// Evaluate one factor at `values`, whitened by its noise and group; the Jacobian blocks go to
+/// `j` (the factor's part of the buffer, blocks in slot order) when asked.
+fn evaluate(
+    e: &Entry,
+    scale: f64,
+    values: &[Value],
+    slots: &[Slot],
+    r: &mut [f64],
+    j: Option<&mut [f64]>,
+) -> bool {
+    let m = r.len();
+    let x = Params::new(values, &e.blocks);
+    let mut views: [Option<DMatrixViewMut<f64>>; MAX_FACTOR_KEYS] = Default::default();
+    let n = e.blocks.len();
+    let ok = match j {
+        Some(j) => {
+            j.fill(0.0);
+            let mut rest: &mut [f64] = j;
+            for (k, s) in slots.iter().enumerate() {
+                if s.joff.is_some() {
+                    let (a, b) = rest.split_at_mut(m * s.dim);
+                    views[k] = Some(DMatrixViewMut::from_slice(a, m, s.dim));
+                    rest = b;
+                }
+            }
+            let ok = e.factor.evaluate(&x, r, &mut views[..n]);
+            if ok {
+                e.noise.whiten(scale, r, j);
+            }
+            ok
+        }
+        None => {
+            let ok = e.factor.evaluate(&x, r, &mut views[..n]);
+            if ok {
+                e.noise.whiten(scale, r, &mut []);
+            }
+            ok
+        }
+    };
+    ok && r.iter().all(|v| v.is_finite())
+}
+
+/// Split `buf` into consecutive pieces of the given lengths.
+pub(crate) fn pieces(mut buf: &mut [f64], lens: impl Iterator<Item = usize>) -> Vec<&mut [f64]> {
+    lens.map(|n| {
+        let (a, b) = std::mem::take(&mut buf).split_at_mut(n);
+        buf = b;
+        a
+    })
+    .collect()
+}
+
+impl Problem {
+    /// Linearise every active factor at `values` into `lin` (buffers reused).
+    pub(crate) fn linearise(
+        &self,
+        st: &Structure,
+        values: &[Value],
+        lin: &mut Linearisation,
+    ) -> Result<Cost, SolveError> {
+        lin.j.resize(st.nbuf, 0.0);
+        lin.w.resize(st.active.len(), 1.0);
+        // Regions in buffer order, each a residual followed by the Jacobian blocks.
+        let len = |k: usize| {
+            st.m[k]
+                + st.slots[k]
+                    .iter()
+                    .filter(|s| s.joff.is_some())
+                    .map(|s| st.m[k] * s.dim)
+                    .sum::<usize>()
+        };
+        let regions = pieces(&mut lin.j, st.order.iter().map(|&k| len(k)));
+        type Weighed = (usize, Option<(f64, f64, f64)>);
+        let results: Vec<Weighed> = regions
+            .into_par_iter()
+            .zip(&st.order)
+            .map(|(region, &k)| {
+                let e = &self.entries[st.active[k]];
+                let scale = self.group_scale[e.group.0];
+                let (r, j) = region.split_at_mut(st.m[k]);
+                if !evaluate(e, scale, values, &st.slots[k], r, Some(j)) {
+                    return (k, None);
+                }
+                let s2: f64 = r.iter().map(|x| x * x).sum();
+                (k, Some((e.loss.weight(s2.sqrt()), e.loss.cost(s2), s2)))
+            })
+            .collect();
+        let mut parts = vec![None; st.active.len()];
+        for (k, p) in results {
+            if let Some((w, c, s2)) = p {
+                lin.w[k] = w;
+                parts[k] = Some((c, s2));
+            }
+        }
+        sum_costs(st, &parts)
+    }
+
+    /// The cost at `values` (no Jacobians).
+    pub(crate) fn cost_at(&self, st: &Structure, values: &[Value]) -> Result<Cost, SolveError> {
+        let parts: Vec<Option<(f64, f64)>> = st
+            .active
+            .par_iter()
+            .zip(&st.slots)
+            .map(|(&f, slots)| {
+                let e = &self.entries[f];
+                let mut buf = [0.0; 16];
+                let mut big = Vec::new();
+                let m = e.factor.dim();
+                let r: &mut [f64] = if m <= 16 {
+                    &mut buf[..m]
+                } else {
+                    big.resize(m, 0.0);
+                    &mut big
+                };
+                let scale = self.group_scale[e.group.0];
+                if !evaluate(e, scale, values, slots, r, None) {
+                    return None;
+                }
+                let s2: f64 = r.iter().map(|x| x * x).sum();
+                Some((e.loss.cost(s2), s2))
+            })
+            .collect();
+        sum_costs(st, &parts)
+    }
+}
+
+/// Sum per-factor costs in factor order (the same bits whatever the threads).
+fn sum_costs(st: &Structure, parts: &[Option<(f64, f64)>]) -> Result<Cost, SolveError> {
+    let mut c = Cost::default();
+    for (k, p) in parts.iter().enumerate() {
+        let (cost, sq) = p.ok_or(SolveError::Evaluation(FactorId(st.active[k])))?;
+        c.cost += cost;
+        c.squares += sq;
+    }
+    Ok(c)
+}
+
+/// out (p×q) += w·Aᵀ·B for A (m×p) and B (m×q), all column-major. Common block sizes
+/// run through code with every size known at compile time (unrolled, in registers).
+pub(crate) fn add_atb(w: f64, a: &[f64], b: &[f64], m: usize, out: &mut [f64], p: usize) {
+    let q = b.len() / m.max(1);
+    macro_rules! fixed {
+        ($(($m:literal, $p:literal, $q:literal)),*) => {
+            match (m, p, q) {
+                $(($m, $p, $q) => return add_atb_n::<$m, $p, $q>(w, a, b, out),)*
+                _ => {}
+            }
+        };
+    }
+    fixed!(
+        (1, 3, 3),
+        (1, 3, 6),
+        (1, 3, 9),
+        (1, 6, 3),
+        (1, 6, 6),
+        (1, 6, 9),
+        (1, 9, 3),
+        (1, 9, 6),
+        (1, 9, 9),
+        (2, 3, 3),
+        (2, 3, 6),
+        (2, 3, 9),
+        (2, 6, 3),
+        (2, 6, 6),
+        (2, 6, 9),
+        (2, 9, 3),
+        (2, 9, 6),
+        (2, 9, 9),
+        (3, 3, 3),
+        (3, 3, 6),
+        (3, 3, 9),
+        (3, 6, 3),
+        (3, 6, 6),
+        (3, 6, 9),
+        (3, 9, 3),
+        (3, 9, 6),
+        (3, 9, 9)
+    );
+    for j in 0..q {
+        let bj = &b[j * m..(j + 1) * m];
+        for i in 0..p {
+            let ai = &a[i * m..(i + 1) * m];
+            let s: f64 = ai.iter().zip(bj).map(|(x, y)| x * y).sum();
+            out[j * p + i] += w * s;
+        }
+    }
+}
+
+/// [`add_atb`] with every size known at compile time.
+fn add_atb_n<const M: usize, const P: usize, const Q: usize>(
+    w: f64,
+    a: &[f64],
+    b: &[f64],
+    out: &mut [f64],
+) {
+    let a: &[f64] = &a[..M * P];
+    let b: &[f64] = &b[..M * Q];
+    let out: &mut [f64] = &mut out[..P * Q];
+    for j in 0..Q {
+        let mut bj = [0.0; M];
+        bj.copy_from_slice(&b[j * M..j * M + M]);
+        for i in 0..P {
+            let mut s = 0.0;
+            for k in 0..M {
+                s += a[i * M + k] * bj[k];
+            }
+            out[j * P + i] += w * s;
+        }
+    }
+}
+
+/// out (p) += w·Aᵀ·v for A (m×p).
+pub(crate) fn add_atv(w: f64, a: &[f64], v: &[f64], out: &mut [f64]) {
+    let m = v.len();
+    for (i, o) in out.iter_mut().enumerate() {
+        let s: f64 = a[i * m..(i + 1) * m]
+            .iter()
+            .zip(v)
+            .map(|(x, y)| x * y)
+            .sum();
+        *o += w * s;
+    }
+}
+
+/// out (p×q) += s·A·B for A (p×k) and B (k×q); common sizes unrolled as in [`add_atb`].
+pub(crate) fn add_ab(s: f64, a: &[f64], b: &[f64], p: usize, k: usize, out: &mut [f64]) {
+    let q = b.len() / k.max(1);
+    macro_rules! fixed {
+        ($(($p:literal, $k:literal, $q:literal)),*) => {
+            match (p, k, q) {
+                $(($p, $k, $q) => return add_ab_n::<$p, $k, $q>(s, a, b, out),)*
+                _ => {}
+            }
+        };
+    }
+    fixed!(
+        (3, 3, 3),
+        (3, 3, 6),
+        (3, 3, 9),
+        (6, 3, 3),
+        (6, 3, 6),
+        (6, 3, 9),
+        (9, 3, 3),
+        (9, 3, 6),
+        (9, 3, 9)
+    );
+    for j in 0..q {
+        for l in 0..k {
+            let blj = s * b[j * k + l];
+            let al = &a[l * p..(l + 1) * p];
+            for (o, x) in out[j * p..(j + 1) * p].iter_mut().zip(al) {
+                *o += x * blj;
+            }
+        }
+    }
+}
+
+/// [`add_ab`] with every size known at compile time.
+fn add_ab_n<const P: usize, const K: usize, const Q: usize>(
+    s: f64,
+    a: &[f64],
+    b: &[f64],
+    out: &mut [f64],
+) {
+    let am = SMatrixView::<f64, P, K>::from_slice(&a[..P * K]);
+    let bm = SMatrixView::<f64, K, Q>::from_slice(&b[..K * Q]);
+    let mut om = SMatrixViewMut::<f64, P, Q>::from_slice(&mut out[..P * Q]);
+    om += (am * bm) * s;
+}
+
+/// out (p) += s·A·v for A (p×k).
+pub(crate) fn add_av(s: f64, a: &[f64], v: &[f64], out: &mut [f64]) {
+    let p = out.len();
+    for (l, vl) in v.iter().enumerate() {
+        let x = s * vl;
+        for (o, al) in out.iter_mut().zip(&a[l * p..(l + 1) * p]) {
+            *o += al * x;
+        }
+    }
+}

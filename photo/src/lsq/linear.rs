@@ -1,0 +1,145 @@
+//! The reduced system's linear algebra: dense faer Cholesky when small, faer's sparse
+//! Cholesky (symbolic factorisation kept while the structure holds) when large; pivots that
+//! betray a datum defect; the inverse for statistics. This is the one place that sets faer's
+//! parallelism. faer's factorisations give the same bits whatever their thread count
+//! (checked for 1–8), so `Options::threads` changes speed, never results.
+
+use super::problem::Problem;
+use super::reduced::Reduced;
+use super::structure::Structure;
+use faer::linalg::solvers::{DenseSolveCore, Solve};
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::{SparseColMat, Triplet};
+
+/// A symbolic sparse factorisation and the structure hash it was computed for.
+pub(crate) type SymbolicCache = (u64, SymbolicLlt<usize>);
+
+impl Problem {
+    /// Set faer's parallelism from the options (process-wide: set before each factorisation).
+    pub(crate) fn set_parallelism(&self) {
+        let n = self
+            .options
+            .threads
+            .unwrap_or_else(rayon::current_num_threads)
+            .max(1);
+        faer::set_global_parallelism(if n == 1 {
+            faer::Par::Seq
+        } else {
+            faer::Par::rayon(n)
+        });
+    }
+
+    /// Solve S·δ = −b: dense when small, sparse when large. `None` when S is not positive
+    /// definite.
+    pub(crate) fn solve_reduced(&self, st: &Structure, red: &Reduced) -> Option<Vec<f64>> {
+        self.set_parallelism();
+        let nr = st.nr;
+        let mut rhs = faer::Mat::<f64>::from_fn(nr, 1, |i, _| -red.g[i]);
+        if nr <= self.options.dense_limit {
+            let llt = dense(st, red).llt(faer::Side::Lower).ok()?;
+            llt.solve_in_place(rhs.as_mut());
+        } else {
+            let m = SparseColMat::<usize, f64>::try_new_from_triplets(nr, nr, &triplets(st, red))
+                .ok()?;
+            let mut cache = self.caches.symbolic.lock().ok()?;
+            if cache.as_ref().is_none_or(|c| c.0 != st.hash) {
+                *cache = Some((
+                    st.hash,
+                    SymbolicLlt::try_new(m.symbolic(), faer::Side::Lower).ok()?,
+                ));
+            }
+            let sym = cache.as_ref()?.1.clone();
+            drop(cache);
+            let llt = Llt::try_new_with_symbolic(sym, m.as_ref(), faer::Side::Lower).ok()?;
+            llt.solve_in_place(rhs.as_mut());
+        }
+        Some((0..nr).map(|i| rhs[(i, 0)]).collect())
+    }
+
+    /// Dense Cholesky of the reduced matrix. Returns the first column whose pivot is not
+    /// significant (a datum defect or dependency there; `None`: regular) and the inverse when
+    /// asked; `None` when the matrix is not positive definite at all (then the column is found
+    /// by bisection over leading minors).
+    pub(crate) fn dense_factor(
+        &self,
+        st: &Structure,
+        red: &Reduced,
+        inverse: bool,
+    ) -> Option<(Option<usize>, Option<faer::Mat<f64>>)> {
+        self.set_parallelism();
+        let m = dense(st, red);
+        let n = m.nrows();
+        let Ok(llt) = m.llt(faer::Side::Lower) else {
+            let (mut lo, mut hi) = (0usize, n);
+            while hi - lo > 1 {
+                let mid = (lo + hi) / 2;
+                if m.as_ref()
+                    .submatrix(0, 0, mid, mid)
+                    .llt(faer::Side::Lower)
+                    .is_ok()
+                {
+                    lo = mid
+                } else {
+                    hi = mid
+                }
+            }
+            return Some((Some(hi - 1), None));
+        };
+        let l = llt.L();
+        // Each pivot against its own diagonal entry: a (near-)dependent unknown loses all its
+        // significant digits there, however the unknowns are scaled.
+        let weak = (0..n).find(|&i| l[(i, i)] * l[(i, i)] <= 1e-11 * m[(i, i)]);
+        drop(m);
+        let inv = inverse.then(|| llt.inverse());
+        Some((weak, inv))
+    }
+}
+
+/// The reduced matrix as one dense symmetric faer matrix.
+fn dense(st: &Structure, red: &Reduced) -> faer::Mat<f64> {
+    let mut m = faer::Mat::<f64>::zeros(st.nr, st.nr);
+    for_each_block(st, red, |r0, c0, dr, dc, b| {
+        for j in 0..dc {
+            for i in 0..dr {
+                m[(r0 + i, c0 + j)] = b[j * dr + i];
+                m[(c0 + j, r0 + i)] = b[j * dr + i];
+            }
+        }
+    });
+    m
+}
+
+/// The lower triangle of the reduced matrix as triplets (in a fixed order).
+fn triplets(st: &Structure, red: &Reduced) -> Vec<Triplet<usize, usize, f64>> {
+    let mut t = Vec::with_capacity(red.vals.len());
+    for_each_block(st, red, |r0, c0, dr, dc, b| {
+        for j in 0..dc {
+            for i in 0..dr {
+                if r0 + i >= c0 + j {
+                    t.push(Triplet {
+                        row: r0 + i,
+                        col: c0 + j,
+                        val: b[j * dr + i],
+                    });
+                }
+            }
+        }
+    });
+    t
+}
+
+/// Call `f(row offset, column offset, rows, columns, block)` for every stored block.
+fn for_each_block(
+    st: &Structure,
+    red: &Reduced,
+    mut f: impl FnMut(usize, usize, usize, usize, &[f64]),
+) {
+    for (a, row) in st.rows.iter().enumerate() {
+        let da = st.cdim[a];
+        for &(off, b) in &row.entries {
+            let db = st.cdim[b];
+            let o = row.start + off;
+            f(st.coff[a], st.coff[b], da, db, &red.vals[o..o + da * db]);
+        }
+    }
+}

@@ -1,0 +1,218 @@
+//! Levenberg–Marquardt with a trust region (as Ceres): the damping λ = 1/radius acts on the
+//! clamped diagonal of the normals; a step is accepted when the cost falls by more than 10⁻³
+//! of what the linear model promised, and the radius follows the gain ratio (Nielsen).
+//! Iterations end when an accepted step gains less than `function_tolerance` of the cost, when
+//! a step changes the cost by round-off only (a converged problem solved again stays bit for
+//! bit where it was, so its statistics can be reused), or after `max_iterations`.
+
+use super::lin::Linearisation;
+use super::problem::Problem;
+use super::reduced::Reduced;
+use super::structure::Structure;
+use super::{FactorId, Key};
+use nalgebra::DMatrix;
+
+/// What an adjustment did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Summary {
+    /// Iterations (accepted or not).
+    pub iterations: usize,
+    /// Accepted steps.
+    pub successful: usize,
+    /// Cost ½Σρ before and after.
+    pub initial_cost: f64,
+    /// Cost ½Σρ at the solution.
+    pub final_cost: f64,
+    /// √(Σr²/(m − n)) of the whitened residuals (1 when there is no redundancy).
+    pub sigma0: f64,
+    /// m − n.
+    pub redundancy: f64,
+    /// Residual components m.
+    pub observations: usize,
+    /// Free unknowns n.
+    pub unknowns: usize,
+    /// Wall time, seconds.
+    pub seconds: f64,
+}
+
+/// Why an adjustment fails.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SolveError {
+    /// The normal equations could not be factorised.
+    #[error("the normal equations are singular: {0}")]
+    Singular(String),
+    /// A block's own observations do not determine it.
+    #[error(
+        "{0} is not determined by its observations (observed too few times, or only along one ray)"
+    )]
+    Undetermined(Key),
+    /// A block's unknowns depend on the others'.
+    #[error("the normal equations are singular at {0}: a datum defect (no control, nothing fixed) or unknowns that cannot be told apart")]
+    Dependent(Key),
+    /// More unknowns than residual components.
+    #[error("more unknowns ({0}) than observations ({1})")]
+    Underdetermined(usize, usize),
+    /// A factor cannot be evaluated at the current values.
+    #[error("factor {} cannot be evaluated (a point behind its camera?)", .0.0)]
+    Evaluation(FactorId),
+}
+
+impl Problem {
+    /// Adjust: Levenberg–Marquardt until convergence, then the checks that make the result
+    /// meaningful (every block determined, the normals regular).
+    pub fn solve(&mut self) -> Result<Summary, SolveError> {
+        let t0 = std::time::Instant::now();
+        let st = self.structure();
+        let mut lins = Linearisation::default();
+        let mut cost = self.linearise(&st, &self.values, &mut lins)?;
+        if self.options.unique {
+            self.check_determined(&st, &lins)?;
+        }
+        let mut s = Summary {
+            initial_cost: cost.cost,
+            ..Summary::default()
+        };
+        let mut red = Reduced::default();
+        let (mut radius, mut nu) = (self.options.initial_radius, 2.0);
+        let mut fresh = true;
+        while s.iterations < self.options.max_iterations {
+            s.iterations += 1;
+            if !fresh {
+                cost = self.linearise(&st, &self.values, &mut lins)?;
+                fresh = true;
+            }
+            let step = self
+                .reduce(&st, &lins, 1.0 / radius, true, &mut red)
+                .then(|| self.solve_reduced(&st, &red))
+                .flatten()
+                .map(|dc| Self::back_substitute(&st, &red, dc));
+            let Some(step) = step else {
+                (radius, nu) = (radius / nu, nu * 2.0);
+                if radius < 1e-32 {
+                    break;
+                }
+                continue;
+            };
+            let cand = self.apply(&st, &step);
+            let new = self
+                .cost_at(&st, &cand)
+                .map(|c| c.cost)
+                .unwrap_or(f64::INFINITY);
+            let model = Self::model_decrease(&st, &lins, &step);
+            let rho = if model > 0.0 {
+                (cost.cost - new) / model
+            } else {
+                -1.0
+            };
+            let change = (cost.cost - new) / cost.cost.max(f64::MIN_POSITIVE);
+            if new.is_finite() && rho > 1e-3 && change >= 1e-14 {
+                self.values = cand;
+                (fresh, s.successful) = (false, s.successful + 1);
+                cost.cost = new;
+                radius /= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
+                nu = 2.0;
+                if change < self.options.function_tolerance {
+                    break;
+                }
+            } else {
+                // A step that changes the cost by round-off only: converged.
+                if new.is_finite() && change.abs() <= 1e-12 {
+                    break;
+                }
+                (radius, nu) = (radius / nu, nu * 2.0);
+                if radius < 1e-32 {
+                    break;
+                }
+            }
+        }
+        if !fresh {
+            cost = self.linearise(&st, &self.values, &mut lins)?;
+        }
+        let m = st.nres;
+        if m < st.n {
+            return Err(SolveError::Underdetermined(st.n, m));
+        }
+        if self.options.unique {
+            self.check_regular(&st, &lins, &mut red)?;
+        }
+        s.final_cost = cost.cost;
+        s.observations = m;
+        s.unknowns = st.n;
+        s.redundancy = (m - st.n) as f64;
+        s.sigma0 = if m > st.n {
+            (cost.squares / (m - st.n) as f64).sqrt()
+        } else {
+            1.0
+        };
+        s.seconds = t0.elapsed().as_secs_f64();
+        self.time("solve", t0);
+        Ok(s)
+    }
+
+    /// Every free block must be determined by its own observations (a point seen by one ray,
+    /// a camera without points are not): its diagonal block of the normals must be regular.
+    fn check_determined(&self, st: &Structure, lin: &Linearisation) -> Result<(), SolveError> {
+        let diag = |dim: usize, terms: &mut dyn Iterator<Item = (usize, usize)>| {
+            let mut m = DMatrix::<f64>::zeros(dim, dim);
+            for (mf, jo) in terms {
+                let j = &lin.j[jo..jo + mf * dim];
+                super::lin::add_atb(1.0, j, j, mf, m.as_mut_slice(), dim);
+            }
+            let e = m.symmetric_eigenvalues();
+            let (lo, hi) = (e.min(), e.max());
+            hi > 0.0 && lo > 1e-10 * hi
+        };
+        for (c, &b) in st.cblocks.iter().enumerate() {
+            if !diag(st.cdim[c], &mut st.rows[c].grad.iter().map(|g| (g.3, g.1))) {
+                return Err(SolveError::Undetermined(self.keys[b]));
+            }
+        }
+        for eb in &st.eblocks {
+            if !diag(eb.dim, &mut st.terms(eb).iter().map(|t| (t.m, t.jo))) {
+                return Err(SolveError::Undetermined(self.keys[eb.block]));
+            }
+        }
+        Ok(())
+    }
+
+    /// The undamped normals must be regular, otherwise there is a datum defect (no control,
+    /// nothing fixed). Checked once per structure (a dense factorisation of the reduced system).
+    fn check_regular(
+        &self,
+        st: &Structure,
+        lins: &Linearisation,
+        red: &mut Reduced,
+    ) -> Result<(), SolveError> {
+        if self
+            .caches
+            .regular_for
+            .lock()
+            .is_ok_and(|r| *r == Some(st.hash))
+        {
+            return Ok(());
+        }
+        let singular = || {
+            SolveError::Singular(format!(
+                "{} unknowns: a datum defect (no control points, nothing fixed)",
+                st.n
+            ))
+        };
+        if !self.reduce(st, lins, 0.0, false, red) {
+            return Err(singular());
+        }
+        if st.nr > 0 {
+            match self.dense_factor(st, red, false) {
+                Some((None, _)) => {}
+                Some((Some(col), _)) => {
+                    let c = st.coff.partition_point(|&o| o <= col) - 1;
+                    return Err(SolveError::Dependent(self.keys[st.cblocks[c]]));
+                }
+                None => return Err(singular()),
+            }
+        }
+        if let Ok(mut r) = self.caches.regular_for.lock() {
+            *r = Some(st.hash);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,46 @@
+//! # lsq — the one least-squares core
+//!
+//! Every adjustment of ppkat runs here: the joint GNSS-supported block adjustment, BAL
+//! problems, and any new observation kind. In the Ceres / gtsam pattern:
+//!
+//! - **Parameter blocks** of any size are named by typed [`Key`]s (`Key::Pose(ImageId)`,
+//!   `Key::Point(PointId)`, `Key::LeverArm(CameraId)` …) and hold a [`Value`] (a vector, a
+//!   pose, or a rotation followed by a vector) updated on its manifold. A block can be fixed
+//!   ([`Problem::set_fixed`]), bounded by a prior (a factor like any other), and blocks of the
+//!   kinds in [`Options::eliminate`] are eliminated by the Schur complement while solving.
+//! - **Factors** ([`Factor`]) name their keys and return r = h(x) − z and its Jacobians; each
+//!   is added with its own [`Noise`] model (σ per component or a full covariance), robust
+//!   [`Loss`] and [`Group`] (for variance components). Factors keep their own observation
+//!   bookkeeping (which image, which point, which file line); [`Problem::factor_as`] gives
+//!   them back by type, so results are read from the factors. Adding an observation kind
+//!   never touches this module.
+//! - **Solving** ([`Problem::solve`]): Levenberg–Marquardt with a trust region; the reduced
+//!   system over the non-eliminated blocks (any eliminated block size) is built row by row in
+//!   parallel and solved by dense Cholesky when small, faer's sparse Cholesky (symbolic
+//!   factorisation kept) when large. Results are bit-identical whatever the thread count.
+//! - **Statistics** at the solution without the full inverse: covariances of chosen blocks,
+//!   redundancy numbers, normalised residuals ([`Problem::statistics`]); data snooping with
+//!   removal ([`Problem::data_snooping`]); Förstner variance components
+//!   ([`Problem::variance_components`]).
+//!
+//! Units: whatever the factors use; σ0 is dimensionless. Cost = ½Σρ(‖L⁻¹r‖²).
+
+mod factor;
+mod key;
+mod lin;
+mod linear;
+mod lm;
+mod problem;
+mod reduced;
+mod snoop;
+mod stats;
+mod structure;
+mod value;
+
+pub use factor::{Factor, FactorId, Group, Loss, Noise, Params};
+pub use key::{CameraId, DriftId, ImageId, Key, KeyKind, PointId};
+pub use lm::{SolveError, Summary};
+pub use problem::{BuildError, Options, Problem, Timing, MAX_FACTOR_KEYS};
+pub use snoop::{normal_quantile, snooping_critical, MIN_VCE_REDUNDANCY};
+pub use stats::{Covariances, Reliability};
+pub use value::Value;

@@ -1,0 +1,155 @@
+//! Baarda data snooping with removal, and Förstner variance components per group.
+
+use super::problem::Problem;
+use super::SolveError;
+use super::{FactorId, Group, Summary};
+
+/// Least redundancy of a group whose variance component is estimated.
+pub const MIN_VCE_REDUNDANCY: f64 = 10.0;
+
+impl Problem {
+    /// Data snooping: adjust, remove the factor with the largest |w| above `critical`, repeat.
+    /// Returns the last adjustment and the removed factors in removal order with their |w|; a
+    /// block of an eliminated kind that a removal leaves undetermined (no more residual rows
+    /// than unknowns) is fixed out, its remaining factors following with w = 0.
+    pub fn data_snooping(
+        &mut self,
+        critical: f64,
+    ) -> Result<(Summary, Vec<(FactorId, f64)>), SolveError> {
+        let mut removed = Vec::new();
+        loop {
+            let summary = self.solve()?;
+            let rel = self.reliability()?;
+            let worst = rel
+                .iter()
+                .map(|r| (r.factor, r.normalised.amax()))
+                .max_by(|a, b| a.1.total_cmp(&b.1));
+            match worst {
+                Some((k, w)) if w > critical => {
+                    self.entries[k.0].removed = true;
+                    removed.push((k, w));
+                    self.drop_undetermined(k, &mut removed);
+                }
+                _ => return Ok((summary, removed)),
+            }
+        }
+    }
+
+    /// After removing factor `k`: a block of an eliminated kind it touched that is left with
+    /// no more residual rows than unknowns is fixed out, with its remaining factors.
+    fn drop_undetermined(&mut self, k: FactorId, removed: &mut Vec<(FactorId, f64)>) {
+        let blocks: Vec<usize> = self.entries[k.0]
+            .blocks
+            .iter()
+            .copied()
+            .filter(|&b| !self.fixed[b] && self.options.eliminate.contains(&self.keys[b].kind()))
+            .collect();
+        for b in blocks {
+            let active: Vec<usize> = (0..self.entries.len())
+                .filter(|&j| !self.entries[j].removed && self.entries[j].blocks.contains(&b))
+                .collect();
+            let rows: usize = active.iter().map(|&j| self.entries[j].factor.dim()).sum();
+            if rows <= self.values[b].dim() {
+                for j in active {
+                    self.entries[j].removed = true;
+                    removed.push((FactorId(j), 0.0));
+                }
+                self.fixed[b] = true;
+            }
+        }
+    }
+
+    /// Variance component estimation (Förstner): per group σ̂² = vᵀPv / r over the group,
+    /// iterated until the factors settle; groups with a redundancy below
+    /// [`MIN_VCE_REDUNDANCY`] keep their weights. Returns each group's σ multiplier (√ of its
+    /// variance factor), indexed by [`Group`].
+    pub fn variance_components(&mut self, max_rounds: usize) -> Result<Vec<f64>, SolveError> {
+        for _ in 0..max_rounds {
+            self.solve()?;
+            let (num, red) = self.group_sums()?;
+            let mut change: f64 = 0.0;
+            for g in 0..self.group_scale.len() {
+                // A group with little redundancy keeps its weight: its estimate would be noise.
+                if red[g] >= MIN_VCE_REDUNDANCY {
+                    let f = num[g] / red[g];
+                    self.group_scale[g] *= f;
+                    change = change.max((f - 1.0).abs());
+                }
+            }
+            if change < 0.01 {
+                break;
+            }
+        }
+        Ok(self.group_scale.iter().map(|s| s.sqrt()).collect())
+    }
+
+    /// σ multiplier of a group (√ of its variance factor).
+    pub fn group_sigma(&self, g: Group) -> f64 {
+        self.group_scale(g).sqrt()
+    }
+}
+
+/// Upper quantile of the standard normal distribution (Acklam's rational approximation,
+/// relative error below 1.2e-9).
+pub fn normal_quantile(p: f64) -> f64 {
+    let p = p.clamp(1e-300, 1.0 - 1e-16);
+    let a = [
+        -3.969683028665376e+01,
+        2.209460984245205e+02,
+        -2.759285104469687e+02,
+        1.38357751867269e+02,
+        -3.066479806614716e+01,
+        2.506628277459239e+00,
+    ];
+    let b = [
+        -5.447609879822406e+01,
+        1.615858368580409e+02,
+        -1.556989798598866e+02,
+        6.680131188771972e+01,
+        -1.328068155288572e+01,
+    ];
+    let c = [
+        -7.784894002430293e-03,
+        -3.223964580411365e-01,
+        -2.400758277161838e+00,
+        -2.549732539343734e+00,
+        4.374664141464968e+00,
+        2.938163982698783e+00,
+    ];
+    let d = [
+        7.784695709041462e-03,
+        3.224671290700398e-01,
+        2.445134137142996e+00,
+        3.754408661907416e+00,
+    ];
+    let lo = 0.02425;
+    if p < lo {
+        let q = (-2.0 * p.ln()).sqrt();
+        (((((c[0] * q + c[1]) * q + c[2]) * q + c[3]) * q + c[4]) * q + c[5])
+            / ((((d[0] * q + d[1]) * q + d[2]) * q + d[3]) * q + 1.0)
+    } else if p <= 1.0 - lo {
+        let q = p - 0.5;
+        let r = q * q;
+        (((((a[0] * r + a[1]) * r + a[2]) * r + a[3]) * r + a[4]) * r + a[5]) * q
+            / (((((b[0] * r + b[1]) * r + b[2]) * r + b[3]) * r + b[4]) * r + 1.0)
+    } else {
+        -normal_quantile(1.0 - p)
+    }
+}
+
+/// Critical value of the normalised residual for `tests` two-sided tests at a family-wise
+/// error `alpha` (Bonferroni): with thousands of observations, Baarda's per-test 3.29
+/// (α = 0.1 %) would reject a few good observations by chance alone.
+pub fn snooping_critical(alpha: f64, tests: usize) -> f64 {
+    normal_quantile(1.0 - alpha / (2.0 * tests.max(1) as f64))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn quantiles() {
+        assert!((super::normal_quantile(0.975) - 1.959964).abs() < 1e-5);
+        assert!((super::normal_quantile(0.9995) - 3.290527).abs() < 1e-5);
+        assert!((super::snooping_critical(0.001, 1) - 3.290527).abs() < 1e-5);
+    }
+}
