@@ -134,7 +134,7 @@ impl BalProblem {
 
     /// Residual (predicted − observed) of one observation.
     pub fn residual(&self, o: &BalObs) -> Vector2<f64> {
-        project(&self.cameras[o.cam], &self.points[o.pt]).0 - o.uv
+        predict(&self.cameras[o.cam], &self.points[o.pt]) - o.uv
     }
 
     /// ½Σr².
@@ -154,6 +154,14 @@ impl BalProblem {
 }
 
 type CamJ = SMatrix<f64, 2, 9>;
+
+/// The predicted image point alone.
+fn predict(c: &BalCamera, x: &Vector3<f64>) -> Vector2<f64> {
+    let pc = c.r * x + c.t;
+    let p = Vector2::new(-pc.x / pc.z, -pc.y / pc.z);
+    let n = p.norm_squared();
+    p * (c.f * (1.0 + c.k1 * n + c.k2 * n * n))
+}
 
 /// Prediction and the Jacobians with respect to (δ, t, f, k1, k2) and X.
 fn project(c: &BalCamera, x: &Vector3<f64>) -> (Vector2<f64>, CamJ, Matrix2x3<f64>) {
@@ -234,7 +242,12 @@ impl Factor for BalFactor {
         let (Some((rot, v)), Some(pt)) = (x.rotated(0), x.point(1)) else {
             return false;
         };
-        let (pred, jc, jp) = project(&camera_of(rot, v), &pt);
+        let cam = camera_of(rot, v);
+        if j.iter().all(Option::is_none) {
+            r.copy_from_slice((predict(&cam, &pt) - self.uv).as_slice());
+            return true;
+        }
+        let (pred, jc, jp) = project(&cam, &pt);
         r.copy_from_slice((pred - self.uv).as_slice());
         if let Some(m) = &mut j[0] {
             m.copy_from(&jc);

@@ -21,7 +21,8 @@ pub trait Factor: Any + Send + Sync {
     /// Number of residual components.
     fn dim(&self) -> usize;
     /// Write r = h(x) − z into `residual` and, for every `Some` slot of `jacobians`, ∂r/∂δ of
-    /// that block (slots are `None` for fixed blocks and when only the cost is wanted).
+    /// that block — every entry of it: the buffers are not cleared beforehand (slots are
+    /// `None` for fixed blocks and when only the cost is wanted).
     /// Returns `false` when the model cannot be evaluated there (a point behind its camera).
     fn evaluate(
         &self,
@@ -143,6 +144,7 @@ impl Noise {
 
     /// Whiten a residual and its Jacobian columns in place, with every variance multiplied by
     /// `scale` (the group's variance factor). `j` holds `cols` columns of `r.len()` rows.
+    #[inline]
     pub(crate) fn whiten(&self, scale: f64, r: &mut [f64], j: &mut [f64]) {
         let m = r.len();
         let s = 1.0 / scale.sqrt();

@@ -41,6 +41,9 @@ impl Linearisation {
     }
 }
 
+/// Fewest items a parallel task takes (factors or blocks are too small to be tasks alone).
+pub(crate) const MIN_LEN: usize = 256;
+
 /// Cost ½Σρ and plain sum of squared whitened residuals.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Cost {
@@ -64,7 +67,6 @@ fn evaluate(
     let n = e.blocks.len();
     let ok = match j {
         Some(j) => {
-            j.fill(0.0);
             let mut rest: &mut [f64] = j;
             for (k, s) in slots.iter().enumerate() {
                 if s.joff.is_some() {
@@ -113,7 +115,9 @@ impl Problem {
         // Regions in buffer order, each a residual followed by the Jacobian blocks.
         let len = |k: usize| {
             st.m[k]
-                + st.slots[k]
+                + st
+                    .slots
+                    .get(k)
                     .iter()
                     .filter(|s| s.joff.is_some())
                     .map(|s| st.m[k] * s.dim)
@@ -124,11 +128,12 @@ impl Problem {
         let results: Vec<Weighed> = regions
             .into_par_iter()
             .zip(&st.order)
+            .with_min_len(MIN_LEN)
             .map(|(region, &k)| {
                 let e = &self.entries[st.active[k]];
                 let scale = self.group_scale[e.group.0];
                 let (r, j) = region.split_at_mut(st.m[k]);
-                if !evaluate(e, scale, values, &st.slots[k], r, Some(j)) {
+                if !evaluate(e, scale, values, st.slots.get(k), r, Some(j)) {
                     return (k, None);
                 }
                 let s2: f64 = r.iter().map(|x| x * x).sum();
@@ -150,8 +155,10 @@ impl Problem {
         let parts: Vec<Option<(f64, f64)>> = st
             .active
             .par_iter()
-            .zip(&st.slots)
-            .map(|(&f, slots)| {
+            .enumerate()
+            .with_min_len(MIN_LEN)
+            .map(|(k, &f)| {
+                let slots = st.slots.get(k);
                 let e = &self.entries[f];
                 let mut buf = [0.0; 16];
                 let mut big = Vec::new();

@@ -95,14 +95,17 @@ impl Problem {
     }
 }
 
-/// The reduced matrix as one dense symmetric faer matrix.
+/// The reduced matrix as one dense symmetric faer matrix, from the lower triangle (the upper
+/// triangle of a diagonal block is not kept up to date).
 fn dense(st: &Structure, red: &Reduced) -> faer::Mat<f64> {
     let mut m = faer::Mat::<f64>::zeros(st.nr, st.nr);
     for_each_block(st, red, |r0, c0, dr, dc, b| {
         for j in 0..dc {
             for i in 0..dr {
-                m[(r0 + i, c0 + j)] = b[j * dr + i];
-                m[(c0 + j, r0 + i)] = b[j * dr + i];
+                if r0 + i >= c0 + j {
+                    m[(r0 + i, c0 + j)] = b[j * dr + i];
+                    m[(c0 + j, r0 + i)] = b[j * dr + i];
+                }
             }
         }
     });

@@ -152,23 +152,28 @@ impl Problem {
     /// Every free block must be determined by its own observations (a point seen by one ray,
     /// a camera without points are not): its diagonal block of the normals must be regular.
     fn check_determined(&self, st: &Structure, lin: &Linearisation) -> Result<(), SolveError> {
-        let diag = |dim: usize, terms: &mut dyn Iterator<Item = (usize, usize)>| {
-            let mut m = DMatrix::<f64>::zeros(dim, dim);
-            for (mf, jo) in terms {
-                let j = &lin.j[jo..jo + mf * dim];
-                super::lin::add_atb(1.0, j, j, mf, m.as_mut_slice(), dim);
-            }
+        let regular = |m: DMatrix<f64>| {
             let e = m.symmetric_eigenvalues();
             let (lo, hi) = (e.min(), e.max());
             hi > 0.0 && lo > 1e-10 * hi
         };
-        for (c, &b) in st.cblocks.iter().enumerate() {
-            if !diag(st.cdim[c], &mut st.rows[c].grad.iter().map(|g| (g.3, g.1))) {
-                return Err(SolveError::Undetermined(self.keys[b]));
+        let mut cm: Vec<DMatrix<f64>> = st.cdim.iter().map(|&d| DMatrix::zeros(d, d)).collect();
+        for g in &st.grads {
+            let j = &lin.j[g.ja..g.ja + g.m * g.da];
+            super::lin::add_atb(1.0, j, j, g.m, cm[g.c].as_mut_slice(), g.da);
+        }
+        for (c, m) in cm.into_iter().enumerate() {
+            if !regular(m) {
+                return Err(SolveError::Undetermined(self.keys[st.cblocks[c]]));
             }
         }
         for eb in &st.eblocks {
-            if !diag(eb.dim, &mut st.terms(eb).iter().map(|t| (t.m, t.jo))) {
+            let mut m = DMatrix::<f64>::zeros(eb.dim, eb.dim);
+            for t in st.terms(eb) {
+                let j = &lin.j[t.jo..t.jo + t.m * eb.dim];
+                super::lin::add_atb(1.0, j, j, t.m, m.as_mut_slice(), eb.dim);
+            }
+            if !regular(m) {
                 return Err(SolveError::Undetermined(self.keys[eb.block]));
             }
         }

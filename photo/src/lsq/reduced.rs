@@ -1,10 +1,15 @@
-//! One damped Gauss–Newton step through the Schur complement: per eliminated block its
-//! normal block V (damped), gradient and couplings W (in parallel); per block row of the
-//! reduced system its blocks and gradient (in parallel, each row summing its terms in a fixed
-//! order); the reduced solve; back-substitution of the eliminated blocks; and the decrease of
-//! the linear model that the step promises.
+//! One damped Gauss–Newton step through the Schur complement.
+//!
+//! The work is split into jobs that each own a copy of the reduced system: one job per range
+//! of eliminated blocks (`Structure::chunks`) and one for the factors that touch no eliminated
+//! block. A range job walks its eliminated blocks in order; for each it reads the factors
+//! touching it (consecutive in the linearisation buffer), adds their direct terms Jₐᵀ·J_b and
+//! Jₐᵀ·r, forms V (damped), gₑ and W, then V⁻¹ and Tₙ = Wₙᵀ·V⁻¹, and subtracts Tₐ·W_b and
+//! Tₐ·gₑ. The copies are added in job order — a count fixed by the problem, never by the
+//! threads — and the damping λ·clamp(diag JᵀJ) goes on the diagonal. Then the reduced solve,
+//! back-substitution of the eliminated blocks, and the decrease the linear model promises.
 
-use super::lin::{add_ab, add_atb, add_atv, add_av, pieces, Linearisation};
+use super::lin::{add_ab, add_atb, add_atv, add_av, pieces, Linearisation, MIN_LEN};
 use super::problem::Problem;
 use super::structure::{EBlock, Structure};
 use super::value::Value;
@@ -14,6 +19,28 @@ use rayon::prelude::*;
 /// Levenberg–Marquardt damping of a diagonal element: λ·clamp(d, 1e-6, 1e32) (as Ceres).
 fn damp(lambda: f64, d: f64) -> f64 {
     lambda * d.clamp(1e-6, 1e32)
+}
+
+/// One job's sums: the reduced matrix, its right-hand side and the diagonal of the direct
+/// terms (for the damping).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Sums {
+    vals: Vec<f64>,
+    g: Vec<f64>,
+    diag: Vec<f64>,
+}
+
+impl Sums {
+    fn zeroed(&mut self, st: &Structure) {
+        for (buf, n) in [
+            (&mut self.vals, st.nvals),
+            (&mut self.g, st.nr),
+            (&mut self.diag, st.nr),
+        ] {
+            buf.clear();
+            buf.resize(n, 0.0);
+        }
+    }
 }
 
 /// The reduced system and what elimination keeps of the eliminated blocks, in shared
@@ -30,40 +57,21 @@ pub(crate) struct Reduced {
     pub ge: Vec<f64>,
     /// Wₙ = Σ w·J_eᵀ·J_n per eliminated block and neighbour (dim × d_n).
     pub w: Vec<f64>,
-    /// Per range of eliminated blocks: its sums of S and b (kept to be reused).
-    sums: Vec<(Vec<f64>, Vec<f64>)>,
+    /// Each job's sums (kept to be reused).
+    sums: Vec<Sums>,
 }
 
-/// A step: reduced unknowns and each eliminated block's.
+/// A step: the reduced unknowns, and the eliminated blocks' (at their `gbase`).
 pub(crate) struct Step {
     pub dc: Vec<f64>,
-    pub de: Vec<Vec<f64>>,
+    pub de: Vec<f64>,
 }
 
-/// One eliminated block's part of the shared buffers, and room for its Tₙ = Wₙᵀ·V⁻¹
-/// (d_n × dim, at the same offsets as Wₙ).
+/// One eliminated block's part of the shared buffers.
 struct EParts<'a> {
     vinv: &'a mut [f64],
     g: &'a mut [f64],
     w: &'a mut [f64],
-    t: &'a mut Vec<f64>,
-}
-
-/// S_ab −= Tₐ·W_b for every pair of an eliminated block of dimension `E` whose neighbours all
-/// have dimension `N` (sizes known at compile time: no dispatch per pair).
-fn subtract_pairs<const N: usize, const E: usize>(
-    pairs: &[(usize, usize, usize)],
-    woff: &[usize],
-    t: &[f64],
-    w: &[f64],
-    vals: &mut [f64],
-) {
-    for &(ia, ib, off) in pairs {
-        let ta = SMatrixView::<f64, N, E>::from_slice(&t[woff[ia]..woff[ia] + N * E]);
-        let wb = SMatrixView::<f64, E, N>::from_slice(&w[woff[ib]..woff[ib] + E * N]);
-        let mut o = SMatrixViewMut::<f64, N, N>::from_slice(&mut vals[off..off + N * N]);
-        o -= ta * wb;
-    }
 }
 
 /// Inverse of a small symmetric block into `out`; `false` when singular.
@@ -82,8 +90,57 @@ fn invert(v: &[f64], d: usize, out: &mut [f64]) -> bool {
     true
 }
 
+/// S_ab −= Tₐ·W_b for every pair of an eliminated block of dimension `E` whose neighbours all
+/// have dimension `N` (sizes known at compile time: no dispatch per pair).
+fn subtract_pairs<const N: usize, const E: usize>(
+    pairs: &[(usize, usize, usize)],
+    woff: &[usize],
+    t: &[f64],
+    w: &[f64],
+    vals: &mut [f64],
+) {
+    for &(ia, ib, off) in pairs {
+        let ta = SMatrixView::<f64, N, E>::from_slice(&t[woff[ia]..woff[ia] + N * E]);
+        let wb = SMatrixView::<f64, E, N>::from_slice(&w[woff[ib]..woff[ib] + E * N]);
+        let o = &mut vals[off..off + N * N];
+        if ia == ib {
+            // A diagonal block: only its lower triangle is ever read.
+            for j in 0..N {
+                for i in j..N {
+                    let mut s = 0.0;
+                    for k in 0..E {
+                        s += ta[(i, k)] * wb[(k, j)];
+                    }
+                    o[j * N + i] -= s;
+                }
+            }
+        } else {
+            let mut o = SMatrixViewMut::<f64, N, N>::from_slice(o);
+            o -= ta * wb;
+        }
+    }
+}
+
+/// Factor `k`'s direct terms: Jₐᵀ·r, Jₐᵀ·J_b and the diagonal of Jₐᵀ·Jₐ.
+fn add_direct(st: &Structure, lin: &Linearisation, k: usize, w: f64, sums: &mut Sums) {
+    let d = st.direct[k];
+    for g in &st.grads[d.grads.0..d.grads.1] {
+        let ja = &lin.j[g.ja..g.ja + g.m * g.da];
+        add_atv(w, ja, &lin.j[g.ro..g.ro + g.m], &mut sums.g[g.go..g.go + g.da]);
+        for (i, col) in ja.chunks_exact(g.m).enumerate() {
+            sums.diag[g.go + i] += w * col.iter().map(|x| x * x).sum::<f64>();
+        }
+    }
+    for p in &st.pairs[d.pairs.0..d.pairs.1] {
+        let (ja, jb) = (&lin.j[p.ja..p.ja + p.m * p.da], &lin.j[p.jb..p.jb + p.m * p.db]);
+        add_atb(w, ja, jb, p.m, &mut sums.vals[p.off..p.off + p.da * p.db], p.da);
+    }
+}
+
 impl Problem {
-    /// Eliminate one block: V (damped by `lambda`), g, W, V⁻¹ and T.
+    /// Eliminate one block: its factors' direct terms into `sums`; V (damped by `lambda`),
+    /// gₑ, W and V⁻¹ into `out`; Tₙ = Wₙᵀ·V⁻¹ into `t`. `false` when V is singular.
+    #[allow(clippy::too_many_arguments)]
     fn eliminate_block(
         st: &Structure,
         eb: &EBlock,
@@ -91,6 +148,8 @@ impl Problem {
         lambda: f64,
         robust: bool,
         out: &mut EParts<'_>,
+        t: &mut Vec<f64>,
+        sums: &mut Sums,
     ) -> bool {
         let d = eb.dim;
         let mut stack = [0.0; 81];
@@ -103,17 +162,17 @@ impl Problem {
         };
         out.g.fill(0.0);
         out.w.fill(0.0);
-        let EParts { vinv, g, w, t } = out;
         let woff = st.woff(eb);
         for term in st.terms(eb) {
             let (jo, m) = (term.jo, term.m);
             let wt = if robust { lin.weight(st, term.f) } else { 1.0 };
+            add_direct(st, lin, term.f, wt, sums);
             let jp = &lin.j[jo..jo + m * d];
             add_atb(wt, jp, jp, m, v, d);
-            add_atv(wt, jp, &lin.j[term.ro..term.ro + m], g);
+            add_atv(wt, jp, &lin.j[term.ro..term.ro + m], out.g);
             for &(jc, dc, ni) in st.links(term) {
                 let o = woff[ni];
-                add_atb(wt, jp, &lin.j[jc..jc + m * dc], m, &mut w[o..o + d * dc], d);
+                add_atb(wt, jp, &lin.j[jc..jc + m * dc], m, &mut out.w[o..o + d * dc], d);
             }
         }
         if lambda > 0.0 {
@@ -121,19 +180,59 @@ impl Problem {
                 v[i * d + i] += damp(lambda, v[i * d + i]);
             }
         }
-        if !invert(v, d, vinv) {
+        if !invert(v, d, out.vinv) {
             return false;
         }
         t.clear();
         t.resize(eb.wlen, 0.0);
         for (&c, &o) in st.nbrs(eb).iter().zip(woff) {
             let dn = st.cdim[c];
-            add_atb(1.0, &w[o..o + d * dn], vinv, d, &mut t[o..o + d * dn], dn);
+            add_atb(1.0, &out.w[o..o + d * dn], out.vinv, d, &mut t[o..o + d * dn], dn);
         }
         true
     }
 
-    /// Build the reduced system at the linearisation `lins` with damping `lambda` (0: none)
+    /// A range of eliminated blocks into `sums`. `false` when a block is singular.
+    fn eliminate_range(
+        st: &Structure,
+        lin: &Linearisation,
+        (lambda, robust): (f64, bool),
+        range: std::ops::Range<usize>,
+        parts: Vec<EParts<'_>>,
+        sums: &mut Sums,
+    ) -> bool {
+        sums.zeroed(st);
+        let mut t = Vec::new();
+        for (eb, mut out) in st.eblocks[range].iter().zip(parts) {
+            if !Self::eliminate_block(st, eb, lin, lambda, robust, &mut out, &mut t, sums) {
+                return false;
+            }
+            let d = eb.dim;
+            let (nbrs, woff) = (st.nbrs(eb), st.woff(eb));
+            let pairs = st.pairs(eb);
+            let same = |k: usize| nbrs.iter().all(|&c| st.cdim[c] == k);
+            match d {
+                3 if same(9) => subtract_pairs::<9, 3>(pairs, woff, &t, out.w, &mut sums.vals),
+                3 if same(6) => subtract_pairs::<6, 3>(pairs, woff, &t, out.w, &mut sums.vals),
+                3 if same(3) => subtract_pairs::<3, 3>(pairs, woff, &t, out.w, &mut sums.vals),
+                _ => {
+                    for &(ia, ib, off) in pairs {
+                        let (da, db) = (st.cdim[nbrs[ia]], st.cdim[nbrs[ib]]);
+                        let ta = &t[woff[ia]..woff[ia] + da * d];
+                        let wb = &out.w[woff[ib]..woff[ib] + d * db];
+                        add_ab(-1.0, ta, wb, da, d, &mut sums.vals[off..off + da * db]);
+                    }
+                }
+            }
+            for (&a, &wo) in nbrs.iter().zip(woff) {
+                let (da, o) = (st.cdim[a], st.coff[a]);
+                add_av(-1.0, &t[wo..wo + da * d], out.g, &mut sums.g[o..o + da]);
+            }
+        }
+        true
+    }
+
+    /// Build the reduced system at the linearisation `lin` with damping `lambda` (0: none)
     /// and the robust weights when `robust`. `false` when an eliminated block is singular.
     pub(crate) fn reduce(
         &self,
@@ -143,18 +242,6 @@ impl Problem {
         robust: bool,
         red: &mut Reduced,
     ) -> bool {
-        red.vals.clear();
-        red.vals.resize(st.nvals, 0.0);
-        red.g.clear();
-        red.g.resize(st.nr, 0.0);
-        // Direct terms: each row owns its blocks and its part of the gradient.
-        let vals = pieces(&mut red.vals, st.rows.iter().map(|r| r.len));
-        let gs = pieces(&mut red.g, st.cdim.iter().copied());
-        vals.into_par_iter()
-            .zip(gs)
-            .enumerate()
-            .for_each(|(a, (vals, g))| Self::assemble_row(st, a, lin, lambda, robust, vals, g));
-        // Eliminated blocks: each range into its own copy, the copies added in order.
         let z = st.esizes;
         for (buf, n) in [(&mut red.vinv, z.v), (&mut red.ge, z.g), (&mut red.w, z.w)] {
             buf.resize(n, 0.0);
@@ -163,133 +250,89 @@ impl Problem {
         let mut parts = pieces(&mut red.vinv, eb.iter().map(|e| e.dim * e.dim))
             .into_iter()
             .zip(pieces(&mut red.ge, eb.iter().map(|e| e.dim)))
-            .zip(pieces(&mut red.w, eb.iter().map(|e| e.wlen)));
-        red.sums.resize_with(st.chunks.len(), Default::default);
+            .zip(pieces(&mut red.w, eb.iter().map(|e| e.wlen)))
+            .map(|((vinv, g), w)| EParts { vinv, g, w });
+        red.sums.resize_with(st.chunks.len() + 1, Sums::default);
+        let (tail_sums, range_sums) = red.sums.split_last_mut().expect("one job at least");
         let jobs: Vec<_> = st
             .chunks
             .iter()
-            .zip(red.sums.iter_mut())
-            .map(|(r, sum)| {
-                let p = parts.by_ref().take(r.len()).collect::<Vec<_>>();
-                (r.clone(), p, sum)
-            })
+            .zip(range_sums.iter_mut())
+            .map(|(r, sums)| (r.clone(), parts.by_ref().take(r.len()).collect(), sums))
             .collect();
-        let ok: Vec<bool> = jobs
-            .into_par_iter()
-            .map(|(range, parts, sum)| {
-                Self::eliminate_range(st, lin, lambda, robust, range, parts, sum)
-            })
-            .collect();
+        let (ok, ()) = rayon::join(
+            || {
+                jobs.into_par_iter()
+                    .map(|(range, parts, sums)| {
+                        Self::eliminate_range(st, lin, (lambda, robust), range, parts, sums)
+                    })
+                    .collect::<Vec<bool>>()
+            },
+            || {
+                if st.tail.is_empty() {
+                    return;
+                }
+                tail_sums.zeroed(st);
+                for &k in &st.tail {
+                    let w = if robust { lin.weight(st, k) } else { 1.0 };
+                    add_direct(st, lin, k, w, tail_sums);
+                }
+            },
+        );
         if ok.iter().any(|x| !x) {
             return false;
         }
-        for (vals, g) in &red.sums {
-            red.vals.iter_mut().zip(vals).for_each(|(x, y)| *x += y);
-            red.g.iter_mut().zip(g).for_each(|(x, y)| *x += y);
-        }
+        self.sum_jobs(st, lambda, red);
         true
     }
 
-    /// Eliminate a range of blocks; their −Tₐ·W_b and −Tₐ·gₑ summed into `sum` (a copy of
-    /// the reduced system). `false` when a block is singular.
-    #[allow(clippy::type_complexity)]
-    fn eliminate_range(
-        st: &Structure,
-        lin: &Linearisation,
-        lambda: f64,
-        robust: bool,
-        range: std::ops::Range<usize>,
-        parts: Vec<((&mut [f64], &mut [f64]), &mut [f64])>,
-        sum: &mut (Vec<f64>, Vec<f64>),
-    ) -> bool {
-        let (vals, g) = sum;
-        for (buf, n) in [(&mut *vals, st.nvals), (&mut *g, st.nr)] {
-            buf.clear();
-            buf.resize(n, 0.0);
-        }
-        let mut t = Vec::new();
-        for (eb, ((vinv, ge), w)) in st.eblocks[range].iter().zip(parts) {
-            let mut out = EParts {
-                vinv,
-                g: ge,
-                w,
-                t: &mut t,
-            };
-            if !Self::eliminate_block(st, eb, lin, lambda, robust, &mut out) {
-                return false;
-            }
-            let (d, t, w, ge) = (eb.dim, &*out.t, &*out.w, &*out.g);
-            let (nbrs, woff) = (st.nbrs(eb), st.woff(eb));
-            let pairs = st.pairs(eb);
-            let same = |k: usize| nbrs.iter().all(|&c| st.cdim[c] == k);
-            match d {
-                3 if same(9) => subtract_pairs::<9, 3>(pairs, woff, t, w, vals),
-                3 if same(6) => subtract_pairs::<6, 3>(pairs, woff, t, w, vals),
-                3 if same(3) => subtract_pairs::<3, 3>(pairs, woff, t, w, vals),
-                _ => {
-                    for &(ia, ib, off) in pairs {
-                        let (da, db) = (st.cdim[nbrs[ia]], st.cdim[nbrs[ib]]);
-                        let ta = &t[woff[ia]..woff[ia] + da * d];
-                        let wb = &w[woff[ib]..woff[ib] + d * db];
-                        add_ab(-1.0, ta, wb, da, d, &mut vals[off..off + da * db]);
-                    }
-                }
-            }
-            for (&a, &wo) in nbrs.iter().zip(woff) {
-                let (da, o) = (st.cdim[a], st.coff[a]);
-                add_av(-1.0, &t[wo..wo + da * d], ge, &mut g[o..o + da]);
-            }
-        }
-        true
-    }
-
-    /// One block row of S and its part of b.
-    fn assemble_row(
-        st: &Structure,
-        a: usize,
-        lin: &Linearisation,
-        lambda: f64,
-        robust: bool,
-        vals: &mut [f64],
-        g: &mut [f64],
-    ) {
-        let row = &st.rows[a];
-        let da = st.cdim[a];
-        for &(f, ja, jb, m, db, off) in &row.pairs {
-            let w = if robust { lin.weight(st, f) } else { 1.0 };
-            let (ja, jb) = (&lin.j[ja..ja + m * da], &lin.j[jb..jb + m * db]);
-            add_atb(w, ja, jb, m, &mut vals[off..off + da * db], da);
-        }
-        for &(f, ja, ro, m) in &row.grad {
-            let w = if robust { lin.weight(st, f) } else { 1.0 };
-            add_atv(w, &lin.j[ja..ja + m * da], &lin.j[ro..ro + m], g);
+    /// S and b as the sum of the jobs' copies (the factors without eliminated blocks first,
+    /// then the ranges in order), damped.
+    fn sum_jobs(&self, st: &Structure, lambda: f64, red: &mut Reduced) {
+        let tail = (!st.tail.is_empty()).then_some(red.sums.len() - 1);
+        let order: Vec<usize> = tail.into_iter().chain(0..red.sums.len() - 1).collect();
+        red.vals.clear();
+        red.vals.resize(st.nvals, 0.0);
+        red.g.clear();
+        red.g.resize(st.nr, 0.0);
+        let mut diag = vec![0.0; st.nr];
+        for &j in &order {
+            let s = &red.sums[j];
+            red.vals.iter_mut().zip(&s.vals).for_each(|(x, y)| *x += y);
+            red.g.iter_mut().zip(&s.g).for_each(|(x, y)| *x += y);
+            diag.iter_mut().zip(&s.diag).for_each(|(x, y)| *x += y);
         }
         if lambda > 0.0 {
-            for i in 0..da {
-                let k = row.diag + i * da + i;
-                vals[k] += damp(lambda, vals[k]);
+            for (a, row) in st.rows.iter().enumerate() {
+                let (da, o) = (st.cdim[a], st.coff[a]);
+                for i in 0..da {
+                    red.vals[row.start + row.diag + i * da + i] += damp(lambda, diag[o + i]);
+                }
             }
         }
     }
 
     /// The eliminated blocks' steps from the reduced one: δe = V⁻¹·(−gₑ − Σ Wₙ·δcₙ).
     pub(crate) fn back_substitute(st: &Structure, red: &Reduced, dc: Vec<f64>) -> Step {
-        let de = st
-            .eblocks
+        let mut de = vec![0.0; st.esizes.g];
+        let outs = pieces(&mut de, st.eblocks.iter().map(|e| e.dim));
+        st.eblocks
             .par_iter()
-            .map(|eb| {
+            .zip(outs)
+            .with_min_len(MIN_LEN)
+            .for_each(|(eb, out)| {
                 let d = eb.dim;
-                let mut rhs: Vec<f64> = red.ge[eb.gbase..eb.gbase + d].iter().map(|x| -x).collect();
+                let mut rhs = [0.0; 16];
+                let rhs = &mut rhs[..d];
+                for (x, g) in rhs.iter_mut().zip(&red.ge[eb.gbase..eb.gbase + d]) {
+                    *x = -g;
+                }
                 for (&c, &wo) in st.nbrs(eb).iter().zip(st.woff(eb)) {
                     let (dn, o) = (st.cdim[c], eb.wbase + wo);
-                    let w = &red.w[o..o + d * dn];
-                    add_av(-1.0, w, &dc[st.coff[c]..st.coff[c] + dn], &mut rhs);
+                    add_av(-1.0, &red.w[o..o + d * dn], &dc[st.coff[c]..st.coff[c] + dn], rhs);
                 }
-                let mut out = vec![0.0; d];
-                add_av(1.0, &red.vinv[eb.vbase..eb.vbase + d * d], &rhs, &mut out);
-                out
-            })
-            .collect();
+                add_av(1.0, &red.vinv[eb.vbase..eb.vbase + d * d], rhs, out);
+            });
         Step { dc, de }
     }
 
@@ -299,19 +342,19 @@ impl Problem {
         for (i, &b) in st.cblocks.iter().enumerate() {
             v[b].plus(&step.dc[st.coff[i]..st.coff[i] + st.cdim[i]]);
         }
-        for (eb, d) in st.eblocks.iter().zip(&step.de) {
-            v[eb.block].plus(d);
+        for eb in &st.eblocks {
+            v[eb.block].plus(&step.de[eb.gbase..eb.gbase + eb.dim]);
         }
         v
     }
 
     /// The cost decrease the linear model predicts for a step: −Σ w·(Jδ)ᵀr − ½Σ w·‖Jδ‖².
     pub(crate) fn model_decrease(st: &Structure, lin: &Linearisation, step: &Step) -> f64 {
-        let parts: Vec<f64> = st
-            .slots
-            .par_iter()
-            .enumerate()
-            .map(|(k, slots)| {
+        let parts: Vec<f64> = (0..st.slots.len())
+            .into_par_iter()
+            .with_min_len(MIN_LEN)
+            .map(|k| {
+                let slots = st.slots.get(k);
                 let r = lin.res(st, k);
                 let (mut stack, mut heap) = ([0.0; 16], Vec::new());
                 let jd: &mut [f64] = if r.len() <= 16 {
@@ -324,7 +367,10 @@ impl Problem {
                     let Some(j) = lin.jac(st, k, s) else { continue };
                     let d = match (s.c, s.e) {
                         (Some(c), _) => &step.dc[st.coff[c]..st.coff[c] + s.dim],
-                        (_, Some(e)) => &step.de[e][..],
+                        (_, Some(e)) => {
+                            let g = st.eblocks[e].gbase;
+                            &step.de[g..g + s.dim]
+                        }
                         _ => continue,
                     };
                     add_av(1.0, j, d, jd);

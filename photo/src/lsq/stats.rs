@@ -70,7 +70,7 @@ impl Cofactors {
     /// The diagonal of J·Q·Jᵀ for active factor `k`.
     fn hat_diag(&self, k: usize) -> DVector<f64> {
         let (st, lin) = (&*self.st, &self.lin);
-        let slots = &st.slots[k];
+        let slots = st.slots.get(k);
         let m = st.m[k];
         let mut h = DVector::zeros(m);
         for sa in slots {

@@ -25,6 +25,31 @@ pub(crate) struct Slot {
     pub e: Option<usize>,
 }
 
+/// The slots of every active factor, in one list.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Slots {
+    list: Vec<Slot>,
+    /// Where factor k's slots start (and, at k + 1, end).
+    at: Vec<usize>,
+}
+
+impl Slots {
+    /// Factor `k`'s slots.
+    pub fn get(&self, k: usize) -> &[Slot] {
+        &self.list[self.at[k]..self.at[k + 1]]
+    }
+
+    /// Every factor's slots, in factor order.
+    pub fn iter(&self) -> impl Iterator<Item = &[Slot]> + '_ {
+        self.at.windows(2).map(|w| &self.list[w[0]..w[1]])
+    }
+
+    /// The number of factors.
+    pub fn len(&self) -> usize {
+        self.at.len().saturating_sub(1)
+    }
+}
+
 /// An eliminated block and what touches it, as it is gathered.
 #[derive(Clone, Debug, Default)]
 struct EDraft {
@@ -79,22 +104,47 @@ pub(crate) struct ESizes {
     pub g: usize,
 }
 
-/// Terms of one block row of the reduced system.
+/// One block row of the reduced system: where its lower blocks are stored.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Row {
-    /// Offset of the row's first entry in the value buffer and the row's length.
+    /// Offset of the row's first entry in the value buffer.
     pub start: usize,
-    pub len: usize,
     /// (entry offset within the row, column block) in ascending column order.
     pub entries: Vec<(usize, usize)>,
     /// Offset of the diagonal block within the row.
     pub diag: usize,
-    /// (active factor, Jacobian offset of this row's block, residual offset, residual
-    /// dimension) contributing Jᵀ·r.
-    pub grad: Vec<(usize, usize, usize, usize)>,
-    /// (active factor, Jacobian offsets of this row's and the column's block, residual
-    /// dimension, the column's dim, entry offset within the row).
-    pub pairs: Vec<(usize, usize, usize, usize, usize, usize)>,
+}
+
+/// A factor's contribution Jₐᵀ·r to the gradient of a reduced block.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Grad {
+    /// Jacobian offset, residual offset, residual dimension.
+    pub ja: usize,
+    pub ro: usize,
+    pub m: usize,
+    /// The reduced block, its dimension and offset.
+    pub c: usize,
+    pub da: usize,
+    pub go: usize,
+}
+
+/// A factor's contribution Jₐᵀ·J_b to block (a, b ≤ a) of the reduced matrix.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Pair {
+    pub ja: usize,
+    pub jb: usize,
+    pub m: usize,
+    pub da: usize,
+    pub db: usize,
+    /// Offset of the block in the value buffer.
+    pub off: usize,
+}
+
+/// Ranges of one factor's direct terms in `Structure::{grads, pairs}`.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Direct {
+    pub grads: (usize, usize),
+    pub pairs: (usize, usize),
 }
 
 /// The structure of the normal equations.
@@ -102,7 +152,7 @@ pub(crate) struct Structure {
     pub hash: u64,
     /// Active factors (entry indices).
     pub active: Vec<usize>,
-    pub slots: Vec<Vec<Slot>>,
+    pub slots: Slots,
     /// Residual dimension of each active factor, and where its region (residual, then its
     /// Jacobian blocks) starts in the linearisation buffer.
     pub m: Vec<usize>,
@@ -139,6 +189,12 @@ pub(crate) struct Structure {
     /// system (in parallel) before the copies are added in order: a count fixed by the
     /// problem, never by the threads, so the sums are the same bits on any machine.
     pub chunks: Vec<std::ops::Range<usize>>,
+    /// Active factors touching no eliminated block (summed by a job of their own).
+    pub tail: Vec<usize>,
+    /// Every active factor's direct terms.
+    pub direct: Vec<Direct>,
+    pub grads: Vec<Grad>,
+    pub pairs: Vec<Pair>,
     pub rows: Vec<Row>,
     /// Length of the reduced value buffer.
     pub nvals: usize,
@@ -266,8 +322,13 @@ impl Problem {
         } = layout;
         let nres = m.iter().sum();
         link_eliminated(&mut eblocks, &slots);
-        let (rows, nvals) = rows(&cdim, &slots, &m, &base, &mut eblocks);
-        let chunks = chunks(eblocks.len(), nvals + nr);
+        let (rows, nvals) = rows(&cdim, &slots, &mut eblocks);
+        let (direct, grads, pairs) = direct_terms(&cdim, &coff, &slots, &m, &base, &rows);
+        let tail: Vec<usize> = (0..active.len())
+            .filter(|&k| slots.get(k).iter().all(|s| s.e.is_none()))
+            .collect();
+        let work: usize = eblocks.iter().map(|e| e.pairs.len()).sum();
+        let chunks = chunks(eblocks.len(), work, nvals + nr);
         let (eblocks, flat, esizes) = pack(eblocks, &m, &base);
         Structure {
             hash,
@@ -292,6 +353,10 @@ impl Problem {
             epairs: flat.pairs,
             esizes,
             chunks,
+            tail,
+            direct,
+            grads,
+            pairs,
             rows,
             nvals,
         }
@@ -299,10 +364,7 @@ impl Problem {
 
     /// Where every active factor's residual and Jacobian blocks go.
     fn layout(&self, active: &[usize], cidx: &[Option<usize>], eidx: &[Option<usize>]) -> Layout {
-        let m: Vec<usize> = active
-            .iter()
-            .map(|&f| self.entries[f].factor.dim())
-            .collect();
+        let m: Vec<usize> = active.iter().map(|&f| self.entries[f].factor.dim()).collect();
         let first_e = |k: usize| {
             self.entries[active[k]]
                 .blocks
@@ -313,30 +375,35 @@ impl Problem {
         let mut order: Vec<usize> = (0..active.len()).collect();
         order.sort_by_key(|&k| (first_e(k), k));
         let mut base = vec![0; active.len()];
-        let mut slots: Vec<Vec<Slot>> = vec![Vec::new(); active.len()];
         let mut at = 0;
         for &k in &order {
-            let e = &self.entries[active[k]];
             base[k] = at;
-            at += m[k];
-            slots[k] = e
-                .blocks
-                .iter()
-                .map(|&b| {
-                    let dim = self.values[b].dim();
-                    let joff = (!self.fixed[b]).then(|| {
-                        at += m[k] * dim;
-                        at - m[k] * dim
-                    });
-                    Slot {
-                        dim,
-                        joff,
-                        c: cidx[b],
-                        e: eidx[b],
-                    }
-                })
-                .collect();
+            let e = &self.entries[active[k]];
+            let free = e.blocks.iter().filter(|&&b| !self.fixed[b]);
+            at += m[k] * (1 + free.map(|&b| self.values[b].dim()).sum::<usize>());
         }
+        let mut slots = Slots {
+            list: Vec::with_capacity(self.entries.len() * 2),
+            at: Vec::with_capacity(active.len() + 1),
+        };
+        for (k, &f) in active.iter().enumerate() {
+            slots.at.push(slots.list.len());
+            let mut j = base[k] + m[k];
+            for &b in &self.entries[f].blocks {
+                let dim = self.values[b].dim();
+                let joff = (!self.fixed[b]).then(|| {
+                    j += m[k] * dim;
+                    j - m[k] * dim
+                });
+                slots.list.push(Slot {
+                    dim,
+                    joff,
+                    c: cidx[b],
+                    e: eidx[b],
+                });
+            }
+        }
+        slots.at.push(slots.list.len());
         Layout {
             slots,
             m,
@@ -349,7 +416,7 @@ impl Problem {
 
 /// The linearisation buffer's layout.
 struct Layout {
-    slots: Vec<Vec<Slot>>,
+    slots: Slots,
     m: Vec<usize>,
     base: Vec<usize>,
     order: Vec<usize>,
@@ -410,7 +477,7 @@ fn pack(drafts: Vec<EDraft>, m: &[usize], base: &[usize]) -> (Vec<EBlock>, Flat,
 }
 
 /// Terms, neighbours and W layout of every eliminated block.
-fn link_eliminated(eblocks: &mut [EDraft], slots: &[Vec<Slot>]) {
+fn link_eliminated(eblocks: &mut [EDraft], slots: &Slots) {
     for (f, ss) in slots.iter().enumerate() {
         for s in ss {
             if let (Some(e), Some(j)) = (s.e, s.joff) {
@@ -422,7 +489,7 @@ fn link_eliminated(eblocks: &mut [EDraft], slots: &[Vec<Slot>]) {
         let mut nbrs: Vec<(usize, usize)> = eb
             .terms
             .iter()
-            .flat_map(|&(f, _)| slots[f].iter().filter_map(|s| s.c.map(|c| (c, s.dim))))
+            .flat_map(|&(f, _)| slots.get(f).iter().filter_map(|s| s.c.map(|c| (c, s.dim))))
             .collect();
         nbrs.sort_unstable();
         nbrs.dedup();
@@ -430,7 +497,7 @@ fn link_eliminated(eblocks: &mut [EDraft], slots: &[Vec<Slot>]) {
             .terms
             .iter()
             .map(|&(f, _)| {
-                slots[f]
+                slots.get(f)
                     .iter()
                     .filter_map(|s| {
                         let (c, j) = (s.c?, s.joff?);
@@ -452,26 +519,24 @@ fn link_eliminated(eblocks: &mut [EDraft], slots: &[Vec<Slot>]) {
     }
 }
 
-/// Ranges of eliminated blocks summed separately: up to four, fewer when the copies of the
-/// reduced system (`size` values each) would take more than 512 MB.
-fn chunks(n: usize, size: usize) -> Vec<std::ops::Range<usize>> {
-    let k = (n / 256).clamp(1, 4).min((64_000_000 / size.max(1)).max(1));
+/// Ranges of eliminated blocks summed separately: one per 50 000 block products (`work`), up
+/// to four, and fewer when the copies of the reduced system (`size` values each) would take
+/// more than 512 MB.
+fn chunks(n: usize, work: usize, size: usize) -> Vec<std::ops::Range<usize>> {
+    let k = (work / 50_000)
+        .clamp(1, 4)
+        .min(n.max(1))
+        .min((64_000_000 / size.max(1)).max(1));
     (0..k).map(|i| i * n / k..(i + 1) * n / k).collect()
 }
 
 /// The lower block pattern of the reduced system, every direct term of each row, and where
 /// each eliminated block's products go.
-fn rows(
-    cdim: &[usize],
-    slots: &[Vec<Slot>],
-    m: &[usize],
-    base: &[usize],
-    eblocks: &mut [EDraft],
-) -> (Vec<Row>, usize) {
+fn rows(cdim: &[usize], slots: &Slots, eblocks: &mut [EDraft]) -> (Vec<Row>, usize) {
     let nc = cdim.len();
     // Column blocks of each row.
     let mut cols: Vec<Vec<usize>> = (0..nc).map(|r| vec![r]).collect();
-    for ss in slots {
+    for ss in slots.iter() {
         for a in ss.iter().filter_map(|s| s.c) {
             for b in ss.iter().filter_map(|s| s.c).filter(|&b| b < a) {
                 cols[a].push(b);
@@ -499,39 +564,74 @@ fn rows(
         let diag = entries.last().map(|e| e.0).unwrap_or(0);
         rows.push(Row {
             start,
-            len: at,
             entries,
             diag,
-            ..Row::default()
         });
         start += at;
-    }
-    let entry = |rows: &[Row], r: usize, col: usize| {
-        let row = &rows[r];
-        let i = row.entries.partition_point(|e| e.1 < col);
-        row.entries[i].0
-    };
-    for (f, ss) in slots.iter().enumerate() {
-        for sa in ss {
-            let (Some(a), Some(ja)) = (sa.c, sa.joff) else {
-                continue;
-            };
-            rows[a].grad.push((f, ja, base[f], m[f]));
-            for sb in ss {
-                if let (Some(b), Some(jb)) = (sb.c.filter(|&b| b <= a), sb.joff) {
-                    let off = entry(&rows, a, b);
-                    rows[a].pairs.push((f, ja, jb, m[f], sb.dim, off));
-                }
-            }
-        }
     }
     for eb in eblocks.iter_mut() {
         for (ia, &a) in eb.nbrs.iter().enumerate() {
             for (ib, &b) in eb.nbrs[..=ia].iter().enumerate() {
-                let off = rows[a].start + entry(&rows, a, b);
-                eb.pairs.push((ia, ib, off));
+                eb.pairs.push((ia, ib, entry(&rows, a, b)));
             }
         }
     }
     (rows, start)
+}
+
+/// Offset of block (row, col ≤ row) in the value buffer.
+fn entry(rows: &[Row], r: usize, col: usize) -> usize {
+    let row = &rows[r];
+    let i = row.entries.partition_point(|e| e.1 < col);
+    row.start + row.entries[i].0
+}
+
+/// Every active factor's gradient and pair terms among the reduced blocks.
+#[allow(clippy::type_complexity)]
+fn direct_terms(
+    cdim: &[usize],
+    coff: &[usize],
+    slots: &Slots,
+    m: &[usize],
+    base: &[usize],
+    rows: &[Row],
+) -> (Vec<Direct>, Vec<Grad>, Vec<Pair>) {
+    let (mut grads, mut pairs) = (Vec::new(), Vec::new());
+    let direct = slots
+        .iter()
+        .enumerate()
+        .map(|(f, ss)| {
+            let (g0, p0) = (grads.len(), pairs.len());
+            for sa in ss {
+                let (Some(a), Some(ja)) = (sa.c, sa.joff) else {
+                    continue;
+                };
+                grads.push(Grad {
+                    ja,
+                    ro: base[f],
+                    m: m[f],
+                    c: a,
+                    da: cdim[a],
+                    go: coff[a],
+                });
+                for sb in ss {
+                    if let (Some(b), Some(jb)) = (sb.c.filter(|&b| b <= a), sb.joff) {
+                        pairs.push(Pair {
+                            ja,
+                            jb,
+                            m: m[f],
+                            da: cdim[a],
+                            db: cdim[b],
+                            off: entry(rows, a, b),
+                        });
+                    }
+                }
+            }
+            Direct {
+                grads: (g0, grads.len()),
+                pairs: (p0, pairs.len()),
+            }
+        })
+        .collect();
+    (direct, grads, pairs)
 }
