@@ -298,13 +298,19 @@ impl fmt::Display for PpkReport {
         for (name, s) in [("forward", &r.forward), ("backward", &r.backward)] {
             let Some(s) = s else { continue };
             let slips: Vec<String> = s.slips.iter().map(|(c, n)| format!("{c:?} {n}")).collect();
+            let gated: Vec<String> = s
+                .rejected
+                .iter()
+                .map(|(c, n)| format!("{c:?} {n}"))
+                .collect();
             writeln!(
                 f,
-                "  {name}: ambiguity resets {} [{}], post-fit outliers {}, innovations rejected {}, satellite-epochs below mask {}, without orbit {}",
+                "  {name}: ambiguity resets {} [{}], post-fit outliers {}, innovations rejected {} [{}], satellite-epochs below mask {}, without orbit {}",
                 s.slips.values().sum::<usize>(),
                 slips.join(", "),
                 s.outlier_resets,
-                s.rejected_innovations,
+                s.rejected_innovations(),
+                gated.join(", "),
                 s.below_mask,
                 s.no_orbit
             )?;

@@ -4,13 +4,17 @@
 
 mod ar;
 pub mod combine;
+mod dd;
 mod filter;
 mod geometry;
 pub mod lambda;
+mod measure;
 pub mod obs;
 pub mod slip;
+mod state;
 
 pub use filter::{EpochSol, PassStats};
+pub use measure::GateReason;
 
 use crate::error::{Error, Result};
 use crate::frame::{enu_rotation, Ecef};
