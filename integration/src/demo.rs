@@ -257,7 +257,7 @@ pub fn run(out: &Path) -> Result<DemoReport, ChainError> {
     )?;
     // Exposures: events of the rover file on the PPK trajectory, lever arm rotated by the
     // attitude an IMU would give (the simulated attitude, written as an attitude file).
-    let traj = crate::exposure::trajectory::Trajectory::read_pos(&pos_path)?;
+    let traj = gnss::trajectory::Trajectory::read_pos(&pos_path)?;
     let (events, _) = crate::exposure::events::from_rinex(rover, &traj);
     let att_path = out.join("imu_attitude.csv");
     let truth_text = |name: &str| {

@@ -359,7 +359,8 @@ pub struct ExposureReport {
 
 /// Read events and trajectory, compute projection centres, write them.
 pub fn exposures(job: &ExposureJob) -> Result<ExposureReport> {
-    use crate::exposure::{compute, events, export, trajectory::Trajectory};
+    use crate::exposure::{compute, events, export};
+    use gnss::trajectory::Trajectory;
     let traj = Trajectory::read_pos(&job.trajectory)?;
     let (evs, clock_correction) = match &job.events {
         EventSource::Rinex(p) => {
@@ -473,6 +474,9 @@ impl fmt::Display for ExposureReport {
         }
         for w in &r.warnings {
             writeln!(f, "  warning: {w}")?;
+        }
+        for n in &r.notes {
+            writeln!(f, "  note: {n}")?;
         }
         Ok(())
     }

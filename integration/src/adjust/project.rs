@@ -6,7 +6,7 @@
 use super::factors::DriftModel;
 use super::tables::{
     antennas_from_trajectory, perr, read_antennas, read_ground, read_images, read_measurements,
-    read_patb,
+    read_patb, read_trajectory,
 };
 use super::AdjustError;
 use crate::exposure::export::Projection;
@@ -366,7 +366,9 @@ impl Project {
             Some(g) => match (&g.antennas, &g.trajectory) {
                 (Some(a), None) => read_antennas(&dir.join(a), g.sigma_scale)?,
                 (None, Some(t)) => {
-                    antennas_from_trajectory(&dir.join(t), &images, g.sigma_scale, &mut warnings)?
+                    let path = dir.join(t);
+                    let traj = read_trajectory(&path)?;
+                    antennas_from_trajectory(&traj, &path, &images, g.sigma_scale, &mut warnings)?
                 }
                 _ => {
                     return Err(perr(

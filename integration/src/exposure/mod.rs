@@ -10,15 +10,14 @@ pub mod events;
 pub mod export;
 pub mod leverarm;
 pub mod photos;
-pub mod trajectory;
 
 use attitude::{from_yaw_pitch_roll, AttitudeTable};
 use events::ExposureEvent;
 use gnss::frame::{enu_rotation, Ecef};
 use gnss::solution::Quality;
+use gnss::trajectory::{InterpError, Trajectory};
 use hifitime::{Duration, Epoch};
 use nalgebra::{Matrix3, Vector3};
-use trajectory::{InterpError, Trajectory};
 
 /// Where a station's attitude came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -69,9 +68,14 @@ pub struct Refused {
 /// Result of the exposure stage.
 #[derive(Clone, Debug, Default)]
 pub struct ExposureResult {
+    /// The camera stations, in time order.
     pub stations: Vec<CameraStation>,
+    /// Exposures without a station, and why.
     pub refused: Vec<Refused>,
+    /// Problems worth a look (sorting, time system, attitude fallback).
     pub warnings: Vec<String>,
+    /// Facts a reader of the results should know (where the ambiguity segments came from).
+    pub notes: Vec<String>,
 }
 
 /// Compute projection centres for events on a trajectory.
@@ -81,6 +85,7 @@ pub fn compute(
     opts: &ExposureOptions,
 ) -> ExposureResult {
     let mut res = ExposureResult::default();
+    res.notes.extend(traj.segments_from.note());
     let (unsorted, dups) = events::sort_and_dedup(&mut events);
     if unsorted {
         res.warnings
