@@ -7,7 +7,7 @@ use gnss::orbit::{Ephemerides, Orbits};
 use gnss::ppk::{self, BasePosition, PpkOptions};
 use gnss::rinex::nav::NavFile;
 use gnss::rinex::ObsFile;
-use gnss::solution::{write_pos, PosFormat, PosRecord, Quality};
+use gnss::solution::{PosFormat, Quality};
 use gnss::spp::{self, SppOptions};
 use nalgebra::Vector3;
 use std::fmt;
@@ -242,17 +242,20 @@ pub fn run(out: &Path) -> Result<DemoReport, ChainError> {
     // Carrier phase.
     let res = inputs.ppk(&sim, &PpkOptions::default())?;
     let mut d = Vec::new();
-    for s in res.solutions.iter().filter(|s| s.quality == Quality::Fixed) {
+    for s in res
+        .trajectory
+        .epochs
+        .iter()
+        .filter(|s| s.quality == Quality::Fixed)
+    {
         if let Some(p) = truth_at(&truth, t_of(s.time)) {
             d.push((s.pos.0 - p).norm());
         }
     }
-    let records: Vec<PosRecord> = res.solutions.iter().map(|s| s.to_record()).collect();
     let pos_path = out.join("rover_ppk.pos");
-    write_pos(
+    res.trajectory.write_pos(
         &pos_path,
         &["program   : ppkat demo (carrier-phase kinematic)".to_string()],
-        &records,
         PosFormat::Llh,
     )?;
     // Exposures: events of the rover file on the PPK trajectory, lever arm rotated by the
@@ -356,7 +359,7 @@ pub fn run(out: &Path) -> Result<DemoReport, ChainError> {
         spp_epochs: sppr.solutions.len(),
         spp_h_rms: rms(&h),
         spp_v_rms: rms(&v),
-        ppk_epochs: res.solutions.len(),
+        ppk_epochs: res.trajectory.epochs.len(),
         ppk_fixed: res.fixed(),
         ppk_3d_rms_fixed: rms(&d),
         ppk_max_fixed: d.iter().copied().fold(0.0, f64::max),

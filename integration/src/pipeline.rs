@@ -231,7 +231,6 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
         progress,
     )?;
     warnings.extend(result.warnings.iter().cloned());
-    let records: Vec<PosRecord> = result.solutions.iter().map(|s| s.to_record()).collect();
     let o = &job.options;
     let b = result.base_marker;
     let header = vec![
@@ -257,11 +256,11 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
         format!(
             "epochs    : {} rover, {} solved, {} fixed",
             result.rover_epochs,
-            result.solutions.len(),
+            result.trajectory.epochs.len(),
             result.fixed()
         ),
     ];
-    write_pos(&job.out, &header, &records, job.format)?;
+    result.trajectory.write_pos(&job.out, &header, job.format)?;
     Ok(PpkReport {
         result,
         out: job.out.clone(),
@@ -273,7 +272,7 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
 impl fmt::Display for PpkReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let r = &self.result;
-        let solved = r.solutions.len();
+        let solved = r.trajectory.epochs.len();
         writeln!(
             f,
             "ppk: {} rover epochs, {} solved, {} fixed ({:.1} % of solved) in {:.2} s → {}",

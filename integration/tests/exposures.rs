@@ -175,8 +175,7 @@ fn events_to_ppk_to_projection_centres() {
     let rover = &inputs.rover;
     let r = inputs.ppk(&s.rep, &PpkOptions::default()).unwrap();
     let pos = s.dir.join("ppk.pos");
-    let recs: Vec<PosRecord> = r.solutions.iter().map(|s| s.to_record()).collect();
-    write_pos(&pos, &[], &recs, PosFormat::Xyz).unwrap();
+    r.trajectory.write_pos(&pos, &[], PosFormat::Xyz).unwrap();
     let traj = Trajectory::read_pos(&pos).unwrap();
     let (evs, clock) = events::from_rinex(rover, &traj);
     let (_, att) = truth_trajectory(&s.dir, 1);

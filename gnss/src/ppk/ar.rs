@@ -34,6 +34,8 @@ pub(super) struct Candidate {
     pub(super) elevation: f64,
     /// Epochs since the state was (re)initialised.
     pub(super) lock: usize,
+    /// Arc of the state (see [`super::state::Track`]).
+    pub(super) arc: u64,
 }
 
 impl Candidate {
@@ -57,6 +59,8 @@ pub(super) struct Fix {
     pub(super) dd_operator: DMatrix<f64>,
     /// The integers, one per row of `dd_operator`.
     pub(super) integers: DVector<f64>,
+    /// The groups the rows come from, in row order (one row per non-pivot member).
+    pub(super) groups: Vec<DdGroup<Candidate>>,
 }
 
 /// Double-difference groups per system and slot over the candidates not excluded.
@@ -133,6 +137,7 @@ impl Filter<'_> {
                     amb,
                     elevation: p.el,
                     lock: s.track.lock,
+                    arc: s.track.arc,
                 });
             }
         }
@@ -153,9 +158,9 @@ impl Filter<'_> {
         &mut self,
         x: &DVector<f64>,
         p: &DMatrix<f64>,
-        groups: &[DdGroup<Candidate>],
+        groups: Vec<DdGroup<Candidate>>,
     ) -> Option<Fix> {
-        let d = dd_operator(groups, x.len());
+        let d = dd_operator(&groups, x.len());
         let m = d.nrows();
         let a = &d * x;
         let q = &d * p * d.transpose();
@@ -180,6 +185,7 @@ impl Filter<'_> {
             n_fixed: m,
             dd_operator: d,
             integers: fix,
+            groups,
         })
     }
 
@@ -249,7 +255,7 @@ impl Filter<'_> {
             if n_dd < o.min_fix_ambiguities {
                 return None;
             }
-            if let Some(f) = self.try_fix(&x, &p, &groups) {
+            if let Some(f) = self.try_fix(&x, &p, groups) {
                 // A partial fix that leaves the position at several centimetres is no fix:
                 // the solution stays float rather than claim what it does not have.
                 if !excluded.is_empty() && f.covariance.trace().sqrt() > o.max_partial_fix_sigma {

@@ -19,11 +19,13 @@
 //!    update (two linearisations about the prior);
 //! 7. post-fit check: phase residuals above `max_phase_residual` reset their ambiguity at the
 //!    next epoch; lock counts of the states observed move on;
-//! 8. resolution: the float solution, replaced by the fixed one when the integers pass.
+//! 8. resolution: the float solution, replaced by the fixed one when the integers pass;
+//!    the epoch's ambiguity segment ([`super::segment`]).
 
 use super::geometry::{tropo, SatView};
 use super::measure::{self, GateReason, ObsKind};
 use super::obs::{SatMeas, NF};
+use super::segment::{FixedIntegers, SegmentTracker};
 use super::slip::{SlipCause, SlipDetector};
 use super::state::{AmbKey, State, StateKey};
 use super::{ArMode, PpkOptions};
@@ -81,21 +83,8 @@ pub struct EpochSol {
     pub age: f64,
     /// Number of double-difference ambiguities fixed.
     pub nfix: usize,
-}
-
-impl EpochSol {
-    /// The `.pos` line of this solution.
-    pub fn to_record(&self) -> crate::solution::PosRecord {
-        crate::solution::PosRecord {
-            time: self.time,
-            pos: self.pos,
-            quality: self.quality,
-            nsat: self.nsat,
-            cov: self.cov,
-            age: self.age,
-            ratio: self.ratio,
-        }
-    }
+    /// Ambiguity segment of this epoch within its pass (see [`crate::trajectory`]).
+    pub segment: u32,
 }
 
 /// Counters of a pass.
@@ -142,6 +131,7 @@ pub struct Filter<'a> {
     pub(super) last_ratio: Option<f64>,
     rover_ant: Option<AntennaPcv>,
     base_ant: Option<AntennaPcv>,
+    segments: SegmentTracker,
 }
 
 /// Ionospheric constraint of the epoch (ionosphere-weighted model), from the baseline length.
@@ -164,13 +154,15 @@ impl IonoConstraint {
 
 impl<'a> Filter<'a> {
     /// A filter for rover data against a base antenna at `base` (antenna reference point,
-    /// ECEF); `backward` for a pass that runs back in time.
+    /// ECEF); `backward` for a pass that runs back in time; `segment_gap`: the step between
+    /// solved epochs (s) beyond which a new ambiguity segment starts.
     pub fn new(
         opts: &'a PpkOptions,
         orbits: &'a Orbits,
         base: Ecef,
         backward: bool,
         antennas: (Option<AntennaPcv>, Option<AntennaPcv>),
+        segment_gap: f64,
     ) -> Self {
         Filter {
             opts,
@@ -188,6 +180,7 @@ impl<'a> Filter<'a> {
             last_ratio: None,
             rover_ant: antennas.0,
             base_ant: antennas.1,
+            segments: SegmentTracker::new(segment_gap),
         }
     }
 
@@ -338,6 +331,15 @@ impl<'a> Filter<'a> {
         for (key, var) in noise {
             self.state.add_variance(key, var);
         }
+        let is_ambiguity = |k: &StateKey| matches!(k, StateKey::Ambiguity(_));
+        let n_ambiguities = self
+            .state
+            .sats()
+            .filter(|(_, s)| is_ambiguity(&s.key))
+            .count();
+        if n_ambiguities > 0 && reset.iter().filter(|k| is_ambiguity(k)).count() == n_ambiguities {
+            self.segments.note_all_reset();
+        }
         self.state.remove(&reset);
         self.pending_reset.clear();
         // Base slips apply once, to the first rover epoch that uses the new base epoch.
@@ -439,7 +441,7 @@ impl<'a> Filter<'a> {
     }
 
     /// The float solution, replaced by the fixed one when the ambiguities resolve (and then
-    /// held in fix-and-hold mode).
+    /// held in fix-and-hold mode), with its ambiguity segment.
     fn solve(&mut self, t: Epoch, tb: Epoch, used_sats: usize, pairs: &[Pair]) -> EpochSol {
         let o = self.opts;
         let mut sol = EpochSol {
@@ -451,8 +453,11 @@ impl<'a> Filter<'a> {
             ratio: 0.0,
             age: (t - tb).to_seconds(),
             nfix: 0,
+            segment: 0,
         };
+        let mut fixed = None;
         if o.ar == ArMode::Off {
+            sol.segment = self.segments.next(t, fixed);
             return sol;
         }
         if let Some(fix) = self.resolve(pairs) {
@@ -464,9 +469,11 @@ impl<'a> Filter<'a> {
             if o.ar == ArMode::FixAndHold {
                 self.hold(&fix);
             }
+            fixed = Some(FixedIntegers::of(&fix));
         } else if let Some(r) = self.last_ratio {
             sol.ratio = r;
         }
+        sol.segment = self.segments.next(t, fixed);
         sol
     }
 }

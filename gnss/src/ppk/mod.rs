@@ -1,6 +1,11 @@
 //! Carrier-phase kinematic positioning of a rover against a base of known position: forward,
 //! backward and combined passes of a double-difference Kalman filter with integer ambiguity
-//! resolution.
+//! resolution, returning a [`Trajectory`] whose ambiguity segments the filter assigns.
+//!
+//! Modules: `state` (typed state layout), `measure` (pure DD residuals, innovation gate),
+//! `dd` (DD groups and their pivot), `filter` (one pass, epoch by epoch), `ar` (LAMBDA,
+//! partial fixing, fix-and-hold), `segment` (ambiguity segments), [`combine`]
+//! (forward/backward), [`slip`], `geometry`, [`obs`], [`lambda`].
 
 mod ar;
 pub mod combine;
@@ -10,6 +15,7 @@ mod geometry;
 pub mod lambda;
 mod measure;
 pub mod obs;
+mod segment;
 pub mod slip;
 mod state;
 
@@ -20,8 +26,10 @@ use crate::error::{Error, Result};
 use crate::frame::{enu_rotation, Ecef};
 use crate::orbit::Orbits;
 use crate::rinex::{ObsFile, ObsHeader};
+use crate::solution::Quality;
 use crate::spp::{self, SppOptions};
 use crate::sv::Constellation;
+use crate::trajectory::{SegmentSource, Trajectory, TrajectoryEpoch};
 use hifitime::Epoch;
 use nalgebra::Vector3;
 use obs::{extract, SatMeas, SignalPlan};
@@ -141,23 +149,27 @@ pub enum BasePosition {
 /// Output of a carrier-phase run.
 #[derive(Clone, Debug)]
 pub struct PpkResult {
-    /// Final solutions (of the chosen filter mode), rover marker positions.
-    pub solutions: Vec<EpochSol>,
+    /// The rover trajectory (of the chosen filter mode): marker positions at the true
+    /// reception times, with the filter's ambiguity segments.
+    pub trajectory: Trajectory,
+    /// Counters of the forward pass, when it ran.
     pub forward: Option<PassStats>,
+    /// Counters of the backward pass, when it ran.
     pub backward: Option<PassStats>,
     /// Rover epochs without a solution and why.
     pub unsolved: Vec<(Epoch, String)>,
+    /// Rover epochs read.
     pub rover_epochs: usize,
+    /// Base marker position used, ECEF.
     pub base_marker: Ecef,
+    /// What the run noticed (base position from the header, antennas not calibrated).
     pub warnings: Vec<String>,
 }
 
 impl PpkResult {
+    /// Number of fixed epochs.
     pub fn fixed(&self) -> usize {
-        self.solutions
-            .iter()
-            .filter(|s| s.quality == crate::solution::Quality::Fixed)
-            .count()
+        self.trajectory.fixed()
     }
 }
 
@@ -317,8 +329,17 @@ pub fn process(
         }
     }
     let n = rover.epochs.len();
+    // A step longer than 2.5 nominal intervals between solved epochs starts a new segment.
+    let segment_gap = 2.5 * interval(rover);
     let run = |backward: bool| -> (Vec<Option<EpochSol>>, PassStats) {
-        let mut f = filter::Filter::new(&opts, orbits, base_arp, backward, antennas.clone());
+        let mut f = filter::Filter::new(
+            &opts,
+            orbits,
+            base_arp,
+            backward,
+            antennas.clone(),
+            segment_gap,
+        );
         let mut out: Vec<Option<EpochSol>> = vec![None; n];
         let order: Box<dyn Iterator<Item = usize>> = if backward {
             Box::new((0..n).rev())
@@ -360,20 +381,47 @@ pub fn process(
         (None, Some((b, _))) => b.clone(),
         (None, None) => Vec::new(),
     };
-    let mut solutions = Vec::with_capacity(n);
+    let pass_segments = |p: &Option<(Vec<Option<EpochSol>>, PassStats)>| -> Vec<Option<u32>> {
+        p.as_ref().map_or_else(Vec::new, |(sols, _)| {
+            sols.iter().map(|s| s.as_ref().map(|s| s.segment)).collect()
+        })
+    };
+    let (fw_segments, bw_segments) = (pass_segments(&fw), pass_segments(&bw));
+    let passes: Vec<&[Option<u32>]> = [&fw_segments, &bw_segments]
+        .into_iter()
+        .filter(|p| !p.is_empty())
+        .map(|p| p.as_slice())
+        .collect();
+    let quality: Vec<Option<Quality>> = merged
+        .iter()
+        .map(|s| s.as_ref().map(|s| s.quality))
+        .collect();
+    let segments = segment::output_segments(&passes, &quality);
+    let mut epochs = Vec::with_capacity(n);
     let mut unsolved = Vec::new();
     for (i, s) in merged.into_iter().enumerate() {
         match s {
-            Some(mut s) => {
+            Some(s) => {
                 // Rover marker = antenna reference point − header offset.
-                s.pos = Ecef(s.pos.0 - arp_offset(&rover.header, &s.pos));
+                let pos = Ecef(s.pos.0 - arp_offset(&rover.header, &s.pos));
                 // The position belongs to the true reception time: the receiver's time tag
                 // minus its clock offset (as RTKLIB reports it). A moving rover at 60 m/s
                 // moves 6 cm in a millisecond of clock offset.
+                let mut time = s.time;
                 if let Ok((_, clock)) = &starts[i] {
-                    s.time -= hifitime::Duration::from_seconds(*clock);
+                    time -= hifitime::Duration::from_seconds(*clock);
                 }
-                solutions.push(s);
+                epochs.push(TrajectoryEpoch {
+                    time,
+                    pos,
+                    cov: s.cov,
+                    vel: None,
+                    quality: s.quality,
+                    nsat: s.nsat,
+                    ratio: s.ratio,
+                    age: s.age,
+                    segment: segments[i].unwrap_or(0),
+                });
             }
             None => {
                 let why = if matched[i].is_none() {
@@ -388,7 +436,7 @@ pub fn process(
         }
     }
     Ok(PpkResult {
-        solutions,
+        trajectory: Trajectory::new(epochs, SegmentSource::Filter),
         forward: fw.map(|x| x.1),
         backward: bw.map(|x| x.1),
         unsolved,

@@ -16,8 +16,9 @@
 //! is first and fixed in size; a velocity block would be a second kinematic block placed
 //! after the position (there is none: the filter has no dynamics model).
 //!
-//! Every satellite state carries its bookkeeping ([`Track`]): lock count and last epoch
-//! observed.
+//! Every satellite state carries its bookkeeping ([`Track`]): lock count, last epoch observed
+//! and an arc number that changes whenever the state is (re)initialised, so a fixed integer
+//! is compared with an earlier one only when both belong to the same arc.
 
 use crate::sv::Sv;
 use hifitime::Epoch;
@@ -53,6 +54,8 @@ pub(super) struct Track {
     pub(super) lock: usize,
     /// Last epoch at which the state was observed.
     pub(super) last: Epoch,
+    /// Number of this arc: unique within a pass, new at every (re)initialisation.
+    pub(super) arc: u64,
 }
 
 /// One per-satellite state: what it is and its bookkeeping.
@@ -122,6 +125,7 @@ pub(super) struct State {
     /// Its covariance.
     pub(super) p: DMatrix<f64>,
     index: StateIndex,
+    next_arc: u64,
 }
 
 impl State {
@@ -131,6 +135,7 @@ impl State {
             x: DVector::zeros(KINEMATIC),
             p: DMatrix::identity(KINEMATIC, KINEMATIC) * var,
             index: StateIndex::default(),
+            next_arc: 0,
         }
     }
 
@@ -186,7 +191,7 @@ impl State {
     }
 
     /// Add a per-satellite state at the end with `value`, variance `var`, uncorrelated,
-    /// locked since `t` (lock count 0).
+    /// locked since `t` (lock count 0), with a new arc number.
     pub(super) fn add(&mut self, key: StateKey, t: Epoch, value: f64, var: f64) {
         debug_assert!(key != StateKey::Position && !self.has(key));
         let n = self.x.len();
@@ -201,8 +206,13 @@ impl State {
         self.index.offsets.insert(key, n);
         self.index.sats.push(SatState {
             key,
-            track: Track { lock: 0, last: t },
+            track: Track {
+                lock: 0,
+                last: t,
+                arc: self.next_arc,
+            },
         });
+        self.next_arc += 1;
     }
 
     /// Remove per-satellite states; the others keep their order.
@@ -258,6 +268,10 @@ mod tests {
         assert_eq!((s.x[a], s.x[c]), (0.0, 2.0));
         assert_eq!((s.p[(a, a)], s.p[(c, c)], s.p[(a, c)]), (10.0, 12.0, 0.5));
         assert!(!s.has(amb(7, 0)));
+        // A state added again starts a new arc.
+        s.add(amb(7, 0), t, 0.0, 1.0);
+        let arc = |k| s.sats().find(|(_, x)| x.key == k).unwrap().1.track.arc;
+        assert_eq!(arc(amb(7, 0)), 3);
         assert_eq!(s.index().range(StateKey::Position), Some(0..3));
     }
 }
