@@ -1,5 +1,8 @@
-//! `ppkat demo`: simulate a short built-in flight, run every stage that exists (single point,
-//! carrier phase), and compare with the exact truth.
+//! `ppkat demo`: simulate a short built-in flight, run the whole chain — single point,
+//! carrier phase, exposures, antenna table, joint adjustment — and compare with the exact
+//! truth. The stages pass values: the exposures are computed on the carrier-phase
+//! [`gnss::trajectory::Trajectory`] in memory, with the filter's ambiguity segments
+//! (`rover_ppk.pos` is written for the user, not read back).
 
 use crate::simulate::{self, SimError, SimReport};
 use gnss::frame::Ecef;
@@ -252,16 +255,17 @@ pub fn run(out: &Path) -> Result<DemoReport, ChainError> {
             d.push((s.pos.0 - p).norm());
         }
     }
-    let pos_path = out.join("rover_ppk.pos");
+    // The trajectory as a file for the user; the chain goes on with the value itself (full
+    // precision, the filter's ambiguity segments).
     res.trajectory.write_pos(
-        &pos_path,
+        &out.join("rover_ppk.pos"),
         &["program   : ppkat demo (carrier-phase kinematic)".to_string()],
         PosFormat::Llh,
     )?;
+    let traj = &res.trajectory;
     // Exposures: events of the rover file on the PPK trajectory, lever arm rotated by the
     // attitude an IMU would give (the simulated attitude, written as an attitude file).
-    let traj = gnss::trajectory::Trajectory::read_pos(&pos_path)?;
-    let (events, _) = crate::exposure::events::from_rinex(rover, &traj);
+    let (events, _) = crate::exposure::events::from_rinex(rover, traj);
     let att_path = out.join("imu_attitude.csv");
     let truth_text = |name: &str| {
         std::fs::read_to_string(out.join(name)).map_err(|e| ChainError::Truth {
@@ -287,7 +291,7 @@ pub fn run(out: &Path) -> Result<DemoReport, ChainError> {
         attitude: Some(attitude),
         ..Default::default()
     };
-    let ex = crate::exposure::compute(events, &traj, &opts);
+    let ex = crate::exposure::compute(events, traj, &opts);
     crate::exposure::export::write(
         &out.join("camera_stations.csv"),
         &ex.stations,
