@@ -12,6 +12,8 @@
 //!
 //! Every epoch is a `hifitime::Epoch` in GPST; angles are radians; lengths metres.
 
+#![deny(missing_docs)]
+
 pub mod error;
 pub mod frame;
 pub mod model;

@@ -19,19 +19,30 @@ use std::path::Path;
 /// Errors of a whole-chain run.
 #[derive(Debug, thiserror::Error)]
 pub enum ChainError {
+    /// The simulation failed.
     #[error(transparent)]
     Sim(#[from] SimError),
+    /// Reading or processing GNSS data failed.
     #[error(transparent)]
     Gnss(#[from] gnss::Error),
+    /// A truth file of the simulation could not be read.
     #[error("{path}: {what}")]
-    Truth { path: String, what: String },
+    Truth {
+        /// The file.
+        path: String,
+        /// What went wrong.
+        what: String,
+    },
 }
 
 /// A truth trajectory sample: GPST seconds, ECEF position and velocity.
 #[derive(Clone, Copy, Debug)]
 pub struct TruthSample {
+    /// GPST seconds (week × 604800 + seconds of week).
     pub t: f64,
+    /// Antenna position, ECEF, metres.
     pub pos: Vector3<f64>,
+    /// Antenna velocity, ECEF, m/s.
     pub vel: Vector3<f64>,
 }
 
@@ -95,12 +106,16 @@ pub fn truth_at(truth: &[TruthSample], t: f64) -> Option<Vector3<f64>> {
 
 /// The files of a simulation, read: rover and base observations and the orbits.
 pub struct SimInputs {
+    /// Rover observations.
     pub rover: ObsFile,
+    /// Base observations.
     pub base: ObsFile,
+    /// Broadcast orbits of the simulated navigation file.
     pub orbits: Orbits,
 }
 
 impl SimInputs {
+    /// Read the files a simulation wrote.
     pub fn read(sim: &SimReport) -> Result<SimInputs, ChainError> {
         Ok(SimInputs {
             rover: ObsFile::read(&sim.rover)?,
@@ -125,20 +140,33 @@ impl SimInputs {
 /// What the demo measured.
 #[derive(Clone, Debug)]
 pub struct DemoReport {
+    /// What the simulation wrote.
     pub sim: SimReport,
+    /// Single-point epochs solved.
     pub spp_epochs: usize,
+    /// Single-point horizontal RMS against truth, metres.
     pub spp_h_rms: f64,
+    /// Single-point vertical RMS against truth, metres.
     pub spp_v_rms: f64,
+    /// Carrier-phase epochs solved.
     pub ppk_epochs: usize,
+    /// Carrier-phase epochs fixed.
     pub ppk_fixed: usize,
+    /// 3D RMS of the fixed epochs against truth, metres.
     pub ppk_3d_rms_fixed: f64,
+    /// Largest 3D error of a fixed epoch, metres.
     pub ppk_max_fixed: f64,
+    /// Camera stations computed.
     pub stations: usize,
+    /// Exposures refused.
     pub stations_refused: usize,
+    /// 3D RMS of the projection centres against truth, metres.
     pub centre_3d_rms: f64,
     /// The joint adjustment of the flight's photographs (None when it could not run).
     pub adjust: Option<crate::adjust::results::Results>,
+    /// Why the adjustment could not run.
     pub adjust_error: Option<String>,
+    /// Wall time of the whole demo, seconds.
     pub seconds: f64,
 }
 

@@ -15,21 +15,32 @@ use std::path::{Path, PathBuf};
 /// Inputs of a single-point run.
 #[derive(Clone, Debug)]
 pub struct SppJob {
+    /// Observation file.
     pub obs: PathBuf,
+    /// Navigation files.
     pub nav: Vec<PathBuf>,
+    /// Precise orbits, when given.
     pub sp3: Option<PathBuf>,
+    /// Processing options.
     pub options: SppOptions,
+    /// Coordinates of the `.pos` written.
     pub format: PosFormat,
+    /// Output `.pos`.
     pub out: PathBuf,
 }
 
 /// What a single-point run did.
 #[derive(Clone, Debug)]
 pub struct SppReport {
+    /// Epochs read.
     pub epochs: usize,
+    /// Epochs solved.
     pub solved: usize,
+    /// What the solver did.
     pub run: SppRun,
+    /// Problems with the inputs (reading went on).
     pub warnings: Vec<String>,
+    /// The `.pos` written.
     pub out: PathBuf,
 }
 
@@ -190,21 +201,32 @@ impl fmt::Display for SppReport {
 /// Inputs of a carrier-phase run.
 #[derive(Clone, Debug)]
 pub struct PpkJob {
+    /// Rover observation file.
     pub rover: PathBuf,
+    /// Base observation file.
     pub base: PathBuf,
+    /// Navigation files.
     pub nav: Vec<PathBuf>,
+    /// Where the base antenna is.
     pub base_position: gnss::ppk::BasePosition,
+    /// Processing options.
     pub options: gnss::ppk::PpkOptions,
+    /// Coordinates of the `.pos` written.
     pub format: PosFormat,
+    /// Output `.pos`.
     pub out: PathBuf,
 }
 
 /// What a carrier-phase run did.
 #[derive(Clone, Debug)]
 pub struct PpkReport {
+    /// The carrier-phase result (trajectory, pass counters, unsolved epochs).
     pub result: gnss::ppk::PpkResult,
+    /// The `.pos` written.
     pub out: PathBuf,
+    /// Problems with the inputs and the run.
     pub warnings: Vec<String>,
+    /// Wall time, seconds.
     pub seconds: f64,
 }
 
@@ -324,19 +346,28 @@ impl fmt::Display for PpkReport {
 /// Where the exposure times come from.
 #[derive(Clone, Debug)]
 pub enum EventSource {
+    /// Flag-5 events of a RINEX observation file (receiver clock removed).
     Rinex(PathBuf),
+    /// A DJI `Timestamp.MRK`.
     Mrk(PathBuf),
+    /// A CSV of times in the given time system.
     Times(PathBuf, crate::exposure::events::TimeSystem),
 }
 
 /// Inputs of the exposure stage.
 #[derive(Clone, Debug)]
 pub struct ExposureJob {
+    /// The trajectory (`.pos`, ours or RTKLIB's).
     pub trajectory: PathBuf,
+    /// Where the exposure times come from.
     pub events: EventSource,
+    /// Lever arm, attitude, delay, gap limit.
     pub options: crate::exposure::ExposureOptions,
+    /// Output layout.
     pub format: crate::exposure::export::Format,
+    /// Horizontal coordinates of the output.
     pub projection: crate::exposure::export::Projection,
+    /// Output file.
     pub out: PathBuf,
     /// Photographs to match to the exposures (their names become the station labels).
     pub photos: Option<PathBuf>,
@@ -347,12 +378,17 @@ pub struct ExposureJob {
 /// What the exposure stage did.
 #[derive(Clone, Debug)]
 pub struct ExposureReport {
+    /// The stations and what was refused.
     pub result: crate::exposure::ExposureResult,
+    /// Exposures read.
     pub events: usize,
+    /// Largest receiver clock correction applied to the event times, seconds.
     pub clock_correction: f64,
+    /// The file written.
     pub out: PathBuf,
     /// Photo matching: Ok(number matched) or the mismatch found.
     pub photos: Option<std::result::Result<usize, String>>,
+    /// Geotagged copies written.
     pub geotagged: usize,
 }
 

@@ -50,27 +50,36 @@ pub enum ArMode {
 /// Which passes to run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FilterMode {
+    /// Forward in time only.
     Forward,
+    /// Backward in time only.
     Backward,
+    /// Forward and backward, combined epoch by epoch.
     Combined,
 }
 
 /// Options of the carrier-phase engine.
 #[derive(Clone, Debug)]
 pub struct PpkOptions {
+    /// Elevation mask, radians.
     pub elev_mask: f64,
+    /// Systems used.
     pub systems: Vec<Constellation>,
     /// Frequency slots used (1–3).
     pub nf: usize,
+    /// Integer ambiguity resolution mode.
     pub ar: ArMode,
+    /// Which passes run.
     pub filter: FilterMode,
+    /// Ratio-test threshold (second best / best squared distance).
     pub ratio_threshold: f64,
     /// Largest base-rover time difference, seconds.
     pub max_age: f64,
-    /// Gap after which an ambiguity is reset, seconds (None: five rover intervals).
+    /// Gap after which an ambiguity is reset, seconds (0: five rover intervals, at least 5 s).
     pub max_gap: f64,
     /// Undifferenced phase sigma a + b/sin(el), metres.
     pub phase_sigma: (f64, f64),
+    /// Code sigma over phase sigma.
     pub code_phase_ratio: f64,
     /// Ambiguity random walk, cycles/√s.
     pub amb_process_noise: f64,
@@ -80,13 +89,17 @@ pub struct PpkOptions {
     pub max_innovation: f64,
     /// Post-fit phase residual that resets an ambiguity, metres.
     pub max_phase_residual: f64,
+    /// Epochs an ambiguity must be locked before it may be fixed.
     pub min_lock: usize,
     /// Lock count below which a satellite counts as newly risen for partial fixing.
     pub mature_lock: usize,
+    /// Elevation mask of the ambiguities fixed, radians.
     pub ar_elev_mask: f64,
+    /// Satellites partial fixing may drop, at most.
     pub max_partial_drops: usize,
     /// A partial fix whose 3D position sigma exceeds this (m) is not accepted.
     pub max_partial_fix_sigma: f64,
+    /// Fewest double-difference ambiguities for a fix.
     pub min_fix_ambiguities: usize,
     /// Variance of the fix-and-hold constraint, cycles².
     pub hold_variance: f64,

@@ -1,6 +1,8 @@
 //! The project file (TOML) of `ppkat adjust` and the tables it names: cameras, the image list,
-//! image measurements (CSV or PATB), ground points (control, check) and the GNSS antenna table
-//! written by `ppkat exposures --format antenna`. Paths are relative to the project file.
+//! image measurements (CSV or PATB), ground points (control, check) and the GNSS input: the
+//! antenna table written by `ppkat exposures --format antenna`, or a `.pos` trajectory read
+//! into a `gnss::trajectory::Trajectory` and interpolated at the image times. Paths are
+//! relative to the project file.
 //! Every problem names the file, the line and what to do.
 
 use super::factors::DriftModel;

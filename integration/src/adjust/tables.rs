@@ -1,5 +1,6 @@
 //! The tables a project names: image list, image measurements (CSV or PATB), ground points,
-//! GNSS antenna table. Each problem names the file and the line.
+//! GNSS antenna table — or the antennas interpolated on a trajectory. Each problem names the
+//! file and the line.
 
 use super::project::{
     Antenna, CameraDef, GroundPoint, GroundSection, ImageDef, Measurement, PointKind,

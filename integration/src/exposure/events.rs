@@ -25,18 +25,22 @@ pub struct MrkInfo {
 /// One exposure time.
 #[derive(Clone, Debug)]
 pub struct ExposureEvent {
+    /// Label (event number or MRK index).
     pub id: String,
     /// GPST.
     pub time: Epoch,
     /// Line in the source file (0 when not applicable).
     pub line: usize,
+    /// What a DJI MRK line adds (None for other sources).
     pub mrk: Option<MrkInfo>,
 }
 
 /// Time system of a CSV of times.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TimeSystem {
+    /// GPS time.
     Gpst,
+    /// UTC (converted with the leap seconds).
     Utc,
 }
 

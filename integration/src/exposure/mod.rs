@@ -22,6 +22,7 @@ use nalgebra::{Matrix3, Vector3};
 /// Where a station's attitude came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum AttitudeSource {
+    /// From the attitude table.
     Table,
     /// Trajectory heading, zero pitch and roll (flagged).
     Heading,
@@ -30,18 +31,25 @@ pub enum AttitudeSource {
 /// A camera station: the projection centre of one exposure.
 #[derive(Clone, Debug)]
 pub struct CameraStation {
+    /// Label (event number, or photo name once matched).
     pub id: String,
+    /// Exposure time (event time plus delay), GPST.
     pub time: Epoch,
+    /// Antenna position interpolated on the trajectory, ECEF.
     pub antenna: Ecef,
+    /// Projection centre, ECEF (antenna minus the rotated lever arm).
     pub centre: Ecef,
     /// ECEF covariance of the centre, m² (from the trajectory).
     pub cov: Matrix3<f64>,
+    /// Worst trajectory quality around the exposure.
     pub quality: Quality,
     /// Ambiguity segment of the trajectory at the exposure (for drift per segment).
     pub segment: u32,
     /// Camera → ENU at the station.
     pub rotation: Matrix3<f64>,
+    /// Where the rotation came from.
     pub attitude: AttitudeSource,
+    /// What a user should look at (float neighbours, heading attitude, no lever arm).
     pub flags: Vec<String>,
 }
 
@@ -50,6 +58,7 @@ pub struct CameraStation {
 pub struct ExposureOptions {
     /// Antenna phase centre in the camera frame (u, v, w), metres.
     pub lever_arm: Option<Vector3<f64>>,
+    /// Camera attitude over time (None: the trajectory heading is used).
     pub attitude: Option<AttitudeTable>,
     /// Camera latency added to every event time, milliseconds.
     pub delay_ms: f64,
@@ -60,8 +69,11 @@ pub struct ExposureOptions {
 /// An exposure that got no station, and why.
 #[derive(Clone, Debug)]
 pub struct Refused {
+    /// Exposure label.
     pub id: String,
+    /// Exposure time, GPST.
     pub time: Epoch,
+    /// Why it got no station.
     pub why: String,
 }
 
