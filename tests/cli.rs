@@ -676,7 +676,8 @@ fn leverarm_from_tapes() {
     fails_with(&o, &["--tapes", "four lengths"]);
 }
 
-/// The demo's rover events on its PPK trajectory, in every export format.
+/// The demo's rover events on its PPK trajectory, in every export format; the report says
+/// where the ambiguity segments came from.
 #[test]
 fn exposures_in_every_format() {
     let dir = tmp("exp-formats");
@@ -713,6 +714,12 @@ fn exposures_in_every_format() {
         assert_eq!(o.status.code(), Some(0), "{t}");
         assert!(
             t.contains("camera stations written") && t.contains("heading"),
+            "{t}"
+        );
+        // A .pos carries no ambiguity segments: the report says they were derived.
+        assert!(
+            t.contains("note: ambiguity segments derived from Q changes and gaps of")
+                && t.contains("rover_ppk.pos"),
             "{t}"
         );
         let body = std::fs::read_to_string(&out).unwrap();

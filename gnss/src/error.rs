@@ -10,19 +10,29 @@ pub enum Error {
     /// The file could not be opened or read.
     #[error("{path}: cannot read: {source}; check that the path exists and is readable")]
     Io {
+        /// The file.
         path: PathBuf,
+        /// What the system said.
         source: std::io::Error,
     },
     /// A line of the file does not follow the format.
     #[error("{path}:{line}: {what}")]
     Parse {
+        /// The file.
         path: PathBuf,
+        /// 1-based line.
         line: usize,
+        /// What is wrong and what to do.
         what: String,
     },
     /// The file as a whole is not what was asked for (wrong kind, unknown version, empty …).
     #[error("{path}: {what}")]
-    Input { path: PathBuf, what: String },
+    Input {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong and what to do.
+        what: String,
+    },
     /// Inputs that are each fine but cannot be used together, or leave nothing to compute.
     #[error("{0}")]
     NoData(String),
@@ -32,6 +42,7 @@ pub enum Error {
 pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
+    /// A [`Error::Parse`] at `line` of `path`.
     pub fn parse(path: &std::path::Path, line: usize, what: impl Into<String>) -> Self {
         Error::Parse {
             path: path.to_path_buf(),
@@ -39,6 +50,7 @@ impl Error {
             what: what.into(),
         }
     }
+    /// An [`Error::Input`] about `path`.
     pub fn input(path: &std::path::Path, what: impl Into<String>) -> Self {
         Error::Input {
             path: path.to_path_buf(),

@@ -16,8 +16,11 @@ pub struct Ecef(pub Vector3<f64>);
 /// Geodetic coordinates on WGS84: latitude and longitude in radians, ellipsoidal height in metres.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Geodetic {
+    /// Latitude, radians.
     pub lat: f64,
+    /// Longitude, radians.
     pub lon: f64,
+    /// Ellipsoidal height, metres.
     pub h: f64,
 }
 
@@ -26,6 +29,7 @@ pub struct Geodetic {
 pub struct Enu(pub Vector3<f64>);
 
 impl Ecef {
+    /// A point from its ECEF coordinates, metres.
     pub fn new(x: f64, y: f64, z: f64) -> Self {
         Ecef(Vector3::new(x, y, z))
     }
@@ -91,6 +95,7 @@ impl Geodetic {
         }
     }
 
+    /// ECEF coordinates of this point.
     pub fn to_ecef(&self) -> Ecef {
         let (sl, cl) = self.lat.sin_cos();
         let (so, co) = self.lon.sin_cos();
@@ -116,12 +121,15 @@ impl Enu {
         let r = enu_rotation(&origin.to_geodetic());
         Ecef(origin.0 + r.transpose() * self.0)
     }
+    /// East component, metres.
     pub fn east(&self) -> f64 {
         self.0.x
     }
+    /// North component, metres.
     pub fn north(&self) -> f64 {
         self.0.y
     }
+    /// Up component, metres.
     pub fn up(&self) -> f64 {
         self.0.z
     }

@@ -6,9 +6,13 @@
 //!   BeiDou, QZSS, GLONASS) or SP3 precise orbits.
 //! - [`model`], [`signal`]: troposphere, ionosphere, frequencies.
 //! - [`frame`], [`tmerc`]: ECEF, geodetic, ENU and transverse Mercator coordinates.
-//! - [`spp`]: single-point positioning; [`solution`]: the RTKLIB-compatible `.pos` writer.
+//! - [`spp`]: single-point positioning; [`ppk`]: carrier-phase kinematic positioning.
+//! - [`trajectory`]: the rover trajectory in memory (with ambiguity segments) and its
+//!   interpolation; [`solution`]: its RTKLIB-compatible `.pos` serialisation.
 //!
 //! Every epoch is a `hifitime::Epoch` in GPST; angles are radians; lengths metres.
+
+#![deny(missing_docs)]
 
 pub mod error;
 pub mod frame;
@@ -22,5 +26,6 @@ pub mod spp;
 pub mod sv;
 pub mod time;
 pub mod tmerc;
+pub mod trajectory;
 
 pub use error::{Error, Result};

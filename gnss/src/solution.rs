@@ -1,29 +1,60 @@
-//! Position solutions and the RTKLIB-compatible `.pos` writer (GPST, llh or ECEF xyz).
+//! Position solutions and the RTKLIB-compatible `.pos` format (GPST, llh or ECEF xyz): the
+//! writer, the reader (ours and RTKLIB's files), and the atomic file writer.
+//!
+//! Columns: date, time (GPST), then lat (deg), lon (deg), h (m, ellipsoidal) or ECEF x, y, z
+//! (m); Q; number of satellites; standard deviations and signed square roots of the
+//! covariances (sdn sde sdu sdne sdeu sdun in the local ENU frame for llh, sdx sdy sdz sdxy
+//! sdyz sdzx in ECEF for xyz); age (s); ratio. [`crate::trajectory::Trajectory`] is the value
+//! these lines serialise.
 
 use crate::error::{Error, Result};
-use crate::frame::{enu_rotation, Ecef};
+use crate::frame::{enu_rotation, Ecef, Geodetic};
 use hifitime::Epoch;
 use nalgebra::Matrix3;
 use std::io::Write;
 use std::path::Path;
 
-/// Solution quality, numbered as RTKLIB numbers it.
+/// Solution quality, numbered as RTKLIB numbers it (lower is better).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Quality {
+    /// Carrier phase, ambiguities fixed.
     Fixed = 1,
+    /// Carrier phase, float ambiguities.
     Float = 2,
+    /// SBAS-corrected code.
     Sbas = 3,
+    /// Differential code.
     Dgps = 4,
+    /// Single point (code).
     Single = 5,
+    /// Precise point positioning.
     Ppp = 6,
+}
+
+impl Quality {
+    /// The quality of an RTKLIB Q number (unknown numbers read as single).
+    pub fn from_q(q: u8) -> Quality {
+        match q {
+            1 => Quality::Fixed,
+            2 => Quality::Float,
+            3 => Quality::Sbas,
+            4 => Quality::Dgps,
+            6 => Quality::Ppp,
+            _ => Quality::Single,
+        }
+    }
 }
 
 /// One line of a `.pos` file.
 #[derive(Clone, Debug)]
 pub struct PosRecord {
+    /// GPST.
     pub time: Epoch,
+    /// Position, ECEF.
     pub pos: Ecef,
+    /// Q.
     pub quality: Quality,
+    /// Number of satellites.
     pub nsat: usize,
     /// Position covariance in ECEF, m².
     pub cov: Matrix3<f64>,
@@ -36,7 +67,9 @@ pub struct PosRecord {
 /// Coordinates written in a `.pos` file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PosFormat {
+    /// Latitude, longitude (degrees), ellipsoidal height; ENU standard deviations.
     Llh,
+    /// ECEF x, y, z; ECEF standard deviations.
     Xyz,
 }
 
@@ -157,4 +190,119 @@ pub fn write_pos(
         }
         Ok(())
     })
+}
+
+/// Inverse of [`sqvar`].
+fn sqvar_inv(v: f64) -> f64 {
+    v.signum() * v * v
+}
+
+/// Read the lines of an RTKLIB-compatible `.pos` (llh or xyz, told by the column header or,
+/// without one, by the size of the first coordinate; GPST; `%` comments), in file order.
+/// Columns after the ratio (RTKLIB's velocities) are ignored.
+pub fn read_pos(path: &Path) -> Result<Vec<PosRecord>> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let mut records = Vec::new();
+    let mut xyz: Option<bool> = None;
+    for (i, line) in text.lines().enumerate() {
+        let l = line.trim();
+        if l.starts_with('%') {
+            if l.contains("x-ecef") {
+                xyz = Some(true);
+            } else if l.contains("latitude") {
+                xyz = Some(false);
+            }
+            continue;
+        }
+        if l.is_empty() {
+            continue;
+        }
+        let bad = |what: &str| Error::Parse {
+            path: path.to_path_buf(),
+            line: i + 1,
+            what: what.to_string(),
+        };
+        let f: Vec<&str> = l.split_whitespace().collect();
+        if f.len() < 6 {
+            return Err(bad("too few columns for a .pos line (date time a b c Q …)"));
+        }
+        let time = parse_time(f[0], f[1])
+            .ok_or_else(|| bad("unreadable date/time (yyyy/mm/dd hh:mm:ss.sss GPST expected)"))?;
+        let num = |k: usize| f.get(k).and_then(|x| x.parse::<f64>().ok());
+        let (a, b, c) = (
+            num(2).ok_or_else(|| bad("bad number"))?,
+            num(3).ok_or_else(|| bad("bad number"))?,
+            num(4).ok_or_else(|| bad("bad number"))?,
+        );
+        let is_xyz = xyz.unwrap_or(a.abs() > 1000.0);
+        let pos = if is_xyz {
+            Ecef::new(a, b, c)
+        } else {
+            Geodetic::from_degrees(a, b, c).to_ecef()
+        };
+        let q = f[5].parse::<u8>().map_err(|_| bad("bad quality flag"))?;
+        let sd: Vec<f64> = (7..13).map(|k| num(k).unwrap_or(0.0)).collect();
+        let cov = if is_xyz {
+            Matrix3::new(
+                sd[0] * sd[0],
+                sqvar_inv(sd[3]),
+                sqvar_inv(sd[5]),
+                sqvar_inv(sd[3]),
+                sd[1] * sd[1],
+                sqvar_inv(sd[4]),
+                sqvar_inv(sd[5]),
+                sqvar_inv(sd[4]),
+                sd[2] * sd[2],
+            )
+        } else {
+            // sdn sde sdu sdne sdeu sdun → ENU covariance → ECEF.
+            let (n, e, u) = (sd[0], sd[1], sd[2]);
+            let (ne, eu, un) = (sqvar_inv(sd[3]), sqvar_inv(sd[4]), sqvar_inv(sd[5]));
+            let c_enu = Matrix3::new(e * e, ne, eu, ne, n * n, un, eu, un, u * u);
+            let r = enu_rotation(&pos.to_geodetic());
+            r.transpose() * c_enu * r
+        };
+        records.push(PosRecord {
+            time,
+            pos,
+            quality: Quality::from_q(q),
+            nsat: f.get(6).and_then(|x| x.parse().ok()).unwrap_or(0),
+            cov,
+            age: num(13).unwrap_or(0.0),
+            ratio: num(14).unwrap_or(0.0),
+        });
+    }
+    Ok(records)
+}
+
+/// `yyyy/mm/dd` + `hh:mm:ss.sss` in GPST.
+fn parse_time(date: &str, time: &str) -> Option<Epoch> {
+    let d: Vec<i64> = date
+        .split('/')
+        .map(|x| x.parse().ok())
+        .collect::<Option<_>>()?;
+    let mut tp = time.split(':');
+    let (h, m, s) = (
+        tp.next()?.parse::<i64>().ok()?,
+        tp.next()?.parse::<i64>().ok()?,
+        tp.next()?.parse::<f64>().ok()?,
+    );
+    if d.len() != 3 {
+        return None;
+    }
+    let base = Epoch::maybe_from_gregorian(
+        d[0] as i32,
+        d[1] as u8,
+        d[2] as u8,
+        h as u8,
+        m as u8,
+        0,
+        0,
+        hifitime::TimeScale::GPST,
+    )
+    .ok()?;
+    Some(base + hifitime::Duration::from_seconds(s))
 }

@@ -47,18 +47,26 @@ impl Default for SppOptions {
 /// Dilutions of precision.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Dop {
+    /// Geometric.
     pub gdop: f64,
+    /// Position.
     pub pdop: f64,
+    /// Horizontal.
     pub hdop: f64,
+    /// Vertical.
     pub vdop: f64,
 }
 
 /// Why a satellite was not used in an epoch.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Rejection {
+    /// The satellite's system was not asked for.
     SystemNotSelected,
+    /// No usable code observation.
     NoCode,
+    /// No valid healthy ephemeris.
     NoEphemeris,
+    /// Below the elevation mask.
     BelowMask,
     /// Excluded by fault detection.
     Faulty,
@@ -79,17 +87,25 @@ impl std::fmt::Display for Rejection {
 /// Why an epoch has no solution.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SppFailure {
+    /// Fewer satellites than unknowns.
     TooFewSatellites {
+        /// Satellites usable.
         usable: usize,
+        /// Satellites needed (the number of unknowns).
         needed: usize,
     },
+    /// The least squares did not converge.
     NoConvergence,
     /// The solution failed the chi-square test and no exclusion repaired it.
     Inconsistent {
+        /// Chi-square of the residuals.
         chi2: f64,
+        /// Its critical value.
         threshold: f64,
     },
+    /// Geometric dilution of precision above 30.
     PoorGeometry {
+        /// The GDOP.
         gdop: f64,
     },
 }
@@ -125,18 +141,23 @@ impl std::fmt::Display for SppFailure {
 /// A single-point solution.
 #[derive(Clone, Debug)]
 pub struct SppSolution {
+    /// Receiver time tag, GPST.
     pub time: Epoch,
+    /// Position, ECEF.
     pub pos: Ecef,
     /// Receiver clock per system, metres.
     pub clocks: BTreeMap<Constellation, f64>,
     /// Position covariance in ECEF, m².
     pub cov: Matrix3<f64>,
+    /// Satellites used.
     pub nsat: usize,
+    /// Dilutions of precision.
     pub dop: Dop,
     /// Root mean square of the post-fit residuals, metres.
     pub rms: f64,
     /// Satellites used.
     pub used: Vec<Sv>,
+    /// Satellites not used, and why.
     pub rejected: Vec<(Sv, Rejection)>,
 }
 
@@ -491,6 +512,7 @@ fn dops(h: &DMatrix<f64>, g: &Geodetic, nx: usize) -> Dop {
 /// Counts of a whole run.
 #[derive(Clone, Debug, Default)]
 pub struct SppRun {
+    /// Solved epochs, in time order.
     pub solutions: Vec<SppSolution>,
     /// Epochs without a solution and why.
     pub failures: Vec<(Epoch, SppFailure)>,

@@ -5,12 +5,19 @@ use std::fmt;
 /// A satellite navigation system, with its RINEX letter.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Debug)]
 pub enum Constellation {
+    /// GPS (G).
     Gps,
+    /// GLONASS (R).
     Glonass,
+    /// Galileo (E).
     Galileo,
+    /// BeiDou (C).
     BeiDou,
+    /// QZSS (J).
     Qzss,
+    /// SBAS (S).
     Sbas,
+    /// NavIC / IRNSS (I).
     Irnss,
 }
 
@@ -80,11 +87,14 @@ impl Constellation {
 /// One satellite: system and PRN (slot number for GLONASS).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Debug)]
 pub struct Sv {
+    /// System.
     pub sys: Constellation,
+    /// PRN (slot number for GLONASS).
     pub prn: u8,
 }
 
 impl Sv {
+    /// A satellite from its system and PRN.
     pub fn new(sys: Constellation, prn: u8) -> Self {
         Sv { sys, prn }
     }

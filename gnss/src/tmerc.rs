@@ -7,7 +7,9 @@ use crate::frame::{Geodetic, WGS84_A, WGS84_F};
 /// A projected position: easting and northing in metres, in the named projection.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Projected {
+    /// Easting, metres.
     pub easting: f64,
+    /// Northing, metres.
     pub northing: f64,
 }
 
@@ -18,7 +20,9 @@ pub struct TransverseMercator {
     pub lon0: f64,
     /// Scale on the central meridian.
     pub k0: f64,
+    /// False easting, metres.
     pub false_easting: f64,
+    /// False northing, metres.
     pub false_northing: f64,
 }
 

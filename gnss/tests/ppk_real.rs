@@ -8,6 +8,7 @@ use gnss::ppk::{self, BasePosition, FilterMode, PpkOptions, PpkResult};
 use gnss::rinex::nav::NavFile;
 use gnss::rinex::ObsFile;
 use gnss::solution::Quality;
+use gnss::trajectory::SegmentSource;
 use std::path::Path;
 
 struct Stats {
@@ -17,11 +18,14 @@ struct Stats {
     max_fixed_err: f64,
 }
 
-fn stats(r: &PpkResult, truth: impl Fn(&ppk::EpochSol) -> Option<Ecef>) -> Stats {
+fn stats(
+    r: &PpkResult,
+    truth: impl Fn(&gnss::trajectory::TrajectoryEpoch) -> Option<Ecef>,
+) -> Stats {
     let mut h = Vec::new();
     let mut v = Vec::new();
     let mut max_fixed: f64 = 0.0;
-    for s in &r.solutions {
+    for s in &r.trajectory.epochs {
         let Some(t) = truth(s) else { continue };
         let e = s.pos.enu_from(&t);
         h.push(e.horizontal());
@@ -31,7 +35,7 @@ fn stats(r: &PpkResult, truth: impl Fn(&ppk::EpochSol) -> Option<Ecef>) -> Stats
         }
     }
     Stats {
-        fixed_pct: 100.0 * r.fixed() as f64 / r.solutions.len().max(1) as f64,
+        fixed_pct: 100.0 * r.fixed() as f64 / r.trajectory.epochs.len().max(1) as f64,
         h_rms: common::rms(&h),
         v_rms: common::rms(&v),
         max_fixed_err: max_fixed,
@@ -87,7 +91,7 @@ fn geonet_static_rover_processed_kinematically() {
         let s = stats(&r, |_| Some(truth));
         eprintln!(
             "GEONET {mode:?}: {} solved of {}, fixed {:.1} %, H RMS {:.2} cm, V RMS {:.2} cm, worst fixed {:.2} cm; fw {:?}",
-            r.solutions.len(),
+            r.trajectory.epochs.len(),
             r.rover_epochs,
             s.fixed_pct,
             s.h_rms * 100.0,
@@ -96,10 +100,24 @@ fn geonet_static_rover_processed_kinematically() {
             r.forward
         );
         // Every epoch with a valid code solution is solved (the last five have GDOP > 30).
-        assert_eq!(r.solutions.len(), 115);
+        assert_eq!(r.trajectory.epochs.len(), 115);
         assert!(s.max_fixed_err < 0.10, "no fixed epoch more than 10 cm off");
+        // The filter assigns the ambiguity segments: ids grow by one at each boundary, a Q
+        // change is one, and the fixed set is held throughout the combined solution.
+        assert_eq!(r.trajectory.segments_from, SegmentSource::Filter);
+        let segments: Vec<u32> = r.trajectory.epochs.iter().map(|e| e.segment).collect();
+        assert_eq!(segments[0], 0);
+        assert!(segments
+            .windows(2)
+            .all(|w| w[1] == w[0] || w[1] == w[0] + 1));
+        for w in r.trajectory.epochs.windows(2) {
+            if w[0].quality != w[1].quality {
+                assert_ne!(w[0].segment, w[1].segment, "a Q change starts a segment");
+            }
+        }
         match mode {
             FilterMode::Combined => {
+                assert!(segments.iter().all(|&s| s == 0), "{segments:?}");
                 assert_eq!(s.fixed_pct, 100.0);
                 // RTKLIB: H 0.53 cm, V 1.12 cm.
                 assert!(s.h_rms <= 0.006, "H RMS {}", s.h_rms);
@@ -150,13 +168,13 @@ fn spirent_dynamic_and_static_rovers() {
     let d3 = (s.h_rms.powi(2) + s.v_rms.powi(2)).sqrt();
     eprintln!(
         "Spirent dynamic: {} solved of {}, fixed {:.1} %, 3D RMS {:.2} mm, worst fixed {:.1} mm",
-        r.solutions.len(),
+        r.trajectory.epochs.len(),
         r.rover_epochs,
         s.fixed_pct,
         d3 * 1000.0,
         s.max_fixed_err * 1000.0
     );
-    assert_eq!(r.solutions.len(), r.rover_epochs);
+    assert_eq!(r.trajectory.epochs.len(), r.rover_epochs);
     assert_eq!(s.fixed_pct, 100.0);
     assert!(d3 <= 0.005, "3D RMS {d3}");
     let st = Ecef::new(4156857.1195929, 673209.028774142, 4774767.03105544);
@@ -172,7 +190,7 @@ fn spirent_dynamic_and_static_rovers() {
     let d3s = (s2.h_rms.powi(2) + s2.v_rms.powi(2)).sqrt();
     eprintln!(
         "Spirent static 2 km: {} solved, fixed {:.1} %, 3D RMS {:.2} mm",
-        r2.solutions.len(),
+        r2.trajectory.epochs.len(),
         s2.fixed_pct,
         d3s * 1000.0
     );
@@ -195,11 +213,11 @@ fn cssrlib_car() {
         base,
         &PpkOptions::default(),
     );
-    let t0 = r.solutions.first().map(|s| s.time).unwrap();
+    let t0 = r.trajectory.epochs.first().map(|s| s.time).unwrap();
     let s = stats(&r, |s| ((s.time - t0).to_seconds() < 35.0).then_some(start));
     eprintln!(
         "cssrlib car: {} solved of {}, fixed {:.1} %, first 35 s H RMS {:.2} cm V RMS {:.2} cm; fw {:?}",
-        r.solutions.len(),
+        r.trajectory.epochs.len(),
         r.rover_epochs,
         s.fixed_pct,
         s.h_rms * 100.0,

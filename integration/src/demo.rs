@@ -1,5 +1,8 @@
-//! `ppkat demo`: simulate a short built-in flight, run every stage that exists (single point,
-//! carrier phase), and compare with the exact truth.
+//! `ppkat demo`: simulate a short built-in flight, run the whole chain — single point,
+//! carrier phase, exposures, antenna table, joint adjustment — and compare with the exact
+//! truth. The stages pass values: the exposures are computed on the carrier-phase
+//! [`gnss::trajectory::Trajectory`] in memory, with the filter's ambiguity segments
+//! (`rover_ppk.pos` is written for the user, not read back).
 
 use crate::simulate::{self, SimError, SimReport};
 use gnss::frame::Ecef;
@@ -7,7 +10,7 @@ use gnss::orbit::{Ephemerides, Orbits};
 use gnss::ppk::{self, BasePosition, PpkOptions};
 use gnss::rinex::nav::NavFile;
 use gnss::rinex::ObsFile;
-use gnss::solution::{write_pos, PosFormat, PosRecord, Quality};
+use gnss::solution::{PosFormat, Quality};
 use gnss::spp::{self, SppOptions};
 use nalgebra::Vector3;
 use std::fmt;
@@ -16,19 +19,30 @@ use std::path::Path;
 /// Errors of a whole-chain run.
 #[derive(Debug, thiserror::Error)]
 pub enum ChainError {
+    /// The simulation failed.
     #[error(transparent)]
     Sim(#[from] SimError),
+    /// Reading or processing GNSS data failed.
     #[error(transparent)]
     Gnss(#[from] gnss::Error),
+    /// A truth file of the simulation could not be read.
     #[error("{path}: {what}")]
-    Truth { path: String, what: String },
+    Truth {
+        /// The file.
+        path: String,
+        /// What went wrong.
+        what: String,
+    },
 }
 
 /// A truth trajectory sample: GPST seconds, ECEF position and velocity.
 #[derive(Clone, Copy, Debug)]
 pub struct TruthSample {
+    /// GPST seconds (week × 604800 + seconds of week).
     pub t: f64,
+    /// Antenna position, ECEF, metres.
     pub pos: Vector3<f64>,
+    /// Antenna velocity, ECEF, m/s.
     pub vel: Vector3<f64>,
 }
 
@@ -92,12 +106,16 @@ pub fn truth_at(truth: &[TruthSample], t: f64) -> Option<Vector3<f64>> {
 
 /// The files of a simulation, read: rover and base observations and the orbits.
 pub struct SimInputs {
+    /// Rover observations.
     pub rover: ObsFile,
+    /// Base observations.
     pub base: ObsFile,
+    /// Broadcast orbits of the simulated navigation file.
     pub orbits: Orbits,
 }
 
 impl SimInputs {
+    /// Read the files a simulation wrote.
     pub fn read(sim: &SimReport) -> Result<SimInputs, ChainError> {
         Ok(SimInputs {
             rover: ObsFile::read(&sim.rover)?,
@@ -122,20 +140,33 @@ impl SimInputs {
 /// What the demo measured.
 #[derive(Clone, Debug)]
 pub struct DemoReport {
+    /// What the simulation wrote.
     pub sim: SimReport,
+    /// Single-point epochs solved.
     pub spp_epochs: usize,
+    /// Single-point horizontal RMS against truth, metres.
     pub spp_h_rms: f64,
+    /// Single-point vertical RMS against truth, metres.
     pub spp_v_rms: f64,
+    /// Carrier-phase epochs solved.
     pub ppk_epochs: usize,
+    /// Carrier-phase epochs fixed.
     pub ppk_fixed: usize,
+    /// 3D RMS of the fixed epochs against truth, metres.
     pub ppk_3d_rms_fixed: f64,
+    /// Largest 3D error of a fixed epoch, metres.
     pub ppk_max_fixed: f64,
+    /// Camera stations computed.
     pub stations: usize,
+    /// Exposures refused.
     pub stations_refused: usize,
+    /// 3D RMS of the projection centres against truth, metres.
     pub centre_3d_rms: f64,
     /// The joint adjustment of the flight's photographs (None when it could not run).
     pub adjust: Option<crate::adjust::results::Results>,
+    /// Why the adjustment could not run.
     pub adjust_error: Option<String>,
+    /// Wall time of the whole demo, seconds.
     pub seconds: f64,
 }
 
@@ -242,23 +273,27 @@ pub fn run(out: &Path) -> Result<DemoReport, ChainError> {
     // Carrier phase.
     let res = inputs.ppk(&sim, &PpkOptions::default())?;
     let mut d = Vec::new();
-    for s in res.solutions.iter().filter(|s| s.quality == Quality::Fixed) {
+    for s in res
+        .trajectory
+        .epochs
+        .iter()
+        .filter(|s| s.quality == Quality::Fixed)
+    {
         if let Some(p) = truth_at(&truth, t_of(s.time)) {
             d.push((s.pos.0 - p).norm());
         }
     }
-    let records: Vec<PosRecord> = res.solutions.iter().map(|s| s.to_record()).collect();
-    let pos_path = out.join("rover_ppk.pos");
-    write_pos(
-        &pos_path,
+    // The trajectory as a file for the user; the chain goes on with the value itself (full
+    // precision, the filter's ambiguity segments).
+    res.trajectory.write_pos(
+        &out.join("rover_ppk.pos"),
         &["program   : ppkat demo (carrier-phase kinematic)".to_string()],
-        &records,
         PosFormat::Llh,
     )?;
+    let traj = &res.trajectory;
     // Exposures: events of the rover file on the PPK trajectory, lever arm rotated by the
     // attitude an IMU would give (the simulated attitude, written as an attitude file).
-    let traj = crate::exposure::trajectory::Trajectory::read_pos(&pos_path)?;
-    let (events, _) = crate::exposure::events::from_rinex(rover, &traj);
+    let (events, _) = crate::exposure::events::from_rinex(rover, traj);
     let att_path = out.join("imu_attitude.csv");
     let truth_text = |name: &str| {
         std::fs::read_to_string(out.join(name)).map_err(|e| ChainError::Truth {
@@ -284,7 +319,7 @@ pub fn run(out: &Path) -> Result<DemoReport, ChainError> {
         attitude: Some(attitude),
         ..Default::default()
     };
-    let ex = crate::exposure::compute(events, &traj, &opts);
+    let ex = crate::exposure::compute(events, traj, &opts);
     crate::exposure::export::write(
         &out.join("camera_stations.csv"),
         &ex.stations,
@@ -356,7 +391,7 @@ pub fn run(out: &Path) -> Result<DemoReport, ChainError> {
         spp_epochs: sppr.solutions.len(),
         spp_h_rms: rms(&h),
         spp_v_rms: rms(&v),
-        ppk_epochs: res.solutions.len(),
+        ppk_epochs: res.trajectory.epochs.len(),
         ppk_fixed: res.fixed(),
         ppk_3d_rms_fixed: rms(&d),
         ppk_max_fixed: d.iter().copied().fold(0.0, f64::max),

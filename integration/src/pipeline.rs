@@ -15,21 +15,32 @@ use std::path::{Path, PathBuf};
 /// Inputs of a single-point run.
 #[derive(Clone, Debug)]
 pub struct SppJob {
+    /// Observation file.
     pub obs: PathBuf,
+    /// Navigation files.
     pub nav: Vec<PathBuf>,
+    /// Precise orbits, when given.
     pub sp3: Option<PathBuf>,
+    /// Processing options.
     pub options: SppOptions,
+    /// Coordinates of the `.pos` written.
     pub format: PosFormat,
+    /// Output `.pos`.
     pub out: PathBuf,
 }
 
 /// What a single-point run did.
 #[derive(Clone, Debug)]
 pub struct SppReport {
+    /// Epochs read.
     pub epochs: usize,
+    /// Epochs solved.
     pub solved: usize,
+    /// What the solver did.
     pub run: SppRun,
+    /// Problems with the inputs (reading went on).
     pub warnings: Vec<String>,
+    /// The `.pos` written.
     pub out: PathBuf,
 }
 
@@ -190,21 +201,32 @@ impl fmt::Display for SppReport {
 /// Inputs of a carrier-phase run.
 #[derive(Clone, Debug)]
 pub struct PpkJob {
+    /// Rover observation file.
     pub rover: PathBuf,
+    /// Base observation file.
     pub base: PathBuf,
+    /// Navigation files.
     pub nav: Vec<PathBuf>,
+    /// Where the base antenna is.
     pub base_position: gnss::ppk::BasePosition,
+    /// Processing options.
     pub options: gnss::ppk::PpkOptions,
+    /// Coordinates of the `.pos` written.
     pub format: PosFormat,
+    /// Output `.pos`.
     pub out: PathBuf,
 }
 
 /// What a carrier-phase run did.
 #[derive(Clone, Debug)]
 pub struct PpkReport {
+    /// The carrier-phase result (trajectory, pass counters, unsolved epochs).
     pub result: gnss::ppk::PpkResult,
+    /// The `.pos` written.
     pub out: PathBuf,
+    /// Problems with the inputs and the run.
     pub warnings: Vec<String>,
+    /// Wall time, seconds.
     pub seconds: f64,
 }
 
@@ -231,7 +253,6 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
         progress,
     )?;
     warnings.extend(result.warnings.iter().cloned());
-    let records: Vec<PosRecord> = result.solutions.iter().map(|s| s.to_record()).collect();
     let o = &job.options;
     let b = result.base_marker;
     let header = vec![
@@ -257,11 +278,11 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
         format!(
             "epochs    : {} rover, {} solved, {} fixed",
             result.rover_epochs,
-            result.solutions.len(),
+            result.trajectory.epochs.len(),
             result.fixed()
         ),
     ];
-    write_pos(&job.out, &header, &records, job.format)?;
+    result.trajectory.write_pos(&job.out, &header, job.format)?;
     Ok(PpkReport {
         result,
         out: job.out.clone(),
@@ -273,7 +294,7 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
 impl fmt::Display for PpkReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let r = &self.result;
-        let solved = r.solutions.len();
+        let solved = r.trajectory.epochs.len();
         writeln!(
             f,
             "ppk: {} rover epochs, {} solved, {} fixed ({:.1} % of solved) in {:.2} s → {}",
@@ -298,13 +319,19 @@ impl fmt::Display for PpkReport {
         for (name, s) in [("forward", &r.forward), ("backward", &r.backward)] {
             let Some(s) = s else { continue };
             let slips: Vec<String> = s.slips.iter().map(|(c, n)| format!("{c:?} {n}")).collect();
+            let gated: Vec<String> = s
+                .rejected
+                .iter()
+                .map(|(c, n)| format!("{c:?} {n}"))
+                .collect();
             writeln!(
                 f,
-                "  {name}: ambiguity resets {} [{}], post-fit outliers {}, innovations rejected {}, satellite-epochs below mask {}, without orbit {}",
+                "  {name}: ambiguity resets {} [{}], post-fit outliers {}, innovations rejected {} [{}], satellite-epochs below mask {}, without orbit {}",
                 s.slips.values().sum::<usize>(),
                 slips.join(", "),
                 s.outlier_resets,
-                s.rejected_innovations,
+                s.rejected_innovations(),
+                gated.join(", "),
                 s.below_mask,
                 s.no_orbit
             )?;
@@ -319,19 +346,28 @@ impl fmt::Display for PpkReport {
 /// Where the exposure times come from.
 #[derive(Clone, Debug)]
 pub enum EventSource {
+    /// Flag-5 events of a RINEX observation file (receiver clock removed).
     Rinex(PathBuf),
+    /// A DJI `Timestamp.MRK`.
     Mrk(PathBuf),
+    /// A CSV of times in the given time system.
     Times(PathBuf, crate::exposure::events::TimeSystem),
 }
 
 /// Inputs of the exposure stage.
 #[derive(Clone, Debug)]
 pub struct ExposureJob {
+    /// The trajectory (`.pos`, ours or RTKLIB's).
     pub trajectory: PathBuf,
+    /// Where the exposure times come from.
     pub events: EventSource,
+    /// Lever arm, attitude, delay, gap limit.
     pub options: crate::exposure::ExposureOptions,
+    /// Output layout.
     pub format: crate::exposure::export::Format,
+    /// Horizontal coordinates of the output.
     pub projection: crate::exposure::export::Projection,
+    /// Output file.
     pub out: PathBuf,
     /// Photographs to match to the exposures (their names become the station labels).
     pub photos: Option<PathBuf>,
@@ -342,18 +378,24 @@ pub struct ExposureJob {
 /// What the exposure stage did.
 #[derive(Clone, Debug)]
 pub struct ExposureReport {
+    /// The stations and what was refused.
     pub result: crate::exposure::ExposureResult,
+    /// Exposures read.
     pub events: usize,
+    /// Largest receiver clock correction applied to the event times, seconds.
     pub clock_correction: f64,
+    /// The file written.
     pub out: PathBuf,
     /// Photo matching: Ok(number matched) or the mismatch found.
     pub photos: Option<std::result::Result<usize, String>>,
+    /// Geotagged copies written.
     pub geotagged: usize,
 }
 
 /// Read events and trajectory, compute projection centres, write them.
 pub fn exposures(job: &ExposureJob) -> Result<ExposureReport> {
-    use crate::exposure::{compute, events, export, trajectory::Trajectory};
+    use crate::exposure::{compute, events, export};
+    use gnss::trajectory::Trajectory;
     let traj = Trajectory::read_pos(&job.trajectory)?;
     let (evs, clock_correction) = match &job.events {
         EventSource::Rinex(p) => {
@@ -467,6 +509,9 @@ impl fmt::Display for ExposureReport {
         }
         for w in &r.warnings {
             writeln!(f, "  warning: {w}")?;
+        }
+        for n in &r.notes {
+            writeln!(f, "  note: {n}")?;
         }
         Ok(())
     }

@@ -663,7 +663,8 @@ fn ground_point_formats_agree() {
 }
 
 /// The GNSS input as a trajectory (`.pos`) interpolated at the image times of the image list
-/// gives the adjustment of the antenna table; images outside the trajectory are reported.
+/// gives the adjustment of the antenna table; images outside the trajectory are reported, and
+/// so is where its ambiguity segments came from.
 #[test]
 fn trajectory_input_equals_the_antenna_table() {
     let dir = project_dir("trajectory");
@@ -679,6 +680,14 @@ fn trajectory_input_equals_the_antenna_table() {
         traj.warnings
             .iter()
             .all(|w| !w.contains("without a GNSS position")),
+        "{:?}",
+        traj.warnings
+    );
+    // A .pos carries no segments: the report says they were derived from it.
+    assert!(
+        traj.warnings.iter().any(|w| w
+            .contains("ambiguity segments derived from Q changes and gaps of")
+            && w.contains("trajectory.pos")),
         "{:?}",
         traj.warnings
     );

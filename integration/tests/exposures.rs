@@ -5,10 +5,10 @@ use gnss::frame::Ecef;
 use gnss::ppk::PpkOptions;
 use gnss::solution::{write_pos, PosFormat, PosRecord, Quality};
 use gnss::time::from_week_tow;
+use gnss::trajectory::{Trajectory, TrajectoryEpoch};
 use integration::demo::SimInputs;
 use integration::exposure::attitude::{AngleConvention, AttitudeTable};
 use integration::exposure::events::{self, ExposureEvent};
-use integration::exposure::trajectory::{TrajPoint, Trajectory};
 use integration::exposure::{compute, ExposureOptions};
 use integration::simulate::{self, SimReport};
 use nalgebra::{Matrix3, Vector3};
@@ -54,11 +54,13 @@ fn truth_trajectory(dir: &Path, step: usize) -> (Trajectory, AttitudeTable) {
     let pts = rows
         .iter()
         .step_by(step)
-        .map(|r| TrajPoint {
-            time: from_week_tow(r[0] as u32, r[1]),
-            pos: Ecef::new(r[2], r[3], r[4]),
-            cov: Matrix3::identity() * 1e-6,
-            quality: Quality::Fixed,
+        .map(|r| {
+            TrajectoryEpoch::new(
+                from_week_tow(r[0] as u32, r[1]),
+                Ecef::new(r[2], r[3], r[4]),
+                Matrix3::identity() * 1e-6,
+                Quality::Fixed,
+            )
         })
         .collect();
     let att = AttitudeTable {
@@ -72,7 +74,7 @@ fn truth_trajectory(dir: &Path, step: usize) -> (Trajectory, AttitudeTable) {
             .map(|r| [r[10].to_radians(), r[9].to_radians(), r[8].to_radians()])
             .collect(),
     };
-    (Trajectory::from_points(pts), att)
+    (Trajectory::with_derived_segments(pts, None), att)
 }
 
 /// Truth exposures: (event, antenna, centre).
@@ -173,8 +175,7 @@ fn events_to_ppk_to_projection_centres() {
     let rover = &inputs.rover;
     let r = inputs.ppk(&s.rep, &PpkOptions::default()).unwrap();
     let pos = s.dir.join("ppk.pos");
-    let recs: Vec<PosRecord> = r.solutions.iter().map(|s| s.to_record()).collect();
-    write_pos(&pos, &[], &recs, PosFormat::Xyz).unwrap();
+    r.trajectory.write_pos(&pos, &[], PosFormat::Xyz).unwrap();
     let traj = Trajectory::read_pos(&pos).unwrap();
     let (evs, clock) = events::from_rinex(rover, &traj);
     let (_, att) = truth_trajectory(&s.dir, 1);
@@ -264,10 +265,10 @@ fn bad_exposure_inputs_are_refused_or_flagged() {
         .all(|s| s.flags.iter().any(|f| f.contains("heading"))));
     assert!(res.warnings.iter().any(|w| w.contains("no attitude")));
     // A gap in the trajectory longer than the limit.
-    let mut pts = traj.points.clone();
+    let mut pts = traj.epochs.clone();
     let cut = pts.iter().position(|p| p.time > truth[10].0.time).unwrap();
     pts.drain(cut - 20..cut + 20);
-    let gappy = Trajectory::from_points(pts);
+    let gappy = Trajectory::with_derived_segments(pts, None);
     let res = compute(
         vec![truth[10].0.clone()],
         &gappy,

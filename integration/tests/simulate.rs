@@ -86,7 +86,12 @@ fn ppk_round_trip_on_a_20_minute_flight() {
     let (rover, orbits) = (&inputs.rover, &inputs.orbits);
     let r = inputs.ppk(&rep, &PpkOptions::default()).unwrap();
     let mut d = Vec::new();
-    for s in r.solutions.iter().filter(|s| s.quality == Quality::Fixed) {
+    for s in r
+        .trajectory
+        .epochs
+        .iter()
+        .filter(|s| s.quality == Quality::Fixed)
+    {
         let t = truth_at(&truth, s.time.to_gpst_seconds()).unwrap();
         d.push((s.pos.0 - t).norm_squared());
     }
@@ -95,7 +100,7 @@ fn ppk_round_trip_on_a_20_minute_flight() {
     eprintln!(
         "round trip: {} epochs, {} solved, {:.2} % fixed, 3D RMS {:.1} mm",
         r.rover_epochs,
-        r.solutions.len(),
+        r.trajectory.epochs.len(),
         100.0 * fixed,
         rms * 1e3
     );
@@ -204,7 +209,8 @@ fn injected_slips_and_gaps_are_survived() {
     // Errors against truth, and normalised by the solution's own 3D sigma: a weak-geometry
     // epoch (a satellite in a gap) may be off by several centimetres, but must say so.
     let errs: Vec<(f64, f64)> = r
-        .solutions
+        .trajectory
+        .epochs
         .iter()
         .filter(|s| s.quality == Quality::Fixed)
         .map(|s| {

@@ -13,7 +13,9 @@ pub struct FreqPcv {
     pub neu: [f64; 3],
     /// First zenith angle, step (degrees) and the non-azimuthal variations (metres).
     pub zen1: f64,
+    /// Zenith angle step of `noazi`, degrees.
     pub dzen: f64,
+    /// Non-azimuthal variations from `zen1` in steps of `dzen`, metres.
     pub noazi: Vec<f64>,
 }
 
@@ -34,6 +36,7 @@ impl FreqPcv {
 /// One receiver antenna (type and radome, as in ANTEX columns 1–20).
 #[derive(Clone, Debug, PartialEq)]
 pub struct AntennaPcv {
+    /// Antenna type and radome (ANTEX columns 1–20).
     pub name: String,
     /// By ANTEX frequency code, e.g. `G01`.
     pub freqs: BTreeMap<String, FreqPcv>,
@@ -61,10 +64,12 @@ impl AntennaPcv {
 /// The receiver antennas of an ANTEX file (satellite antennas are skipped).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Antex {
+    /// The receiver antennas, in file order.
     pub antennas: Vec<AntennaPcv>,
 }
 
 impl Antex {
+    /// Read the receiver antennas of an ANTEX file.
     pub fn read(path: &Path) -> Result<Antex> {
         let mut src = Lines::open(path)?;
         let mut out = Antex::default();

@@ -16,20 +16,30 @@ const STEP: f64 = 60.0;
 /// A GLONASS ephemeris: state at toe (= toc, GPST) and clock terms.
 #[derive(Clone, Debug)]
 pub struct GlonassEph {
+    /// Slot number.
     pub slot: u8,
+    /// Reference time (= toc), GPST.
     pub toe: Epoch,
     /// −τn (s) and γn from the file.
     pub minus_tau: f64,
+    /// Relative frequency offset γn.
     pub gamma: f64,
+    /// Position at toe, PZ-90 ≈ ECEF, metres.
     pub pos: Vector3<f64>,
+    /// Velocity at toe, m/s.
     pub vel: Vector3<f64>,
+    /// Luni-solar acceleration at toe, m/s².
     pub acc: Vector3<f64>,
+    /// Health word Bn as written in the file.
     pub health: u32,
+    /// Frequency channel number.
     pub channel: i8,
+    /// Line of the record in its file.
     pub line: usize,
 }
 
 impl GlonassEph {
+    /// The ephemeris of a GLONASS navigation record (None when incomplete).
     pub fn from_record(r: &NavRecord) -> Option<GlonassEph> {
         let o = &r.orbit;
         if o.len() < 12 {
@@ -49,6 +59,7 @@ impl GlonassEph {
         })
     }
 
+    /// Whether Bn marks no malfunction.
     pub fn healthy(&self) -> bool {
         // Bit 2 of Bn is the one that marks a malfunction; RINEX writes Bn (0 = OK).
         self.health & 0x4 == 0 && self.health < 4

@@ -8,6 +8,7 @@ use crate::time::WEEK_SECONDS;
 use hifitime::{Duration, Epoch};
 use nalgebra::Vector3;
 
+/// Speed of light in vacuum, m/s.
 pub const C: f64 = 299_792_458.0;
 const MU_GPS: f64 = 3.986_005e14;
 const MU_GAL: f64 = 3.986_004_418e14;
@@ -18,34 +19,58 @@ const OMEGA_BDS: f64 = 7.292_115e-5;
 /// Which Galileo navigation message an ephemeris came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum GalMessage {
+    /// Galileo I/NAV (E1-B/E5b).
     INav,
+    /// Galileo F/NAV (E5a).
     FNav,
 }
 
 /// A Keplerian broadcast ephemeris.
 #[derive(Clone, Debug)]
 pub struct KeplerEph {
+    /// System.
     pub sys: Constellation,
+    /// PRN.
     pub prn: u8,
+    /// Time of clock, GPST.
     pub toc: Epoch,
+    /// Time of ephemeris, GPST.
     pub toe: Epoch,
+    /// Clock bias (s), drift (s/s) and drift rate (s/s²) at toc.
     pub af: [f64; 3],
+    /// Issue of data (IODE / IODnav / AODE).
     pub iode: f64,
+    /// Radius sine correction, metres.
     pub crs: f64,
+    /// Mean motion difference, rad/s.
     pub dn: f64,
+    /// Mean anomaly at toe, radians.
     pub m0: f64,
+    /// Argument of latitude cosine correction, radians.
     pub cuc: f64,
+    /// Eccentricity.
     pub e: f64,
+    /// Argument of latitude sine correction, radians.
     pub cus: f64,
+    /// Square root of the semi-major axis, √m.
     pub sqrt_a: f64,
+    /// Inclination cosine correction, radians.
     pub cic: f64,
+    /// Longitude of the ascending node at the week start, radians.
     pub omega0: f64,
+    /// Inclination sine correction, radians.
     pub cis: f64,
+    /// Inclination at toe, radians.
     pub i0: f64,
+    /// Radius cosine correction, metres.
     pub crc: f64,
+    /// Argument of perigee, radians.
     pub omega: f64,
+    /// Rate of right ascension, rad/s.
     pub omega_dot: f64,
+    /// Rate of inclination, rad/s.
     pub idot: f64,
+    /// Health word as broadcast (0 healthy).
     pub health: u32,
     /// GPS/QZS TGD; Galileo BGD E5a/E1; BeiDou TGD1 (B1I/B3I).
     pub tgd1: f64,
@@ -55,14 +80,18 @@ pub struct KeplerEph {
     pub gal: Option<GalMessage>,
     /// Validity window around toe, seconds: used only for toe − before ≤ t ≤ toe + after.
     pub valid_before: f64,
+    /// See `valid_before`.
     pub valid_after: f64,
+    /// Line of the record in its file.
     pub line: usize,
 }
 
 /// Position, velocity and clock of a satellite at a transmission time.
 #[derive(Clone, Copy, Debug)]
 pub struct SatPosClock {
+    /// Position, ECEF at transmission time, metres.
     pub pos: Ecef,
+    /// Velocity, m/s.
     pub vel: Vector3<f64>,
     /// Clock offset in seconds, relativistic correction included, group delay not applied.
     pub clock: f64,

@@ -18,17 +18,21 @@ use std::collections::BTreeMap;
 /// One broadcast ephemeris of any system.
 #[derive(Clone, Debug)]
 pub enum Eph {
+    /// GPS, Galileo, BeiDou or QZSS Keplerian elements.
     Kepler(KeplerEph),
+    /// GLONASS state vector.
     Glonass(GlonassEph),
 }
 
 impl Eph {
+    /// Reference time of the ephemeris (GPST).
     pub fn toe(&self) -> Epoch {
         match self {
             Eph::Kepler(k) => k.toe,
             Eph::Glonass(g) => g.toe,
         }
     }
+    /// Whether the satellite is flagged healthy.
     pub fn healthy(&self) -> bool {
         match self {
             Eph::Kepler(k) => k.healthy(),
@@ -43,12 +47,14 @@ impl Eph {
             Eph::Glonass(_) => dt.abs() <= 1800.0,
         }
     }
+    /// Position, velocity and clock at transmission time `t` (GPST).
     pub fn compute(&self, t: Epoch) -> SatPosClock {
         match self {
             Eph::Kepler(k) => k.compute(t),
             Eph::Glonass(g) => g.compute(t),
         }
     }
+    /// Broadcast group delay (s) for a signal on `band` (0 for GLONASS).
     pub fn group_delay(&self, band: u8) -> f64 {
         match self {
             Eph::Kepler(k) => k.group_delay(band),
@@ -69,7 +75,9 @@ impl Eph {
 /// What happened to the navigation records.
 #[derive(Clone, Debug, Default)]
 pub struct EphStats {
+    /// Navigation records read.
     pub records: usize,
+    /// Ephemerides flagged unhealthy (not used).
     pub unhealthy: usize,
     /// Records of messages ppkat does not use (SBAS, CNAV …).
     pub unused: usize,
@@ -81,12 +89,16 @@ pub struct EphStats {
 #[derive(Clone, Debug, Default)]
 pub struct Ephemerides {
     by_sv: BTreeMap<Sv, Vec<Eph>>,
+    /// GPS Klobuchar ionosphere parameters, from the first file that has them.
     pub gps_iono: Option<Klobuchar>,
+    /// BeiDou Klobuchar ionosphere parameters, from the first file that has them.
     pub bds_iono: Option<Klobuchar>,
+    /// What happened to the records.
     pub stats: EphStats,
 }
 
 impl Ephemerides {
+    /// Index the ephemerides of navigation files (one satellite's records sorted by toe).
     pub fn from_nav(navs: &[NavFile]) -> Self {
         let mut e = Ephemerides::default();
         for nav in navs {
@@ -184,19 +196,23 @@ impl Ephemerides {
 /// Where satellite positions and clocks come from.
 #[derive(Clone, Debug)]
 pub struct Orbits {
+    /// Broadcast ephemerides (their group delays apply to precise orbits too).
     pub broadcast: Ephemerides,
+    /// Precise orbits and clocks (SP3), used instead of the broadcast ones when given.
     pub precise: Option<Sp3>,
 }
 
 /// A satellite at its transmission time, ready for a range model.
 #[derive(Clone, Copy, Debug)]
 pub struct SatInfo {
+    /// Position, velocity and clock.
     pub pv: SatPosClock,
     /// Group delay (s) to subtract from the clock for the band asked.
     pub group_delay: f64,
 }
 
 impl Orbits {
+    /// Orbits from broadcast ephemerides only.
     pub fn broadcast(e: Ephemerides) -> Self {
         Orbits {
             broadcast: e,

@@ -17,12 +17,14 @@ const NPTS: usize = 11;
 /// Precise orbits: per satellite, samples on the file's epoch grid.
 #[derive(Clone, Debug, Default)]
 pub struct Sp3 {
+    /// The file's epochs (GPST).
     pub epochs: Vec<Epoch>,
     /// Per satellite: position (m) and clock (s, NaN when absent) at each epoch; NaN position = absent.
     pub sats: BTreeMap<Sv, Vec<(Vector3<f64>, f64)>>,
 }
 
 impl Sp3 {
+    /// Read an SP3-c or SP3-d file (plain or gzip).
     pub fn read(path: &Path) -> Result<Sp3> {
         let mut src = Lines::open(path)?;
         let first = src

@@ -1,48 +1,97 @@
-//! Integer ambiguity resolution on the filter state: double-difference ambiguities per system
-//! and frequency (reference = highest satellite), LAMBDA with a ratio test, wide-lane first
-//! when the full set fails on dual-frequency data, partial fixing by dropping newly risen then
-//! low satellites, and fix-and-hold feedback.
+//! Integer ambiguity resolution on the filter state.
+//!
+//! - Candidates: SD ambiguity states of non-GLONASS satellites (GLONASS SD ambiguities absorb
+//!   inter-frequency biases and stay float) locked for `min_lock` epochs, observed this epoch
+//!   above the AR elevation mask.
+//! - Double differences per system and slot ([`DdGroup`]); pivot = the highest satellite among
+//!   those locked for `mature_lock` epochs (a freshly reset pivot would make every DD of its
+//!   group uncertain). The DD operator D maps the state to the DD ambiguities: +1 on the
+//!   satellite's SD state, −1 on the pivot's.
+//! - LAMBDA on a = D·x, Q_a = D·P·Dᵀ with the ratio test; when the full set fails on
+//!   dual-frequency data, the wide lane (slot 0 − slot 1) is fixed first on a copy of the
+//!   state; then partial fixing drops the newest, then the lowest satellite.
+//! - Fixed position: x_pos − Q_pos,a·Q_a⁻¹·(a − ǎ), covariance P_pos − Q_pos,a·Q_a⁻¹·Q_a,pos.
+//! - Fix-and-hold: the float state is constrained to D·x = ǎ with variance `hold_variance`.
 
-use super::filter::{Filter, Pair, IONO};
+use super::dd::DdGroup;
+use super::filter::{Filter, Pair};
 use super::lambda::lambda;
+use super::measure::has_phase;
+use super::state::{AmbKey, StateKey};
 use crate::sv::{Constellation, Sv};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use std::collections::BTreeMap;
+use std::ops::Range;
 
-/// An ambiguity candidate: state index, satellite, slot, elevation, lock count.
-type Cand = (usize, Sv, usize, f64, usize);
+/// An ambiguity that may be fixed this epoch.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Candidate {
+    /// Offset of its SD state in the state vector.
+    pub(super) state: usize,
+    /// Satellite and slot.
+    pub(super) amb: AmbKey,
+    /// Rover elevation, radians.
+    pub(super) elevation: f64,
+    /// Epochs since the state was (re)initialised.
+    pub(super) lock: usize,
+    /// Arc of the state (see [`super::state::Track`]).
+    pub(super) arc: u64,
+}
 
-/// A fixed solution: position, covariance, ratio, number of fixed ambiguities, and the
-/// difference operator and integers (for holding).
-pub(super) type Fix = (
-    Vector3<f64>,
-    Matrix3<f64>,
-    f64,
-    usize,
-    DMatrix<f64>,
-    DVector<f64>,
-);
-
-/// Double-difference rows (ambiguity index, reference index) per system and slot.
-fn dd_rows(cands: &[Cand], excluded: &[Sv], mature: usize) -> Vec<(usize, usize)> {
-    let mut groups: BTreeMap<(Constellation, usize), Vec<&Cand>> = BTreeMap::new();
-    for c in cands.iter().filter(|c| !excluded.contains(&c.1)) {
-        groups.entry((c.1.sys, c.2)).or_default().push(c);
+impl Candidate {
+    fn sv(&self) -> Sv {
+        self.amb.sv
     }
-    let mut rows = Vec::new();
-    for g in groups.values().filter(|g| g.len() >= 2) {
-        // Reference: the highest satellite among those locked for a while (a freshly reset
-        // reference would make every double difference of its group uncertain).
-        let Some(r) = g.iter().max_by(|a, b| {
-            ((a.4 >= mature), a.3)
-                .partial_cmp(&((b.4 >= mature), b.3))
-                .unwrap_or(std::cmp::Ordering::Equal)
-        }) else {
-            continue;
-        };
-        rows.extend(g.iter().filter(|c| c.0 != r.0).map(|c| (c.0, r.0)));
+}
+
+/// A fixed solution.
+#[derive(Clone, Debug)]
+pub(super) struct Fix {
+    /// Rover position conditioned on the integers, ECEF metres.
+    pub(super) position: Vector3<f64>,
+    /// Its covariance, m².
+    pub(super) covariance: Matrix3<f64>,
+    /// Ratio test value (capped at 999.9).
+    pub(super) ratio: f64,
+    /// Number of DD ambiguities fixed.
+    pub(super) n_fixed: usize,
+    /// DD operator (one row per fixed DD, over the whole state vector).
+    pub(super) dd_operator: DMatrix<f64>,
+    /// The integers, one per row of `dd_operator`.
+    pub(super) integers: DVector<f64>,
+    /// The groups the rows come from, in row order (one row per non-pivot member).
+    pub(super) groups: Vec<DdGroup<Candidate>>,
+}
+
+/// Double-difference groups per system and slot over the candidates not excluded.
+fn dd_groups(cands: &[Candidate], excluded: &[Sv], mature: usize) -> Vec<DdGroup<Candidate>> {
+    let mut by_signal: BTreeMap<(Constellation, usize), Vec<Candidate>> = BTreeMap::new();
+    for c in cands.iter().filter(|c| !excluded.contains(&c.sv())) {
+        by_signal
+            .entry((c.amb.sv.sys, c.amb.slot))
+            .or_default()
+            .push(*c);
     }
-    rows
+    by_signal
+        .into_iter()
+        .filter_map(|((_, slot), members)| {
+            DdGroup::form(slot, members, |c| (c.lock >= mature, c.elevation))
+        })
+        .collect()
+}
+
+/// The DD operator of groups: one row per non-pivot member, +1 on its state, −1 on the pivot's.
+fn dd_operator(groups: &[DdGroup<Candidate>], n: usize) -> DMatrix<f64> {
+    let m = groups.iter().map(|g| g.others.len()).sum();
+    let mut d = DMatrix::zeros(m, n);
+    let rows = groups
+        .iter()
+        .flat_map(|g| g.others.iter().map(move |c| (c.state, g.pivot.state)));
+    for (i, (a, r)) in rows.enumerate() {
+        d[(i, a)] = 1.0;
+        d[(i, r)] = -1.0;
+    }
+    d
 }
 
 /// Constrain `x`, `p` to `d·x = z` with variance `var` (a Kalman update).
@@ -65,39 +114,54 @@ fn constrain(
 }
 
 impl Filter<'_> {
-    fn candidates(&self, pairs: &[Pair]) -> Vec<Cand> {
+    /// The ambiguities that may be fixed this epoch, in state order.
+    fn candidates(&self, pairs: &[Pair]) -> Vec<Candidate> {
         let o = self.opts;
         let mut cands = Vec::new();
-        for (k, a) in self.ambs.iter().enumerate() {
-            if a.f == IONO || a.sv.sys == Constellation::Glonass || a.lock < o.min_lock {
+        for (state, s) in self.state.sats() {
+            let StateKey::Ambiguity(amb) = s.key else {
+                continue;
+            };
+            if amb.sv.sys == Constellation::Glonass || s.track.lock < o.min_lock {
                 continue;
             }
             let Some(p) = pairs
                 .iter()
-                .find(|p| p.r.sv == a.sv && p.r.l[a.f].is_finite() && p.b.l[a.f].is_finite())
+                .find(|p| p.r.sv == amb.sv && has_phase(p, amb.slot))
             else {
                 continue;
             };
             if p.el >= o.ar_elev_mask {
-                cands.push((3 + k, a.sv, a.f, p.el, a.lock));
+                cands.push(Candidate {
+                    state,
+                    amb,
+                    elevation: p.el,
+                    lock: s.track.lock,
+                    arc: s.track.arc,
+                });
             }
         }
         cands
     }
 
-    /// LAMBDA on the rows; the fix when the ratio test passes. Records the best ratio seen.
+    /// Offsets of the position block.
+    fn position_range(&self) -> Range<usize> {
+        self.state
+            .index()
+            .range(StateKey::Position)
+            .expect("the position block exists")
+    }
+
+    /// LAMBDA on the groups' DDs; the fix when the ratio test passes. Records the best ratio
+    /// seen.
     fn try_fix(
         &mut self,
         x: &DVector<f64>,
         p: &DMatrix<f64>,
-        rows: &[(usize, usize)],
+        groups: Vec<DdGroup<Candidate>>,
     ) -> Option<Fix> {
-        let m = rows.len();
-        let mut d = DMatrix::zeros(m, x.len());
-        for (i, (a, r)) in rows.iter().enumerate() {
-            d[(i, *a)] = 1.0;
-            d[(i, *r)] = -1.0;
-        }
+        let d = dd_operator(&groups, x.len());
+        let m = d.nrows();
         let a = &d * x;
         let q = &d * p * d.transpose();
         let q = (&q + q.transpose()) * 0.5;
@@ -108,44 +172,50 @@ impl Filter<'_> {
             return None;
         }
         let fix = DVector::from_vec(c.fixes[0].clone());
-        let qxa = p.rows(0, 3) * d.transpose();
+        let pos = self.position_range();
+        let (p0, n) = (pos.start, pos.len());
+        let qxa = p.rows(p0, n) * d.transpose();
         let ch = q.cholesky()?;
-        let pos = x.rows(0, 3) - &qxa * ch.solve(&(&a - &fix));
-        let cov = p.view((0, 0), (3, 3)) - &qxa * ch.solve(&qxa.transpose());
-        Some((
-            Vector3::new(pos[0], pos[1], pos[2]),
-            Matrix3::from_fn(|i, j| cov[(i, j)]),
+        let x_fixed = x.rows(p0, n) - &qxa * ch.solve(&(&a - &fix));
+        let cov = p.view((p0, p0), (n, n)) - &qxa * ch.solve(&qxa.transpose());
+        Some(Fix {
+            position: Vector3::new(x_fixed[0], x_fixed[1], x_fixed[2]),
+            covariance: Matrix3::from_fn(|i, j| cov[(i, j)]),
             ratio,
-            m,
-            d,
-            fix,
-        ))
+            n_fixed: m,
+            dd_operator: d,
+            integers: fix,
+            groups,
+        })
     }
 
-    /// Wide-lane (slot 1 − slot 2) double differences fixed on a copy of the state.
-    fn widelane(&mut self, cands: &[Cand]) -> Option<(DVector<f64>, DMatrix<f64>)> {
-        let n = self.x.len();
+    /// Wide-lane (slot 0 − slot 1) double differences fixed on a copy of the state.
+    fn widelane(&mut self, cands: &[Candidate]) -> Option<(DVector<f64>, DMatrix<f64>)> {
+        let n = self.state.x.len();
         let mut rows: Vec<[(usize, f64); 4]> = Vec::new();
         for sys in Constellation::ALL {
-            // Satellites of this system with both slot-1 and slot-2 ambiguities.
-            let both: Vec<(usize, usize, f64)> = cands
+            // Satellites of this system with both slot-0 and slot-1 candidates.
+            let both: Vec<(Candidate, Candidate)> = cands
                 .iter()
-                .filter(|c| c.1.sys == sys && c.2 == 0)
+                .filter(|c| c.amb.sv.sys == sys && c.amb.slot == 0)
                 .filter_map(|c1| {
                     cands
                         .iter()
-                        .find(|c2| c2.1 == c1.1 && c2.2 == 1)
-                        .map(|c2| (c1.0, c2.0, c1.3))
+                        .find(|c2| c2.amb.sv == c1.amb.sv && c2.amb.slot == 1)
+                        .map(|c2| (*c1, *c2))
                 })
                 .collect();
-            let Some(r) = both
-                .iter()
-                .max_by(|a, b| a.2.partial_cmp(&b.2).unwrap_or(std::cmp::Ordering::Equal))
-            else {
+            let Some(g) = DdGroup::form(0, both, |(c1, _)| c1.elevation) else {
                 continue;
             };
-            for s in both.iter().filter(|s| s.0 != r.0) {
-                rows.push([(s.0, 1.0), (s.1, -1.0), (r.0, -1.0), (r.1, 1.0)]);
+            let (r1, r2) = g.pivot;
+            for (s1, s2) in &g.others {
+                rows.push([
+                    (s1.state, 1.0),
+                    (s2.state, -1.0),
+                    (r1.state, -1.0),
+                    (r2.state, 1.0),
+                ]);
             }
         }
         if rows.len() < self.opts.min_fix_ambiguities {
@@ -157,35 +227,38 @@ impl Filter<'_> {
                 d[(i, *k)] = *v;
             }
         }
-        let a = &d * &self.x;
-        let q = &d * &self.p * d.transpose();
+        let (x, p) = (&self.state.x, &self.state.p);
+        let a = &d * x;
+        let q = &d * p * d.transpose();
         let q = (&q + q.transpose()) * 0.5;
         let c = lambda(a.as_slice(), q.as_slice(), 2)?;
         if c.ratio() < self.opts.ratio_threshold {
             return None;
         }
-        let (mut x, mut p) = (self.x.clone(), self.p.clone());
+        let (mut x, mut p) = (x.clone(), p.clone());
         let z = DVector::from_vec(c.fixes[0].clone());
         constrain(&mut x, &mut p, &d, &z, self.opts.hold_variance).then_some((x, p))
     }
 
+    /// Resolve the ambiguities of this epoch: full set, wide lane first, then partial sets.
     pub(super) fn resolve(&mut self, pairs: &[Pair]) -> Option<Fix> {
         let o = self.opts;
         let cands = self.candidates(pairs);
-        let (mut x, mut p) = (self.x.clone(), self.p.clone());
+        let (mut x, mut p) = (self.state.x.clone(), self.state.p.clone());
         let mut excluded: Vec<Sv> = Vec::new();
         let mut widelane_tried = o.nf < 2;
         self.last_ratio = None;
         let mut attempt = 0;
         while attempt <= o.max_partial_drops {
-            let rows = dd_rows(&cands, &excluded, o.mature_lock);
-            if rows.len() < o.min_fix_ambiguities {
+            let groups = dd_groups(&cands, &excluded, o.mature_lock);
+            let n_dd: usize = groups.iter().map(|g| g.others.len()).sum();
+            if n_dd < o.min_fix_ambiguities {
                 return None;
             }
-            if let Some(f) = self.try_fix(&x, &p, &rows) {
+            if let Some(f) = self.try_fix(&x, &p, groups) {
                 // A partial fix that leaves the position at several centimetres is no fix:
                 // the solution stays float rather than claim what it does not have.
-                if !excluded.is_empty() && f.1.trace().sqrt() > o.max_partial_fix_sigma {
+                if !excluded.is_empty() && f.covariance.trace().sqrt() > o.max_partial_fix_sigma {
                     return None;
                 }
                 return Some(f);
@@ -200,21 +273,22 @@ impl Filter<'_> {
             // Partial fixing: drop the newest, then the lowest satellite.
             let worst = cands
                 .iter()
-                .filter(|c| !excluded.contains(&c.1))
+                .filter(|c| !excluded.contains(&c.sv()))
                 .min_by(|a, b| {
-                    let ka = (a.4 >= o.mature_lock, a.3);
-                    let kb = (b.4 >= o.mature_lock, b.3);
+                    let ka = (a.lock >= o.mature_lock, a.elevation);
+                    let kb = (b.lock >= o.mature_lock, b.elevation);
                     ka.partial_cmp(&kb).unwrap_or(std::cmp::Ordering::Equal)
                 })?;
-            excluded.push(worst.1);
+            excluded.push(worst.sv());
             attempt += 1;
         }
         None
     }
 
     /// Fix-and-hold: constrain the float ambiguities to the fixed integers.
-    pub(super) fn hold(&mut self, d: &DMatrix<f64>, fix: &DVector<f64>) {
+    pub(super) fn hold(&mut self, fix: &Fix) {
         let var = self.opts.hold_variance;
-        constrain(&mut self.x, &mut self.p, d, fix, var);
+        let s = &mut self.state;
+        constrain(&mut s.x, &mut s.p, &fix.dd_operator, &fix.integers, var);
     }
 }

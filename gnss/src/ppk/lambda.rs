@@ -6,7 +6,9 @@
 /// The best `m` integer vectors and their squared distances (ascending).
 #[derive(Clone, Debug)]
 pub struct IntegerCandidates {
+    /// Integer vectors, best first.
     pub fixes: Vec<Vec<f64>>,
+    /// Their squared distances (Q⁻¹ norm) from the float vector.
     pub distances: Vec<f64>,
 }
 

@@ -1,23 +1,36 @@
 //! Carrier-phase kinematic positioning of a rover against a base of known position: forward,
 //! backward and combined passes of a double-difference Kalman filter with integer ambiguity
-//! resolution.
+//! resolution, returning a [`Trajectory`] whose ambiguity segments the filter assigns.
+//!
+//! Modules: `state` (typed state layout), `measure` (pure DD residuals, innovation gate),
+//! `dd` (DD groups and their pivot), `filter` (one pass, epoch by epoch), `ar` (LAMBDA,
+//! partial fixing, fix-and-hold), `segment` (ambiguity segments), [`combine`]
+//! (forward/backward), [`slip`], `geometry`, [`obs`], [`lambda`].
 
 mod ar;
 pub mod combine;
+mod dd;
 mod filter;
 mod geometry;
 pub mod lambda;
+mod measure;
 pub mod obs;
+mod segment;
 pub mod slip;
+mod state;
 
 pub use filter::{EpochSol, PassStats};
+pub use measure::GateReason;
 
 use crate::error::{Error, Result};
 use crate::frame::{enu_rotation, Ecef};
+use crate::model::antex::AntennaPcv;
 use crate::orbit::Orbits;
 use crate::rinex::{ObsFile, ObsHeader};
+use crate::solution::Quality;
 use crate::spp::{self, SppOptions};
 use crate::sv::Constellation;
+use crate::trajectory::{SegmentSource, Trajectory, TrajectoryEpoch};
 use hifitime::Epoch;
 use nalgebra::Vector3;
 use obs::{extract, SatMeas, SignalPlan};
@@ -38,27 +51,36 @@ pub enum ArMode {
 /// Which passes to run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FilterMode {
+    /// Forward in time only.
     Forward,
+    /// Backward in time only.
     Backward,
+    /// Forward and backward, combined epoch by epoch.
     Combined,
 }
 
 /// Options of the carrier-phase engine.
 #[derive(Clone, Debug)]
 pub struct PpkOptions {
+    /// Elevation mask, radians.
     pub elev_mask: f64,
+    /// Systems used.
     pub systems: Vec<Constellation>,
     /// Frequency slots used (1–3).
     pub nf: usize,
+    /// Integer ambiguity resolution mode.
     pub ar: ArMode,
+    /// Which passes run.
     pub filter: FilterMode,
+    /// Ratio-test threshold (second best / best squared distance).
     pub ratio_threshold: f64,
     /// Largest base-rover time difference, seconds.
     pub max_age: f64,
-    /// Gap after which an ambiguity is reset, seconds (None: five rover intervals).
+    /// Gap after which an ambiguity is reset, seconds (0: five rover intervals, at least 5 s).
     pub max_gap: f64,
     /// Undifferenced phase sigma a + b/sin(el), metres.
     pub phase_sigma: (f64, f64),
+    /// Code sigma over phase sigma.
     pub code_phase_ratio: f64,
     /// Ambiguity random walk, cycles/√s.
     pub amb_process_noise: f64,
@@ -68,13 +90,17 @@ pub struct PpkOptions {
     pub max_innovation: f64,
     /// Post-fit phase residual that resets an ambiguity, metres.
     pub max_phase_residual: f64,
+    /// Epochs an ambiguity must be locked before it may be fixed.
     pub min_lock: usize,
     /// Lock count below which a satellite counts as newly risen for partial fixing.
     pub mature_lock: usize,
+    /// Elevation mask of the ambiguities fixed, radians.
     pub ar_elev_mask: f64,
+    /// Satellites partial fixing may drop, at most.
     pub max_partial_drops: usize,
     /// A partial fix whose 3D position sigma exceeds this (m) is not accepted.
     pub max_partial_fix_sigma: f64,
+    /// Fewest double-difference ambiguities for a fix.
     pub min_fix_ambiguities: usize,
     /// Variance of the fix-and-hold constraint, cycles².
     pub hold_variance: f64,
@@ -137,23 +163,27 @@ pub enum BasePosition {
 /// Output of a carrier-phase run.
 #[derive(Clone, Debug)]
 pub struct PpkResult {
-    /// Final solutions (of the chosen filter mode), rover marker positions.
-    pub solutions: Vec<EpochSol>,
+    /// The rover trajectory (of the chosen filter mode): marker positions at the true
+    /// reception times, with the filter's ambiguity segments.
+    pub trajectory: Trajectory,
+    /// Counters of the forward pass, when it ran.
     pub forward: Option<PassStats>,
+    /// Counters of the backward pass, when it ran.
     pub backward: Option<PassStats>,
     /// Rover epochs without a solution and why.
     pub unsolved: Vec<(Epoch, String)>,
+    /// Rover epochs read.
     pub rover_epochs: usize,
+    /// Base marker position used, ECEF.
     pub base_marker: Ecef,
+    /// What the run noticed (base position from the header, antennas not calibrated).
     pub warnings: Vec<String>,
 }
 
 impl PpkResult {
+    /// Number of fixed epochs.
     pub fn fixed(&self) -> usize {
-        self.solutions
-            .iter()
-            .filter(|s| s.quality == crate::solution::Quality::Fixed)
-            .count()
+        self.trajectory.fixed()
     }
 }
 
@@ -197,20 +227,10 @@ pub fn require_phase(f: &ObsFile, role: &str) -> Result<()> {
     }
 }
 
-/// Run the carrier-phase engine.
-pub fn process(
-    rover: &ObsFile,
-    base: &ObsFile,
-    base_pos: BasePosition,
-    orbits: &Orbits,
-    opts: &PpkOptions,
-    progress: &(dyn Fn(usize) + Sync),
-) -> Result<PpkResult> {
-    let mut warnings = Vec::new();
-    require_phase(rover, "rover")?;
-    require_phase(base, "base")?;
-    let base_marker = match base_pos {
-        BasePosition::Given(p) => p,
+/// The base marker position: given, or the header's (with a loud warning).
+fn base_marker(base: &ObsFile, base_pos: BasePosition, warnings: &mut Vec<String>) -> Result<Ecef> {
+    match base_pos {
+        BasePosition::Given(p) => Ok(p),
         BasePosition::Header => {
             let p = base.header.approx_position.ok_or_else(|| {
                 Error::input(&base.path, "no base position: give --base-pos X,Y,Z or --base-llh LAT,LON,H (the header has none either)")
@@ -222,38 +242,47 @@ pub fn process(
                 p.0.y,
                 p.0.z
             ));
-            p
+            Ok(p)
         }
-    };
-    let base_arp = Ecef(base_marker.0 + arp_offset(&base.header, &base_marker));
-    let antennas = match &opts.antex {
-        None => (None, None),
-        Some(atx) => {
-            let mut pick = |f: &ObsFile, role: &str| {
-                let name = f.header.antenna.trim().to_string();
-                match atx.find(&name) {
-                    Some((a, fallback)) => {
-                        if fallback {
-                            warnings.push(format!("{role} antenna '{name}': no calibration with this radome, using '{}'", a.name));
-                        }
-                        Some(a.clone())
-                    }
-                    None => {
-                        warnings.push(format!("{role} antenna '{name}' is not in the ANTEX file: no phase-centre correction for it"));
-                        None
-                    }
-                }
-            };
-            (pick(rover, "rover"), pick(base, "base"))
-        }
-    };
-    // Base epoch nearest each rover epoch, within the age limit.
-    let mut opts = opts.clone();
-    if opts.max_gap <= 0.0 {
-        opts.max_gap = (5.0 * interval(rover)).max(5.0);
     }
+}
+
+/// Rover and base antenna calibrations from the ANTEX file of the options, looked up by the
+/// headers' antenna types; what is missing or replaced is told in `warnings`.
+fn antenna_calibrations(
+    opts: &PpkOptions,
+    rover: &ObsFile,
+    base: &ObsFile,
+    warnings: &mut Vec<String>,
+) -> (Option<AntennaPcv>, Option<AntennaPcv>) {
+    let Some(atx) = &opts.antex else {
+        return (None, None);
+    };
+    let mut pick = |f: &ObsFile, role: &str| {
+        let name = f.header.antenna.trim().to_string();
+        match atx.find(&name) {
+            Some((a, fallback)) => {
+                if fallback {
+                    warnings.push(format!(
+                        "{role} antenna '{name}': no calibration with this radome, using '{}'",
+                        a.name
+                    ));
+                }
+                Some(a.clone())
+            }
+            None => {
+                warnings.push(format!("{role} antenna '{name}' is not in the ANTEX file: no phase-centre correction for it"));
+                None
+            }
+        }
+    };
+    (pick(rover, "rover"), pick(base, "base"))
+}
+
+/// The base epoch nearest each rover epoch, within `max_age` seconds.
+fn match_base_epochs(rover: &ObsFile, base: &ObsFile, max_age: f64) -> Vec<Option<usize>> {
     let bt: Vec<Epoch> = base.epochs.iter().map(|e| e.time).collect();
-    let matched: Vec<Option<usize>> = rover
+    rover
         .epochs
         .iter()
         .map(|e| {
@@ -266,41 +295,26 @@ pub fn process(
                     let db = (bt[b] - e.time).to_seconds().abs();
                     da.partial_cmp(&db).unwrap_or(std::cmp::Ordering::Equal)
                 })
-                .filter(|&j| (bt[j] - e.time).to_seconds().abs() <= opts.max_age)
+                .filter(|&j| (bt[j] - e.time).to_seconds().abs() <= max_age)
         })
-        .collect();
-    if matched.iter().all(|m| m.is_none()) {
-        return Err(Error::NoData(format!(
-            "{} and {}: no rover epoch has a base epoch within {} s: the files do not cover a common time",
-            rover.path.display(),
-            base.path.display(),
-            opts.max_age
-        )));
-    }
-    let eph = &orbits.broadcast;
-    let rplan = SignalPlan::new(&rover.header);
-    let bplan = SignalPlan::new(&base.header);
-    let rmeas: Vec<Vec<SatMeas>> = rover
-        .epochs
-        .iter()
-        .map(|e| extract(e, &rover.header, &rplan, &opts.systems, opts.nf, eph))
-        .collect();
-    let bmeas: Vec<Vec<SatMeas>> = base
-        .epochs
-        .iter()
-        .map(|e| extract(e, &base.header, &bplan, &opts.systems, opts.nf, eph))
-        .collect();
-    // Single-point start values.
+        .collect()
+}
+
+/// Start position and receiver clock offset (s) of each rover epoch from its code
+/// solution, or why there is none. As in RTKLIB, an epoch whose code solution fails (too few
+/// satellites, GDOP > 30, inconsistent) gets no carrier-phase solution either: its geometry
+/// cannot be trusted.
+fn start_values(
+    rover: &ObsFile,
+    orbits: &Orbits,
+    opts: &PpkOptions,
+) -> Vec<std::result::Result<(Ecef, f64), String>> {
     let sopts = SppOptions {
         elev_mask: opts.elev_mask,
         systems: opts.systems.clone(),
         ..SppOptions::default()
     };
-    // As in RTKLIB, an epoch whose code solution fails (too few satellites, GDOP > 30,
-    // inconsistent) gets no carrier-phase solution either: its geometry cannot be trusted.
-    // Start position and receiver clock offset (s) per epoch.
-    let mut starts: Vec<std::result::Result<(Ecef, f64), String>> =
-        Vec::with_capacity(rover.epochs.len());
+    let mut starts = Vec::with_capacity(rover.epochs.len());
     let mut prior = rover.header.approx_position;
     for e in &rover.epochs {
         match spp::solve_epoch(e, &rover.header, orbits, &sopts, prior) {
@@ -312,41 +326,61 @@ pub fn process(
             Err((why, _)) => starts.push(Err(why.kind().to_string())),
         }
     }
-    let n = rover.epochs.len();
-    let run = |backward: bool| -> (Vec<Option<EpochSol>>, PassStats) {
-        let mut f = filter::Filter::new(&opts, orbits, base_arp, backward, antennas.clone());
-        let mut out: Vec<Option<EpochSol>> = vec![None; n];
-        let order: Box<dyn Iterator<Item = usize>> = if backward {
-            Box::new((0..n).rev())
-        } else {
-            Box::new(0..n)
+    starts
+}
+
+/// Everything a pass reads, per rover epoch.
+struct PassInputs<'a> {
+    rover: &'a ObsFile,
+    base: &'a ObsFile,
+    rover_meas: Vec<Vec<SatMeas>>,
+    base_meas: Vec<Vec<SatMeas>>,
+    /// Base epoch of each rover epoch.
+    matched: Vec<Option<usize>>,
+    /// Start position and clock offset of each rover epoch.
+    starts: Vec<std::result::Result<(Ecef, f64), String>>,
+}
+
+/// One pass of the filter over every rover epoch (forward or backward in time): its
+/// solution per epoch (None when unsolved) and its counters.
+fn run_pass(
+    inputs: &PassInputs,
+    mut f: filter::Filter,
+    backward: bool,
+    progress: &(dyn Fn(usize) + Sync),
+) -> (Vec<Option<EpochSol>>, PassStats) {
+    let n = inputs.rover.epochs.len();
+    let mut out: Vec<Option<EpochSol>> = vec![None; n];
+    let order: Box<dyn Iterator<Item = usize>> = if backward {
+        Box::new((0..n).rev())
+    } else {
+        Box::new(0..n)
+    };
+    for (count, i) in order.enumerate() {
+        if count % 500 == 0 {
+            progress(500.min(n - count));
+        }
+        let (Some(j), Ok((start, _))) = (inputs.matched[i], &inputs.starts[i]) else {
+            continue;
         };
-        for (count, i) in order.enumerate() {
-            if count % 500 == 0 {
-                progress(500.min(n - count));
-            }
-            let (Some(j), Ok((start, _))) = (matched[i], &starts[i]) else {
-                continue;
-            };
-            out[i] = f.step(
-                rover.epochs[i].time,
-                &rmeas[i],
-                base.epochs[j].time,
-                &bmeas[j],
-                *start,
-            );
-        }
-        (out, f.stats)
-    };
-    let (fw, bw) = match opts.filter {
-        FilterMode::Forward => (Some(run(false)), None),
-        FilterMode::Backward => (None, Some(run(true))),
-        FilterMode::Combined => {
-            let (a, b) = rayon::join(|| run(false), || run(true));
-            (Some(a), Some(b))
-        }
-    };
-    let merged: Vec<Option<EpochSol>> = match (&fw, &bw) {
+        out[i] = f.step(
+            inputs.rover.epochs[i].time,
+            &inputs.rover_meas[i],
+            inputs.base.epochs[j].time,
+            &inputs.base_meas[j],
+            *start,
+        );
+    }
+    (out, f.stats)
+}
+
+/// A pass's solutions and counters.
+type Pass = (Vec<Option<EpochSol>>, PassStats);
+
+/// The output solution of each epoch (the one pass, or both combined) with its ambiguity
+/// segment (the union of the passes' boundaries plus Q changes).
+fn merge_passes(fw: Option<&Pass>, bw: Option<&Pass>) -> Vec<Option<(EpochSol, u32)>> {
+    let merged: Vec<Option<EpochSol>> = match (fw, bw) {
         (Some((f, _)), Some((b, _))) => f
             .iter()
             .zip(b)
@@ -356,25 +390,122 @@ pub fn process(
         (None, Some((b, _))) => b.clone(),
         (None, None) => Vec::new(),
     };
-    let mut solutions = Vec::with_capacity(n);
+    let segments_of = |(sols, _): &Pass| -> Vec<Option<u32>> {
+        sols.iter().map(|s| s.as_ref().map(|s| s.segment)).collect()
+    };
+    let pass_segments: Vec<Vec<Option<u32>>> =
+        [fw, bw].into_iter().flatten().map(segments_of).collect();
+    let passes: Vec<&[Option<u32>]> = pass_segments.iter().map(|p| p.as_slice()).collect();
+    let quality: Vec<Option<Quality>> = merged
+        .iter()
+        .map(|s| s.as_ref().map(|s| s.quality))
+        .collect();
+    let segments = segment::output_segments(&passes, &quality);
+    merged
+        .into_iter()
+        .zip(segments)
+        .map(|(s, id)| s.map(|s| (s, id.unwrap_or(0))))
+        .collect()
+}
+
+/// Run the carrier-phase engine: forward, backward or both passes of the filter over the
+/// rover epochs matched to base epochs, combined; the trajectory of the rover marker at the
+/// true reception times, with the filter's ambiguity segments.
+pub fn process(
+    rover: &ObsFile,
+    base: &ObsFile,
+    base_pos: BasePosition,
+    orbits: &Orbits,
+    opts: &PpkOptions,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<PpkResult> {
+    let mut warnings = Vec::new();
+    require_phase(rover, "rover")?;
+    require_phase(base, "base")?;
+    let base_marker = base_marker(base, base_pos, &mut warnings)?;
+    let base_arp = Ecef(base_marker.0 + arp_offset(&base.header, &base_marker));
+    let antennas = antenna_calibrations(opts, rover, base, &mut warnings);
+    let mut opts = opts.clone();
+    if opts.max_gap <= 0.0 {
+        opts.max_gap = (5.0 * interval(rover)).max(5.0);
+    }
+    let matched = match_base_epochs(rover, base, opts.max_age);
+    if matched.iter().all(|m| m.is_none()) {
+        return Err(Error::NoData(format!(
+            "{} and {}: no rover epoch has a base epoch within {} s: the files do not cover a common time",
+            rover.path.display(),
+            base.path.display(),
+            opts.max_age
+        )));
+    }
+    let eph = &orbits.broadcast;
+    let measurements = |f: &ObsFile| -> Vec<Vec<SatMeas>> {
+        let plan = SignalPlan::new(&f.header);
+        f.epochs
+            .iter()
+            .map(|e| extract(e, &f.header, &plan, &opts.systems, opts.nf, eph))
+            .collect()
+    };
+    let inputs = PassInputs {
+        rover,
+        base,
+        rover_meas: measurements(rover),
+        base_meas: measurements(base),
+        matched,
+        starts: start_values(rover, orbits, &opts),
+    };
+    // A step longer than 2.5 nominal intervals between solved epochs starts a new segment.
+    let segment_gap = 2.5 * interval(rover);
+    let run = |backward: bool| -> Pass {
+        let f = filter::Filter::new(
+            &opts,
+            orbits,
+            base_arp,
+            backward,
+            antennas.clone(),
+            segment_gap,
+        );
+        run_pass(&inputs, f, backward, progress)
+    };
+    let (fw, bw) = match opts.filter {
+        FilterMode::Forward => (Some(run(false)), None),
+        FilterMode::Backward => (None, Some(run(true))),
+        FilterMode::Combined => {
+            let (a, b) = rayon::join(|| run(false), || run(true));
+            (Some(a), Some(b))
+        }
+    };
+    let merged = merge_passes(fw.as_ref(), bw.as_ref());
+    let mut epochs = Vec::with_capacity(rover.epochs.len());
     let mut unsolved = Vec::new();
     for (i, s) in merged.into_iter().enumerate() {
         match s {
-            Some(mut s) => {
+            Some((s, segment)) => {
                 // Rover marker = antenna reference point − header offset.
-                s.pos = Ecef(s.pos.0 - arp_offset(&rover.header, &s.pos));
+                let pos = Ecef(s.pos.0 - arp_offset(&rover.header, &s.pos));
                 // The position belongs to the true reception time: the receiver's time tag
                 // minus its clock offset (as RTKLIB reports it). A moving rover at 60 m/s
                 // moves 6 cm in a millisecond of clock offset.
-                if let Ok((_, clock)) = &starts[i] {
-                    s.time -= hifitime::Duration::from_seconds(*clock);
+                let mut time = s.time;
+                if let Ok((_, clock)) = &inputs.starts[i] {
+                    time -= hifitime::Duration::from_seconds(*clock);
                 }
-                solutions.push(s);
+                epochs.push(TrajectoryEpoch {
+                    time,
+                    pos,
+                    cov: s.cov,
+                    vel: None,
+                    quality: s.quality,
+                    nsat: s.nsat,
+                    ratio: s.ratio,
+                    age: s.age,
+                    segment,
+                });
             }
             None => {
-                let why = if matched[i].is_none() {
+                let why = if inputs.matched[i].is_none() {
                     format!("no base epoch within {} s", opts.max_age)
-                } else if let Err(why) = &starts[i] {
+                } else if let Err(why) = &inputs.starts[i] {
                     format!("no single-point solution: {why}")
                 } else {
                     "fewer than two satellites common to rover and base above the mask".to_string()
@@ -384,11 +515,11 @@ pub fn process(
         }
     }
     Ok(PpkResult {
-        solutions,
+        trajectory: Trajectory::new(epochs, SegmentSource::Filter),
         forward: fw.map(|x| x.1),
         backward: bw.map(|x| x.1),
         unsolved,
-        rover_epochs: n,
+        rover_epochs: rover.epochs.len(),
         base_marker,
         warnings,
     })

@@ -29,20 +29,27 @@ pub fn slot_band(sys: Constellation, slot: usize) -> u8 {
 /// Column indices of the phase, code and Doppler used for one slot.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SlotCols {
+    /// Band digit.
     pub band: u8,
+    /// Column of the phase.
     pub phase: usize,
+    /// Column of the code (same attribute, else the best available).
     pub code: Option<usize>,
+    /// Column of the Doppler, when present.
     pub doppler: Option<usize>,
+    /// The phase observation code.
     pub phase_code: ObsCode,
 }
 
 /// Which columns of a file feed each system's slots.
 #[derive(Clone, Debug, Default)]
 pub struct SignalPlan {
+    /// Columns per system and slot.
     pub cols: std::collections::BTreeMap<Constellation, [Option<SlotCols>; NF]>,
 }
 
 impl SignalPlan {
+    /// The plan of a header: per system and slot, the best signal present.
     pub fn new(h: &ObsHeader) -> Self {
         let mut plan = SignalPlan::default();
         for (&sys, types) in &h.obs_types {
@@ -77,6 +84,7 @@ impl SignalPlan {
 /// One satellite's measurements in one epoch; NaN where absent.
 #[derive(Clone, Debug)]
 pub struct SatMeas {
+    /// The satellite.
     pub sv: Sv,
     /// Carrier frequency (Hz) per slot, NaN when the slot is unused.
     pub freq: [f64; NF],
@@ -86,10 +94,12 @@ pub struct SatMeas {
     pub p: [f64; NF],
     /// Doppler, Hz.
     pub d: [f64; NF],
+    /// Loss-of-lock indicator of the phase per slot.
     pub lli: [u8; NF],
 }
 
 impl SatMeas {
+    /// Wavelength of slot `f`, metres.
     pub fn wavelength(&self, f: usize) -> f64 {
         crate::orbit::C / self.freq[f]
     }

@@ -10,11 +10,15 @@ use std::collections::HashMap;
 /// Why an ambiguity was reset.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum SlipCause {
+    /// Loss-of-lock indicator set.
     LossOfLock,
+    /// Geometry-free phase jump.
     GeometryFree,
+    /// Melbourne–Wübbena wide-lane jump.
     MelbourneWubbena,
     /// Phase change disagrees with the integrated Doppler (after removing the common clock part).
     Doppler,
+    /// A gap longer than the limit.
     Gap,
 }
 
@@ -41,10 +45,12 @@ pub struct SlipDetector {
     pub max_gap: f64,
     /// Doppler-versus-phase threshold, cycles (plus 0.5 cycle per second of interval).
     pub doppler_threshold: f64,
+    /// A pass running backward in time.
     pub backward: bool,
 }
 
 impl SlipDetector {
+    /// A detector with the given longest gap (s), for a forward or backward pass.
     pub fn new(max_gap: f64, backward: bool) -> Self {
         SlipDetector {
             hist: HashMap::new(),

@@ -11,8 +11,11 @@ use std::collections::BTreeMap;
 /// Antenna reference point offset from the marker (RINEX "ANTENNA: DELTA H/E/N"), metres.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct AntennaDelta {
+    /// Up, metres.
     pub up: f64,
+    /// East, metres.
     pub east: f64,
+    /// North, metres.
     pub north: f64,
 }
 
@@ -25,11 +28,17 @@ pub struct ObsHeader {
     pub crinex: Option<f64>,
     /// Satellite system of the file (`None` for mixed).
     pub file_system: Option<Constellation>,
+    /// Marker name.
     pub marker: String,
+    /// Marker number.
     pub marker_number: String,
+    /// Receiver number, type and version.
     pub receiver: String,
+    /// Antenna type and radome (as in ANTEX).
     pub antenna: String,
+    /// Approximate marker position, ECEF, when given.
     pub approx_position: Option<Ecef>,
+    /// Antenna reference point offset from the marker.
     pub antenna_delta: AntennaDelta,
     /// Nominal interval in seconds.
     pub interval: Option<f64>,
@@ -39,6 +48,7 @@ pub struct ObsHeader {
     pub glonass_channels: BTreeMap<u8, i8>,
     /// Time scale of the epochs (GPST unless the header says otherwise).
     pub time_scale: TimeScale,
+    /// Leap seconds, when given.
     pub leap_seconds: Option<i32>,
     /// Header lines kept but not interpreted by ppkat (for `info`).
     pub notes: Vec<String>,
@@ -54,6 +64,7 @@ impl ObsHeader {
             .map(|v| v.as_slice())
             .unwrap_or(&[])
     }
+    /// Whether the file is RINEX 2.x.
     pub fn is_v2(&self) -> bool {
         self.version < 3.0
     }

@@ -13,12 +13,14 @@ pub struct Lines {
     buf: Vec<u8>,
     /// 1-based number of the line last returned.
     pub line_no: usize,
+    /// The file.
     pub path: PathBuf,
     /// Bytes of (decompressed) text read so far.
     pub bytes: u64,
 }
 
 impl Lines {
+    /// Open a file (gzip detected by its magic bytes).
     pub fn open(path: &Path) -> Result<Self> {
         let io = |source| Error::Io {
             path: path.to_path_buf(),
@@ -185,6 +187,7 @@ pub fn parse_int(field: &[u8]) -> std::result::Result<Option<i64>, ()> {
         .ok_or(())
 }
 
+/// `s` without leading and trailing ASCII whitespace.
 pub fn trim(s: &[u8]) -> &[u8] {
     let mut a = 0;
     let mut b = s.len();

@@ -36,6 +36,7 @@ impl ObsCode {
     pub fn band(&self) -> u8 {
         self.0[1]
     }
+    /// Tracking attribute (signal component).
     pub fn attribute(&self) -> u8 {
         self.0[2]
     }
@@ -56,17 +57,22 @@ impl fmt::Debug for ObsCode {
 /// A missing observation has a NaN value.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Obs {
+    /// Value (cycles, metres, Hz or dB-Hz); NaN when missing.
     pub value: f64,
+    /// Loss-of-lock indicator (0 when blank).
     pub lli: u8,
+    /// Signal strength indicator (0 when blank).
     pub ssi: u8,
 }
 
 impl Obs {
+    /// A missing observation.
     pub const MISSING: Obs = Obs {
         value: f64::NAN,
         lli: 0,
         ssi: 0,
     };
+    /// Whether the observation has a value.
     pub fn is_present(&self) -> bool {
         !self.value.is_nan()
     }
@@ -75,7 +81,9 @@ impl Obs {
 /// All observations of one satellite in one epoch, aligned with [`ObsHeader::types_of`].
 #[derive(Clone, Debug)]
 pub struct SatObs {
+    /// The satellite.
     pub sv: Sv,
+    /// Observations in the header's order for its system.
     pub obs: Vec<Obs>,
 }
 
@@ -88,6 +96,7 @@ pub struct ObsEpoch {
     pub flag: u8,
     /// Receiver clock offset from the file, seconds, when given.
     pub clock_offset: Option<f64>,
+    /// Satellites observed.
     pub sats: Vec<SatObs>,
     /// 1-based line where the epoch starts (in the compressed file for CRINEX).
     pub line: usize,
@@ -98,6 +107,7 @@ pub struct ObsEpoch {
 pub struct Event {
     /// The exact event time in GPST (may be absent for flags 2–4).
     pub time: Option<Epoch>,
+    /// Epoch flag (2–5).
     pub flag: u8,
     /// 1-based line of the event record.
     pub line: usize,
@@ -108,7 +118,9 @@ pub struct Event {
 /// Something wrong in the file that did not stop the reading; the data around it were kept.
 #[derive(Clone, Debug)]
 pub struct Warning {
+    /// 1-based line.
     pub line: usize,
+    /// What was wrong.
     pub what: String,
 }
 
@@ -117,6 +129,7 @@ pub struct Warning {
 pub struct IngestStats {
     /// Text bytes parsed (after decompression).
     pub bytes: u64,
+    /// Lines read.
     pub lines: usize,
     /// Epochs with flag 1 (power failure).
     pub power_failures: usize,
@@ -133,7 +146,9 @@ pub struct IngestStats {
 /// One item of the observation stream.
 #[derive(Clone, Debug)]
 pub enum Record {
+    /// An observation epoch.
     Epoch(ObsEpoch),
+    /// A special record (flags 2–5).
     Event(Event),
 }
 
@@ -175,6 +190,7 @@ impl ObsReader {
         Ok(ObsReader { header, body })
     }
 
+    /// The header.
     pub fn header(&self) -> &ObsHeader {
         &self.header
     }
@@ -184,9 +200,11 @@ impl ObsReader {
         self.body.next_record(&self.header)
     }
 
+    /// What was wrong so far (reading went on).
     pub fn warnings(&self) -> &[Warning] {
         &self.body.warnings
     }
+    /// Counts so far.
     pub fn stats(&self) -> &IngestStats {
         &self.body.stats
     }
@@ -195,15 +213,22 @@ impl ObsReader {
 /// A whole observation file in memory: header, epochs, events, and what was wrong with it.
 #[derive(Clone, Debug)]
 pub struct ObsFile {
+    /// The file read.
     pub path: std::path::PathBuf,
+    /// Its header.
     pub header: ObsHeader,
+    /// Observation epochs in file order.
     pub epochs: Vec<ObsEpoch>,
+    /// Special records (flags 2–5), camera events among them.
     pub events: Vec<Event>,
+    /// What was wrong (reading went on).
     pub warnings: Vec<Warning>,
+    /// Counts gathered while reading.
     pub stats: IngestStats,
 }
 
 impl ObsFile {
+    /// Read a whole observation file (RINEX 2/3/4, plain, gzip or Hatanaka).
     pub fn read(path: &Path) -> Result<Self> {
         let mut r = ObsReader::open(path)?;
         let mut epochs = Vec::new();

@@ -26,7 +26,9 @@ pub enum NavKind {
 /// One ephemeris record as written in the file.
 #[derive(Clone, Debug)]
 pub struct NavRecord {
+    /// The satellite.
     pub sv: Sv,
+    /// What kind of message the record holds.
     pub kind: NavKind,
     /// Time of clock in GPST.
     pub toc: Epoch,
@@ -34,24 +36,33 @@ pub struct NavRecord {
     pub clock: [f64; 3],
     /// Broadcast orbit values in file order (blank fields are 0).
     pub orbit: Vec<f64>,
+    /// Line where the record starts.
     pub line: usize,
 }
 
 /// Klobuchar-type ionosphere parameters broadcast in the header or ION records.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Klobuchar {
+    /// Amplitude coefficients α0–α3.
     pub alpha: [f64; 4],
+    /// Period coefficients β0–β3.
     pub beta: [f64; 4],
 }
 
 /// A navigation file.
 #[derive(Clone, Debug, Default)]
 pub struct NavFile {
+    /// The file read.
     pub path: PathBuf,
+    /// RINEX version.
     pub version: f64,
+    /// Ephemeris records in file order.
     pub records: Vec<NavRecord>,
+    /// GPS Klobuchar parameters, when given.
     pub gps_iono: Option<Klobuchar>,
+    /// BeiDou Klobuchar parameters, when given.
     pub bds_iono: Option<Klobuchar>,
+    /// Leap seconds, when given.
     pub leap_seconds: Option<i32>,
     /// Records skipped with the reason (line, what).
     pub skipped: Vec<(usize, String)>,
@@ -83,6 +94,7 @@ fn klob4(line: &[u8], start: usize, w: usize) -> Option<[f64; 4]> {
 }
 
 impl NavFile {
+    /// Read a navigation file (RINEX 2.x, 3.x, 4.x; plain or gzip).
     pub fn read(path: &Path) -> Result<NavFile> {
         let mut src = Lines::open(path)?;
         let mut nav = NavFile {

@@ -10,11 +10,14 @@ use std::fmt;
 /// A summary of an observation file.
 #[derive(Clone, Debug)]
 pub struct ObsSummary {
+    /// Label and value, in print order.
     pub lines: Vec<(String, String)>,
+    /// What looks wrong.
     pub warnings: Vec<String>,
 }
 
 impl ObsSummary {
+    /// The summary of a file read.
     pub fn of(f: &ObsFile) -> Self {
         let h = &f.header;
         let mut l: Vec<(String, String)> = Vec::new();

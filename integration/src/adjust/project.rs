@@ -1,12 +1,14 @@
 //! The project file (TOML) of `ppkat adjust` and the tables it names: cameras, the image list,
-//! image measurements (CSV or PATB), ground points (control, check) and the GNSS antenna table
-//! written by `ppkat exposures --format antenna`. Paths are relative to the project file.
+//! image measurements (CSV or PATB), ground points (control, check) and the GNSS input: the
+//! antenna table written by `ppkat exposures --format antenna`, or a `.pos` trajectory read
+//! into a `gnss::trajectory::Trajectory` and interpolated at the image times. Paths are
+//! relative to the project file.
 //! Every problem names the file, the line and what to do.
 
 use super::factors::DriftModel;
 use super::tables::{
     antennas_from_trajectory, perr, read_antennas, read_ground, read_images, read_measurements,
-    read_patb,
+    read_patb, read_trajectory,
 };
 use super::AdjustError;
 use crate::exposure::export::Projection;
@@ -366,7 +368,9 @@ impl Project {
             Some(g) => match (&g.antennas, &g.trajectory) {
                 (Some(a), None) => read_antennas(&dir.join(a), g.sigma_scale)?,
                 (None, Some(t)) => {
-                    antennas_from_trajectory(&dir.join(t), &images, g.sigma_scale, &mut warnings)?
+                    let path = dir.join(t);
+                    let traj = read_trajectory(&path)?;
+                    antennas_from_trajectory(&traj, &path, &images, g.sigma_scale, &mut warnings)?
                 }
                 _ => {
                     return Err(perr(

@@ -1,5 +1,6 @@
 //! The tables a project names: image list, image measurements (CSV or PATB), ground points,
-//! GNSS antenna table. Each problem names the file and the line.
+//! GNSS antenna table — or the antennas interpolated on a trajectory. Each problem names the
+//! file and the line.
 
 use super::project::{
     Antenna, CameraDef, GroundPoint, GroundSection, ImageDef, Measurement, PointKind,
@@ -7,6 +8,7 @@ use super::project::{
 use super::AdjustError;
 use crate::exposure::export::Projection;
 use gnss::frame::{Ecef, Geodetic};
+use gnss::trajectory::{InterpError, Trajectory};
 use nalgebra::{Matrix3, Vector2};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -442,22 +444,28 @@ pub(super) fn read_antennas(path: &Path, scale: f64) -> Result<Vec<Antenna>, Adj
     Ok(out)
 }
 
-/// Antenna positions interpolated on a trajectory at the image times: covariance and
-/// ambiguity segment from the trajectory; images outside it or in its gaps are listed.
+/// Read the `.pos` trajectory a project names (segments derived from its Q changes and gaps).
+pub(super) fn read_trajectory(path: &Path) -> Result<Trajectory, AdjustError> {
+    Trajectory::read_pos(path).map_err(|e| perr(path, e.to_string()))
+}
+
+/// Antenna positions interpolated on a trajectory (read from `path`) at the image times:
+/// covariance and ambiguity segment from the trajectory; images outside it or in its gaps are
+/// listed, and so is where its segments came from when not from the filter.
 pub(super) fn antennas_from_trajectory(
+    traj: &Trajectory,
     path: &Path,
     images: &[ImageDef],
     scale: f64,
     warnings: &mut Vec<String>,
 ) -> Result<Vec<Antenna>, AdjustError> {
-    let traj = crate::exposure::trajectory::Trajectory::read_pos(path)
-        .map_err(|e| perr(path, e.to_string()))?;
     if images.iter().all(|im| im.time.is_none()) {
         return Err(perr(
             path,
             "a trajectory needs the image times: add `week,tow` (GPST) columns to the image list",
         ));
     }
+    warnings.extend(traj.segments_from.note());
     let max_gap = 2.5 * traj.interval;
     let mut out = Vec::new();
     let mut missed = Vec::new();
@@ -479,12 +487,8 @@ pub(super) fn antennas_from_trajectory(
                     rotation: None,
                 });
             }
-            Err(crate::exposure::trajectory::InterpError::Outside) => {
-                missed.push(format!("{} (outside the trajectory)", im.id))
-            }
-            Err(crate::exposure::trajectory::InterpError::Gap(g)) => {
-                missed.push(format!("{} (in a {g:.1} s gap)", im.id))
-            }
+            Err(InterpError::Outside) => missed.push(format!("{} (outside the trajectory)", im.id)),
+            Err(InterpError::Gap(g)) => missed.push(format!("{} (in a {g:.1} s gap)", im.id)),
         }
     }
     if !missed.is_empty() {

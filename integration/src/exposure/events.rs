@@ -1,11 +1,11 @@
 //! Exposure times: RINEX flag-5 events (receiver time, corrected by the receiver clock seen in
 //! the trajectory), DJI `Timestamp.MRK`, or a CSV of times in GPST or UTC.
 
-use super::trajectory::Trajectory;
 use gnss::error::{Error, Result};
 use gnss::frame::{Ecef, Geodetic};
 use gnss::rinex::ObsFile;
 use gnss::time::from_week_tow;
+use gnss::trajectory::Trajectory;
 use hifitime::{Duration, Epoch, TimeScale};
 use std::path::Path;
 
@@ -25,18 +25,22 @@ pub struct MrkInfo {
 /// One exposure time.
 #[derive(Clone, Debug)]
 pub struct ExposureEvent {
+    /// Label (event number or MRK index).
     pub id: String,
     /// GPST.
     pub time: Epoch,
     /// Line in the source file (0 when not applicable).
     pub line: usize,
+    /// What a DJI MRK line adds (None for other sources).
     pub mrk: Option<MrkInfo>,
 }
 
 /// Time system of a CSV of times.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TimeSystem {
+    /// GPS time.
     Gpst,
+    /// UTC (converted with the leap seconds).
     Utc,
 }
 
@@ -48,7 +52,7 @@ pub fn from_rinex(obs: &ObsFile, traj: &Trajectory) -> (Vec<ExposureEvent>, f64)
     // Clock offset samples (tag, offset) where a trajectory epoch lies within 5 ms of a tag.
     let mut samples: Vec<(Epoch, f64)> = Vec::new();
     let tags: Vec<Epoch> = obs.epochs.iter().map(|e| e.time).collect();
-    for p in &traj.points {
+    for p in &traj.epochs {
         let i = tags.partition_point(|t| *t < p.time);
         for j in [i.wrapping_sub(1), i] {
             if let Some(t) = tags.get(j) {

@@ -10,19 +10,19 @@ pub mod events;
 pub mod export;
 pub mod leverarm;
 pub mod photos;
-pub mod trajectory;
 
 use attitude::{from_yaw_pitch_roll, AttitudeTable};
 use events::ExposureEvent;
 use gnss::frame::{enu_rotation, Ecef};
 use gnss::solution::Quality;
+use gnss::trajectory::{InterpError, Trajectory};
 use hifitime::{Duration, Epoch};
 use nalgebra::{Matrix3, Vector3};
-use trajectory::{InterpError, Trajectory};
 
 /// Where a station's attitude came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum AttitudeSource {
+    /// From the attitude table.
     Table,
     /// Trajectory heading, zero pitch and roll (flagged).
     Heading,
@@ -31,18 +31,25 @@ pub enum AttitudeSource {
 /// A camera station: the projection centre of one exposure.
 #[derive(Clone, Debug)]
 pub struct CameraStation {
+    /// Label (event number, or photo name once matched).
     pub id: String,
+    /// Exposure time (event time plus delay), GPST.
     pub time: Epoch,
+    /// Antenna position interpolated on the trajectory, ECEF.
     pub antenna: Ecef,
+    /// Projection centre, ECEF (antenna minus the rotated lever arm).
     pub centre: Ecef,
     /// ECEF covariance of the centre, m² (from the trajectory).
     pub cov: Matrix3<f64>,
+    /// Worst trajectory quality around the exposure.
     pub quality: Quality,
     /// Ambiguity segment of the trajectory at the exposure (for drift per segment).
     pub segment: u32,
     /// Camera → ENU at the station.
     pub rotation: Matrix3<f64>,
+    /// Where the rotation came from.
     pub attitude: AttitudeSource,
+    /// What a user should look at (float neighbours, heading attitude, no lever arm).
     pub flags: Vec<String>,
 }
 
@@ -51,6 +58,7 @@ pub struct CameraStation {
 pub struct ExposureOptions {
     /// Antenna phase centre in the camera frame (u, v, w), metres.
     pub lever_arm: Option<Vector3<f64>>,
+    /// Camera attitude over time (None: the trajectory heading is used).
     pub attitude: Option<AttitudeTable>,
     /// Camera latency added to every event time, milliseconds.
     pub delay_ms: f64,
@@ -61,17 +69,25 @@ pub struct ExposureOptions {
 /// An exposure that got no station, and why.
 #[derive(Clone, Debug)]
 pub struct Refused {
+    /// Exposure label.
     pub id: String,
+    /// Exposure time, GPST.
     pub time: Epoch,
+    /// Why it got no station.
     pub why: String,
 }
 
 /// Result of the exposure stage.
 #[derive(Clone, Debug, Default)]
 pub struct ExposureResult {
+    /// The camera stations, in time order.
     pub stations: Vec<CameraStation>,
+    /// Exposures without a station, and why.
     pub refused: Vec<Refused>,
+    /// Problems worth a look (sorting, time system, attitude fallback).
     pub warnings: Vec<String>,
+    /// Facts a reader of the results should know (where the ambiguity segments came from).
+    pub notes: Vec<String>,
 }
 
 /// Compute projection centres for events on a trajectory.
@@ -81,6 +97,7 @@ pub fn compute(
     opts: &ExposureOptions,
 ) -> ExposureResult {
     let mut res = ExposureResult::default();
+    res.notes.extend(traj.segments_from.note());
     let (unsorted, dups) = events::sort_and_dedup(&mut events);
     if unsorted {
         res.warnings

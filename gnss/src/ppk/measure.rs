@@ -1,0 +1,358 @@
+//! The measurement model: double-difference residuals of carrier phase and code, their design
+//! rows and covariance, formed without side effects; and the innovation gate, a separate pass
+//! that removes rows and says why.
+//!
+//! Conventions:
+//! - Single difference (SD) = rover − base; double difference (DD) = SD of a satellite − SD of
+//!   the pivot of its group ([`DdGroup`]: one system, one slot, one kind; pivot = the highest
+//!   satellite).
+//! - Residual (innovation) v = observed − modelled, metres, at the state the rows are formed
+//!   at; phase observed as λ·(L_rover − L_base), modelled with λ times the SD ambiguity states.
+//! - Design row h = ∂(modelled)/∂x over the whole state vector: −(e_s − e_pivot) on the
+//!   position block (e = unit vector receiver → satellite, ECEF), ±λ on the two SD ambiguity
+//!   states of a phase row, ±μ (ionospheric scale of the slot, negative for phase) on the SD
+//!   ionosphere states when the model has them.
+//! - Covariance: SD variance 2·σ²(el) (σ² = a² + (b/sin el)², code scaled by the code/phase
+//!   ratio²); DDs of one group share their pivot's SD variance.
+//! - Row order: system (`Constellation::ALL`), slot, phase before code, then the pairs' order.
+
+use super::dd::DdGroup;
+use super::filter::Pair;
+use super::geometry::tropo;
+use super::obs::NF;
+use super::state::{AmbKey, State, StateKey};
+use super::PpkOptions;
+use crate::frame::Ecef;
+use crate::orbit::C;
+use crate::sv::{Constellation, Sv};
+use nalgebra::{DMatrix, DVector, Vector3};
+use std::collections::{BTreeMap, BTreeSet};
+
+/// Carrier phase or code.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum ObsKind {
+    /// Carrier phase (needs SD ambiguity states).
+    Phase,
+    /// Pseudorange.
+    Code,
+}
+
+/// Why the innovation gate removed a measurement row.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum GateReason {
+    /// A carrier-phase DD innovation larger than the gate (`max_innovation`).
+    PhaseInnovation,
+    /// A code DD innovation larger than the gate (`max_innovation`).
+    CodeInnovation,
+}
+
+/// One double-difference measurement row.
+#[derive(Clone, Debug)]
+pub(super) struct Row {
+    /// Phase or code.
+    pub(super) kind: ObsKind,
+    /// The satellite differenced against the pivot.
+    pub(super) sv: Sv,
+    /// The pivot of its group.
+    pub(super) pivot: Sv,
+    /// Frequency slot.
+    pub(super) slot: usize,
+    /// Index of its group (rows of one group are consecutive).
+    pub(super) group: usize,
+    /// Design row over the whole state vector.
+    pub(super) h: DVector<f64>,
+    /// Observed − modelled, metres.
+    pub(super) innovation: f64,
+    /// SD variance of `sv` (the group adds its pivot's), m².
+    pub(super) var: f64,
+}
+
+/// The rows of one epoch at one state.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Residuals {
+    /// Rows in model order.
+    pub(super) rows: Vec<Row>,
+    /// SD variance of each group's pivot, m².
+    pub(super) pivot_var: Vec<f64>,
+}
+
+/// Design matrix, innovations and their covariance of the rows kept.
+pub(super) struct Linearised {
+    /// Design matrix (rows × state length).
+    pub(super) h: DMatrix<f64>,
+    /// Innovations, metres.
+    pub(super) v: DVector<f64>,
+    /// Covariance of the innovations, m².
+    pub(super) r: DMatrix<f64>,
+    /// Satellites used (as satellite or pivot of a row).
+    pub(super) used_sats: usize,
+}
+
+/// Whether a pair observes the phase of slot `slot` on both receivers.
+pub(super) fn has_phase(p: &Pair, slot: usize) -> bool {
+    p.r.l[slot].is_finite() && p.b.l[slot].is_finite()
+}
+
+/// Whether a pair observes what a per-satellite state describes: the phase of its slot for an
+/// ambiguity, any phase for the ionosphere.
+pub(super) fn observes(p: &Pair, key: StateKey) -> bool {
+    match key {
+        StateKey::Position => true,
+        StateKey::Ambiguity(a) => p.r.sv == a.sv && has_phase(p, a.slot),
+        StateKey::Iono(sv) => p.r.sv == sv && (0..NF).any(|k| has_phase(p, k)),
+    }
+}
+
+fn var_phase(el: f64, o: &PpkOptions) -> f64 {
+    let s = el.sin().max(0.05);
+    o.phase_sigma.0.powi(2) + (o.phase_sigma.1 / s).powi(2)
+}
+
+/// SD model pieces of one pair at the linearisation point.
+struct Pre {
+    /// Unit vector rover → satellite.
+    e: Vector3<f64>,
+    /// Modelled SD range without ambiguity, antenna and ionosphere, metres.
+    sd_model: f64,
+}
+
+fn undifferenced(pairs: &[Pair], rx: &Vector3<f64>) -> Vec<Pre> {
+    let rg = Ecef(*rx).to_geodetic();
+    pairs
+        .iter()
+        .map(|p| {
+            let (rho_r, e) = p.vr.range(rx);
+            let tr = if rg.h > -500.0 && rg.h < 2.0e4 {
+                tropo(&rg, p.el)
+            } else {
+                0.0
+            };
+            Pre {
+                e,
+                sd_model: (rho_r - p.rho_b) - C * (p.vr.clock - p.vb.clock) + (tr - p.tropo_b),
+            }
+        })
+        .collect()
+}
+
+/// Every DD row of the epoch at the current state, none rejected.
+pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residuals {
+    let x = &state.x;
+    let pos = state
+        .index()
+        .range(StateKey::Position)
+        .expect("the position block exists");
+    let rx = Vector3::from_iterator(x.rows_range(pos.clone()).iter().copied());
+    let pre = undifferenced(pairs, &rx);
+    let mut out = Residuals::default();
+    for sys in Constellation::ALL {
+        for f in 0..o.nf {
+            for kind in [ObsKind::Phase, ObsKind::Code] {
+                let amb = |i: usize| {
+                    state.offset(StateKey::Ambiguity(AmbKey {
+                        sv: pairs[i].r.sv,
+                        slot: f,
+                    }))
+                };
+                let iono = |i: usize| state.offset(StateKey::Iono(pairs[i].r.sv));
+                // Members with the needed data (and an ambiguity state for phase).
+                let members: Vec<usize> = (0..pairs.len())
+                    .filter(|&i| {
+                        let p = &pairs[i];
+                        p.r.sv.sys == sys
+                            && match kind {
+                                ObsKind::Phase => has_phase(p, f) && amb(i).is_some(),
+                                ObsKind::Code => p.r.p[f].is_finite() && p.b.p[f].is_finite(),
+                            }
+                    })
+                    .collect();
+                let Some(group) = DdGroup::form(f, members, |&i| pairs[i].el) else {
+                    continue;
+                };
+                let phase = kind == ObsKind::Phase;
+                let obs_sd = |i: usize| -> f64 {
+                    let p = &pairs[i];
+                    if phase {
+                        p.r.wavelength(f) * (p.r.l[f] - p.b.l[f])
+                    } else {
+                        p.r.p[f] - p.b.p[f]
+                    }
+                };
+                let fac = if phase {
+                    1.0
+                } else {
+                    o.code_phase_ratio.powi(2)
+                };
+                let sd_var = |i: usize| 2.0 * fac * var_phase(pairs[i].el, o);
+                // Ionosphere scale of this slot relative to the first (delays code, advances phase).
+                let mu = |i: usize| {
+                    (pairs[i].r.freq[0] / pairs[i].r.freq[f]).powi(2)
+                        * if phase { -1.0 } else { 1.0 }
+                };
+                let model_sd = |i: usize| -> f64 {
+                    let mut m = pre[i].sd_model + pairs[i].ant[f];
+                    if phase {
+                        let k = amb(i).unwrap_or(0);
+                        m += pairs[i].r.wavelength(f) * x[k];
+                    }
+                    if let Some(k) = iono(i) {
+                        m += mu(i) * x[k];
+                    }
+                    m
+                };
+                let refi = group.pivot;
+                let y_ref = obs_sd(refi) - model_sd(refi);
+                let gi = out.pivot_var.len();
+                for &i in &group.others {
+                    let v = (obs_sd(i) - model_sd(i)) - y_ref;
+                    let mut hr = DVector::zeros(x.len());
+                    let de = -(pre[i].e - pre[refi].e);
+                    hr.rows_range_mut(pos.clone()).copy_from(&de);
+                    if let (Some(ki), Some(kr)) = (iono(i), iono(refi)) {
+                        hr[ki] = mu(i);
+                        hr[kr] = -mu(refi);
+                    }
+                    if phase {
+                        if let (Some(ki), Some(kr)) = (amb(i), amb(refi)) {
+                            hr[ki] = pairs[i].r.wavelength(f);
+                            hr[kr] = -pairs[refi].r.wavelength(f);
+                        }
+                    }
+                    out.rows.push(Row {
+                        kind,
+                        sv: pairs[i].r.sv,
+                        pivot: pairs[refi].r.sv,
+                        slot: group.slot,
+                        group: gi,
+                        h: hr,
+                        innovation: v,
+                        var: sd_var(i),
+                    });
+                }
+                out.pivot_var.push(sd_var(refi));
+            }
+        }
+    }
+    out
+}
+
+/// The innovation gate: rows whose |innovation| exceeds `max_innovation` (m) are removed.
+/// Returns the rows kept (in order) and how many were removed, per reason.
+pub(super) fn gate(
+    res: Residuals,
+    max_innovation: f64,
+) -> (Residuals, BTreeMap<GateReason, usize>) {
+    let mut counts = BTreeMap::new();
+    let Residuals { rows, pivot_var } = res;
+    let rows = rows
+        .into_iter()
+        .filter(|r| {
+            if r.innovation.abs() > max_innovation {
+                let reason = match r.kind {
+                    ObsKind::Phase => GateReason::PhaseInnovation,
+                    ObsKind::Code => GateReason::CodeInnovation,
+                };
+                *counts.entry(reason).or_insert(0) += 1;
+                false
+            } else {
+                true
+            }
+        })
+        .collect();
+    (Residuals { rows, pivot_var }, counts)
+}
+
+impl Residuals {
+    /// Design matrix, innovations and covariance for a state of length `nx`; None without
+    /// rows.
+    pub(super) fn linearise(&self, nx: usize) -> Option<Linearised> {
+        let rows = &self.rows;
+        let m = rows.len();
+        if m == 0 {
+            return None;
+        }
+        let h = DMatrix::from_fn(m, nx, |i, j| rows[i].h[j]);
+        let v = DVector::from_iterator(m, rows.iter().map(|r| r.innovation));
+        let mut r = DMatrix::zeros(m, m);
+        let mut at = 0;
+        while at < m {
+            let g = rows[at].group;
+            let len = rows[at..].iter().take_while(|x| x.group == g).count();
+            let vref = self.pivot_var[g];
+            for a in 0..len {
+                for b in 0..len {
+                    r[(at + a, at + b)] = if a == b {
+                        rows[at + a].var + vref
+                    } else {
+                        vref
+                    };
+                }
+            }
+            at += len;
+        }
+        let used: BTreeSet<Sv> = rows.iter().flat_map(|r| [r.sv, r.pivot]).collect();
+        Some(Linearised {
+            h,
+            v,
+            r,
+            used_sats: used.len(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(kind: ObsKind, prn: u8, group: usize, innovation: f64) -> Row {
+        Row {
+            kind,
+            sv: Sv::new(Constellation::Gps, prn),
+            pivot: Sv::new(Constellation::Gps, 1),
+            slot: 0,
+            group,
+            h: DVector::from_element(4, prn as f64),
+            innovation,
+            var: prn as f64,
+        }
+    }
+
+    /// The gate removes exactly the rows beyond it, keeps the order, counts per reason; the
+    /// covariance of what is left keeps each group's pivot variance on its block.
+    #[test]
+    fn gate_removes_counts_and_keeps_groups() {
+        let res = Residuals {
+            rows: vec![
+                row(ObsKind::Phase, 2, 0, 0.01),
+                row(ObsKind::Phase, 3, 0, 31.0),
+                row(ObsKind::Phase, 4, 0, -0.02),
+                row(ObsKind::Code, 2, 1, -40.0),
+                row(ObsKind::Code, 3, 1, 35.0),
+                row(ObsKind::Code, 5, 2, 1.0),
+            ],
+            pivot_var: vec![0.5, 7.0, 9.0],
+        };
+        let (kept, counts) = gate(res, 30.0);
+        let prns: Vec<u8> = kept.rows.iter().map(|r| r.sv.prn).collect();
+        assert_eq!(prns, vec![2, 4, 5]);
+        assert_eq!(counts.get(&GateReason::PhaseInnovation), Some(&1));
+        assert_eq!(counts.get(&GateReason::CodeInnovation), Some(&2));
+        let lin = kept.linearise(4).unwrap();
+        assert_eq!(lin.v.as_slice(), &[0.01, -0.02, 1.0]);
+        assert_eq!(lin.r[(0, 0)], 2.5);
+        assert_eq!(lin.r[(0, 1)], 0.5);
+        assert_eq!(lin.r[(1, 1)], 4.5);
+        assert_eq!(lin.r[(2, 2)], 14.0);
+        assert_eq!(lin.r[(1, 2)], 0.0);
+        assert_eq!(lin.h[(2, 3)], 5.0);
+        assert_eq!(lin.used_sats, 4);
+        let (empty, _) = gate(
+            Residuals {
+                rows: vec![row(ObsKind::Code, 2, 0, 99.0)],
+                pivot_var: vec![1.0],
+            },
+            30.0,
+        );
+        assert!(empty.linearise(4).is_none());
+    }
+}
