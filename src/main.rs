@@ -429,7 +429,9 @@ fn run(cli: Cli) -> Result<()> {
             let lever_arm = match lever_arm {
                 Some(s) => {
                     let [u, v, w] = triple("--lever-arm", &s)?;
-                    Some(nalgebra::Vector3::new(u, v, w))
+                    Some(integration::photo::lever::LeverArm::new(
+                        nalgebra::Vector3::new(u, v, w),
+                    ))
                 }
                 None => None,
             };

@@ -313,7 +313,7 @@ pub fn run(out: &Path) -> Result<DemoReport, ChainError> {
         &att_path,
         crate::exposure::attitude::AngleConvention::YawPitchRoll,
     )?;
-    let lever = Vector3::from(scenario.camera.lever_arm);
+    let lever = photo::lever::LeverArm::new(Vector3::from(scenario.camera.lever_arm));
     let opts = crate::exposure::ExposureOptions {
         lever_arm: Some(lever),
         attitude: Some(attitude),

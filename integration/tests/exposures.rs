@@ -107,7 +107,7 @@ fn interpolation_and_lever_arm_against_truth() {
     for (step, label) in [(1, "10 Hz"), (10, "1 Hz")] {
         let (traj, att) = truth_trajectory(&s.dir, step);
         let opts = ExposureOptions {
-            lever_arm: Some(s.lever),
+            lever_arm: Some(photo::lever::LeverArm::new(s.lever)),
             attitude: Some(att),
             ..Default::default()
         };
@@ -183,7 +183,7 @@ fn events_to_ppk_to_projection_centres() {
         evs,
         &traj,
         &ExposureOptions {
-            lever_arm: Some(s.lever),
+            lever_arm: Some(photo::lever::LeverArm::new(s.lever)),
             attitude: Some(att),
             ..Default::default()
         },
@@ -235,7 +235,7 @@ fn bad_exposure_inputs_are_refused_or_flagged() {
         evs,
         &traj,
         &ExposureOptions {
-            lever_arm: Some(s.lever),
+            lever_arm: Some(photo::lever::LeverArm::new(s.lever)),
             ..Default::default()
         },
     );

@@ -9,6 +9,7 @@ pub mod bal;
 pub mod camera;
 pub mod factors;
 pub mod intersection;
+pub mod lever;
 pub mod lsq;
 pub mod resection;
 pub mod rotation;

@@ -246,7 +246,7 @@ pub fn build(p: &Project) -> Result<Built, AdjustError> {
         p.ground.iter().map(|g| g.pos.to_geodetic().h).sum::<f64>() / p.ground.len() as f64
     };
     let frame = LocalFrame::new(g0);
-    let lever0 = gnss.map(|g| Vector3::from(g.lever_arm)).unwrap_or_default();
+    let lever0 = gnss.map(|g| g.lever_arm()).unwrap_or_default();
 
     // Start orientations.
     let control_of = |id: &str| {
@@ -286,7 +286,7 @@ pub fn build(p: &Project) -> Result<Built, AdjustError> {
         let controls = controls_in(p, i, |id| control_of(id).map(|g| frame.to_local(&g.pos)));
         start[i] = match (antenna, rot) {
             (Some(a), Some(r)) => {
-                let centre = frame.to_local(&a.pos) - r * lever0;
+                let centre = lever0.centre(&frame.to_local(&a.pos), &r);
                 // Close range: refine the compass angles on the control seen (≥ 2 points).
                 let r = if p.file.mode == Mode::CloseRange && controls.len() >= 2 {
                     resect_angles(cam, centre, &controls, Some(r))

@@ -4,6 +4,7 @@
 //! adjustment frame), weighted by the trajectory's full 3×3 covariance (its noise model).
 
 use nalgebra::{DMatrix, DMatrixViewMut, Matrix3, Vector3};
+use photo::lever::LeverArm;
 use photo::lsq::{CameraId, DriftId, Factor, ImageId, Key, Params};
 use photo::rotation::skew;
 
@@ -109,7 +110,7 @@ impl Factor for GnssCentre {
         let (Some(pose), Some(l)) = (x.pose(0), x.point(1)) else {
             return false;
         };
-        let rl = pose.r * l;
+        let rl = LeverArm::new(l).offset(&pose.r);
         let mut pred = pose.centre + rl;
         let mut jd = None;
         if let Some((model, dt)) = self.drift {

@@ -135,6 +135,17 @@ pub struct GnssSection {
     pub drift_model: DriftModel,
 }
 
+impl GnssSection {
+    /// The lever arm given (start value), with its σ when it is a prior.
+    pub fn lever_arm(&self) -> photo::lever::LeverArm {
+        let l = photo::lever::LeverArm::new(nalgebra::Vector3::from(self.lever_arm));
+        match self.lever_arm_sigma {
+            Some(s) => l.with_sigma(nalgebra::Vector3::from(s)),
+            None => l,
+        }
+    }
+}
+
 fn one() -> f64 {
     1.0
 }

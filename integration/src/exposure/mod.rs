@@ -57,7 +57,7 @@ pub struct CameraStation {
 #[derive(Clone, Debug, Default)]
 pub struct ExposureOptions {
     /// Antenna phase centre in the camera frame (u, v, w), metres.
-    pub lever_arm: Option<Vector3<f64>>,
+    pub lever_arm: Option<photo::lever::LeverArm>,
     /// Camera attitude over time (None: the trajectory heading is used).
     pub attitude: Option<AttitudeTable>,
     /// Camera latency added to every event time, milliseconds.
@@ -163,7 +163,7 @@ pub fn compute(
                     + enu_to_ecef * Vector3::new(m.offset_neu[1], m.offset_neu[0], m.offset_neu[2]),
             )
         } else if let Some(l) = opts.lever_arm {
-            Ecef(ip.pos.0 - enu_to_ecef * (rotation * l))
+            Ecef(ip.pos.0 - enu_to_ecef * l.offset(&rotation))
         } else {
             flags.push("no lever arm: the projection centre is the antenna".into());
             ip.pos

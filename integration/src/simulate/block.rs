@@ -352,7 +352,8 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
             _ => 0,
         };
         let noise = l * Vector3::new(rng.normal(), rng.normal(), rng.normal());
-        let a = im.2.centre + im.2.r * Vector3::from(spec.lever_arm) + drift + noise;
+        let lever = photo::lever::LeverArm::new(Vector3::from(spec.lever_arm));
+        let a = lever.antenna(&im.2.centre, &im.2.r) + drift + noise;
         let g = g_ecef(&a);
         // Noise drawn in the site ENU: express the covariance in the ENU at the antenna.
         let ra = enu_rotation(&g);

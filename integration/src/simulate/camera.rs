@@ -15,8 +15,8 @@ pub struct CameraSpec {
     pub width_px: usize,
     pub height_px: usize,
     pub pixel: f64,
-    /// Antenna phase centre in the camera frame, metres.
-    pub lever: Vector3<f64>,
+    /// Antenna phase centre in the camera frame.
+    pub lever: photo::lever::LeverArm,
 }
 
 /// One simulated exposure (true values, local ENU frame of the site).
@@ -89,7 +89,7 @@ pub fn exposures(
             let t = t0 + margin + k as f64 * base / speed;
             let state = flight.at(t);
             let r = from_yaw_pitch_roll(state.yaw, state.pitch, state.roll);
-            let centre = state.pos - r * cam.lever;
+            let centre = cam.lever.centre(&state.pos, &r);
             out.push(Exposure {
                 id: out.len() + 1,
                 strip,

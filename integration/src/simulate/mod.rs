@@ -340,7 +340,7 @@ impl Scenario {
             width_px: c.width_px,
             height_px: c.height_px,
             pixel: c.pixel_um * 1e-6,
-            lever: Vector3::new(c.lever_arm[0], c.lever_arm[1], c.lever_arm[2]),
+            lever: photo::lever::LeverArm::new(Vector3::from(c.lever_arm)),
         }
     }
 }

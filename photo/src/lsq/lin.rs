@@ -115,8 +115,7 @@ impl Problem {
         // Regions in buffer order, each a residual followed by the Jacobian blocks.
         let len = |k: usize| {
             st.m[k]
-                + st
-                    .slots
+                + st.slots
                     .get(k)
                     .iter()
                     .filter(|s| s.joff.is_some())

@@ -126,14 +126,29 @@ fn add_direct(st: &Structure, lin: &Linearisation, k: usize, w: f64, sums: &mut 
     let d = st.direct[k];
     for g in &st.grads[d.grads.0..d.grads.1] {
         let ja = &lin.j[g.ja..g.ja + g.m * g.da];
-        add_atv(w, ja, &lin.j[g.ro..g.ro + g.m], &mut sums.g[g.go..g.go + g.da]);
+        add_atv(
+            w,
+            ja,
+            &lin.j[g.ro..g.ro + g.m],
+            &mut sums.g[g.go..g.go + g.da],
+        );
         for (i, col) in ja.chunks_exact(g.m).enumerate() {
             sums.diag[g.go + i] += w * col.iter().map(|x| x * x).sum::<f64>();
         }
     }
     for p in &st.pairs[d.pairs.0..d.pairs.1] {
-        let (ja, jb) = (&lin.j[p.ja..p.ja + p.m * p.da], &lin.j[p.jb..p.jb + p.m * p.db]);
-        add_atb(w, ja, jb, p.m, &mut sums.vals[p.off..p.off + p.da * p.db], p.da);
+        let (ja, jb) = (
+            &lin.j[p.ja..p.ja + p.m * p.da],
+            &lin.j[p.jb..p.jb + p.m * p.db],
+        );
+        add_atb(
+            w,
+            ja,
+            jb,
+            p.m,
+            &mut sums.vals[p.off..p.off + p.da * p.db],
+            p.da,
+        );
     }
 }
 
@@ -172,7 +187,14 @@ impl Problem {
             add_atv(wt, jp, &lin.j[term.ro..term.ro + m], out.g);
             for &(jc, dc, ni) in st.links(term) {
                 let o = woff[ni];
-                add_atb(wt, jp, &lin.j[jc..jc + m * dc], m, &mut out.w[o..o + d * dc], d);
+                add_atb(
+                    wt,
+                    jp,
+                    &lin.j[jc..jc + m * dc],
+                    m,
+                    &mut out.w[o..o + d * dc],
+                    d,
+                );
             }
         }
         if lambda > 0.0 {
@@ -187,7 +209,14 @@ impl Problem {
         t.resize(eb.wlen, 0.0);
         for (&c, &o) in st.nbrs(eb).iter().zip(woff) {
             let dn = st.cdim[c];
-            add_atb(1.0, &out.w[o..o + d * dn], out.vinv, d, &mut t[o..o + d * dn], dn);
+            add_atb(
+                1.0,
+                &out.w[o..o + d * dn],
+                out.vinv,
+                d,
+                &mut t[o..o + d * dn],
+                dn,
+            );
         }
         true
     }
@@ -329,7 +358,12 @@ impl Problem {
                 }
                 for (&c, &wo) in st.nbrs(eb).iter().zip(st.woff(eb)) {
                     let (dn, o) = (st.cdim[c], eb.wbase + wo);
-                    add_av(-1.0, &red.w[o..o + d * dn], &dc[st.coff[c]..st.coff[c] + dn], rhs);
+                    add_av(
+                        -1.0,
+                        &red.w[o..o + d * dn],
+                        &dc[st.coff[c]..st.coff[c] + dn],
+                        rhs,
+                    );
                 }
                 add_av(1.0, &red.vinv[eb.vbase..eb.vbase + d * d], rhs, out);
             });

@@ -364,7 +364,10 @@ impl Problem {
 
     /// Where every active factor's residual and Jacobian blocks go.
     fn layout(&self, active: &[usize], cidx: &[Option<usize>], eidx: &[Option<usize>]) -> Layout {
-        let m: Vec<usize> = active.iter().map(|&f| self.entries[f].factor.dim()).collect();
+        let m: Vec<usize> = active
+            .iter()
+            .map(|&f| self.entries[f].factor.dim())
+            .collect();
         let first_e = |k: usize| {
             self.entries[active[k]]
                 .blocks
@@ -497,7 +500,8 @@ fn link_eliminated(eblocks: &mut [EDraft], slots: &Slots) {
             .terms
             .iter()
             .map(|&(f, _)| {
-                slots.get(f)
+                slots
+                    .get(f)
                     .iter()
                     .filter_map(|s| {
                         let (c, j) = (s.c?, s.joff?);
