@@ -564,7 +564,7 @@ fn run(cli: Cli) -> Result<()> {
             print!("{}", simulate::run(&s, &out)?);
         }
         Cmd::Adjust { project, out } => {
-            let r = integration::adjust::run(&project, &out)?;
+            let r = integration::adjust::run(&project, &out, &Default::default())?;
             print!("{}", r.summary());
             println!("outputs in {}", out.display());
         }

@@ -132,7 +132,11 @@ pub fn adjust(
         .map_err(|e| crate::adjust::AdjustError::Problem(e.to_string()))?;
     let simulate_s = t0.elapsed().as_secs_f64();
     let t1 = std::time::Instant::now();
-    let r = crate::adjust::run(&dir.join("project.toml"), &dir.join("out"))?;
+    let r = crate::adjust::run(
+        &dir.join("project.toml"),
+        &dir.join("out"),
+        &Default::default(),
+    )?;
     Ok(AdjustBench {
         images: r.images.len(),
         points: r.points.len(),

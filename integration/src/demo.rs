@@ -377,11 +377,14 @@ pub fn run(out: &Path) -> Result<DemoReport, ChainError> {
     gnss::solution::write_atomic(&out.join("project.toml"), |w| {
         w.write_all(project.as_bytes())
     })?;
-    let (adjust, adjust_error) =
-        match crate::adjust::run(&out.join("project.toml"), &out.join("adjust")) {
-            Ok(r) => (Some(r), None),
-            Err(e) => (None, Some(e.to_string())),
-        };
+    let (adjust, adjust_error) = match crate::adjust::run(
+        &out.join("project.toml"),
+        &out.join("adjust"),
+        &Default::default(),
+    ) {
+        Ok(r) => (Some(r), None),
+        Err(e) => (None, Some(e.to_string())),
+    };
     Ok(DemoReport {
         adjust,
         adjust_error,

@@ -14,7 +14,12 @@ fn tmp(name: &str) -> PathBuf {
 fn run(spec: &BlockSpec, name: &str) -> (BlockTruth, Results) {
     let dir = tmp(name);
     let truth = block::aerial(spec, &dir).unwrap();
-    let res = adjust::run(&dir.join("project.toml"), &dir.join("out")).unwrap();
+    let res = adjust::run(
+        &dir.join("project.toml"),
+        &dir.join("out"),
+        &Default::default(),
+    )
+    .unwrap();
     let _ = std::fs::remove_dir_all(&dir);
     (truth, res)
 }
@@ -277,9 +282,13 @@ fn edit(dir: &std::path::Path, file: &str, f: impl Fn(&str) -> String) {
 }
 
 fn fails(dir: &std::path::Path) -> String {
-    let e = adjust::run(&dir.join("project.toml"), &dir.join("out"))
-        .err()
-        .expect("must fail");
+    let e = adjust::run(
+        &dir.join("project.toml"),
+        &dir.join("out"),
+        &Default::default(),
+    )
+    .err()
+    .expect("must fail");
     assert!(
         !dir.join("out/report.json").exists(),
         "no output on failure"
@@ -383,7 +392,12 @@ fn close_range_pair() {
         };
         let dir = tmp(&format!("cr-{seed}"));
         close_range(&spec, &dir).unwrap();
-        let r = adjust::run(&dir.join("project.toml"), &dir.join("out")).unwrap();
+        let r = adjust::run(
+            &dir.join("project.toml"),
+            &dir.join("out"),
+            &Default::default(),
+        )
+        .unwrap();
         let c = &r.checks;
         assert_eq!(c.points.len(), 12);
         for a in 0..3 {
@@ -425,7 +439,12 @@ fn close_range_pair() {
     };
     let dir = tmp("cr-three");
     close_range(&spec, &dir).unwrap();
-    let r = adjust::run(&dir.join("project.toml"), &dir.join("out")).unwrap();
+    let r = adjust::run(
+        &dir.join("project.toml"),
+        &dir.join("out"),
+        &Default::default(),
+    )
+    .unwrap();
     assert_eq!(r.images.len(), 3);
     assert!(r.checks.theoretical_rms[1] < (t2[1] / n).sqrt());
     for a in 0..3 {
@@ -547,7 +566,12 @@ fn drift_per_ambiguity_segment() {
 #[test]
 fn patb_measurements_equal_csv() {
     let dir = project_dir("patb");
-    let csv = adjust::run(&dir.join("project.toml"), &dir.join("out-csv")).unwrap();
+    let csv = adjust::run(
+        &dir.join("project.toml"),
+        &dir.join("out-csv"),
+        &Default::default(),
+    )
+    .unwrap();
     let text = std::fs::read_to_string(dir.join("image_observations.csv")).unwrap();
     let (w, h, px) = (23000.0 / 2.0, 23000.0 / 2.0, 0.010);
     let mut by_image: std::collections::BTreeMap<String, Vec<String>> = Default::default();
@@ -572,7 +596,12 @@ fn patb_measurements_equal_csv() {
             "patb = \"block.im\"",
         )
     });
-    let pat = adjust::run(&dir.join("project.toml"), &dir.join("out-patb")).unwrap();
+    let pat = adjust::run(
+        &dir.join("project.toml"),
+        &dir.join("out-patb"),
+        &Default::default(),
+    )
+    .unwrap();
     assert_eq!(pat.observations, csv.observations);
     for (a, b) in pat.points.iter().zip(&csv.points) {
         assert_eq!(a.id, b.id);
@@ -594,7 +623,12 @@ fn patb_measurements_equal_csv() {
 #[test]
 fn ground_point_formats_agree() {
     let dir = project_dir("formats");
-    let base = adjust::run(&dir.join("project.toml"), &dir.join("out-geo")).unwrap();
+    let base = adjust::run(
+        &dir.join("project.toml"),
+        &dir.join("out-geo"),
+        &Default::default(),
+    )
+    .unwrap();
     let text = std::fs::read_to_string(dir.join("ground_points.csv")).unwrap();
     let tm = gnss::tmerc::TransverseMercator::utm(50, true);
     let (mut utm, mut xyz) = (
@@ -631,7 +665,12 @@ fn ground_point_formats_agree() {
             src.replace("file = \"ground_points.csv\"", ground),
         )
         .unwrap();
-        let r = adjust::run(&dir.join("project.toml"), &dir.join(format!("out-{name}"))).unwrap();
+        let r = adjust::run(
+            &dir.join("project.toml"),
+            &dir.join(format!("out-{name}")),
+            &Default::default(),
+        )
+        .unwrap();
         for a in 0..3 {
             assert!(
                 (r.checks.rms[a] - base.checks.rms[a]).abs() < 2e-3,
@@ -650,7 +689,12 @@ fn ground_point_formats_agree() {
         ),
     )
     .unwrap();
-    let r = adjust::run(&dir.join("project.toml"), &dir.join("out-ascheck")).unwrap();
+    let r = adjust::run(
+        &dir.join("project.toml"),
+        &dir.join("out-ascheck"),
+        &Default::default(),
+    )
+    .unwrap();
     assert_eq!(r.checks.points.len(), base.checks.points.len() + 1);
     assert!(r.checks.points.iter().any(|c| c.id == "G1"));
     let ctl = r
@@ -668,14 +712,24 @@ fn ground_point_formats_agree() {
 #[test]
 fn trajectory_input_equals_the_antenna_table() {
     let dir = project_dir("trajectory");
-    let table = adjust::run(&dir.join("project.toml"), &dir.join("out-table")).unwrap();
+    let table = adjust::run(
+        &dir.join("project.toml"),
+        &dir.join("out-table"),
+        &Default::default(),
+    )
+    .unwrap();
     edit(&dir, "project.toml", |t| {
         t.replace(
             "antennas = \"antennas.csv\"",
             "trajectory = \"trajectory.pos\"",
         )
     });
-    let traj = adjust::run(&dir.join("project.toml"), &dir.join("out-traj")).unwrap();
+    let traj = adjust::run(
+        &dir.join("project.toml"),
+        &dir.join("out-traj"),
+        &Default::default(),
+    )
+    .unwrap();
     assert!(
         traj.warnings
             .iter()
@@ -720,7 +774,12 @@ fn trajectory_input_equals_the_antenna_table() {
         );
         l.join("\n")
     });
-    let late = adjust::run(&dir.join("project.toml"), &dir.join("out-late")).unwrap();
+    let late = adjust::run(
+        &dir.join("project.toml"),
+        &dir.join("out-late"),
+        &Default::default(),
+    )
+    .unwrap();
     assert!(
         late.warnings
             .iter()
@@ -748,7 +807,12 @@ fn float_positions_are_reported() {
             .collect::<Vec<_>>()
             .join("\n")
     });
-    let r = adjust::run(&dir.join("project.toml"), &dir.join("out")).unwrap();
+    let r = adjust::run(
+        &dir.join("project.toml"),
+        &dir.join("out"),
+        &Default::default(),
+    )
+    .unwrap();
     assert!(
         r.warnings.iter().any(
             |w| w.starts_with("2 of 29 GNSS positions are not ambiguity-fixed")

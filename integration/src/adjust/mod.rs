@@ -55,9 +55,18 @@ pub struct Solved {
     pub critical: f64,
 }
 
+/// How to run an adjustment (what is not the project's own business).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunOptions {
+    /// Threads for the solver's factorisations (`None`: rayon's pool). Results are the same
+    /// bits whatever the number.
+    pub threads: Option<usize>,
+}
+
 /// Adjust a loaded project.
-pub fn solve(project: &Project) -> Result<Solved, AdjustError> {
+pub fn solve(project: &Project, opts: &RunOptions) -> Result<Solved, AdjustError> {
     let mut built = build::build(project)?;
+    built.problem.options.threads = opts.threads;
     let result = solve_built(project, &mut built);
     let name = |e: photo::lsq::SolveError| {
         use photo::lsq::SolveError;
@@ -160,9 +169,13 @@ fn solve_built(
 const GROUPS: usize = build::GROUP_NAMES.len();
 
 /// Load, adjust and write every output into `out`; returns the report.
-pub fn run(project_path: &Path, out: &Path) -> Result<results::Results, AdjustError> {
+pub fn run(
+    project_path: &Path,
+    out: &Path,
+    opts: &RunOptions,
+) -> Result<results::Results, AdjustError> {
     let project = Project::load(project_path)?;
-    let solved = solve(&project)?;
+    let solved = solve(&project, opts)?;
     let res = results::collect(&project, &solved)?;
     report::write_all(&project, &res, out)?;
     Ok(res)
