@@ -569,7 +569,7 @@ fn run(cli: Cli) -> Result<()> {
             println!("outputs in {}", out.display());
         }
         Cmd::Demo { out } => {
-            print!("{}", integration::demo::run(&out)?);
+            print!("{}", integration::demo::run(&out, &Default::default())?);
         }
         Cmd::Bench { what } => match what {
             BenchCmd::Ingest { file } => {
@@ -581,7 +581,10 @@ fn run(cli: Cli) -> Result<()> {
                 per_strip,
                 out,
             } => {
-                print!("{}", integration::bench::adjust(strips, per_strip, &out)?);
+                print!(
+                    "{}",
+                    integration::bench::adjust(strips, per_strip, &out, &Default::default())?
+                );
             }
         },
     }

@@ -124,6 +124,7 @@ pub fn adjust(
     strips: usize,
     per_strip: usize,
     dir: &Path,
+    opts: &crate::adjust::RunOptions,
 ) -> std::result::Result<AdjustBench, crate::adjust::AdjustError> {
     let t0 = std::time::Instant::now();
     let mut spec = crate::simulate::block::BlockSpec::large(strips, per_strip);
@@ -132,11 +133,7 @@ pub fn adjust(
         .map_err(|e| crate::adjust::AdjustError::Problem(e.to_string()))?;
     let simulate_s = t0.elapsed().as_secs_f64();
     let t1 = std::time::Instant::now();
-    let r = crate::adjust::run(
-        &dir.join("project.toml"),
-        &dir.join("out"),
-        &Default::default(),
-    )?;
+    let r = crate::adjust::run(&dir.join("project.toml"), &dir.join("out"), opts)?;
     Ok(AdjustBench {
         images: r.images.len(),
         points: r.points.len(),

@@ -251,7 +251,7 @@ fn rms(v: &[f64]) -> f64 {
 }
 
 /// Run the demo into `out`.
-pub fn run(out: &Path) -> Result<DemoReport, ChainError> {
+pub fn run(out: &Path, run: &crate::adjust::RunOptions) -> Result<DemoReport, ChainError> {
     let t0 = std::time::Instant::now();
     let scenario = simulate::builtin("demo").expect("the demo scenario exists");
     let sim = simulate::run(&scenario, out)?;
@@ -377,14 +377,11 @@ pub fn run(out: &Path) -> Result<DemoReport, ChainError> {
     gnss::solution::write_atomic(&out.join("project.toml"), |w| {
         w.write_all(project.as_bytes())
     })?;
-    let (adjust, adjust_error) = match crate::adjust::run(
-        &out.join("project.toml"),
-        &out.join("adjust"),
-        &Default::default(),
-    ) {
-        Ok(r) => (Some(r), None),
-        Err(e) => (None, Some(e.to_string())),
-    };
+    let (adjust, adjust_error) =
+        match crate::adjust::run(&out.join("project.toml"), &out.join("adjust"), run) {
+            Ok(r) => (Some(r), None),
+            Err(e) => (None, Some(e.to_string())),
+        };
     Ok(DemoReport {
         adjust,
         adjust_error,
