@@ -8,9 +8,9 @@
 //! measured point id in sorted order (`Built::point_names`), `LeverArm(CameraId(c))` and
 //! `Camera(CameraId(c))` for camera c, `Drift(DriftId(d))` for `Built::drifts[d]`.
 
+use super::error::AdjustError;
 use super::factors::{DriftModel, GnssCentre};
 use super::project::{DriftGroup, Mode, PointKind, Project};
-use super::AdjustError;
 use gnss::frame::{enu_rotation, Ecef, Geodetic};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector2, Vector3};
 use photo::camera::Pose;

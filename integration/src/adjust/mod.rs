@@ -1,172 +1,34 @@
 //! The joint GNSS-supported bundle adjustment (`ppkat adjust`): image points, control and
 //! check points, GNSS antenna positions with their full covariance, an unknown lever arm,
 //! drift per block, strip or ambiguity segment, optional self-calibration — all factors on
-//! `photo::lsq`, the one least-squares core. Then data snooping with removal, variance components, covariances,
-//! reliability and the check-point table; outputs in geodetic and UTM / Gauss–Krüger.
+//! `photo::lsq`, the one least-squares core. Then data snooping with removal, variance
+//! components, covariances, reliability and the check-point table; outputs in geodetic and
+//! UTM / Gauss–Krüger.
 //!
-//! Stages: [`project`] (TOML + tables) → [`build`] (frame, start values, factors) → [`solve`]
-//! here → [`results`] (numbers for the report) → [`report`] (CSV, JSON, HTML with SVG plots).
+//! What enters: a project file (TOML) naming its tables, or a [`project::Project`] built in
+//! memory. What leaves: [`results::Results`] and the files of [`report`].
+//!
+//! Stages, each a module that only uses the ones before it: [`input`] (the rows of the
+//! tables) ← `tables` (readers) ← [`project`] (TOML schema, loading) → [`build`] (frame, start
+//! values, factors; [`factors`] holds the GNSS-centre factor) → [`solve`] (snooping, variance
+//! components) → [`residuals`] and [`results`] (numbers for the report, read from the factors)
+//! → [`report`] (CSV, JSON, HTML with SVG plots). [`error`] is the error type of them all.
 
 pub mod build;
+pub mod error;
 pub mod factors;
+pub mod input;
 pub mod project;
 pub mod report;
 pub mod residuals;
 pub mod results;
+pub mod solve;
 mod tables;
 
-use build::Built;
+pub use error::AdjustError;
 use project::Project;
+pub use solve::{solve, RunOptions, Solved};
 use std::path::Path;
-
-/// Why an adjustment cannot be done.
-#[derive(Debug, thiserror::Error)]
-pub enum AdjustError {
-    #[error("{path}: {what}")]
-    Project { path: String, what: String },
-    #[error("{path}, line {line}: {what}")]
-    Input {
-        path: String,
-        line: usize,
-        what: String,
-    },
-    #[error("{0}")]
-    Problem(String),
-    #[error("the adjustment failed: {0}")]
-    Solve(String),
-    #[error("{path}: cannot write: {what}")]
-    Write { path: String, what: String },
-}
-
-impl From<photo::lsq::SolveError> for AdjustError {
-    fn from(e: photo::lsq::SolveError) -> Self {
-        AdjustError::Solve(e.to_string())
-    }
-}
-
-/// The adjusted problem with what was removed and estimated on the way.
-pub struct Solved {
-    pub built: Built,
-    pub stats: photo::lsq::Summary,
-    /// Factors removed by data snooping, in order, with |w|.
-    pub removed: Vec<(photo::lsq::FactorId, f64)>,
-    /// σ multiplier per observation group (variance components; 1 when not estimated).
-    pub components: Vec<f64>,
-    pub critical: f64,
-}
-
-/// How to run an adjustment (what is not the project's own business).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct RunOptions {
-    /// Threads for the solver's factorisations (`None`: rayon's pool). Results are the same
-    /// bits whatever the number.
-    pub threads: Option<usize>,
-}
-
-/// Adjust a loaded project.
-pub fn solve(project: &Project, opts: &RunOptions) -> Result<Solved, AdjustError> {
-    let mut built = build::build(project)?;
-    built.problem.options.threads = opts.threads;
-    let result = solve_built(project, &mut built);
-    let name = |e: photo::lsq::SolveError| {
-        use photo::lsq::SolveError;
-        match e {
-        SolveError::Undetermined(k) => AdjustError::Solve(format!(
-            "{} is not determined by its observations (too few rays, or rays too close to parallel): remove it or measure it in more images",
-            block_name(project, &built, k)
-        )),
-        SolveError::Dependent(k) => AdjustError::Solve(format!(
-            "the normal equations are singular at {}: a datum defect (too little control or GNSS) or unknowns that cannot be told apart (e.g. a drift offset without control, or offsets per strip with a free lever arm)",
-            block_name(project, &built, k)
-        )),
-        e => AdjustError::from(e),
-    }
-    };
-    match result {
-        Ok((stats, removed, components, critical)) => Ok(Solved {
-            built,
-            stats,
-            removed,
-            components,
-            critical,
-        }),
-        Err(e) => Err(name(e)),
-    }
-}
-
-/// A readable name of a parameter block, with the project's ids.
-fn block_name(p: &Project, b: &Built, key: photo::lsq::Key) -> String {
-    use photo::lsq::Key;
-    let camera = |c: photo::lsq::CameraId| {
-        p.cameras
-            .get(c.index())
-            .map_or(c.to_string(), |c| c.id.clone())
-    };
-    match key {
-        Key::Pose(i) => format!(
-            "the orientation of image {}",
-            p.images
-                .get(i.index())
-                .map_or(i.to_string(), |x| x.id.clone())
-        ),
-        Key::Point(k) => format!(
-            "point {}",
-            b.point_names.get(k.index()).cloned().unwrap_or_default()
-        ),
-        Key::Drift(d) => format!(
-            "the drift of {}",
-            b.drifts
-                .get(d.index())
-                .map_or(d.to_string(), |x| x.name.clone())
-        ),
-        Key::LeverArm(c) => format!("the lever arm of camera {}", camera(c)),
-        Key::Camera(c) => format!("the interior orientation of camera {}", camera(c)),
-        k => k.to_string(),
-    }
-}
-
-/// Snooping, variance components, snooping again, final solve.
-#[allow(clippy::type_complexity)]
-fn solve_built(
-    project: &Project,
-    built: &mut Built,
-) -> Result<
-    (
-        photo::lsq::Summary,
-        Vec<(photo::lsq::FactorId, f64)>,
-        Vec<f64>,
-        f64,
-    ),
-    photo::lsq::SolveError,
-> {
-    let opts = &project.file.adjustment;
-    let pr = &mut built.problem;
-    let tests: usize = pr.factors().map(|(_, f)| f.dim()).sum();
-    let critical = photo::lsq::snooping_critical(opts.alpha, tests);
-    let mut removed = Vec::new();
-    let snoop = |pr: &mut photo::lsq::Problem,
-                 removed: &mut Vec<(photo::lsq::FactorId, f64)>|
-     -> Result<(), photo::lsq::SolveError> {
-        if opts.snooping {
-            removed.extend(pr.data_snooping(critical)?.1);
-        } else {
-            pr.solve()?;
-        }
-        Ok(())
-    };
-    snoop(pr, &mut removed)?;
-    let mut components = vec![1.0; GROUPS];
-    if opts.variance_components {
-        components = pr.variance_components(10)?;
-        // Snoop again with the estimated weights.
-        snoop(pr, &mut removed)?;
-    }
-    let stats = pr.solve()?;
-    Ok((stats, removed, components, critical))
-}
-
-/// Number of observation groups (see `build::GROUP_NAMES`).
-const GROUPS: usize = build::GROUP_NAMES.len();
 
 /// Load, adjust and write every output into `out`; returns the report.
 pub fn run(

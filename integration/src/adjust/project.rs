@@ -5,16 +5,15 @@
 //! relative to the project file.
 //! Every problem names the file, the line and what to do.
 
+use super::error::AdjustError;
 use super::factors::DriftModel;
+use super::input::perr;
+pub use super::input::{Antenna, CameraDef, GroundPoint, ImageDef, Measurement, PointKind};
 use super::tables::{
-    antennas_from_trajectory, perr, read_antennas, read_ground, read_images, read_measurements,
+    antennas_from_trajectory, read_antennas, read_ground, read_images, read_measurements,
     read_patb, read_trajectory,
 };
-use super::AdjustError;
 use crate::exposure::export::Projection;
-use gnss::frame::Ecef;
-use hifitime::Epoch;
-use nalgebra::{Matrix3, Vector2};
 use photo::camera::Camera;
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -205,74 +204,6 @@ fn default_loss() -> String {
     "none".into()
 }
 
-/// A camera with its estimation choices.
-#[derive(Clone, Debug)]
-pub struct CameraDef {
-    pub id: String,
-    pub camera: Camera,
-    /// Indices into the interior parameter order of `photo::camera`.
-    pub calibrate: Vec<usize>,
-    pub sigma_px: f64,
-}
-
-/// One image.
-#[derive(Clone, Debug)]
-pub struct ImageDef {
-    pub id: String,
-    pub camera: usize,
-    pub strip: String,
-    /// Approximate viewing direction from a compass: azimuth, elevation, roll (radians).
-    pub compass: Option<[f64; 3]>,
-    /// Exposure time (GPST), when the list gives `week,tow`.
-    pub time: Option<hifitime::Epoch>,
-}
-
-/// One image measurement, metric image coordinates.
-#[derive(Clone, Debug)]
-pub struct Measurement {
-    pub image: usize,
-    pub point: String,
-    pub xy: Vector2<f64>,
-    /// σ in metres on the image (the camera's default when not given).
-    pub sigma: f64,
-    /// Where it came from (file:line), for the report.
-    pub source: String,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum PointKind {
-    Control,
-    Check,
-    Tie,
-}
-
-/// A ground point with known coordinates (control or check).
-#[derive(Clone, Debug)]
-pub struct GroundPoint {
-    pub id: String,
-    pub kind: PointKind,
-    pub pos: Ecef,
-    /// σ east, north, up, metres.
-    pub sigma: [f64; 3],
-    pub source: String,
-}
-
-/// A GNSS antenna position at an exposure.
-#[derive(Clone, Debug)]
-pub struct Antenna {
-    pub image: String,
-    pub time: Epoch,
-    pub pos: Ecef,
-    /// Covariance in the local ENU at the antenna, m².
-    pub cov_enu: Matrix3<f64>,
-    pub segment: u32,
-    /// Solution quality as RTKLIB's Q (1 fixed, 2 float, 5 single).
-    pub quality: u8,
-    /// Camera → local ENU at the antenna, when the table carries an attitude.
-    pub rotation: Option<Matrix3<f64>>,
-}
-
 /// A loaded project.
 #[derive(Clone, Debug)]
 pub struct Project {
@@ -371,7 +302,7 @@ impl Project {
             }
         };
         let ground = match &file.ground {
-            Some(g) => read_ground(&dir.join(&g.file), g)?,
+            Some(g) => read_ground(&dir.join(&g.file), g.crs.as_deref(), &g.as_check)?,
             None => Vec::new(),
         };
         let mut warnings = Vec::new();

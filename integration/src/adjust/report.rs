@@ -3,9 +3,9 @@
 //! `report.html` with SVG plots (plotters): image residual vectors, check-point errors, GNSS
 //! centre residuals per strip, drift over time.
 
+use super::error::AdjustError;
 use super::project::{Mode, Project};
 use super::results::{Estimated, Results};
-use super::AdjustError;
 use gnss::solution::write_atomic;
 use plotters::prelude::*;
 use std::fmt::Write as _;

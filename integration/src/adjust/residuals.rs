@@ -3,11 +3,14 @@
 
 use super::factors::GnssCentre;
 use super::project::Project;
-use super::results::DELTA0;
-use super::Solved;
+use super::solve::Solved;
 use photo::factors::{ImagePoint, Prior};
 use photo::lsq::{FactorId, Key, PointId, Reliability};
 use serde::Serialize;
+
+/// Lower bound of the non-centrality for α0 = 0.1 % (two-sided) and power 80 %: the minimal
+/// detectable blunder is δ0·σ/√r (Baarda).
+pub const DELTA0: f64 = 4.13;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct ImageResidual {

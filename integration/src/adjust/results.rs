@@ -4,20 +4,17 @@
 //! the check-point table.
 
 use super::build::GROUP_NAMES;
+use super::error::AdjustError;
 use super::factors::DriftModel;
 use super::factors::GnssCentre;
 use super::project::{Mode, PointKind, Project};
-pub use super::residuals::{ControlResidual, GnssResidual, ImageResidual};
-use super::{AdjustError, Solved};
+pub use super::residuals::{ControlResidual, GnssResidual, ImageResidual, DELTA0};
+use super::solve::Solved;
 use nalgebra::{DMatrix, Vector3};
 use photo::factors::{Distance, ImagePoint, Prior};
 use photo::lsq::{CameraId, DriftId, FactorId, ImageId, Key, PointId, Problem, Value};
 use photo::rotation::Angles;
 use serde::Serialize;
-
-/// Lower bound of the non-centrality for α0 = 0.1 % (two-sided) and power 80 %: the minimal
-/// detectable blunder is δ0·σ/√r (Baarda).
-pub const DELTA0: f64 = 4.13;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct ImageResult {

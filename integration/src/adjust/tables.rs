@@ -2,23 +2,14 @@
 //! GNSS antenna table — or the antennas interpolated on a trajectory. Each problem names the
 //! file and the line.
 
-use super::project::{
-    Antenna, CameraDef, GroundPoint, GroundSection, ImageDef, Measurement, PointKind,
-};
-use super::AdjustError;
+use super::error::AdjustError;
+use super::input::{perr, Antenna, CameraDef, GroundPoint, ImageDef, Measurement, PointKind};
 use crate::exposure::export::Projection;
 use gnss::frame::{Ecef, Geodetic};
 use gnss::trajectory::{InterpError, Trajectory};
 use nalgebra::{Matrix3, Vector2};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-
-pub(super) fn perr(path: &Path, what: impl Into<String>) -> AdjustError {
-    AdjustError::Project {
-        path: path.display().to_string(),
-        what: what.into(),
-    }
-}
 
 /// A CSV table: header names, then rows with their line numbers (comments `#` skipped).
 struct Table {
@@ -262,7 +253,11 @@ pub(super) fn read_patb(
     Ok(out)
 }
 
-pub(super) fn read_ground(path: &Path, g: &GroundSection) -> Result<Vec<GroundPoint>, AdjustError> {
+pub(super) fn read_ground(
+    path: &Path,
+    crs: Option<&str>,
+    as_check: &[String],
+) -> Result<Vec<GroundPoint>, AdjustError> {
     let t = Table::read(path)?;
     let (cp, ck) = (t.need("point")?, t.need("kind")?);
     enum Coords {
@@ -281,7 +276,7 @@ pub(super) fn read_ground(path: &Path, g: &GroundSection) -> Result<Vec<GroundPo
     } else {
         return Err(perr(path, "coordinates: give lat,lon,h or x,y,z (ECEF) or easting,northing,h (with crs in [ground])"));
     };
-    let tm = match (&coords, &g.crs) {
+    let tm = match (&coords, crs) {
         (Coords::Proj(..), Some(c)) => {
             let p = Projection::parse(c)
                 .ok_or_else(|| perr(path, format!("crs `{c}`: use utm:ZONE or gk:CM")))?;
@@ -333,7 +328,7 @@ pub(super) fn read_ground(path: &Path, g: &GroundSection) -> Result<Vec<GroundPo
                 })
             }
         };
-        let kind = if kind == PointKind::Control && g.as_check.contains(&id) {
+        let kind = if kind == PointKind::Control && as_check.contains(&id) {
             PointKind::Check
         } else {
             kind

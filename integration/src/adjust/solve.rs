@@ -1,0 +1,130 @@
+//! The solve stage: the problem built from a project is adjusted with data snooping, variance
+//! components and snooping again; solver errors are renamed with the project's ids.
+
+use super::build::{self, Built};
+use super::error::AdjustError;
+use super::project::Project;
+
+/// The adjusted problem with what was removed and estimated on the way.
+pub struct Solved {
+    pub built: Built,
+    pub stats: photo::lsq::Summary,
+    /// Factors removed by data snooping, in order, with |w|.
+    pub removed: Vec<(photo::lsq::FactorId, f64)>,
+    /// σ multiplier per observation group (variance components; 1 when not estimated).
+    pub components: Vec<f64>,
+    pub critical: f64,
+}
+
+/// How to run an adjustment (what is not the project's own business).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunOptions {
+    /// Threads for the solver's factorisations (`None`: rayon's pool). Results are the same
+    /// bits whatever the number.
+    pub threads: Option<usize>,
+}
+
+/// Adjust a loaded project.
+pub fn solve(project: &Project, opts: &RunOptions) -> Result<Solved, AdjustError> {
+    let mut built = build::build(project)?;
+    built.problem.options.threads = opts.threads;
+    let result = solve_built(project, &mut built);
+    let name = |e: photo::lsq::SolveError| {
+        use photo::lsq::SolveError;
+        match e {
+        SolveError::Undetermined(k) => AdjustError::Solve(format!(
+            "{} is not determined by its observations (too few rays, or rays too close to parallel): remove it or measure it in more images",
+            block_name(project, &built, k)
+        )),
+        SolveError::Dependent(k) => AdjustError::Solve(format!(
+            "the normal equations are singular at {}: a datum defect (too little control or GNSS) or unknowns that cannot be told apart (e.g. a drift offset without control, or offsets per strip with a free lever arm)",
+            block_name(project, &built, k)
+        )),
+        e => AdjustError::from(e),
+    }
+    };
+    match result {
+        Ok((stats, removed, components, critical)) => Ok(Solved {
+            built,
+            stats,
+            removed,
+            components,
+            critical,
+        }),
+        Err(e) => Err(name(e)),
+    }
+}
+
+/// A readable name of a parameter block, with the project's ids.
+fn block_name(p: &Project, b: &Built, key: photo::lsq::Key) -> String {
+    use photo::lsq::Key;
+    let camera = |c: photo::lsq::CameraId| {
+        p.cameras
+            .get(c.index())
+            .map_or(c.to_string(), |c| c.id.clone())
+    };
+    match key {
+        Key::Pose(i) => format!(
+            "the orientation of image {}",
+            p.images
+                .get(i.index())
+                .map_or(i.to_string(), |x| x.id.clone())
+        ),
+        Key::Point(k) => format!(
+            "point {}",
+            b.point_names.get(k.index()).cloned().unwrap_or_default()
+        ),
+        Key::Drift(d) => format!(
+            "the drift of {}",
+            b.drifts
+                .get(d.index())
+                .map_or(d.to_string(), |x| x.name.clone())
+        ),
+        Key::LeverArm(c) => format!("the lever arm of camera {}", camera(c)),
+        Key::Camera(c) => format!("the interior orientation of camera {}", camera(c)),
+        k => k.to_string(),
+    }
+}
+
+/// Snooping, variance components, snooping again, final solve.
+#[allow(clippy::type_complexity)]
+fn solve_built(
+    project: &Project,
+    built: &mut Built,
+) -> Result<
+    (
+        photo::lsq::Summary,
+        Vec<(photo::lsq::FactorId, f64)>,
+        Vec<f64>,
+        f64,
+    ),
+    photo::lsq::SolveError,
+> {
+    let opts = &project.file.adjustment;
+    let pr = &mut built.problem;
+    let tests: usize = pr.factors().map(|(_, f)| f.dim()).sum();
+    let critical = photo::lsq::snooping_critical(opts.alpha, tests);
+    let mut removed = Vec::new();
+    let snoop = |pr: &mut photo::lsq::Problem,
+                 removed: &mut Vec<(photo::lsq::FactorId, f64)>|
+     -> Result<(), photo::lsq::SolveError> {
+        if opts.snooping {
+            removed.extend(pr.data_snooping(critical)?.1);
+        } else {
+            pr.solve()?;
+        }
+        Ok(())
+    };
+    snoop(pr, &mut removed)?;
+    let mut components = vec![1.0; GROUPS];
+    if opts.variance_components {
+        components = pr.variance_components(10)?;
+        // Snoop again with the estimated weights.
+        snoop(pr, &mut removed)?;
+    }
+    let stats = pr.solve()?;
+    Ok((stats, removed, components, critical))
+}
+
+/// Number of observation groups (see `build::GROUP_NAMES`).
+const GROUPS: usize = build::GROUP_NAMES.len();
