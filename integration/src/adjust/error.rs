@@ -42,3 +42,8 @@ impl From<photo::lsq::SolveError> for AdjustError {
         AdjustError::Solve(e.to_string())
     }
 }
+
+/// The inputs do not make an adjustable problem.
+pub(super) fn problem_err(what: String) -> AdjustError {
+    AdjustError::Problem(what)
+}

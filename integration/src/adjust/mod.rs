@@ -14,15 +14,18 @@
 //! components) → [`residuals`] and [`results`] (numbers for the report, read from the factors)
 //! → [`report`] (CSV, JSON, HTML with SVG plots). [`error`] is the error type of them all.
 
+mod assemble;
 pub mod build;
 pub mod error;
 pub mod factors;
+mod frame;
 pub mod input;
 pub mod project;
 pub mod report;
 pub mod residuals;
 pub mod results;
 pub mod solve;
+mod start;
 mod tables;
 
 pub use error::AdjustError;

@@ -1,0 +1,262 @@
+//! The blocks and factors of the adjustment: a pose per image, a point per measured point
+//! with two rays or more (or control), interior blocks for self-calibration, lever arms and
+//! drift groups; one factor per image measurement, control point, lever-arm prior and GNSS
+//! antenna position, each with its noise model, the project's loss and its group.
+
+use super::error::{problem_err as err, AdjustError};
+use super::factors::{DriftModel, GnssCentre};
+use super::frame::LocalFrame;
+use super::project::{DriftGroup, PointKind, Project};
+use super::start::{intersect_point, Rays};
+use nalgebra::{DMatrix, DVector};
+use photo::camera::Pose;
+use photo::factors::{ImagePoint, Prior};
+use photo::lsq::{
+    CameraId, DriftId, Group, ImageId, Key, Loss, Noise, Options, PointId, Problem, Value,
+};
+use std::collections::BTreeMap;
+
+/// Observation groups (variance components).
+pub const GROUP_IMAGE: Group = Group(0);
+/// Control points.
+pub const GROUP_CONTROL: Group = Group(1);
+/// GNSS antenna positions.
+pub const GROUP_GNSS: Group = Group(2);
+/// Lever-arm priors.
+pub const GROUP_PRIOR: Group = Group(3);
+/// Measured distances.
+pub const GROUP_DISTANCE: Group = Group(4);
+/// Names of the groups, by index.
+pub const GROUP_NAMES: [&str; 5] = [
+    "image points",
+    "control points",
+    "GNSS centres",
+    "lever-arm prior",
+    "distances",
+];
+
+/// A drift group (key `Drift(DriftId(index))`): its name, model and reference time.
+#[derive(Clone, Debug)]
+pub struct DriftBlock {
+    pub name: String,
+    pub model: DriftModel,
+    /// Reference time t0, GPST seconds.
+    pub t0: f64,
+}
+
+/// Blocks and factors; returns the problem, the point names by `PointId`, the points left
+/// out for having a single ray (id, image) and the drift groups.
+#[allow(clippy::type_complexity)]
+pub(super) fn problem(
+    p: &Project,
+    frame: &LocalFrame,
+    rays: &Rays,
+    start: &[Pose],
+    antenna_of: &[Option<usize>],
+) -> Result<(Problem, Vec<String>, Vec<(String, String)>, Vec<DriftBlock>), AdjustError> {
+    let opts = &p.file.adjustment;
+    let loss = match opts.loss.as_str() {
+        "huber" => Loss::Huber(3.0),
+        "cauchy" => Loss::Cauchy(3.0),
+        _ => Loss::Trivial,
+    };
+    let mut pr = Problem::new(Options {
+        max_iterations: opts.max_iterations,
+        ..Options::default()
+    });
+    let built = |e: photo::lsq::BuildError| err(e.to_string());
+    for (i, s) in start.iter().enumerate() {
+        pr.add_block(Key::Pose(ImageId::from(i)), Value::Pose(*s))
+            .map_err(built)?;
+    }
+    let point_names: Vec<String> = rays.keys().map(|s| s.to_string()).collect();
+    let mut single_ray = Vec::new();
+    for (k, (id, ks)) in rays.iter().enumerate() {
+        let ground = p.ground.iter().find(|g| g.id == *id);
+        let control = ground.is_some_and(|g| g.kind == PointKind::Control);
+        let images: std::collections::BTreeSet<usize> =
+            ks.iter().map(|k| p.measurements[*k].image).collect();
+        let x = match ground {
+            Some(g) if control => Some(frame.to_local(&g.pos)),
+            _ if images.len() >= 2 => intersect_point(p, ks, |i| Some(&start[i])),
+            _ => None,
+        };
+        match x {
+            Some(x) if images.len() >= 2 || control => pr
+                .add_block(Key::Point(PointId::from(k)), Value::point(&x))
+                .map_err(built)?,
+            _ => single_ray.push((
+                id.to_string(),
+                p.images[p.measurements[ks[0]].image].id.clone(),
+            )),
+        }
+    }
+    for (c, cd) in p.cameras.iter().enumerate() {
+        if !cd.calibrate.is_empty() {
+            let v = ImagePoint::interior_start(&cd.camera, &cd.calibrate);
+            pr.add_block(Key::Camera(CameraId::from(c)), Value::Vector(v))
+                .map_err(built)?;
+        }
+    }
+    let index: BTreeMap<&str, PointId> = point_names
+        .iter()
+        .enumerate()
+        .map(|(k, n)| (n.as_str(), PointId::from(k)))
+        .collect();
+    image_factors(p, &mut pr, &index, loss).map_err(built)?;
+    control_factors(p, frame, &mut pr, &index, loss).map_err(built)?;
+    let drifts = match p.file.gnss.as_ref() {
+        Some(_) => gnss_factors(p, frame, &mut pr, antenna_of, loss)?,
+        None => Vec::new(),
+    };
+    Ok((pr, point_names, single_ray, drifts))
+}
+
+/// One factor per image measurement of an adjusted point.
+fn image_factors(
+    p: &Project,
+    pr: &mut Problem,
+    index: &BTreeMap<&str, PointId>,
+    loss: Loss,
+) -> Result<(), photo::lsq::BuildError> {
+    for m in &p.measurements {
+        let Some(&pt) = index.get(m.point.as_str()) else {
+            continue;
+        };
+        if !pr.contains(Key::Point(pt)) {
+            continue;
+        }
+        let c = p.images[m.image].camera;
+        let cd = &p.cameras[c];
+        let f = ImagePoint::self_calibrating(
+            cd.camera,
+            ImageId::from(m.image),
+            pt,
+            CameraId::from(c),
+            cd.calibrate.clone(),
+            m.xy,
+        )
+        .with_source(m.source.clone());
+        pr.add_factor(f, Noise::isotropic(2, m.sigma), loss, GROUP_IMAGE)?;
+    }
+    Ok(())
+}
+
+/// One prior per control point (σ per axis).
+fn control_factors(
+    p: &Project,
+    frame: &LocalFrame,
+    pr: &mut Problem,
+    index: &BTreeMap<&str, PointId>,
+    loss: Loss,
+) -> Result<(), photo::lsq::BuildError> {
+    for g in p.ground.iter().filter(|g| g.kind == PointKind::Control) {
+        let Some(&pt) = index.get(g.id.as_str()) else {
+            continue;
+        };
+        if !pr.contains(Key::Point(pt)) {
+            continue;
+        }
+        let f = Prior::point(pt, frame.to_local(&g.pos)).with_source(g.source.clone());
+        pr.add_factor(f, Noise::sigmas(&g.sigma), loss, GROUP_CONTROL)?;
+    }
+    Ok(())
+}
+
+/// Lever arms (with their priors), drift groups and one GNSS factor per image with an antenna.
+fn gnss_factors(
+    p: &Project,
+    frame: &LocalFrame,
+    pr: &mut Problem,
+    antenna_of: &[Option<usize>],
+    loss: Loss,
+) -> Result<Vec<DriftBlock>, AdjustError> {
+    let Some(gs) = p.file.gnss.as_ref() else {
+        return Ok(Vec::new());
+    };
+    let built = |e: photo::lsq::BuildError| err(e.to_string());
+    for (c, _) in p.cameras.iter().enumerate() {
+        if !p
+            .images
+            .iter()
+            .enumerate()
+            .any(|(i, im)| im.camera == c && antenna_of[i].is_some())
+        {
+            continue;
+        }
+        let key = Key::LeverArm(CameraId::from(c));
+        pr.add_block(
+            key,
+            Value::Vector(DVector::from_column_slice(&gs.lever_arm)),
+        )
+        .map_err(built)?;
+        pr.set_fixed(key, !gs.estimate_lever_arm).map_err(built)?;
+        if let (Some(s), true) = (gs.lever_arm_sigma, gs.estimate_lever_arm) {
+            let sig: Vec<f64> = s.iter().map(|x| x.max(1e-6)).collect();
+            let f = Prior::new(key, DVector::from_column_slice(&gs.lever_arm));
+            pr.add_factor(f, Noise::sigmas(&sig), loss, GROUP_PRIOR)
+                .map_err(built)?;
+        }
+    }
+    // Drift groups.
+    let key = |i: usize, k: usize| -> Option<String> {
+        match gs.drift {
+            DriftGroup::None => None,
+            DriftGroup::Block => Some("block".into()),
+            DriftGroup::Strip => Some(format!("strip {}", p.images[i].strip)),
+            DriftGroup::Segment => Some(format!("segment {}", p.antennas[k].segment)),
+        }
+    };
+    let mut groups: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    for (i, a) in antenna_of.iter().enumerate() {
+        if let Some(k) = a {
+            if let Some(name) = key(i, *k) {
+                groups
+                    .entry(name)
+                    .or_default()
+                    .push(p.antennas[*k].time.to_gpst_seconds());
+            }
+        }
+    }
+    let mut drifts: Vec<DriftBlock> = Vec::new();
+    for (name, times) in &groups {
+        let t0 = match gs.drift_model {
+            DriftModel::Rate => times.iter().cloned().fold(f64::INFINITY, f64::min),
+            _ => times.iter().sum::<f64>() / times.len() as f64,
+        };
+        let v = Value::Vector(DVector::zeros(gs.drift_model.dim()));
+        pr.add_block(Key::Drift(DriftId::from(drifts.len())), v)
+            .map_err(built)?;
+        drifts.push(DriftBlock {
+            name: name.clone(),
+            model: gs.drift_model,
+            t0,
+        });
+    }
+    for (i, a) in antenna_of.iter().enumerate() {
+        let Some(k) = *a else { continue };
+        let ant = &p.antennas[k];
+        let cam = CameraId::from(p.images[i].camera);
+        if !pr.contains(Key::LeverArm(cam)) {
+            continue;
+        }
+        let drift = key(i, k)
+            .and_then(|n| drifts.iter().position(|d| d.name == n))
+            .map(|d| {
+                let dt = ant.time.to_gpst_seconds() - drifts[d].t0;
+                (DriftId::from(d), drifts[d].model, dt)
+            });
+        let m = frame.from_enu_at(&ant.pos);
+        let cov = m * ant.cov_enu * m.transpose();
+        let noise = Noise::covariance(&DMatrix::from_column_slice(3, 3, cov.as_slice()))
+            .ok_or_else(|| {
+                err(format!(
+                    "antenna of image {}: the covariance is not positive definite",
+                    ant.image
+                ))
+            })?;
+        let f = GnssCentre::new(ImageId::from(i), cam, drift, frame.to_local(&ant.pos), k);
+        pr.add_factor(f, noise, loss, GROUP_GNSS).map_err(built)?;
+    }
+    Ok(drifts)
+}
