@@ -21,6 +21,7 @@ pub mod factors;
 mod frame;
 pub mod input;
 pub mod project;
+mod quality;
 pub mod report;
 pub mod residuals;
 pub mod results;

@@ -3,16 +3,14 @@
 //! reliability (redundancy, minimal detectable blunders), removed observations, residuals and
 //! the check-point table.
 
-use super::build::GROUP_NAMES;
 use super::error::AdjustError;
 use super::factors::DriftModel;
-use super::factors::GnssCentre;
 use super::project::{Mode, PointKind, Project};
+pub use super::quality::{GroupQuality, Removed};
 pub use super::residuals::{ControlResidual, GnssResidual, ImageResidual, DELTA0};
 use super::solve::Solved;
 use nalgebra::{DMatrix, Vector3};
-use photo::factors::{Distance, ImagePoint, Prior};
-use photo::lsq::{CameraId, DriftId, FactorId, ImageId, Key, PointId, Problem, Value};
+use photo::lsq::{CameraId, DriftId, ImageId, Key, PointId, Problem, Value};
 use photo::rotation::Angles;
 use serde::Serialize;
 
@@ -81,29 +79,6 @@ pub struct Estimated {
     /// Reference time t0 of a drift (GPST seconds), 0 otherwise.
     pub t0: f64,
     pub fixed: bool,
-}
-
-#[derive(Clone, Debug, Serialize)]
-pub struct Removed {
-    pub kind: String,
-    pub what: String,
-    pub w: f64,
-    pub source: String,
-}
-
-#[derive(Clone, Debug, Serialize)]
-pub struct GroupQuality {
-    pub group: String,
-    pub observations: usize,
-    pub sigma_factor: f64,
-    pub mean_redundancy: f64,
-    pub min_redundancy: f64,
-    /// Components with a redundancy below 0.1: a blunder there is (nearly) undetectable.
-    pub uncontrolled: usize,
-    /// Largest minimal detectable blunder among the controlled components (redundancy ≥ 0.1),
-    /// pixels for image points, metres otherwise.
-    pub max_mdb: f64,
-    pub mdb_unit: String,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -187,18 +162,22 @@ fn estimated(
     }
 }
 
-pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
-    let b = &s.built;
-    let pr = &b.problem;
-    let s0 = s.stats.sigma0;
-    let frame = &b.frame;
-    let (tm, crs) = match p.output.mercator(&frame.geodetic) {
-        Some((t, n)) => (Some(t), n),
-        None => (None, "WGS84 geodetic".to_string()),
-    };
-    let project = |v: &Vector3<f64>| {
-        let g = frame.to_ecef(v).to_geodetic();
-        let (e, n) = tm
+/// What every part of the results reads: the problem, its frame, the output projection, the
+/// covariances of every block and the reliability of every factor.
+struct Context<'a> {
+    pr: &'a Problem,
+    frame: &'a super::frame::LocalFrame,
+    tm: Option<gnss::tmerc::TransverseMercator>,
+    keys: Vec<Key>,
+    covs: photo::lsq::Covariances,
+}
+
+impl Context<'_> {
+    /// Geodetic position and the projected (or lon/lat) coordinates of a local point.
+    fn project(&self, v: &Vector3<f64>) -> (gnss::frame::Geodetic, f64, f64) {
+        let g = self.frame.to_ecef(v).to_geodetic();
+        let (e, n) = self
+            .tm
             .as_ref()
             .map(|t| {
                 let q = t.forward(&g);
@@ -206,37 +185,91 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
             })
             .unwrap_or((g.lon.to_degrees(), g.lat.to_degrees()));
         (g, e, n)
-    };
-    // Covariances of every block in one pass.
-    let want: Vec<Key> = pr.keys().to_vec();
-    let (covs, rel) = pr.statistics(&want, s0)?;
-    let cov_of = |key: Key| {
-        want.iter()
+    }
+
+    /// The covariance of a block.
+    fn cov_of(&self, key: Key) -> Option<&DMatrix<f64>> {
+        self.keys
+            .iter()
             .position(|w| *w == key)
-            .and_then(|i| covs[i].as_ref())
+            .and_then(|i| self.covs[i].as_ref())
+    }
+}
+
+/// The numbers of an adjusted block, read from the problem and its factors.
+pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
+    let b = &s.built;
+    let pr = &b.problem;
+    let (tm, crs) = match p.output.mercator(&b.frame.geodetic) {
+        Some((t, n)) => (Some(t), n),
+        None => (None, "WGS84 geodetic".to_string()),
+    };
+    // Covariances of every block and the reliability of every factor in one pass.
+    let keys: Vec<Key> = pr.keys().to_vec();
+    let (covs, rel) = pr.statistics(&keys, s.stats.sigma0)?;
+    let ctx = Context {
+        pr,
+        frame: &b.frame,
+        tm,
+        keys,
+        covs,
     };
     let res = super::residuals::collect(p, s, &rel);
-    let per_image = res.per_image;
-    let images = p
-        .images
+    let (points, checks) = point_results(p, b, &ctx);
+    let g = &b.frame.geodetic;
+    Ok(Results {
+        name: p.file.name.clone(),
+        mode: p.file.mode,
+        crs,
+        origin_deg: [g.lat.to_degrees(), g.lon.to_degrees(), g.h],
+        sigma0: s.stats.sigma0,
+        redundancy: s.stats.redundancy,
+        observations: s.stats.observations,
+        unknowns: s.stats.unknowns,
+        iterations: s.stats.iterations,
+        critical_w: s.critical,
+        images: image_results(p, &ctx, &res.per_image),
+        points,
+        lever_arms: lever_arms(p, &ctx),
+        drifts: drifts(b, &ctx),
+        interiors: interiors(p, &ctx),
+        groups: super::quality::groups(p, s, &rel),
+        removed: s
+            .removed
+            .iter()
+            .map(|&(k, w)| super::quality::removed_observation(p, b, k, w))
+            .collect(),
+        checks,
+        image_residuals: res.image,
+        control_residuals: res.control,
+        gnss_residuals: res.gnss,
+        warnings: warnings(p, b),
+    })
+}
+
+/// Every image's orientation with σ, its measurement count and RMS residual (`per_image`:
+/// measurements and sum of squared pixel residuals).
+fn image_results(p: &Project, ctx: &Context, per_image: &[(usize, f64)]) -> Vec<ImageResult> {
+    p.images
         .iter()
         .enumerate()
         .map(|(i, im)| {
             let key = Key::Pose(ImageId::from(i));
             let pose =
-                pr.value(key)
+                ctx.pr
+                    .value(key)
                     .and_then(Value::pose)
                     .copied()
                     .unwrap_or(photo::camera::Pose {
                         r: nalgebra::Matrix3::identity(),
                         centre: Vector3::zeros(),
                     });
-            let (g, e, n) = project(&pose.centre);
+            let (g, e, n) = ctx.project(&pose.centre);
             let Angles::OmegaPhiKappa { omega, phi, kappa } = Angles::omega_phi_kappa(&pose.r)
             else {
                 unreachable!("omega_phi_kappa returns that convention")
             };
-            let c = cov_of(key);
+            let c = ctx.cov_of(key);
             let (n_pts, ss) = per_image[i];
             ImageResult {
                 id: im.id.clone(),
@@ -260,7 +293,15 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
                 },
             }
         })
-        .collect();
+        .collect()
+}
+
+/// Every adjusted point with σ, and the check-point table.
+fn point_results(
+    p: &Project,
+    b: &super::build::Built,
+    ctx: &Context,
+) -> (Vec<PointResult>, CheckTable) {
     let mut rays = std::collections::BTreeMap::<&str, usize>::new();
     for m in &p.measurements {
         *rays.entry(m.point.as_str()).or_default() += 1;
@@ -269,16 +310,15 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
     let mut checks = CheckTable::default();
     for (k, id) in b.point_names.iter().enumerate() {
         let key = Key::Point(PointId::from(k));
-        let Some(x) = pr.value(key).and_then(Value::as_point) else {
+        let Some(x) = ctx.pr.value(key).and_then(Value::as_point) else {
             continue;
         };
-        let (g, e, n) = project(&x);
+        let (g, e, n) = ctx.project(&x);
         let ground = p.ground.iter().find(|g| &g.id == id);
         let kind = ground.map(|g| g.kind).unwrap_or(PointKind::Tie);
-        let sigma = cov_of(key).map(|c| sig3(c, 0)).unwrap_or_default();
+        let sigma = ctx.cov_of(key).map(|c| sig3(c, 0)).unwrap_or_default();
         if let (Some(gp), PointKind::Check) = (ground, kind) {
-            let known = frame.to_local(&gp.pos);
-            let d = x - known;
+            let d = x - ctx.frame.to_local(&gp.pos);
             let kg = gp.pos.to_geodetic();
             checks.points.push(CheckPoint {
                 id: id.clone(),
@@ -302,39 +342,47 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
             rays: rays.get(id.as_str()).copied().unwrap_or(0),
         });
     }
-    checks.points.sort_by_key(|c| natural(&c.id));
-    let nc = checks.points.len() as f64;
-    if nc > 0.0 {
+    checks.summarise();
+    (points, checks)
+}
+
+impl CheckTable {
+    /// Sort the points naturally (C2 before C10) and compute mean, RMS, max and the RMS the
+    /// adjustment's own covariance predicts.
+    fn summarise(&mut self) {
+        self.points.sort_by_key(|c| natural(&c.id));
+        let nc = self.points.len() as f64;
+        if nc == 0.0 {
+            return;
+        }
         for a in 0..3 {
-            checks.mean[a] = checks.points.iter().map(|c| c.d[a]).sum::<f64>() / nc;
-            checks.rms[a] = (checks.points.iter().map(|c| c.d[a].powi(2)).sum::<f64>() / nc).sqrt();
-            checks.max[a] = checks
-                .points
-                .iter()
-                .map(|c| c.d[a].abs())
-                .fold(0.0, f64::max);
-            checks.theoretical_rms[a] = (checks
-                .points
-                .iter()
-                .map(|c| c.sigma[a].powi(2))
-                .sum::<f64>()
-                / nc)
-                .sqrt();
+            let d = || self.points.iter().map(|c| c.d[a]);
+            self.mean[a] = d().sum::<f64>() / nc;
+            self.rms[a] = (d().map(|x| x * x).sum::<f64>() / nc).sqrt();
+            self.max[a] = d().map(f64::abs).fold(0.0, f64::max);
+            let s2 = self.points.iter().map(|c| c.sigma[a].powi(2)).sum::<f64>();
+            self.theoretical_rms[a] = (s2 / nc).sqrt();
         }
     }
-    let lever_arms = p
-        .cameras
+}
+
+/// The lever arm of every camera with GNSS.
+fn lever_arms(p: &Project, ctx: &Context) -> Vec<Estimated> {
+    p.cameras
         .iter()
         .enumerate()
         .map(|(i, c)| (c, Key::LeverArm(CameraId::from(i))))
-        .filter(|(_, k)| pr.contains(*k))
+        .filter(|(_, k)| ctx.pr.contains(*k))
         .map(|(c, k)| {
             let name = format!("lever arm ({})", c.id);
-            estimated(name, &["u", "v", "w"], pr, k, cov_of(k), 0.0)
+            estimated(name, &["u", "v", "w"], ctx.pr, k, ctx.cov_of(k), 0.0)
         })
-        .collect();
-    let drifts = b
-        .drifts
+        .collect()
+}
+
+/// The drift of every drift group.
+fn drifts(b: &super::build::Built, ctx: &Context) -> Vec<Estimated> {
+    b.drifts
         .iter()
         .enumerate()
         .map(|(i, d)| {
@@ -344,79 +392,29 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
                 DriftModel::Rate => &["bE", "bN", "bU"],
                 DriftModel::Linear => &["aE", "aN", "aU", "bE", "bN", "bU"],
             };
-            estimated(d.name.clone(), labels, pr, key, cov_of(key), d.t0)
+            estimated(d.name.clone(), labels, ctx.pr, key, ctx.cov_of(key), d.t0)
         })
-        .collect();
+        .collect()
+}
+
+/// The estimated interior parameters of every self-calibrated camera.
+fn interiors(p: &Project, ctx: &Context) -> Vec<Estimated> {
     const NAMES: [&str; 10] = ["f", "x0", "y0", "k1", "k2", "k3", "p1", "p2", "b1", "b2"];
-    let interiors = p
-        .cameras
+    p.cameras
         .iter()
         .enumerate()
         .map(|(i, c)| (c, Key::Camera(CameraId::from(i))))
-        .filter(|(_, k)| pr.contains(*k))
+        .filter(|(_, k)| ctx.pr.contains(*k))
         .map(|(c, k)| {
             let labels: Vec<&str> = c.calibrate.iter().map(|&i| NAMES[i]).collect();
-            estimated(
-                format!("interior ({})", c.id),
-                &labels,
-                pr,
-                k,
-                cov_of(k),
-                0.0,
-            )
+            let name = format!("interior ({})", c.id);
+            estimated(name, &labels, ctx.pr, k, ctx.cov_of(k), 0.0)
         })
-        .collect();
-    // Reliability per group.
-    let mut groups: Vec<GroupQuality> = GROUP_NAMES
-        .iter()
-        .enumerate()
-        .map(|(g, n)| GroupQuality {
-            group: n.to_string(),
-            observations: 0,
-            sigma_factor: s.components.get(g).copied().unwrap_or(1.0),
-            mean_redundancy: 0.0,
-            min_redundancy: f64::INFINITY,
-            uncontrolled: 0,
-            max_mdb: 0.0,
-            mdb_unit: if g == 0 { "px".into() } else { "m".into() },
-        })
-        .collect();
-    for r in &rel {
-        let g = pr.group(r.factor);
-        let scale = pr.group_sigma(g) * s0;
-        let noise = pr.noise(r.factor);
-        let unit = match pr.factor_as::<ImagePoint>(r.factor) {
-            Some(f) => p.cameras[p.images[f.image().index()].camera].camera.pixel,
-            None => 1.0,
-        };
-        let q = &mut groups[g.0];
-        for i in 0..r.redundancy.len() {
-            let rr = r.redundancy[i];
-            q.observations += 1;
-            q.mean_redundancy += rr;
-            q.min_redundancy = q.min_redundancy.min(rr);
-            if rr < 0.1 {
-                q.uncontrolled += 1;
-            } else {
-                q.max_mdb = q
-                    .max_mdb
-                    .max(DELTA0 * noise.sigma(i) * scale / rr.sqrt() / unit);
-            }
-        }
-    }
-    for q in &mut groups {
-        if q.observations > 0 {
-            q.mean_redundancy /= q.observations as f64;
-        } else {
-            q.min_redundancy = 0.0;
-        }
-    }
-    groups.retain(|q| q.observations > 0);
-    let removed = s
-        .removed
-        .iter()
-        .map(|&(k, w)| removed_observation(p, b, k, w))
-        .collect();
+        .collect()
+}
+
+/// The project's warnings, points left out for a single ray, antennas of unknown images.
+fn warnings(p: &Project, b: &super::build::Built) -> Vec<String> {
     let mut warnings = p.warnings.clone();
     if !b.single_ray.is_empty() {
         let list: Vec<String> = b
@@ -439,68 +437,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
             b.unused_antennas[0]
         ));
     }
-    let g = &frame.geodetic;
-    Ok(Results {
-        name: p.file.name.clone(),
-        mode: p.file.mode,
-        crs,
-        origin_deg: [g.lat.to_degrees(), g.lon.to_degrees(), g.h],
-        sigma0: s0,
-        redundancy: s.stats.redundancy,
-        observations: s.stats.observations,
-        unknowns: s.stats.unknowns,
-        iterations: s.stats.iterations,
-        critical_w: s.critical,
-        images,
-        points,
-        lever_arms,
-        drifts,
-        interiors,
-        groups,
-        removed,
-        checks,
-        image_residuals: res.image,
-        control_residuals: res.control,
-        gnss_residuals: res.gnss,
-        warnings,
-    })
-}
-
-/// What a factor removed by data snooping was, read from the factor itself.
-fn removed_observation(p: &Project, b: &super::build::Built, k: FactorId, w: f64) -> Removed {
-    let pr = &b.problem;
-    let point = |id: PointId| b.point_names.get(id.index()).cloned().unwrap_or_default();
-    let (kind, what, source) = if let Some(f) = pr.factor_as::<ImagePoint>(k) {
-        let image = &p.images[f.image().index()].id;
-        let what = format!("point {} in image {image}", point(f.point()));
-        ("image point", what, f.source.clone())
-    } else if let Some(f) = pr.factor_as::<Prior>(k) {
-        match f.key() {
-            Key::Point(id) => {
-                let what = format!("control point {} (kept as a tie point)", point(id));
-                ("control point", what, f.source.clone())
-            }
-            Key::LeverArm(c) => {
-                let what = format!("camera {}", p.cameras[c.index()].id);
-                ("lever-arm prior", what, f.source.clone())
-            }
-            other => ("prior", other.to_string(), f.source.clone()),
-        }
-    } else if let Some(f) = pr.factor_as::<GnssCentre>(k) {
-        let what = format!("antenna of image {}", p.antennas[f.record].image);
-        ("GNSS centre", what, String::new())
-    } else if let Some(f) = pr.factor_as::<Distance>(k) {
-        let [a, c] = f.points();
-        ("distance", format!("{a} – {c}"), f.source.clone())
-    } else {
-        ("observation", format!("factor {}", k.0), String::new())
-    };
-    Removed {
-        kind: kind.into(),
-        what,
-        w,
-        source,
-    }
+    warnings
 }
 
 /// A sort key that puts C2 before C10: the text before the first digit, then the number.

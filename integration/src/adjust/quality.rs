@@ -1,0 +1,128 @@
+//! The quality of an adjusted block beyond its residuals: reliability per observation group
+//! (observations, σ factor, redundancy, uncontrolled components, the largest minimal
+//! detectable blunder) and what data snooping removed, each read from its factor.
+
+use super::build::GROUP_NAMES;
+use super::factors::GnssCentre;
+use super::project::Project;
+use super::residuals::DELTA0;
+use super::solve::Solved;
+use photo::factors::{Distance, ImagePoint, Prior};
+use photo::lsq::{FactorId, Key, PointId, Reliability};
+use serde::Serialize;
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Removed {
+    pub kind: String,
+    pub what: String,
+    pub w: f64,
+    pub source: String,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct GroupQuality {
+    pub group: String,
+    pub observations: usize,
+    pub sigma_factor: f64,
+    pub mean_redundancy: f64,
+    pub min_redundancy: f64,
+    /// Components with a redundancy below 0.1: a blunder there is (nearly) undetectable.
+    pub uncontrolled: usize,
+    /// Largest minimal detectable blunder among the controlled components (redundancy ≥ 0.1),
+    /// pixels for image points, metres otherwise.
+    pub max_mdb: f64,
+    pub mdb_unit: String,
+}
+
+/// Reliability per observation group (groups without observations left out).
+pub(super) fn groups(p: &Project, s: &Solved, rel: &[Reliability]) -> Vec<GroupQuality> {
+    let pr = &s.built.problem;
+    let mut groups: Vec<GroupQuality> = GROUP_NAMES
+        .iter()
+        .enumerate()
+        .map(|(g, n)| GroupQuality {
+            group: n.to_string(),
+            observations: 0,
+            sigma_factor: s.components.get(g).copied().unwrap_or(1.0),
+            mean_redundancy: 0.0,
+            min_redundancy: f64::INFINITY,
+            uncontrolled: 0,
+            max_mdb: 0.0,
+            mdb_unit: if g == 0 { "px".into() } else { "m".into() },
+        })
+        .collect();
+    for r in rel {
+        let g = pr.group(r.factor);
+        let scale = pr.group_sigma(g) * s.stats.sigma0;
+        let noise = pr.noise(r.factor);
+        let unit = match pr.factor_as::<ImagePoint>(r.factor) {
+            Some(f) => p.cameras[p.images[f.image().index()].camera].camera.pixel,
+            None => 1.0,
+        };
+        let q = &mut groups[g.0];
+        for i in 0..r.redundancy.len() {
+            let rr = r.redundancy[i];
+            q.observations += 1;
+            q.mean_redundancy += rr;
+            q.min_redundancy = q.min_redundancy.min(rr);
+            if rr < 0.1 {
+                q.uncontrolled += 1;
+            } else {
+                q.max_mdb = q
+                    .max_mdb
+                    .max(DELTA0 * noise.sigma(i) * scale / rr.sqrt() / unit);
+            }
+        }
+    }
+    for q in &mut groups {
+        if q.observations > 0 {
+            q.mean_redundancy /= q.observations as f64;
+        } else {
+            q.min_redundancy = 0.0;
+        }
+    }
+    groups.retain(|q| q.observations > 0);
+    groups
+}
+
+/// What a factor removed by data snooping was, read from the factor itself.
+pub(super) fn removed_observation(
+    p: &Project,
+    b: &super::build::Built,
+    k: FactorId,
+    w: f64,
+) -> Removed {
+    let pr = &b.problem;
+    let point = |id: PointId| b.point_names.get(id.index()).cloned().unwrap_or_default();
+    let (kind, what, source) = if let Some(f) = pr.factor_as::<ImagePoint>(k) {
+        let image = &p.images[f.image().index()].id;
+        let what = format!("point {} in image {image}", point(f.point()));
+        ("image point", what, f.source.clone())
+    } else if let Some(f) = pr.factor_as::<Prior>(k) {
+        match f.key() {
+            Key::Point(id) => {
+                let what = format!("control point {} (kept as a tie point)", point(id));
+                ("control point", what, f.source.clone())
+            }
+            Key::LeverArm(c) => {
+                let what = format!("camera {}", p.cameras[c.index()].id);
+                ("lever-arm prior", what, f.source.clone())
+            }
+            other => ("prior", other.to_string(), f.source.clone()),
+        }
+    } else if let Some(f) = pr.factor_as::<GnssCentre>(k) {
+        let what = format!("antenna of image {}", p.antennas[f.record].image);
+        ("GNSS centre", what, String::new())
+    } else if let Some(f) = pr.factor_as::<Distance>(k) {
+        let [a, c] = f.points();
+        ("distance", format!("{a} – {c}"), f.source.clone())
+    } else {
+        ("observation", format!("factor {}", k.0), String::new())
+    };
+    Removed {
+        kind: kind.into(),
+        what,
+        w,
+        source,
+    }
+}
