@@ -240,51 +240,11 @@ impl Project {
         if file.camera.is_empty() {
             return Err(perr(path, "no [[camera]]: describe at least one camera"));
         }
-        let mut cameras = Vec::new();
-        for c in &file.camera {
-            if !(c.focal_mm > 0.0 && c.pixel_um > 0.0 && c.width_px > 0 && c.height_px > 0) {
-                return Err(perr(
-                    path,
-                    format!(
-                        "camera {}: focal_mm, pixel_um, width_px and height_px must be positive",
-                        c.id
-                    ),
-                ));
-            }
-            let mut cam = Camera::ideal(
-                c.focal_mm * 1e-3,
-                c.pixel_um * 1e-6,
-                c.width_px,
-                c.height_px,
-            );
-            cam.x0 = c.principal_point_mm[0] * 1e-3;
-            cam.y0 = c.principal_point_mm[1] * 1e-3;
-            cam.k = c.k;
-            cam.p = c.p;
-            let mut calibrate = Vec::new();
-            for n in &c.self_calibrate {
-                let i = INTERIOR_NAMES.iter().position(|x| x == n).ok_or_else(|| {
-                    perr(
-                        path,
-                        format!(
-                            "camera {}: self_calibrate `{n}`: use {}",
-                            c.id,
-                            INTERIOR_NAMES.join(", ")
-                        ),
-                    )
-                })?;
-                if !calibrate.contains(&i) {
-                    calibrate.push(i);
-                }
-            }
-            calibrate.sort();
-            cameras.push(CameraDef {
-                id: c.id.clone(),
-                camera: cam,
-                calibrate,
-                sigma_px: c.sigma_px,
-            });
-        }
+        let cameras = file
+            .camera
+            .iter()
+            .map(|c| camera_def(c, path))
+            .collect::<Result<Vec<_>, _>>()?;
         let images = read_images(&dir.join(&file.images.list), &cameras)?;
         let index: BTreeMap<&str, usize> = images
             .iter()
@@ -307,35 +267,9 @@ impl Project {
         };
         let mut warnings = Vec::new();
         let antennas = match &file.gnss {
-            Some(g) => match (&g.antennas, &g.trajectory) {
-                (Some(a), None) => read_antennas(&dir.join(a), g.sigma_scale)?,
-                (None, Some(t)) => {
-                    let path = dir.join(t);
-                    let traj = read_trajectory(&path)?;
-                    antennas_from_trajectory(&traj, &path, &images, g.sigma_scale, &mut warnings)?
-                }
-                _ => {
-                    return Err(perr(
-                        path,
-                        "[gnss]: give exactly one of `antennas` (table) or `trajectory` (.pos)",
-                    ))
-                }
-            },
+            Some(g) => load_antennas(path, dir, g, &images, &mut warnings)?,
             None => Vec::new(),
         };
-        let unfixed: Vec<&str> = antennas
-            .iter()
-            .filter(|a| a.quality != 1)
-            .map(|a| a.image.as_str())
-            .collect();
-        if !unfixed.is_empty() {
-            warnings.push(format!(
-                "{} of {} GNSS positions are not ambiguity-fixed (Q ≠ 1; first: {}): they enter with their larger covariance",
-                unfixed.len(),
-                antennas.len(),
-                unfixed[..unfixed.len().min(5)].join(", ")
-            ));
-        }
         Ok(Project {
             path: path.to_path_buf(),
             file,
@@ -348,4 +282,89 @@ impl Project {
             warnings,
         })
     }
+}
+
+/// A camera section as a camera with its estimation choices.
+fn camera_def(c: &CameraSection, path: &Path) -> Result<CameraDef, AdjustError> {
+    if !(c.focal_mm > 0.0 && c.pixel_um > 0.0 && c.width_px > 0 && c.height_px > 0) {
+        return Err(perr(
+            path,
+            format!(
+                "camera {}: focal_mm, pixel_um, width_px and height_px must be positive",
+                c.id
+            ),
+        ));
+    }
+    let mut cam = Camera::ideal(
+        c.focal_mm * 1e-3,
+        c.pixel_um * 1e-6,
+        c.width_px,
+        c.height_px,
+    );
+    cam.x0 = c.principal_point_mm[0] * 1e-3;
+    cam.y0 = c.principal_point_mm[1] * 1e-3;
+    cam.k = c.k;
+    cam.p = c.p;
+    let mut calibrate = Vec::new();
+    for n in &c.self_calibrate {
+        let i = INTERIOR_NAMES.iter().position(|x| x == n).ok_or_else(|| {
+            perr(
+                path,
+                format!(
+                    "camera {}: self_calibrate `{n}`: use {}",
+                    c.id,
+                    INTERIOR_NAMES.join(", ")
+                ),
+            )
+        })?;
+        if !calibrate.contains(&i) {
+            calibrate.push(i);
+        }
+    }
+    calibrate.sort();
+    Ok(CameraDef {
+        id: c.id.clone(),
+        camera: cam,
+        calibrate,
+        sigma_px: c.sigma_px,
+    })
+}
+
+/// The GNSS antenna positions: the antenna table, or a trajectory interpolated at the image
+/// times; a warning counts and names the positions that are not ambiguity-fixed.
+fn load_antennas(
+    path: &Path,
+    dir: &Path,
+    g: &GnssSection,
+    images: &[ImageDef],
+    warnings: &mut Vec<String>,
+) -> Result<Vec<Antenna>, AdjustError> {
+    let antennas = match (&g.antennas, &g.trajectory) {
+        (Some(a), None) => read_antennas(&dir.join(a), g.sigma_scale)?,
+        (None, Some(t)) => {
+            let path = dir.join(t);
+            let traj = read_trajectory(&path)?;
+            antennas_from_trajectory(&traj, &path, images, g.sigma_scale, warnings)?
+        }
+        _ => {
+            return Err(perr(
+                path,
+                "[gnss]: give exactly one of `antennas` (table) or `trajectory` (.pos)",
+            ))
+        }
+    };
+    let unfixed: Vec<&str> = antennas
+        .iter()
+        .filter(|a| a.quality != 1)
+        .map(|a| a.image.as_str())
+        .collect();
+    if !unfixed.is_empty() {
+        warnings.push(format!(
+            "{} of {} GNSS positions are not ambiguity-fixed (Q ≠ 1; first: {}): they enter with their larger covariance",
+            unfixed.len(),
+            antennas.len(),
+            unfixed[..unfixed.len().min(5)].join(", ")
+        ));
+    }
+    Ok(antennas)
 }

@@ -144,8 +144,28 @@ fn est_rows(s: &mut String, e: &Estimated, unit: &str) {
 }
 
 /// The self-contained HTML report.
+/// The self-contained HTML report: summary, groups, parameters, control, removed
+/// observations, check points, plots, images.
 pub fn html(p: &Project, r: &Results) -> String {
     let mut s = String::new();
+    html_summary(&mut s, p, r);
+    html_groups(&mut s, r);
+    html_parameters(&mut s, r);
+    html_control(&mut s, r);
+    html_removed(&mut s, r);
+    html_checks(&mut s, r);
+    html_plots(&mut s, p, r);
+    html_images(&mut s, r);
+    let _ = writeln!(
+        s,
+        "</table><p>Written by ppkat {}.</p></body></html>",
+        env!("CARGO_PKG_VERSION")
+    );
+    s
+}
+
+/// Head, title, the project and the summary table, warnings.
+fn html_summary(s: &mut String, p: &Project, r: &Results) {
     let title = if r.name.is_empty() {
         "ppkat adjustment"
     } else {
@@ -157,6 +177,10 @@ pub fn html(p: &Project, r: &Results) -> String {
     for w in &r.warnings {
         let _ = writeln!(s, "<p class=\"warn\">⚠ {w}</p>");
     }
+}
+
+/// The observation groups with their reliability.
+fn html_groups(s: &mut String, r: &Results) {
     let _ = writeln!(s, "<h2>Observation groups</h2><table><tr><th>group</th><th>components</th><th>σ factor (VCE)</th><th>mean redundancy</th><th>min redundancy</th><th>uncontrolled (r &lt; 0.1)</th><th>max MDB (r ≥ 0.1)</th></tr>");
     for g in &r.groups {
         let mdb = if g.uncontrolled == g.observations {
@@ -167,19 +191,27 @@ pub fn html(p: &Project, r: &Results) -> String {
         let _ = writeln!(s, "<tr><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{}</td><td>{mdb}</td></tr>", g.group, g.observations, g.sigma_factor, g.mean_redundancy, g.min_redundancy, g.uncontrolled);
     }
     let _ = writeln!(s, "</table>");
+}
+
+/// Lever arms, drifts and interior parameters with σ.
+fn html_parameters(s: &mut String, r: &Results) {
     if !(r.lever_arms.is_empty() && r.drifts.is_empty() && r.interiors.is_empty()) {
         let _ = writeln!(s, "<h2>Additional parameters</h2><table><tr><th>parameter</th><th></th><th>value</th><th>σ</th><th>unit</th></tr>");
         for e in &r.lever_arms {
-            est_rows(&mut s, e, "m");
+            est_rows(s, e, "m");
         }
         for e in &r.drifts {
-            est_rows(&mut s, e, "m, m/s");
+            est_rows(s, e, "m, m/s");
         }
         for e in &r.interiors {
-            est_rows(&mut s, e, "m (f, x0, y0), distortion units");
+            est_rows(s, e, "m (f, x0, y0), distortion units");
         }
         let _ = writeln!(s, "</table>");
     }
+}
+
+/// The control points' residuals, redundancy, w and MDB.
+fn html_control(s: &mut String, r: &Results) {
     if !r.control_residuals.is_empty() {
         let _ = writeln!(s, "<h2>Control points</h2><table><tr><th>point</th><th>vE m</th><th>vN m</th><th>vU m</th><th>rE</th><th>rN</th><th>rU</th><th>wE</th><th>wN</th><th>wU</th><th>MDB E/N/U m</th></tr>");
         for c in &r.control_residuals {
@@ -200,6 +232,10 @@ pub fn html(p: &Project, r: &Results) -> String {
         }
         let _ = writeln!(s, "</table>");
     }
+}
+
+/// What data snooping removed.
+fn html_removed(s: &mut String, r: &Results) {
     let _ = writeln!(
         s,
         "<h2>Removed observations (data snooping, critical |w| = {:.2})</h2>",
@@ -225,6 +261,10 @@ pub fn html(p: &Project, r: &Results) -> String {
         }
         let _ = writeln!(s, "</table>");
     }
+}
+
+/// The check-point table.
+fn html_checks(s: &mut String, r: &Results) {
     let c = &r.checks;
     if !c.points.is_empty() {
         let close = r.mode == Mode::CloseRange;
@@ -254,9 +294,13 @@ pub fn html(p: &Project, r: &Results) -> String {
         };
         let _ = writeln!(s, "<tr><th>mean</th>{}{blank}</tr><tr><th>RMS</th>{}{blank}</tr><tr><th>max |Δ|</th>{}{blank}</tr><tr><th>theoretical RMS</th>{}{blank}</tr></table>", f3(c.mean, 1.0, 3), f3(c.rms, 1.0, 3), f3(c.max, 1.0, 3), f3(c.theoretical_rms, 1.0, 3));
     }
+}
+
+/// The SVG plots.
+fn html_plots(s: &mut String, p: &Project, r: &Results) {
     let _ = writeln!(s, "<h2>Plots</h2>");
     s.push_str(&plot_image_residuals(p, r));
-    if !c.points.is_empty() {
+    if !r.checks.points.is_empty() {
         s.push_str(&plot_checks(r));
     }
     if !r.gnss_residuals.is_empty() {
@@ -265,6 +309,10 @@ pub fn html(p: &Project, r: &Results) -> String {
     if !r.drifts.is_empty() {
         s.push_str(&plot_drift(r));
     }
+}
+
+/// The images' orientations with σ (the table is closed by the caller).
+fn html_images(s: &mut String, r: &Results) {
     let geo = r.crs.starts_with("WGS84");
     let _ = writeln!(s, "<h2>Images</h2><table><tr><th>image</th><th>strip</th>{}<th>h</th><th>ω°</th><th>φ°</th><th>κ°</th><th>σE</th><th>σN</th><th>σU</th><th>σω°</th><th>σφ°</th><th>σκ°</th><th>points</th><th>RMS px</th></tr>", if geo { "<th>lat°</th><th>lon°</th>" } else { "<th>easting</th><th>northing</th>" });
     for i in &r.images {
@@ -275,12 +323,6 @@ pub fn html(p: &Project, r: &Results) -> String {
         };
         let _ = writeln!(s, "<tr><td>{}</td><td>{}</td>{xy}<td>{:.3}</td><td>{:.4}</td><td>{:.4}</td><td>{:.4}</td>{}{}<td>{}</td><td>{:.2}</td></tr>", i.id, i.strip, i.h, i.opk_deg[0], i.opk_deg[1], i.opk_deg[2], f3(i.sigma_centre, 1.0, 3), f3(i.sigma_angles_deg, 1.0, 4), i.points, i.rms_px);
     }
-    let _ = writeln!(
-        s,
-        "</table><p>Written by ppkat {}.</p></body></html>",
-        env!("CARGO_PKG_VERSION")
-    );
-    s
 }
 
 /// A plot into an SVG string; drawing errors leave a note instead of the plot.

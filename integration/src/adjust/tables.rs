@@ -253,6 +253,103 @@ pub(super) fn read_patb(
     Ok(out)
 }
 
+/// Which columns hold a ground point's coordinates.
+enum Coords {
+    Geo(usize, usize, usize),
+    Xyz(usize, usize, usize),
+    Proj(usize, usize, usize),
+}
+
+impl Coords {
+    /// The coordinate columns of a ground-point table.
+    fn of(t: &Table) -> Result<Coords, AdjustError> {
+        let lat = t.col("lat").or(t.col("lat_deg"));
+        let lon = t.col("lon").or(t.col("lon_deg"));
+        if let (Some(a), Some(b), Some(c)) = (lat, lon, t.col("h")) {
+            Ok(Coords::Geo(a, b, c))
+        } else if let (Some(a), Some(b), Some(c)) = (t.col("x"), t.col("y"), t.col("z")) {
+            Ok(Coords::Xyz(a, b, c))
+        } else if let (Some(a), Some(b), Some(c)) =
+            (t.col("easting"), t.col("northing"), t.col("h"))
+        {
+            Ok(Coords::Proj(a, b, c))
+        } else {
+            Err(perr(&t.path, "coordinates: give lat,lon,h or x,y,z (ECEF) or easting,northing,h (with crs in [ground])"))
+        }
+    }
+
+    /// The projection of easting/northing columns (`None` for the others).
+    fn projection(
+        &self,
+        path: &Path,
+        crs: Option<&str>,
+    ) -> Result<Option<(gnss::tmerc::TransverseMercator, String)>, AdjustError> {
+        match (self, crs) {
+            (Coords::Proj(..), Some(c)) => {
+                let p = Projection::parse(c)
+                    .ok_or_else(|| perr(path, format!("crs `{c}`: use utm:ZONE or gk:CM")))?;
+                match p {
+                    Projection::Utm(None) | Projection::Geodetic => {
+                        Err(perr(path, "crs: give the UTM zone (utm:ZONE) or gk:CM"))
+                    }
+                    _ => {
+                        let lat = if c.ends_with(['S', 's']) { -1.0 } else { 1.0 };
+                        Ok(p.mercator(&Geodetic::from_degrees(lat, 0.0, 0.0)))
+                    }
+                }
+            }
+            (Coords::Proj(..), None) => Err(perr(
+                path,
+                "easting/northing columns need `crs` in [ground]",
+            )),
+            _ => Ok(None),
+        }
+    }
+
+    /// The position of one row.
+    fn position(
+        &self,
+        t: &Table,
+        line: usize,
+        row: &[String],
+        tm: Option<&gnss::tmerc::TransverseMercator>,
+    ) -> Result<Ecef, AdjustError> {
+        let n = |c: usize| t.num(line, row, c);
+        Ok(match *self {
+            Coords::Geo(a, b, c) => Geodetic::from_degrees(n(a)?, n(b)?, n(c)?).to_ecef(),
+            Coords::Xyz(a, b, c) => Ecef::new(n(a)?, n(b)?, n(c)?),
+            Coords::Proj(a, b, c) => {
+                let tm = tm.ok_or_else(|| perr(&t.path, "crs missing"))?;
+                let p = gnss::tmerc::Projected {
+                    easting: n(a)?,
+                    northing: n(b)?,
+                };
+                tm.inverse(&p, n(c)?).to_ecef()
+            }
+        })
+    }
+}
+
+/// σ east, north, up of a ground-point row: `sigma_xy, sigma_z`, or `sigma_e, sigma_n,
+/// sigma_u`, or 2/2/3 cm.
+fn ground_sigma(t: &Table, row: &[String], line: usize) -> Result<[f64; 3], AdjustError> {
+    if let (Some(a), Some(b)) = (t.col("sigma_xy"), t.col("sigma_z")) {
+        let (h, v) = (t.num(line, row, a)?, t.num(line, row, b)?);
+        return Ok([h, h, v]);
+    }
+    if let (Some(a), Some(b), Some(c)) = (t.col("sigma_e"), t.col("sigma_n"), t.col("sigma_u")) {
+        return Ok([
+            t.num(line, row, a)?,
+            t.num(line, row, b)?,
+            t.num(line, row, c)?,
+        ]);
+    }
+    Ok([0.02, 0.02, 0.03])
+}
+
+/// Ground points: `point, kind (gcp|check|tie)`, coordinates as lat/lon/h, ECEF x/y/z or
+/// easting/northing/h in `crs`, optional σ. Tie rows are skipped; control points named in
+/// `as_check` become check points.
 pub(super) fn read_ground(
     path: &Path,
     crs: Option<&str>,
@@ -260,114 +357,36 @@ pub(super) fn read_ground(
 ) -> Result<Vec<GroundPoint>, AdjustError> {
     let t = Table::read(path)?;
     let (cp, ck) = (t.need("point")?, t.need("kind")?);
-    enum Coords {
-        Geo(usize, usize, usize),
-        Xyz(usize, usize, usize),
-        Proj(usize, usize, usize),
-    }
-    let lat = t.col("lat").or(t.col("lat_deg"));
-    let lon = t.col("lon").or(t.col("lon_deg"));
-    let coords = if let (Some(a), Some(b), Some(c)) = (lat, lon, t.col("h")) {
-        Coords::Geo(a, b, c)
-    } else if let (Some(a), Some(b), Some(c)) = (t.col("x"), t.col("y"), t.col("z")) {
-        Coords::Xyz(a, b, c)
-    } else if let (Some(a), Some(b), Some(c)) = (t.col("easting"), t.col("northing"), t.col("h")) {
-        Coords::Proj(a, b, c)
-    } else {
-        return Err(perr(path, "coordinates: give lat,lon,h or x,y,z (ECEF) or easting,northing,h (with crs in [ground])"));
-    };
-    let tm = match (&coords, crs) {
-        (Coords::Proj(..), Some(c)) => {
-            let p = Projection::parse(c)
-                .ok_or_else(|| perr(path, format!("crs `{c}`: use utm:ZONE or gk:CM")))?;
-            match p {
-                Projection::Utm(None) | Projection::Geodetic => {
-                    return Err(perr(path, "crs: give the UTM zone (utm:ZONE) or gk:CM"))
-                }
-                _ => {
-                    let lat = if c.ends_with(['S', 's']) { -1.0 } else { 1.0 };
-                    p.mercator(&Geodetic::from_degrees(lat, 0.0, 0.0))
-                }
-            }
-        }
-        (Coords::Proj(..), None) => {
-            return Err(perr(
-                path,
-                "easting/northing columns need `crs` in [ground]",
-            ))
-        }
-        _ => None,
-    };
-    let sig = |row: &[String], line: usize| -> Result<[f64; 3], AdjustError> {
-        if let (Some(a), Some(b)) = (t.col("sigma_xy"), t.col("sigma_z")) {
-            let (h, v) = (t.num(line, row, a)?, t.num(line, row, b)?);
-            return Ok([h, h, v]);
-        }
-        if let (Some(a), Some(b), Some(c)) = (t.col("sigma_e"), t.col("sigma_n"), t.col("sigma_u"))
-        {
-            return Ok([
-                t.num(line, row, a)?,
-                t.num(line, row, b)?,
-                t.num(line, row, c)?,
-            ]);
-        }
-        Ok([0.02, 0.02, 0.03])
+    let coords = Coords::of(&t)?;
+    let tm = coords.projection(path, crs)?;
+    let bad = |line: usize, what: String| AdjustError::Input {
+        path: path.display().to_string(),
+        line,
+        what,
     };
     let mut out = Vec::new();
     for (line, row) in &t.rows {
         let id = t.text(row, cp);
         let kind = match t.text(row, ck).to_ascii_lowercase().as_str() {
+            "gcp" | "control" if as_check.contains(&id) => PointKind::Check,
             "gcp" | "control" => PointKind::Control,
             "check" => PointKind::Check,
             "tie" => continue,
             k => {
-                return Err(AdjustError::Input {
-                    path: path.display().to_string(),
-                    line: *line,
-                    what: format!("point {id}: kind `{k}`: use gcp, check or tie"),
-                })
+                let what = format!("point {id}: kind `{k}`: use gcp, check or tie");
+                return Err(bad(*line, what));
             }
         };
-        let kind = if kind == PointKind::Control && as_check.contains(&id) {
-            PointKind::Check
-        } else {
-            kind
-        };
-        let pos = match coords {
-            Coords::Geo(a, b, c) => Geodetic::from_degrees(
-                t.num(*line, row, a)?,
-                t.num(*line, row, b)?,
-                t.num(*line, row, c)?,
-            )
-            .to_ecef(),
-            Coords::Xyz(a, b, c) => Ecef::new(
-                t.num(*line, row, a)?,
-                t.num(*line, row, b)?,
-                t.num(*line, row, c)?,
-            ),
-            Coords::Proj(a, b, c) => {
-                let (tm, _) = tm.as_ref().ok_or_else(|| perr(path, "crs missing"))?;
-                let p = gnss::tmerc::Projected {
-                    easting: t.num(*line, row, a)?,
-                    northing: t.num(*line, row, b)?,
-                };
-                tm.inverse(&p, t.num(*line, row, c)?).to_ecef()
-            }
-        };
-        let sigma = sig(row, *line)?;
+        let pos = coords.position(&t, *line, row, tm.as_ref().map(|x| &x.0))?;
+        let sigma = ground_sigma(&t, row, *line)?;
         if sigma.iter().any(|s| s.is_nan() || *s <= 0.0) && kind == PointKind::Control {
-            return Err(AdjustError::Input {
-                path: path.display().to_string(),
-                line: *line,
-                what: format!("control point {id}: σ must be positive"),
-            });
+            return Err(bad(
+                *line,
+                format!("control point {id}: σ must be positive"),
+            ));
         }
         if out.iter().any(|p: &GroundPoint| p.id == id) {
-            return Err(AdjustError::Input {
-                path: path.display().to_string(),
-                line: *line,
-                what: format!("point {id} listed twice"),
-            });
+            return Err(bad(*line, format!("point {id} listed twice")));
         }
         out.push(GroundPoint {
             id,
