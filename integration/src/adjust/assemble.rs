@@ -10,7 +10,7 @@ use super::project::{DriftGroup, PointKind, Project};
 use super::start::{intersect_point, Rays};
 use nalgebra::{DMatrix, DVector};
 use photo::camera::Pose;
-use photo::factors::{ImagePoint, Prior};
+use photo::factors::{Distance, ImagePoint, Prior};
 use photo::lsq::{
     CameraId, DriftId, Group, ImageId, Key, Loss, Noise, Options, PointId, Problem, Value,
 };
@@ -105,6 +105,7 @@ pub(super) fn problem(
         .collect();
     image_factors(p, &mut pr, &index, loss).map_err(built)?;
     control_factors(p, frame, &mut pr, &index, loss).map_err(built)?;
+    distance_factors(p, &mut pr, &index, loss).map_err(built)?;
     let drifts = match p.file.gnss.as_ref() {
         Some(_) => gnss_factors(p, frame, &mut pr, antenna_of, loss)?,
         None => Vec::new(),
@@ -159,6 +160,28 @@ fn control_factors(
         }
         let f = Prior::point(pt, frame.to_local(&g.pos)).with_source(g.source.clone());
         pr.add_factor(f, Noise::sigmas(&g.sigma), loss, GROUP_CONTROL)?;
+    }
+    Ok(())
+}
+
+/// One factor per measured distance between two adjusted points.
+fn distance_factors(
+    p: &Project,
+    pr: &mut Problem,
+    index: &BTreeMap<&str, PointId>,
+    loss: Loss,
+) -> Result<(), photo::lsq::BuildError> {
+    for d in &p.distances {
+        let ids = d
+            .points
+            .each_ref()
+            .map(|id| index.get(id.as_str()).copied());
+        let [Some(a), Some(b)] = ids else { continue };
+        if !(pr.contains(Key::Point(a)) && pr.contains(Key::Point(b))) {
+            continue;
+        }
+        let f = Distance::new(a, b, d.distance).with_source(d.source.clone());
+        pr.add_factor(f, Noise::sigmas(&[d.sigma]), loss, GROUP_DISTANCE)?;
     }
     Ok(())
 }

@@ -84,6 +84,14 @@ fn measured(p: &Project) -> Result<Rays<'_>, AdjustError> {
             unmeasured.join(", ")
         )));
     }
+    for d in &p.distances {
+        if let Some(id) = d.points.iter().find(|id| !rays.contains_key(id.as_str())) {
+            return Err(err(format!(
+                "{}: the distance names point {id}, which no image measures: check the id",
+                d.source
+            )));
+        }
+    }
     Ok(rays)
 }
 

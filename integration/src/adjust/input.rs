@@ -105,3 +105,16 @@ pub struct Antenna {
     /// Camera → local ENU at the antenna, when the table carries an attitude.
     pub rotation: Option<Matrix3<f64>>,
 }
+
+/// A measured distance between two points.
+#[derive(Clone, Debug)]
+pub struct MeasuredDistance {
+    /// The two points' ids.
+    pub points: [String; 2],
+    /// The distance, metres.
+    pub distance: f64,
+    /// Its σ, metres.
+    pub sigma: f64,
+    /// Where it came from (file:line).
+    pub source: String,
+}

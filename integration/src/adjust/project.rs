@@ -8,10 +8,12 @@
 use super::error::AdjustError;
 use super::factors::DriftModel;
 use super::input::perr;
-pub use super::input::{Antenna, CameraDef, GroundPoint, ImageDef, Measurement, PointKind};
+pub use super::input::{
+    Antenna, CameraDef, GroundPoint, ImageDef, MeasuredDistance, Measurement, PointKind,
+};
 use super::tables::{
-    antennas_from_trajectory, read_antennas, read_ground, read_images, read_measurements,
-    read_patb, read_trajectory,
+    antennas_from_trajectory, read_antennas, read_distances, read_ground, read_images,
+    read_measurements, read_patb, read_trajectory,
 };
 use crate::exposure::export::Projection;
 use photo::camera::Camera;
@@ -104,6 +106,9 @@ pub struct GroundSection {
     /// Control points to use as check points instead.
     #[serde(default)]
     pub as_check: Vec<String>,
+    /// CSV `point_a,point_b,distance[,sigma]` of measured distances between points (m).
+    #[serde(default)]
+    pub distances: Option<PathBuf>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -215,6 +220,8 @@ pub struct Project {
     pub measurements: Vec<Measurement>,
     pub ground: Vec<GroundPoint>,
     pub antennas: Vec<Antenna>,
+    /// Measured distances between points.
+    pub distances: Vec<MeasuredDistance>,
     /// What loading noticed (images outside the trajectory, …), for the report.
     pub warnings: Vec<String>,
 }
@@ -265,6 +272,10 @@ impl Project {
             Some(g) => read_ground(&dir.join(&g.file), g.crs.as_deref(), &g.as_check)?,
             None => Vec::new(),
         };
+        let distances = match file.ground.as_ref().and_then(|g| g.distances.as_ref()) {
+            Some(d) => read_distances(&dir.join(d))?,
+            None => Vec::new(),
+        };
         let mut warnings = Vec::new();
         let antennas = match &file.gnss {
             Some(g) => load_antennas(path, dir, g, &images, &mut warnings)?,
@@ -279,6 +290,7 @@ impl Project {
             measurements,
             ground,
             antennas,
+            distances,
             warnings,
         })
     }

@@ -114,8 +114,11 @@ pub(super) fn removed_observation(
         let what = format!("antenna of image {}", p.antennas[f.record].image);
         ("GNSS centre", what, String::new())
     } else if let Some(f) = pr.factor_as::<Distance>(k) {
-        let [a, c] = f.points();
-        ("distance", format!("{a} – {c}"), f.source.clone())
+        let [a, c] = f.points().map(|k| match k {
+            Key::Point(id) => point(id),
+            k => k.to_string(),
+        });
+        ("distance", format!("distance {a} – {c}"), f.source.clone())
     } else {
         ("observation", format!("factor {}", k.0), String::new())
     };

@@ -152,6 +152,7 @@ pub fn html(p: &Project, r: &Results) -> String {
     html_groups(&mut s, r);
     html_parameters(&mut s, r);
     html_control(&mut s, r);
+    html_distances(&mut s, r);
     html_removed(&mut s, r);
     html_checks(&mut s, r);
     html_plots(&mut s, p, r);
@@ -232,6 +233,22 @@ fn html_control(s: &mut String, r: &Results) {
         }
         let _ = writeln!(s, "</table>");
     }
+}
+
+/// The measured distances with their residuals.
+fn html_distances(s: &mut String, r: &Results) {
+    if r.distance_residuals.is_empty() {
+        return;
+    }
+    let _ = writeln!(s, "<h2>Distances</h2><table><tr><th>from</th><th>to</th><th>measured m</th><th>v m</th><th>r</th><th>w</th><th>source</th></tr>");
+    for d in &r.distance_residuals {
+        let _ = writeln!(
+            s,
+            "<tr><td>{}</td><td>{}</td><td>{:.4}</td><td>{:.4}</td><td>{:.3}</td><td>{:.2}</td><td>{}</td></tr>",
+            d.points[0], d.points[1], d.distance, d.v, d.r, d.w, d.source
+        );
+    }
+    let _ = writeln!(s, "</table>");
 }
 
 /// What data snooping removed.

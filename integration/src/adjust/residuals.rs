@@ -4,7 +4,7 @@
 use super::factors::GnssCentre;
 use super::project::Project;
 use super::solve::Solved;
-use photo::factors::{ImagePoint, Prior};
+use photo::factors::{Distance, ImagePoint, Prior};
 use photo::lsq::{FactorId, Key, PointId, Reliability};
 use serde::Serialize;
 
@@ -44,11 +44,29 @@ pub struct GnssResidual {
     pub v: [f64; 3],
 }
 
+/// A measured distance's residual (adjusted − measured, m) with its reliability.
+#[derive(Clone, Debug, Serialize)]
+pub struct DistanceResidual {
+    /// The two points.
+    pub points: [String; 2],
+    /// The measured distance (m).
+    pub distance: f64,
+    /// Adjusted − measured (m).
+    pub v: f64,
+    /// Redundancy number and Baarda's w.
+    pub r: f64,
+    /// Normalised residual.
+    pub w: f64,
+    /// Where it came from (file:line).
+    pub source: String,
+}
+
 /// The residual tables and, per image, (measurements, sum of squared pixel residuals).
 pub struct Residuals {
     pub image: Vec<ImageResidual>,
     pub control: Vec<ControlResidual>,
     pub gnss: Vec<GnssResidual>,
+    pub distance: Vec<DistanceResidual>,
     pub per_image: Vec<(usize, f64)>,
 }
 
@@ -70,6 +88,7 @@ pub fn collect(p: &Project, s: &Solved, rel: &[Reliability]) -> Residuals {
         image: Vec::new(),
         control: Vec::new(),
         gnss: Vec::new(),
+        distance: Vec::new(),
         per_image: vec![(0, 0.0); p.images.len()],
     };
     for (k, _) in pr.factors() {
@@ -110,6 +129,20 @@ pub fn collect(p: &Project, s: &Solved, rel: &[Reliability]) -> Residuals {
                 c.mdb[a] = (ra > 1e-3).then(|| DELTA0 * noise.sigma(a) * scale / ra.sqrt());
             }
             res.control.push(c);
+        } else if let Some(f) = pr.factor_as::<Distance>(k) {
+            let (r_, w) = rw(k, 0);
+            let [a, b] = f.points().map(|k| match k {
+                Key::Point(id) => point(id),
+                k => k.to_string(),
+            });
+            res.distance.push(DistanceResidual {
+                points: [a, b],
+                distance: f.distance,
+                v: r[0],
+                r: r_,
+                w,
+                source: f.source.clone(),
+            });
         } else if let Some(f) = pr.factor_as::<GnssCentre>(k) {
             let ant = &p.antennas[f.record];
             res.gnss.push(GnssResidual {

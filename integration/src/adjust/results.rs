@@ -7,7 +7,9 @@ use super::error::AdjustError;
 use super::factors::DriftModel;
 use super::project::{Mode, PointKind, Project};
 pub use super::quality::{GroupQuality, Removed};
-pub use super::residuals::{ControlResidual, GnssResidual, ImageResidual, DELTA0};
+pub use super::residuals::{
+    ControlResidual, DistanceResidual, GnssResidual, ImageResidual, DELTA0,
+};
 use super::solve::Solved;
 use nalgebra::{DMatrix, Vector3};
 use photo::lsq::{CameraId, DriftId, ImageId, Key, PointId, Problem, Value};
@@ -104,6 +106,8 @@ pub struct Results {
     pub image_residuals: Vec<ImageResidual>,
     pub control_residuals: Vec<ControlResidual>,
     pub gnss_residuals: Vec<GnssResidual>,
+    /// Measured distances between points, with their residuals.
+    pub distance_residuals: Vec<DistanceResidual>,
     pub warnings: Vec<String>,
 }
 
@@ -243,6 +247,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         image_residuals: res.image,
         control_residuals: res.control,
         gnss_residuals: res.gnss,
+        distance_residuals: res.distance,
         warnings: warnings(p, b),
     })
 }

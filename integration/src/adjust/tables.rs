@@ -3,7 +3,9 @@
 //! file and the line.
 
 use super::error::AdjustError;
-use super::input::{perr, Antenna, CameraDef, GroundPoint, ImageDef, Measurement, PointKind};
+use super::input::{
+    perr, Antenna, CameraDef, GroundPoint, ImageDef, MeasuredDistance, Measurement, PointKind,
+};
 use crate::exposure::export::Projection;
 use gnss::frame::{Ecef, Geodetic};
 use gnss::trajectory::{InterpError, Trajectory};
@@ -249,6 +251,37 @@ pub(super) fn read_patb(
                 return Err(bad(line, "expected `point x y` (mm) or -99".into()));
             }
         }
+    }
+    Ok(out)
+}
+
+/// Measured distances: `point_a, point_b, distance[, sigma]` (metres; σ 1 cm when not given).
+pub(super) fn read_distances(path: &Path) -> Result<Vec<MeasuredDistance>, AdjustError> {
+    let t = Table::read(path)?;
+    let (ca, cb, cd) = (t.need("point_a")?, t.need("point_b")?, t.need("distance")?);
+    let cs = t.col("sigma");
+    let mut out = Vec::new();
+    for (line, row) in &t.rows {
+        let points = [t.text(row, ca), t.text(row, cb)];
+        let distance = t.num(*line, row, cd)?;
+        let sigma = match cs {
+            Some(c) if !t.text(row, c).is_empty() => t.num(*line, row, c)?,
+            _ => 0.01,
+        };
+        if !(distance > 0.0 && sigma > 0.0) || points[0] == points[1] {
+            return Err(AdjustError::Input {
+                path: path.display().to_string(),
+                line: *line,
+                what: "a distance needs two different points, a positive distance and a positive σ"
+                    .into(),
+            });
+        }
+        out.push(MeasuredDistance {
+            points,
+            distance,
+            sigma,
+            source: format!("{}:{line}", path.display()),
+        });
     }
     Ok(out)
 }

@@ -1,0 +1,84 @@
+//! Bad projects give clear errors naming files, lines and ids; no output is written.
+
+use super::*;
+
+#[test]
+fn bad_input_gives_clear_errors() {
+    // A strip without GNSS: its antenna records are missing.
+    let d = project_dir("bad-strip");
+    edit(&d, "antennas.csv", |t| {
+        t.lines()
+            .filter(|l| !l.starts_with('2'))
+            .collect::<Vec<_>>()
+            .join("\n")
+    });
+    let e = fails(&d);
+    assert!(e.contains("strip 2 (14 images) without any GNSS"), "{e}");
+    // An image with no points.
+    let d = project_dir("bad-image");
+    edit(&d, "images.csv", |t| format!("{t}999,cam,1\n"));
+    let e = fails(&d);
+    assert!(e.contains("image(s) 999 have no measured points"), "{e}");
+    // Control ids that are not in the measurements.
+    let d = project_dir("bad-gcp");
+    edit(&d, "ground_points.csv", |t| t.replacen("G2,", "G2x,", 1));
+    let e = fails(&d);
+    assert!(e.contains("G2x are not measured in any image"), "{e}");
+    // A datum defect: no control, no GNSS.
+    let d = project_dir("bad-datum");
+    edit(&d, "project.toml", |t| {
+        t[..t.find("[gnss]").unwrap()].to_string()
+    });
+    edit(&d, "ground_points.csv", |t| {
+        t.lines()
+            .filter(|l| !l.contains(",gcp,"))
+            .collect::<Vec<_>>()
+            .join("\n")
+    });
+    let e = fails(&d);
+    assert!(
+        e.contains("datum defect: 0 control point(s) and no GNSS"),
+        "{e}"
+    );
+    // A measurement naming an unknown image: file and line.
+    let d = project_dir("bad-meas");
+    edit(&d, "image_observations.csv", |t| {
+        format!("{t}777,T1,10,10,0.5\n")
+    });
+    let e = fails(&d);
+    assert!(
+        e.contains("image_observations.csv, line")
+            && e.contains("image `777` is not in the image list"),
+        "{e}"
+    );
+    // A coordinate that is not a finite number.
+    let d = project_dir("bad-nan");
+    edit(&d, "ground_points.csv", |t| {
+        let mut l: Vec<String> = t.lines().map(String::from).collect();
+        let f: Vec<&str> = l[1].split(',').collect();
+        l[1] = format!("{},{},NaN,{}", f[0], f[1], f[3..].join(","));
+        l.join("\n")
+    });
+    let e = fails(&d);
+    assert!(
+        e.contains("ground_points.csv, line 2") && e.contains("`NaN` is not a number"),
+        "{e}"
+    );
+    // An unknown key in the project file.
+    let d = project_dir("bad-key");
+    edit(&d, "project.toml", |t| {
+        t.replace("drift_model", "drift_modle")
+    });
+    let e = fails(&d);
+    assert!(e.contains("drift_modle"), "{e}");
+    for n in [
+        "bad-strip",
+        "bad-image",
+        "bad-gcp",
+        "bad-datum",
+        "bad-meas",
+        "bad-key",
+    ] {
+        let _ = std::fs::remove_dir_all(tmp(n));
+    }
+}
