@@ -4,7 +4,8 @@
 
 use super::factor::Params;
 use super::problem::{Entry, Problem, MAX_FACTOR_KEYS};
-use super::structure::{Slot, Structure};
+use super::slots::Slot;
+use super::structure::Structure;
 use super::value::Value;
 use super::FactorId;
 use super::SolveError;

@@ -25,13 +25,16 @@
 //!
 //! Units: whatever the factors use; σ0 is dimensionless. Cost = ½Σρ(‖L⁻¹r‖²).
 
+mod elim;
 mod factor;
 mod key;
 mod lin;
 mod linear;
 mod lm;
+mod pattern;
 mod problem;
 mod reduced;
+mod slots;
 mod snoop;
 mod stats;
 mod structure;

@@ -9,9 +9,10 @@
 //! threads — and the damping λ·clamp(diag JᵀJ) goes on the diagonal. Then the reduced solve,
 //! back-substitution of the eliminated blocks, and the decrease the linear model promises.
 
+use super::elim::EBlock;
 use super::lin::{add_ab, add_atb, add_atv, add_av, pieces, Linearisation, MIN_LEN};
 use super::problem::Problem;
-use super::structure::{EBlock, Structure};
+use super::structure::Structure;
 use super::value::Value;
 use nalgebra::{DMatrix, Matrix3, SMatrixView, SMatrixViewMut};
 use rayon::prelude::*;

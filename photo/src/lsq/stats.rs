@@ -10,7 +10,8 @@
 use super::lin::Linearisation;
 use super::problem::Problem;
 use super::reduced::Reduced;
-use super::structure::{Slot, Structure};
+use super::slots::Slot;
+use super::structure::Structure;
 use super::{FactorId, Key, SolveError};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
