@@ -16,13 +16,23 @@ use std::path::Path;
 /// Errors reading a BAL file.
 #[derive(Debug, thiserror::Error)]
 pub enum BalError {
+    /// The file cannot be read.
     #[error("{path}: cannot read: {source}")]
     Io {
+        /// The file.
         path: String,
+        /// Why.
         source: std::io::Error,
     },
+    /// The file is not a BAL problem.
     #[error("{path}: {what}")]
-    Format { path: String, what: String },
+    Format {
+        /// The file.
+        path: String,
+        /// What is wrong.
+        what: String,
+    },
+    /// The adjustment failed.
     #[error("the adjustment failed: {0}")]
     Solve(String),
 }
@@ -30,30 +40,43 @@ pub enum BalError {
 /// A BAL camera as the solver holds it.
 #[derive(Clone, Debug)]
 pub struct BalCamera {
+    /// Rotation world → camera (from the Rodrigues vector).
     pub r: Matrix3<f64>,
+    /// Translation: P = R·X + t.
     pub t: Vector3<f64>,
+    /// Focal length, pixels.
     pub f: f64,
+    /// Radial distortion r(p) = 1 + k1‖p‖² + k2‖p‖⁴.
     pub k1: f64,
+    /// See `k1`.
     pub k2: f64,
 }
 
 /// One observation: camera, point, measured image point.
 #[derive(Clone, Copy, Debug)]
 pub struct BalObs {
+    /// Camera index.
     pub cam: usize,
+    /// Point index.
     pub pt: usize,
+    /// Measured image point (pixels, BAL's convention).
     pub uv: Vector2<f64>,
 }
 
 /// A BAL problem.
 #[derive(Clone, Debug)]
 pub struct BalProblem {
+    /// The cameras.
     pub cameras: Vec<BalCamera>,
+    /// The points.
     pub points: Vec<Vector3<f64>>,
+    /// The observations.
     pub obs: Vec<BalObs>,
 }
 
 impl BalProblem {
+    /// Read a BAL file (counts, observations, cameras, points); every number is checked, and
+    /// an error names the file and the element.
     pub fn read(path: &Path) -> Result<BalProblem, BalError> {
         let p = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|source| BalError::Io {

@@ -12,15 +12,23 @@ use nalgebra::{Matrix2, Matrix2x3, Matrix3, SMatrix, Vector2, Vector3};
 /// affinity (b1, b2); plus the pixel grid for conversions.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
+    /// Principal distance (metres).
     pub f: f64,
+    /// Principal point x (metres, image coordinates).
     pub x0: f64,
+    /// Principal point y (metres, image coordinates).
     pub y0: f64,
+    /// Radial distortion k1, k2, k3 (on radii in metres).
     pub k: [f64; 3],
+    /// Decentring distortion p1, p2.
     pub p: [f64; 2],
+    /// Affinity and shear b1, b2.
     pub b: [f64; 2],
-    /// Pixel size (same unit as f) and image size in pixels.
+    /// Pixel size (same unit as f).
     pub pixel: f64,
+    /// Image width, pixels.
     pub width_px: usize,
+    /// Image height, pixels.
     pub height_px: usize,
 }
 
@@ -30,7 +38,9 @@ pub const N_INTERIOR: usize = 10;
 /// An exterior orientation: rotation camera → object, projection centre.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pose {
+    /// Rotation camera → object frame.
     pub r: Matrix3<f64>,
+    /// Projection centre in the object frame.
     pub centre: Vector3<f64>,
 }
 
@@ -38,8 +48,11 @@ pub struct Pose {
 /// the centre), object point, interior parameters.
 #[derive(Clone, Copy, Debug)]
 pub struct Jacobians {
+    /// With respect to (δ rotation, centre).
     pub pose: SMatrix<f64, 2, 6>,
+    /// With respect to the object point.
     pub point: Matrix2x3<f64>,
+    /// With respect to f, x0, y0, k1, k2, k3, p1, p2, b1, b2.
     pub interior: SMatrix<f64, 2, N_INTERIOR>,
 }
 

@@ -7,31 +7,42 @@ use nalgebra::{Matrix3, Vector2, Vector3};
 /// One ray: the camera, its exterior orientation, the measured image point and its sigma.
 #[derive(Clone, Copy, Debug)]
 pub struct Ray<'a> {
+    /// The camera's interior orientation.
     pub camera: &'a Camera,
+    /// Its exterior orientation.
     pub pose: &'a Pose,
+    /// The measured image point (metres, image coordinates).
     pub xy: Vector2<f64>,
+    /// Its σ (metres).
     pub sigma: f64,
 }
 
 /// An intersected point.
 #[derive(Clone, Debug)]
 pub struct Intersection {
+    /// The point.
     pub point: Vector3<f64>,
+    /// Its covariance (σ0² applied).
     pub cov: Matrix3<f64>,
     /// A posteriori sigma of unit weight (1 when there is no redundancy).
     pub sigma0: f64,
+    /// Gauss–Newton iterations.
     pub iterations: usize,
 }
 
 /// Why a point cannot be intersected.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum IntersectError {
+    /// Fewer than two rays.
     #[error("{0} ray(s): intersection needs at least two")]
     TooFewRays(usize),
+    /// The rays do not determine the point.
     #[error("the rays are (nearly) parallel: the point is not determined")]
     Parallel,
+    /// The point falls behind this camera (index of the ray).
     #[error("the point falls behind camera {0}")]
     BehindCamera(usize),
+    /// Gauss–Newton did not converge.
     #[error("no convergence")]
     NoConvergence,
 }

@@ -1,9 +1,23 @@
+#![deny(missing_docs)]
 //! # photo — the photogrammetric half of ppkat
 //!
-//! Cameras, rotation conventions, collinearity, resection, intersection and bundle adjustment.
-//! It knows nothing of GNSS. Today: [`rotation`] (SO(3) exponential and logarithm) and
-//! [`bal`] (Bundle Adjustment in the Large: reader and a Levenberg–Marquardt solver with
-//! Schur elimination of the points).
+//! Cameras, rotation conventions, collinearity, resection, intersection and the one
+//! least-squares core every adjustment runs on. It knows nothing of GNSS.
+//!
+//! - [`rotation`]: SO(3) exponential and logarithm, ω-φ-κ / φ-ω-κ / yaw-pitch-roll.
+//! - [`camera`]: interior orientation (Brown distortion, affinity), collinearity with analytic
+//!   Jacobians, pixel ↔ image coordinates.
+//! - [`lever`]: the GNSS lever arm, X_A = X_S + R·(u, v, w).
+//! - [`resection`], [`intersection`]: closed-form starts and least-squares refinement.
+//! - [`lsq`]: the least-squares core — typed keys, factors with their own noise model and
+//!   loss, Levenberg–Marquardt with the Schur complement, statistics, data snooping, variance
+//!   components.
+//! - [`factors`]: image points (with self-calibration), priors, distances on [`lsq`].
+//! - [`bal`]: the "Bundle Adjustment in the Large" file format and camera factor on [`lsq`].
+//!
+//! Conventions (see the house plan): R maps the camera frame into the object frame; image
+//! coordinates are metric with x right, y up, origin at the image centre; a rotation step is a
+//! left perturbation R ← exp([δ]×)·R.
 
 pub mod bal;
 pub mod camera;

@@ -11,29 +11,38 @@ use nalgebra::{Matrix3, Matrix4, SMatrix, SVector, Vector2, Vector3};
 /// A control point seen in the image.
 #[derive(Clone, Copy, Debug)]
 pub struct Control {
+    /// Its object coordinates.
     pub object: Vector3<f64>,
+    /// Its measured image point (metres, image coordinates).
     pub image: Vector2<f64>,
+    /// σ of the image point (metres).
     pub sigma: f64,
 }
 
 /// A resected exterior orientation.
 #[derive(Clone, Debug)]
 pub struct Resection {
+    /// The orientation.
     pub pose: Pose,
     /// Covariance of (δ rotation, centre) — δ is a small rotation of R from the left.
     pub cov: SMatrix<f64, 6, 6>,
+    /// A posteriori sigma of unit weight.
     pub sigma0: f64,
 }
 
 /// Why a resection fails.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ResectionError {
+    /// Too few control points (given, needed).
     #[error("{0} control point(s): resection needs at least {1}")]
     TooFewPoints(usize, usize),
+    /// The control points do not determine the orientation.
     #[error("the control points are (nearly) collinear: the orientation is not determined")]
     Collinear,
+    /// No closed-form solution fits.
     #[error("no closed-form start fits the control points")]
     NoStart,
+    /// Gauss–Newton did not converge.
     #[error("the adjustment does not converge")]
     NoConvergence,
 }

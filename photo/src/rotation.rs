@@ -3,7 +3,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-/// [v]× such that [v]×·w = v × w.
+/// The skew-symmetric matrix \[v\]× such that \[v\]×·w = v × w.
 pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
 }
@@ -65,15 +65,18 @@ mod tests {
     }
 }
 
-/// Elementary rotations (right-handed, active).
+/// Rotation by `a` radians about x (right-handed, active).
 pub fn rot_x(a: f64) -> Matrix3<f64> {
     let (s, c) = a.sin_cos();
     Matrix3::new(1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c)
 }
+
+/// Rotation by `a` radians about y (right-handed, active).
 pub fn rot_y(a: f64) -> Matrix3<f64> {
     let (s, c) = a.sin_cos();
     Matrix3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
 }
+/// Rotation by `a` radians about z (right-handed, active).
 pub fn rot_z(a: f64) -> Matrix3<f64> {
     let (s, c) = a.sin_cos();
     Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
@@ -83,13 +86,34 @@ pub fn rot_z(a: f64) -> Matrix3<f64> {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Angles {
     /// ω-φ-κ: R = Rω·Rφ·Rκ (the usual western definition).
-    OmegaPhiKappa { omega: f64, phi: f64, kappa: f64 },
-    /// φ-ω-κ: R = Rφ·Rω·Rκ with Rφ = [[cφ,0,−sφ],[0,1,0],[sφ,0,cφ]] (Y primary axis, as in
+    OmegaPhiKappa {
+        /// ω (about x).
+        omega: f64,
+        /// φ (about y).
+        phi: f64,
+        /// κ (about z).
+        kappa: f64,
+    },
+    /// φ-ω-κ: R = Rφ·Rω·Rκ with Rφ = `[[cφ,0,−sφ],[0,1,0],[sφ,0,cφ]]` (Y primary axis, as in
     /// Chinese photogrammetry texts).
-    PhiOmegaKappa { phi: f64, omega: f64, kappa: f64 },
+    PhiOmegaKappa {
+        /// φ (about y, primary).
+        phi: f64,
+        /// ω (about x).
+        omega: f64,
+        /// κ (about z).
+        kappa: f64,
+    },
     /// Yaw (from north, clockwise), pitch (nose up), roll (right wing down) of a NED body whose
     /// camera looks down with its x axis forward; the object frame is ENU.
-    YawPitchRoll { yaw: f64, pitch: f64, roll: f64 },
+    YawPitchRoll {
+        /// Yaw from north, clockwise.
+        yaw: f64,
+        /// Pitch, nose up.
+        pitch: f64,
+        /// Roll, right wing down.
+        roll: f64,
+    },
 }
 
 impl Angles {
@@ -117,7 +141,8 @@ impl Angles {
         }
     }
 
-    /// φ-ω-κ of a rotation matrix (R = Rφ·Rω·Rκ: R[1][2] = −sω, R[0][2] = −sφ·cω, R[2][2] = cφ·cω).
+    /// φ-ω-κ of a rotation matrix (R = Rφ·Rω·Rκ: `R[1][2] = −sω`, `R[0][2] = −sφ·cω`,
+    /// `R[2][2] = cφ·cω`).
     pub fn phi_omega_kappa(r: &Matrix3<f64>) -> Angles {
         let omega = (-r[(1, 2)]).clamp(-1.0, 1.0).asin();
         Angles::PhiOmegaKappa {
