@@ -38,7 +38,9 @@ pub const GROUP_NAMES: [&str; 5] = [
 /// A drift group (key `Drift(DriftId(index))`): its name, model and reference time.
 #[derive(Clone, Debug)]
 pub struct DriftBlock {
+    /// The group's name ("block", "strip 2", "segment 5").
     pub name: String,
+    /// Which drift terms it has.
     pub model: DriftModel,
     /// Reference time t0, GPST seconds.
     pub t0: f64,

@@ -23,10 +23,13 @@ use std::collections::BTreeMap;
 
 /// The assembled problem and how to read it back.
 pub struct Built {
+    /// The local frame the block is adjusted in.
     pub frame: LocalFrame,
+    /// The problem: blocks and factors.
     pub problem: Problem,
     /// Measured point ids by `PointId` (sorted); those with a block are adjusted.
     pub point_names: Vec<String>,
+    /// The drift groups, by `DriftId`.
     pub drifts: Vec<DriftBlock>,
     /// Points measured in a single image (not determinable): id and its image.
     pub single_ray: Vec<(String, String)>,
@@ -34,6 +37,7 @@ pub struct Built {
     pub unused_antennas: Vec<String>,
 }
 
+/// Check the inputs, choose the frame and the start values, assemble the problem.
 pub fn build(p: &Project) -> Result<Built, AdjustError> {
     let rays = measured(p)?;
     let (antenna_of, unused_antennas) = antennas_by_image(p)?;

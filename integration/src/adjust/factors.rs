@@ -21,6 +21,7 @@ pub enum DriftModel {
 }
 
 impl DriftModel {
+    /// Number of parameters.
     pub fn dim(self) -> usize {
         match self {
             DriftModel::Linear => 6,

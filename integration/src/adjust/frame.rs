@@ -7,13 +7,16 @@ use nalgebra::{Matrix3, Vector3};
 /// The local adjustment frame: ENU axes at `origin`.
 #[derive(Clone, Debug)]
 pub struct LocalFrame {
+    /// The origin.
     pub origin: Ecef,
+    /// The origin, geodetic.
     pub geodetic: Geodetic,
     /// ECEF → ENU.
     pub rot: Matrix3<f64>,
 }
 
 impl LocalFrame {
+    /// The ENU frame at `g`.
     pub fn new(g: Geodetic) -> LocalFrame {
         LocalFrame {
             origin: g.to_ecef(),
@@ -21,9 +24,11 @@ impl LocalFrame {
             rot: enu_rotation(&g),
         }
     }
+    /// ECEF → local ENU coordinates (m).
     pub fn to_local(&self, p: &Ecef) -> Vector3<f64> {
         self.rot * (p.0 - self.origin.0)
     }
+    /// Local ENU coordinates → ECEF.
     pub fn to_ecef(&self, v: &Vector3<f64>) -> Ecef {
         Ecef(self.origin.0 + self.rot.transpose() * v)
     }

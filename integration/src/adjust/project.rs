@@ -25,6 +25,7 @@ use std::path::{Path, PathBuf};
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ProjectFile {
+    /// A name for the reports.
     #[serde(default)]
     pub name: String,
     /// `aerial` (default) or `close-range`.
@@ -33,12 +34,17 @@ pub struct ProjectFile {
     /// `geodetic`, `utm`, `utm:ZONE` or `gk:CM` for the outputs (default `utm`).
     #[serde(default = "default_output")]
     pub output: String,
+    /// The cameras (`[[camera]]`).
     pub camera: Vec<CameraSection>,
+    /// The image list and the image measurements.
     pub images: ImagesSection,
+    /// Ground points (control, check) and measured distances.
     #[serde(default)]
     pub ground: Option<GroundSection>,
+    /// GNSS antenna positions, lever arm and drift.
     #[serde(default)]
     pub gnss: Option<GnssSection>,
+    /// Solver and statistics options.
     #[serde(default)]
     pub adjustment: AdjustmentSection,
 }
@@ -47,27 +53,38 @@ fn default_output() -> String {
     "utm".into()
 }
 
+/// The kind of block.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Mode {
+    /// Aerial: nadir images in strips.
     #[default]
     Aerial,
+    /// Close range: terrestrial stations with compass angles.
     CloseRange,
 }
 
+/// A `[[camera]]` section.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraSection {
+    /// The id the image list refers to.
     pub id: String,
+    /// Principal distance, mm.
     pub focal_mm: f64,
+    /// Pixel size, µm.
     pub pixel_um: f64,
+    /// Image width, pixels.
     pub width_px: usize,
+    /// Image height, pixels.
     pub height_px: usize,
+    /// Principal point x0, y0, mm (image coordinates: x right, y up).
     #[serde(default)]
     pub principal_point_mm: [f64; 2],
     /// Radial k1, k2, k3 (image coordinates in metres).
     #[serde(default)]
     pub k: [f64; 3],
+    /// Decentring p1, p2.
     #[serde(default)]
     pub p: [f64; 2],
     /// Image measurement σ, pixels (default 0.5).
@@ -82,6 +99,7 @@ fn default_sigma_px() -> f64 {
     0.5
 }
 
+/// The `[images]` section.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ImagesSection {
@@ -95,12 +113,14 @@ pub struct ImagesSection {
     pub patb: Option<PathBuf>,
 }
 
+/// The `[ground]` section.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GroundSection {
     /// CSV `point,kind,…coordinates…,sigma_xy,sigma_z` with lat/lon/h, x/y/z (ECEF) or
     /// easting/northing/h (then `crs`).
     pub file: PathBuf,
+    /// Projection of easting/northing columns: `utm:ZONE[N|S]` or `gk:CM`.
     #[serde(default)]
     pub crs: Option<String>,
     /// Control points to use as check points instead.
@@ -111,6 +131,7 @@ pub struct GroundSection {
     pub distances: Option<PathBuf>,
 }
 
+/// The `[gnss]` section.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GnssSection {
@@ -128,13 +149,16 @@ pub struct GnssSection {
     /// `lever_arm_sigma` is given.
     #[serde(default)]
     pub lever_arm: [f64; 3],
+    /// σ of the lever arm per component (m): a prior; absent: free.
     #[serde(default)]
     pub lever_arm_sigma: Option<[f64; 3]>,
+    /// Estimate the lever arm (default); `false`: hold it fixed.
     #[serde(default = "yes")]
     pub estimate_lever_arm: bool,
     /// none, block, strip or segment.
     #[serde(default)]
     pub drift: DriftGroup,
+    /// offset, linear or rate.
     #[serde(default = "default_drift_model")]
     pub drift_model: DriftModel,
 }
@@ -160,26 +184,35 @@ fn default_drift_model() -> DriftModel {
     DriftModel::Linear
 }
 
+/// Which antenna positions share a drift.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum DriftGroup {
+    /// No drift.
     #[default]
     None,
+    /// One drift for the whole block.
     Block,
+    /// One per strip.
     Strip,
+    /// One per ambiguity segment of the trajectory.
     Segment,
 }
 
+/// The `[adjustment]` section.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AdjustmentSection {
+    /// Levenberg–Marquardt iterations per solve.
     #[serde(default = "default_iterations")]
     pub max_iterations: usize,
+    /// Baarda data snooping with removal.
     #[serde(default = "yes")]
     pub snooping: bool,
     /// Family-wise error rate of data snooping (Bonferroni over all tests).
     #[serde(default = "default_alpha")]
     pub alpha: f64,
+    /// Estimate a variance component per observation group.
     #[serde(default = "yes")]
     pub variance_components: bool,
     /// none, huber or cauchy (with data snooping, none is the usual choice).
@@ -212,13 +245,21 @@ fn default_loss() -> String {
 /// A loaded project.
 #[derive(Clone, Debug)]
 pub struct Project {
+    /// The project file.
     pub path: PathBuf,
+    /// Its TOML document.
     pub file: ProjectFile,
+    /// The output coordinates.
     pub output: Projection,
+    /// The cameras.
     pub cameras: Vec<CameraDef>,
+    /// The images.
     pub images: Vec<ImageDef>,
+    /// The image measurements.
     pub measurements: Vec<Measurement>,
+    /// The control and check points.
     pub ground: Vec<GroundPoint>,
+    /// The GNSS antenna positions.
     pub antennas: Vec<Antenna>,
     /// Measured distances between points.
     pub distances: Vec<MeasuredDistance>,

@@ -11,26 +11,38 @@ use photo::factors::{Distance, ImagePoint, Prior};
 use photo::lsq::{FactorId, Key, PointId, Reliability};
 use serde::Serialize;
 
+/// An observation removed by data snooping.
 #[derive(Clone, Debug, Serialize)]
 pub struct Removed {
+    /// Its kind ("image point", "control point", "GNSS centre", …).
     pub kind: String,
+    /// Which observation, with the project's ids.
     pub what: String,
+    /// |w| when it was removed (0: removed with a point left undetermined).
     pub w: f64,
+    /// Where it came from (file:line), when known.
     pub source: String,
 }
 
+/// Reliability of an observation group.
 #[derive(Clone, Debug, Serialize)]
 pub struct GroupQuality {
+    /// The group's name.
     pub group: String,
+    /// Residual components in the group.
     pub observations: usize,
+    /// σ multiplier from variance component estimation (1 when not estimated).
     pub sigma_factor: f64,
+    /// Mean redundancy number.
     pub mean_redundancy: f64,
+    /// Least redundancy number.
     pub min_redundancy: f64,
     /// Components with a redundancy below 0.1: a blunder there is (nearly) undetectable.
     pub uncontrolled: usize,
     /// Largest minimal detectable blunder among the controlled components (redundancy ≥ 0.1),
     /// pixels for image points, metres otherwise.
     pub max_mdb: f64,
+    /// Unit of the MDB: px for image points, m otherwise.
     pub mdb_unit: String,
 }
 

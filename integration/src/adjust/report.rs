@@ -22,6 +22,7 @@ fn write_text(path: &Path, text: &str) -> Result<(), AdjustError> {
     write_atomic(path, |w| w.write_all(text.as_bytes())).map_err(|e| werr(path, e))
 }
 
+/// Write every output into `out` (created), each file atomically.
 pub fn write_all(p: &Project, r: &Results, out: &Path) -> Result<(), AdjustError> {
     std::fs::create_dir_all(out).map_err(|e| werr(out, e))?;
     // Projected coordinates first when there is a projection; geodetic always.

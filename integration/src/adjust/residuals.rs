@@ -12,33 +12,46 @@ use serde::Serialize;
 /// detectable blunder is δ0·σ/√r (Baarda).
 pub const DELTA0: f64 = 4.13;
 
+/// An image measurement's residual with its reliability.
 #[derive(Clone, Debug, Serialize)]
 pub struct ImageResidual {
+    /// The image.
     pub image: String,
+    /// The point.
     pub point: String,
     /// Measured position and residual (predicted − measured), pixels.
     pub px: [f64; 2],
+    /// Residual (predicted − measured), pixels (column, row).
     pub v_px: [f64; 2],
     /// Redundancy numbers and normalised residuals (Baarda's w) of x and y.
     pub r: [f64; 2],
+    /// Normalised residuals (Baarda's w) of x and y.
     pub w: [f64; 2],
 }
 
 /// A control point's residual (adjusted − given, local E, N, U) with its reliability.
 #[derive(Clone, Debug, Serialize)]
 pub struct ControlResidual {
+    /// The point.
     pub id: String,
+    /// Adjusted − given, local E, N, U (m).
     pub v: [f64; 3],
+    /// Redundancy numbers per axis.
     pub r: [f64; 3],
+    /// Normalised residuals per axis.
     pub w: [f64; 3],
     /// Minimal detectable blunder per axis (m), None where the redundancy is ~0.
     pub mdb: [Option<f64>; 3],
 }
 
+/// A GNSS antenna position's residual.
 #[derive(Clone, Debug, Serialize)]
 pub struct GnssResidual {
+    /// The image.
     pub image: String,
+    /// Its strip.
     pub strip: String,
+    /// GPS time of week of the exposure, s.
     pub tow: f64,
     /// Predicted − observed antenna, local E, N, U (m).
     pub v: [f64; 3],
@@ -63,10 +76,15 @@ pub struct DistanceResidual {
 
 /// The residual tables and, per image, (measurements, sum of squared pixel residuals).
 pub struct Residuals {
+    /// Image measurements.
     pub image: Vec<ImageResidual>,
+    /// Control points.
     pub control: Vec<ControlResidual>,
+    /// GNSS antenna positions.
     pub gnss: Vec<GnssResidual>,
+    /// Measured distances.
     pub distance: Vec<DistanceResidual>,
+    /// Per image: measurements and the sum of squared pixel residuals.
     pub per_image: Vec<(usize, f64)>,
 }
 

@@ -16,41 +16,66 @@ use photo::lsq::{CameraId, DriftId, ImageId, Key, PointId, Problem, Value};
 use photo::rotation::Angles;
 use serde::Serialize;
 
+/// An adjusted image.
 #[derive(Clone, Debug, Serialize)]
 pub struct ImageResult {
+    /// The image.
     pub id: String,
+    /// Its strip.
     pub strip: String,
+    /// Projection centre, local ENU (m).
     pub local: [f64; 3],
+    /// Latitude, degrees.
     pub lat: f64,
+    /// Longitude, degrees.
     pub lon: f64,
+    /// Ellipsoidal height, m.
     pub h: f64,
+    /// Easting in the output projection (longitude when geodetic).
     pub easting: f64,
+    /// Northing in the output projection (latitude when geodetic).
     pub northing: f64,
     /// ω, φ, κ of R camera → local ENU, degrees.
     pub opk_deg: [f64; 3],
+    /// σ of the centre, local E, N, U (m).
     pub sigma_centre: [f64; 3],
     /// σ of ω, φ, κ, degrees (the rotation covariance carried through the angle conversion).
     pub sigma_angles_deg: [f64; 3],
+    /// Image measurements used.
     pub points: usize,
+    /// RMS residual per coordinate, pixels.
     pub rms_px: f64,
 }
 
+/// An adjusted point.
 #[derive(Clone, Debug, Serialize)]
 pub struct PointResult {
+    /// The point.
     pub id: String,
+    /// Control, check or tie.
     pub kind: PointKind,
+    /// Position, local ENU (m).
     pub local: [f64; 3],
+    /// Latitude, degrees.
     pub lat: f64,
+    /// Longitude, degrees.
     pub lon: f64,
+    /// Ellipsoidal height, m.
     pub h: f64,
+    /// Easting in the output projection (longitude when geodetic).
     pub easting: f64,
+    /// Northing in the output projection (latitude when geodetic).
     pub northing: f64,
+    /// σ, local E, N, U (m).
     pub sigma: [f64; 3],
+    /// Image measurements of the point.
     pub rays: usize,
 }
 
+/// A check point against its known coordinates.
 #[derive(Clone, Debug, Serialize)]
 pub struct CheckPoint {
+    /// The point.
     pub id: String,
     /// Adjusted − known, local E, N, U (m).
     pub d: [f64; 3],
@@ -58,56 +83,92 @@ pub struct CheckPoint {
     pub sigma: [f64; 3],
     /// Adjusted − known as latitude and longitude (arc seconds) and height (m).
     pub dlat_arcsec: f64,
+    /// Adjusted − known longitude, arc seconds.
     pub dlon_arcsec: f64,
+    /// Adjusted − known height, m.
     pub dh: f64,
 }
 
+/// The check-point table and its summary.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct CheckTable {
+    /// Every check point, in natural order.
     pub points: Vec<CheckPoint>,
+    /// Mean difference, E, N, U (m).
     pub mean: [f64; 3],
+    /// RMS difference, E, N, U (m).
     pub rms: [f64; 3],
+    /// Largest |difference|, E, N, U (m).
     pub max: [f64; 3],
     /// √(mean σ²) per axis: the RMS the adjustment's own covariance predicts.
     pub theoretical_rms: [f64; 3],
 }
 
+/// An estimated parameter block (lever arm, drift, interior orientation).
 #[derive(Clone, Debug, Serialize)]
 pub struct Estimated {
+    /// Its name.
     pub name: String,
+    /// The values.
     pub values: Vec<f64>,
+    /// Their σ (0 when fixed).
     pub sigmas: Vec<f64>,
+    /// A label per value.
     pub labels: Vec<String>,
     /// Reference time t0 of a drift (GPST seconds), 0 otherwise.
     pub t0: f64,
+    /// Whether the block was held fixed.
     pub fixed: bool,
 }
 
+/// Everything an adjustment produced, for the reports (`report.json` is this, serialised).
 #[derive(Clone, Debug, Serialize)]
 pub struct Results {
+    /// The project's name.
     pub name: String,
+    /// Aerial or close range.
     pub mode: Mode,
+    /// The output coordinate system.
     pub crs: String,
+    /// Origin of the local frame: latitude, longitude (degrees), height (m).
     pub origin_deg: [f64; 3],
+    /// A posteriori σ of unit weight.
     pub sigma0: f64,
+    /// Redundancy (observations − unknowns).
     pub redundancy: f64,
+    /// Residual components.
     pub observations: usize,
+    /// Free unknowns.
     pub unknowns: usize,
+    /// Iterations of the last solve.
     pub iterations: usize,
+    /// Critical |w| of data snooping.
     pub critical_w: f64,
+    /// The images.
     pub images: Vec<ImageResult>,
+    /// The points.
     pub points: Vec<PointResult>,
+    /// Lever arms per camera.
     pub lever_arms: Vec<Estimated>,
+    /// Drift per group.
     pub drifts: Vec<Estimated>,
+    /// Interior orientations estimated by self-calibration.
     pub interiors: Vec<Estimated>,
+    /// Reliability per observation group.
     pub groups: Vec<GroupQuality>,
+    /// What data snooping removed.
     pub removed: Vec<Removed>,
+    /// The check-point table.
     pub checks: CheckTable,
+    /// Image residuals.
     pub image_residuals: Vec<ImageResidual>,
+    /// Control-point residuals.
     pub control_residuals: Vec<ControlResidual>,
+    /// GNSS residuals.
     pub gnss_residuals: Vec<GnssResidual>,
     /// Measured distances between points, with their residuals.
     pub distance_residuals: Vec<DistanceResidual>,
+    /// What the user should know (inputs left out, float positions …).
     pub warnings: Vec<String>,
 }
 

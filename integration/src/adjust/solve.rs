@@ -7,12 +7,15 @@ use super::project::Project;
 
 /// The adjusted problem with what was removed and estimated on the way.
 pub struct Solved {
+    /// The problem and how to read it.
     pub built: Built,
+    /// The last solve.
     pub stats: photo::lsq::Summary,
     /// Factors removed by data snooping, in order, with |w|.
     pub removed: Vec<(photo::lsq::FactorId, f64)>,
     /// σ multiplier per observation group (variance components; 1 when not estimated).
     pub components: Vec<f64>,
+    /// Critical |w| of data snooping (5 % family-wise).
     pub critical: f64,
 }
 
