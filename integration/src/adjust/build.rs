@@ -1,7 +1,7 @@
 //! From a loaded project to a `photo::lsq::Problem`: the inputs checked (every image measured,
 //! every ground point measured, GNSS in every strip, a datum), the local frame (ENU tangent
-//! plane at the block centre), start values ([`super::start`]) and the blocks and factors
-//! ([`super::assemble`]). Input problems are refused here with the ids that cause them.
+//! plane at the block centre), start values (`start`) and the blocks and factors
+//! (`assemble`). Input problems are refused here with the ids that cause them.
 //!
 //! Keys: `Pose(ImageId(i))` for the i-th image of the list, `Point(PointId(k))` for the k-th
 //! measured point id in sorted order (`Built::point_names`), `LeverArm(CameraId(c))` and

@@ -10,7 +10,7 @@
 //!
 //! Stages, each a module that only uses the ones before it: [`input`] (the rows of the
 //! tables) ← `tables` (readers) ← [`project`] (TOML schema, loading) → [`build`] (frame, start
-//! values, factors; [`factors`] holds the GNSS-centre factor) → [`solve`] (snooping, variance
+//! values, factors; [`factors`] holds the GNSS-centre factor) → [`solve`](mod@solve) (snooping, variance
 //! components) → [`residuals`] and [`results`] (numbers for the report, read from the factors)
 //! → [`report`] (CSV, JSON, HTML with SVG plots). [`error`] is the error type of them all.
 
