@@ -322,3 +322,37 @@ fn schur_cofactors_equal_the_full_inverse() {
         assert!((&x.normalised - &y.normalised).amax() < 1e-5);
     }
 }
+
+/// The Schur complement for any block size: eliminating the 6-D poses instead of the 3-D
+/// points gives the same solution (to the convergence tolerance: the same cost to 1e-14),
+/// σ0 and covariances (the reduced system is then over the points, solved sparse).
+#[test]
+fn eliminating_poses_instead_of_points_gives_the_same_adjustment() {
+    let b = block();
+    let (mut points, _, _) = problem(&b, |_| PX, |_| 0, 0);
+    let (mut poses, _, _) = problem(&b, |_| PX, |_| 0, 0);
+    poses.options.eliminate = vec![KeyKind::Pose];
+    poses.options.dense_limit = 0; // the reduced system over the points goes sparse
+    let a = points.solve().unwrap();
+    let c = poses.solve().unwrap();
+    assert!((a.sigma0 - c.sigma0).abs() < 1e-9 * a.sigma0, "{a:?} {c:?}");
+    assert!((a.final_cost - c.final_cost).abs() < 1e-9 * a.final_cost);
+    for k in points.keys().to_vec() {
+        let (x, y) = (points.value(k).unwrap(), poses.value(k).unwrap());
+        match (x, y) {
+            (Value::Pose(p), Value::Pose(q)) => {
+                let (dc, dr) = ((p.centre - q.centre).norm(), (p.r - q.r).norm());
+                assert!(dc < 1e-5 && dr < 1e-8, "{k:?}: {dc} {dr}")
+            }
+            (Value::Vector(p), Value::Vector(q)) => assert!((p - q).norm() < 1e-5, "{k:?}"),
+            _ => unreachable!(),
+        }
+    }
+    let probe = [Key::Pose(ImageId(4)), Key::Point(PointId(100))];
+    let ca = points.covariances(&probe, a.sigma0).unwrap();
+    let cc = poses.covariances(&probe, c.sigma0).unwrap();
+    for (x, y) in ca.iter().zip(&cc) {
+        let (x, y) = (x.as_ref().unwrap(), y.as_ref().unwrap());
+        assert!((x - y).norm() < 1e-6 * y.norm(), "{x} {y}");
+    }
+}
