@@ -2,13 +2,13 @@
 //! parallel, into buffers kept between steps), the cost, and the small column-major
 //! products the reduced system is built from.
 
+use super::error::SolveError;
+use super::factor::FactorId;
 use super::factor::Params;
-use super::problem::{Entry, Problem, MAX_FACTOR_KEYS};
+use super::model::{Entry, Model, MAX_FACTOR_KEYS};
 use super::slots::Slot;
 use super::structure::Structure;
 use super::value::Value;
-use super::FactorId;
-use super::SolveError;
 use nalgebra::{DMatrixViewMut, SMatrixView, SMatrixViewMut};
 use rayon::prelude::*;
 
@@ -103,7 +103,7 @@ pub(crate) fn pieces(mut buf: &mut [f64], lens: impl Iterator<Item = usize>) -> 
     .collect()
 }
 
-impl Problem {
+impl Model {
     /// Linearise every active factor at `values` into `lin` (buffers reused).
     pub(crate) fn linearise(
         &self,

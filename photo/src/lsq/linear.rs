@@ -4,7 +4,7 @@
 //! parallelism. faer's factorisations give the same bits whatever their thread count
 //! (checked for 1–8), so `Options::threads` changes speed, never results.
 
-use super::problem::Problem;
+use super::options::Options;
 use super::reduced::Reduced;
 use super::structure::Structure;
 use faer::linalg::solvers::{DenseSolveCore, Solve};
@@ -14,7 +14,15 @@ use faer::sparse::{SparseColMat, Triplet};
 /// A symbolic sparse factorisation and the structure hash it was computed for.
 pub(crate) type SymbolicCache = (u64, SymbolicLlt<usize>);
 
-impl Problem {
+/// The reduced system's solves with the solver's settings and its symbolic factorisation.
+pub(crate) struct Linear<'a> {
+    /// Dense limit and threads.
+    pub options: &'a Options,
+    /// The symbolic factorisation kept between steps.
+    pub symbolic: &'a std::sync::Mutex<Option<SymbolicCache>>,
+}
+
+impl Linear<'_> {
     /// Set faer's parallelism from the options (process-wide: set before each factorisation).
     pub(crate) fn set_parallelism(&self) {
         let n = self
@@ -41,7 +49,7 @@ impl Problem {
         } else {
             let m = SparseColMat::<usize, f64>::try_new_from_triplets(nr, nr, &triplets(st, red))
                 .ok()?;
-            let mut cache = self.caches.symbolic.lock().ok()?;
+            let mut cache = self.symbolic.lock().ok()?;
             if cache.as_ref().is_none_or(|c| c.0 != st.hash) {
                 *cache = Some((
                     st.hash,

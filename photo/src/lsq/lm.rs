@@ -5,11 +5,13 @@
 //! a step changes the cost by round-off only (a converged problem solved again stays bit for
 //! bit where it was, so its statistics can be reused), or after `max_iterations`.
 
+use super::error::SolveError;
 use super::lin::Linearisation;
+use super::linear::Linear;
+use super::model::Model;
 use super::problem::Problem;
 use super::reduced::Reduced;
 use super::structure::Structure;
-use super::{FactorId, Key};
 use nalgebra::DMatrix;
 
 /// What an adjustment did.
@@ -35,28 +37,6 @@ pub struct Summary {
     pub seconds: f64,
 }
 
-/// Why an adjustment fails.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum SolveError {
-    /// The normal equations could not be factorised.
-    #[error("the normal equations are singular: {0}")]
-    Singular(String),
-    /// A block's own observations do not determine it.
-    #[error(
-        "{0} is not determined by its observations (observed too few times, or only along one ray)"
-    )]
-    Undetermined(Key),
-    /// A block's unknowns depend on the others'.
-    #[error("the normal equations are singular at {0}: a datum defect (no control, nothing fixed) or unknowns that cannot be told apart")]
-    Dependent(Key),
-    /// More unknowns than residual components.
-    #[error("more unknowns ({0}) than observations ({1})")]
-    Underdetermined(usize, usize),
-    /// A factor cannot be evaluated at the current values.
-    #[error("factor {} cannot be evaluated (a point behind its camera?)", .0.0)]
-    Evaluation(FactorId),
-}
-
 impl Problem {
     /// Adjust: Levenberg–Marquardt until convergence, then the checks that make the result
     /// meaningful (every block determined, the normals regular).
@@ -64,10 +44,14 @@ impl Problem {
         let t0 = std::time::Instant::now();
         let st = self.structure();
         let mut lins = Linearisation::default();
-        let mut cost = self.linearise(&st, &self.values, &mut lins)?;
+        let mut cost = self.model.linearise(&st, &self.model.values, &mut lins)?;
         if self.options.unique {
-            self.check_determined(&st, &lins)?;
+            self.model.check_determined(&st, &lins)?;
         }
+        let linear = Linear {
+            options: &self.options,
+            symbolic: &self.caches.symbolic,
+        };
         let mut s = Summary {
             initial_cost: cost.cost,
             ..Summary::default()
@@ -78,14 +62,13 @@ impl Problem {
         while s.iterations < self.options.max_iterations {
             s.iterations += 1;
             if !fresh {
-                cost = self.linearise(&st, &self.values, &mut lins)?;
+                cost = self.model.linearise(&st, &self.model.values, &mut lins)?;
                 fresh = true;
             }
-            let step = self
-                .reduce(&st, &lins, 1.0 / radius, true, &mut red)
-                .then(|| self.solve_reduced(&st, &red))
+            let step = Model::reduce(&st, &lins, 1.0 / radius, true, &mut red)
+                .then(|| linear.solve_reduced(&st, &red))
                 .flatten()
-                .map(|dc| Self::back_substitute(&st, &red, dc));
+                .map(|dc| Model::back_substitute(&st, &red, dc));
             let Some(step) = step else {
                 (radius, nu) = (radius / nu, nu * 2.0);
                 if radius < 1e-32 {
@@ -93,12 +76,13 @@ impl Problem {
                 }
                 continue;
             };
-            let cand = self.apply(&st, &step);
+            let cand = self.model.apply(&st, &step);
             let new = self
+                .model
                 .cost_at(&st, &cand)
                 .map(|c| c.cost)
                 .unwrap_or(f64::INFINITY);
-            let model = Self::model_decrease(&st, &lins, &step);
+            let model = Model::model_decrease(&st, &lins, &step);
             let rho = if model > 0.0 {
                 (cost.cost - new) / model
             } else {
@@ -106,7 +90,7 @@ impl Problem {
             };
             let change = (cost.cost - new) / cost.cost.max(f64::MIN_POSITIVE);
             if new.is_finite() && rho > 1e-3 && change >= 1e-14 {
-                self.values = cand;
+                self.model.values = cand;
                 (fresh, s.successful) = (false, s.successful + 1);
                 cost.cost = new;
                 radius /= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
@@ -126,14 +110,14 @@ impl Problem {
             }
         }
         if !fresh {
-            cost = self.linearise(&st, &self.values, &mut lins)?;
+            cost = self.model.linearise(&st, &self.model.values, &mut lins)?;
         }
         let m = st.nres;
         if m < st.n {
             return Err(SolveError::Underdetermined(st.n, m));
         }
         if self.options.unique {
-            self.check_regular(&st, &lins, &mut red)?;
+            self.check_regular(&st, &lins, &linear, &mut red)?;
         }
         s.final_cost = cost.cost;
         s.observations = m;
@@ -149,9 +133,57 @@ impl Problem {
         Ok(s)
     }
 
+    /// The undamped normals must be regular, otherwise there is a datum defect (no control,
+    /// nothing fixed). Checked once per structure (a dense factorisation of the reduced system).
+    fn check_regular(
+        &self,
+        st: &Structure,
+        lins: &Linearisation,
+        linear: &Linear,
+        red: &mut Reduced,
+    ) -> Result<(), SolveError> {
+        if self
+            .caches
+            .regular_for
+            .lock()
+            .is_ok_and(|r| *r == Some(st.hash))
+        {
+            return Ok(());
+        }
+        let singular = || {
+            SolveError::Singular(format!(
+                "{} unknowns: a datum defect (no control points, nothing fixed)",
+                st.n
+            ))
+        };
+        if !Model::reduce(st, lins, 0.0, false, red) {
+            return Err(singular());
+        }
+        if st.nr > 0 {
+            match linear.dense_factor(st, red, false) {
+                Some((None, _)) => {}
+                Some((Some(col), _)) => {
+                    let c = st.coff.partition_point(|&o| o <= col) - 1;
+                    return Err(SolveError::Dependent(self.model.keys[st.cblocks[c]]));
+                }
+                None => return Err(singular()),
+            }
+        }
+        if let Ok(mut r) = self.caches.regular_for.lock() {
+            *r = Some(st.hash);
+        }
+        Ok(())
+    }
+}
+
+impl Model {
     /// Every free block must be determined by its own observations (a point seen by one ray,
     /// a camera without points are not): its diagonal block of the normals must be regular.
-    fn check_determined(&self, st: &Structure, lin: &Linearisation) -> Result<(), SolveError> {
+    pub(crate) fn check_determined(
+        &self,
+        st: &Structure,
+        lin: &Linearisation,
+    ) -> Result<(), SolveError> {
         let regular = |m: DMatrix<f64>| {
             let e = m.symmetric_eigenvalues();
             let (lo, hi) = (e.min(), e.max());
@@ -176,47 +208,6 @@ impl Problem {
             if !regular(m) {
                 return Err(SolveError::Undetermined(self.keys[eb.block]));
             }
-        }
-        Ok(())
-    }
-
-    /// The undamped normals must be regular, otherwise there is a datum defect (no control,
-    /// nothing fixed). Checked once per structure (a dense factorisation of the reduced system).
-    fn check_regular(
-        &self,
-        st: &Structure,
-        lins: &Linearisation,
-        red: &mut Reduced,
-    ) -> Result<(), SolveError> {
-        if self
-            .caches
-            .regular_for
-            .lock()
-            .is_ok_and(|r| *r == Some(st.hash))
-        {
-            return Ok(());
-        }
-        let singular = || {
-            SolveError::Singular(format!(
-                "{} unknowns: a datum defect (no control points, nothing fixed)",
-                st.n
-            ))
-        };
-        if !self.reduce(st, lins, 0.0, false, red) {
-            return Err(singular());
-        }
-        if st.nr > 0 {
-            match self.dense_factor(st, red, false) {
-                Some((None, _)) => {}
-                Some((Some(col), _)) => {
-                    let c = st.coff.partition_point(|&o| o <= col) - 1;
-                    return Err(SolveError::Dependent(self.keys[st.cblocks[c]]));
-                }
-                None => return Err(singular()),
-            }
-        }
-        if let Ok(mut r) = self.caches.regular_for.lock() {
-            *r = Some(st.hash);
         }
         Ok(())
     }

@@ -25,12 +25,16 @@
 //!
 //! Units: whatever the factors use; σ0 is dimensionless. Cost = ½Σρ(‖L⁻¹r‖²).
 
+mod cofactor;
 mod elim;
+mod error;
 mod factor;
 mod key;
 mod lin;
 mod linear;
 mod lm;
+mod model;
+mod options;
 mod pattern;
 mod problem;
 mod reduced;
@@ -40,10 +44,13 @@ mod stats;
 mod structure;
 mod value;
 
+pub use cofactor::Reliability;
+pub use error::SolveError;
 pub use factor::{Factor, FactorId, Group, Loss, Noise, Params};
 pub use key::{CameraId, DriftId, ImageId, Key, KeyKind, PointId};
-pub use lm::{SolveError, Summary};
-pub use problem::{BuildError, Options, Problem, Timing, MAX_FACTOR_KEYS};
+pub use lm::Summary;
+pub use options::Options;
+pub use problem::{BuildError, Problem, Timing, MAX_FACTOR_KEYS};
 pub use snoop::{normal_quantile, snooping_critical, MIN_VCE_REDUNDANCY};
-pub use stats::{Covariances, Reliability};
+pub use stats::Covariances;
 pub use value::Value;

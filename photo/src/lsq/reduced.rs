@@ -11,7 +11,7 @@
 
 use super::elim::EBlock;
 use super::lin::{add_ab, add_atb, add_atv, add_av, pieces, Linearisation, MIN_LEN};
-use super::problem::Problem;
+use super::model::Model;
 use super::structure::Structure;
 use super::value::Value;
 use nalgebra::{DMatrix, Matrix3, SMatrixView, SMatrixViewMut};
@@ -153,7 +153,7 @@ fn add_direct(st: &Structure, lin: &Linearisation, k: usize, w: f64, sums: &mut 
     }
 }
 
-impl Problem {
+impl Model {
     /// Eliminate one block: its factors' direct terms into `sums`; V (damped by `lambda`),
     /// gₑ, W and V⁻¹ into `out`; Tₙ = Wₙᵀ·V⁻¹ into `t`. `false` when V is singular.
     #[allow(clippy::too_many_arguments)]
@@ -265,7 +265,6 @@ impl Problem {
     /// Build the reduced system at the linearisation `lin` with damping `lambda` (0: none)
     /// and the robust weights when `robust`. `false` when an eliminated block is singular.
     pub(crate) fn reduce(
-        &self,
         st: &Structure,
         lin: &Linearisation,
         lambda: f64,
@@ -312,13 +311,13 @@ impl Problem {
         if ok.iter().any(|x| !x) {
             return false;
         }
-        self.sum_jobs(st, lambda, red);
+        Self::sum_jobs(st, lambda, red);
         true
     }
 
     /// S and b as the sum of the jobs' copies (the factors without eliminated blocks first,
     /// then the ranges in order), damped.
-    fn sum_jobs(&self, st: &Structure, lambda: f64, red: &mut Reduced) {
+    fn sum_jobs(st: &Structure, lambda: f64, red: &mut Reduced) {
         let tail = (!st.tail.is_empty()).then_some(red.sums.len() - 1);
         let order: Vec<usize> = tail.into_iter().chain(0..red.sums.len() - 1).collect();
         red.vals.clear();

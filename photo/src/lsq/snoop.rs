@@ -1,8 +1,9 @@
 //! Baarda data snooping with removal, and Förstner variance components per group.
 
+use super::error::SolveError;
+use super::factor::{FactorId, Group};
+use super::lm::Summary;
 use super::problem::Problem;
-use super::SolveError;
-use super::{FactorId, Group, Summary};
 
 /// Least redundancy of a group whose variance component is estimated.
 pub const MIN_VCE_REDUNDANCY: f64 = 10.0;
@@ -26,7 +27,7 @@ impl Problem {
                 .max_by(|a, b| a.1.total_cmp(&b.1));
             match worst {
                 Some((k, w)) if w > critical => {
-                    self.entries[k.0].removed = true;
+                    self.model.entries[k.0].removed = true;
                     removed.push((k, w));
                     self.drop_undetermined(k, &mut removed);
                 }
@@ -38,23 +39,30 @@ impl Problem {
     /// After removing factor `k`: a block of an eliminated kind it touched that is left with
     /// no more residual rows than unknowns is fixed out, with its remaining factors.
     fn drop_undetermined(&mut self, k: FactorId, removed: &mut Vec<(FactorId, f64)>) {
-        let blocks: Vec<usize> = self.entries[k.0]
+        let blocks: Vec<usize> = self.model.entries[k.0]
             .blocks
             .iter()
             .copied()
-            .filter(|&b| !self.fixed[b] && self.options.eliminate.contains(&self.keys[b].kind()))
+            .filter(|&b| {
+                !self.model.fixed[b] && self.options.eliminate.contains(&self.model.keys[b].kind())
+            })
             .collect();
         for b in blocks {
-            let active: Vec<usize> = (0..self.entries.len())
-                .filter(|&j| !self.entries[j].removed && self.entries[j].blocks.contains(&b))
+            let active: Vec<usize> = (0..self.model.entries.len())
+                .filter(|&j| {
+                    !self.model.entries[j].removed && self.model.entries[j].blocks.contains(&b)
+                })
                 .collect();
-            let rows: usize = active.iter().map(|&j| self.entries[j].factor.dim()).sum();
-            if rows <= self.values[b].dim() {
+            let rows: usize = active
+                .iter()
+                .map(|&j| self.model.entries[j].factor.dim())
+                .sum();
+            if rows <= self.model.values[b].dim() {
                 for j in active {
-                    self.entries[j].removed = true;
+                    self.model.entries[j].removed = true;
                     removed.push((FactorId(j), 0.0));
                 }
-                self.fixed[b] = true;
+                self.model.fixed[b] = true;
             }
         }
     }
@@ -68,11 +76,11 @@ impl Problem {
             self.solve()?;
             let (num, red) = self.group_sums()?;
             let mut change: f64 = 0.0;
-            for g in 0..self.group_scale.len() {
+            for g in 0..self.model.group_scale.len() {
                 // A group with little redundancy keeps its weight: its estimate would be noise.
                 if red[g] >= MIN_VCE_REDUNDANCY {
                     let f = num[g] / red[g];
-                    self.group_scale[g] *= f;
+                    self.model.group_scale[g] *= f;
                     change = change.max((f - 1.0).abs());
                 }
             }
@@ -80,7 +88,7 @@ impl Problem {
                 break;
             }
         }
-        Ok(self.group_scale.iter().map(|s| s.sqrt()).collect())
+        Ok(self.model.group_scale.iter().map(|s| s.sqrt()).collect())
     }
 
     /// σ multiplier of a group (√ of its variance factor).

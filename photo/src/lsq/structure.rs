@@ -10,11 +10,11 @@
 //! order, then eliminated blocks in order), so the result does not depend on the threads.
 
 use super::elim::{chunks, link_eliminated, pack, EBlock, EDraft, ESizes, ETerm};
+use super::key::KeyKind;
+use super::model::Model;
 use super::pattern::{direct_terms, rows, Direct, Grad, Pair, Row};
-use super::problem::Problem;
 pub(crate) use super::slots::{Slot, Slots};
 use std::hash::{Hash, Hasher};
-use std::sync::Arc;
 
 /// The structure of the normal equations.
 pub(crate) struct Structure {
@@ -106,37 +106,23 @@ impl Structure {
     }
 }
 
-impl Problem {
+impl Model {
     /// A hash of everything the structure depends on.
-    pub(crate) fn shape_hash(&self) -> u64 {
+    pub(crate) fn shape_hash(&self, eliminate: &[KeyKind]) -> u64 {
         let mut h = std::collections::hash_map::DefaultHasher::new();
         self.fixed.hash(&mut h);
         self.values.len().hash(&mut h);
         self.entries.len().hash(&mut h);
         self.entries.iter().for_each(|e| e.removed.hash(&mut h));
-        self.options.eliminate.hash(&mut h);
+        eliminate.hash(&mut h);
         h.finish()
-    }
-
-    /// The structure for the current shape (cached).
-    pub(crate) fn structure(&self) -> Arc<Structure> {
-        let hash = self.shape_hash();
-        if let Ok(mut c) = self.caches.structure.lock() {
-            if let Some(s) = c.as_ref().filter(|s| s.hash == hash) {
-                return s.clone();
-            }
-            let s = Arc::new(self.build_structure(hash));
-            *c = Some(s.clone());
-            return s;
-        }
-        Arc::new(self.build_structure(hash))
     }
 
     /// Which free blocks the Schur complement eliminates: those of the chosen kinds, unless a
     /// factor ties two of them together (then none).
-    fn eliminated(&self, active: &[usize]) -> Vec<bool> {
+    fn eliminated(&self, eliminate: &[KeyKind], active: &[usize]) -> Vec<bool> {
         let mut elim: Vec<bool> = (0..self.values.len())
-            .map(|b| !self.fixed[b] && self.options.eliminate.contains(&self.keys[b].kind()))
+            .map(|b| !self.fixed[b] && eliminate.contains(&self.keys[b].kind()))
             .collect();
         let tied = active
             .iter()
@@ -147,11 +133,11 @@ impl Problem {
         elim
     }
 
-    fn build_structure(&self, hash: u64) -> Structure {
+    pub(crate) fn build_structure(&self, eliminate: &[KeyKind], hash: u64) -> Structure {
         let active: Vec<usize> = (0..self.entries.len())
             .filter(|&f| !self.entries[f].removed)
             .collect();
-        let elim = self.eliminated(&active);
+        let elim = self.eliminated(eliminate, &active);
         let mut cblocks = Vec::new();
         let (mut coff, mut cdim) = (Vec::new(), Vec::new());
         let (mut n, mut nr) = (0, 0);
@@ -181,7 +167,7 @@ impl Problem {
         let layout = self.layout(&active, &cidx, &eidx);
         let robust = active
             .iter()
-            .any(|&f| self.entries[f].loss != super::Loss::Trivial);
+            .any(|&f| self.entries[f].loss != super::factor::Loss::Trivial);
         let Layout {
             slots,
             m,
