@@ -42,7 +42,7 @@ pub fn write_all(p: &Project, r: &Results, out: &Path) -> Result<(), AdjustError
         let _ = writeln!(
             s,
             "{},{},{}{:.9},{:.9},{:.4},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{},{:.3}",
-            i.id, i.strip, proj(i.easting, i.northing), i.lat, i.lon, i.h, i.local[0], i.local[1], i.local[2],
+            i.id, i.strip, proj(i.position.easting, i.position.northing), i.position.lat, i.position.lon, i.position.h, i.position.local[0], i.position.local[1], i.position.local[2],
             i.opk_deg[0], i.opk_deg[1], i.opk_deg[2], i.sigma_centre[0], i.sigma_centre[1], i.sigma_centre[2],
             i.sigma_angles_deg[0], i.sigma_angles_deg[1], i.sigma_angles_deg[2], i.points, i.rms_px
         );
@@ -67,10 +67,10 @@ pub fn write_all(p: &Project, r: &Results, out: &Path) -> Result<(), AdjustError
                 .ok()
                 .and_then(|v| v.as_str().map(String::from))
                 .unwrap_or_default(),
-            proj(q.easting, q.northing),
-            q.lat,
-            q.lon,
-            q.h,
+            proj(q.position.easting, q.position.northing),
+            q.position.lat,
+            q.position.lon,
+            q.position.h,
             q.sigma[0],
             q.sigma[1],
             q.sigma[2],
@@ -335,11 +335,17 @@ fn html_images(s: &mut String, r: &Results) {
     let _ = writeln!(s, "<h2>Images</h2><table><tr><th>image</th><th>strip</th>{}<th>h</th><th>ω°</th><th>φ°</th><th>κ°</th><th>σE</th><th>σN</th><th>σU</th><th>σω°</th><th>σφ°</th><th>σκ°</th><th>points</th><th>RMS px</th></tr>", if geo { "<th>lat°</th><th>lon°</th>" } else { "<th>easting</th><th>northing</th>" });
     for i in &r.images {
         let xy = if geo {
-            format!("<td>{:.9}</td><td>{:.9}</td>", i.lat, i.lon)
+            format!(
+                "<td>{:.9}</td><td>{:.9}</td>",
+                i.position.lat, i.position.lon
+            )
         } else {
-            format!("<td>{:.3}</td><td>{:.3}</td>", i.easting, i.northing)
+            format!(
+                "<td>{:.3}</td><td>{:.3}</td>",
+                i.position.easting, i.position.northing
+            )
         };
-        let _ = writeln!(s, "<tr><td>{}</td><td>{}</td>{xy}<td>{:.3}</td><td>{:.4}</td><td>{:.4}</td><td>{:.4}</td>{}{}<td>{}</td><td>{:.2}</td></tr>", i.id, i.strip, i.h, i.opk_deg[0], i.opk_deg[1], i.opk_deg[2], f3(i.sigma_centre, 1.0, 3), f3(i.sigma_angles_deg, 1.0, 4), i.points, i.rms_px);
+        let _ = writeln!(s, "<tr><td>{}</td><td>{}</td>{xy}<td>{:.3}</td><td>{:.4}</td><td>{:.4}</td><td>{:.4}</td>{}{}<td>{}</td><td>{:.2}</td></tr>", i.id, i.strip, i.position.h, i.opk_deg[0], i.opk_deg[1], i.opk_deg[2], f3(i.sigma_centre, 1.0, 3), f3(i.sigma_angles_deg, 1.0, 4), i.points, i.rms_px);
     }
 }
 
@@ -430,7 +436,7 @@ fn plot_checks(r: &Results) -> String {
             r.points
                 .iter()
                 .find(|p| p.id == c.id)
-                .map(|p| (p.local[0], p.local[1], c.d))
+                .map(|p| (p.position.local[0], p.position.local[1], c.d))
         })
         .collect();
     let (x0, x1) = range(pts.iter().map(|p| p.0));

@@ -16,14 +16,10 @@ use photo::lsq::{CameraId, DriftId, ImageId, Key, PointId, Problem, Value};
 use photo::rotation::Angles;
 use serde::Serialize;
 
-/// An adjusted image.
-#[derive(Clone, Debug, Serialize)]
-pub struct ImageResult {
-    /// The image.
-    pub id: String,
-    /// Its strip.
-    pub strip: String,
-    /// Projection centre, local ENU (m).
+/// A position in the local frame, geodetic and in the output projection.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Position {
+    /// Position, local ENU (m).
     pub local: [f64; 3],
     /// Latitude, degrees.
     pub lat: f64,
@@ -35,6 +31,18 @@ pub struct ImageResult {
     pub easting: f64,
     /// Northing in the output projection (latitude when geodetic).
     pub northing: f64,
+}
+
+/// An adjusted image.
+#[derive(Clone, Debug, Serialize)]
+pub struct ImageResult {
+    /// The image.
+    pub id: String,
+    /// Its strip.
+    pub strip: String,
+    /// The projection centre.
+    #[serde(flatten)]
+    pub position: Position,
     /// ω, φ, κ of R camera → local ENU, degrees.
     pub opk_deg: [f64; 3],
     /// σ of the centre, local E, N, U (m).
@@ -54,18 +62,9 @@ pub struct PointResult {
     pub id: String,
     /// Control, check or tie.
     pub kind: PointKind,
-    /// Position, local ENU (m).
-    pub local: [f64; 3],
-    /// Latitude, degrees.
-    pub lat: f64,
-    /// Longitude, degrees.
-    pub lon: f64,
-    /// Ellipsoidal height, m.
-    pub h: f64,
-    /// Easting in the output projection (longitude when geodetic).
-    pub easting: f64,
-    /// Northing in the output projection (latitude when geodetic).
-    pub northing: f64,
+    /// Where it is.
+    #[serde(flatten)]
+    pub position: Position,
     /// σ, local E, N, U (m).
     pub sigma: [f64; 3],
     /// Image measurements of the point.
@@ -238,10 +237,10 @@ struct Context<'a> {
 }
 
 impl Context<'_> {
-    /// Geodetic position and the projected (or lon/lat) coordinates of a local point.
-    fn project(&self, v: &Vector3<f64>) -> (gnss::frame::Geodetic, f64, f64) {
+    /// A local point, geodetic and projected (lon/lat when the output is geodetic).
+    fn project(&self, v: &Vector3<f64>) -> (gnss::frame::Geodetic, Position) {
         let g = self.frame.to_ecef(v).to_geodetic();
-        let (e, n) = self
+        let (easting, northing) = self
             .tm
             .as_ref()
             .map(|t| {
@@ -249,7 +248,15 @@ impl Context<'_> {
                 (q.easting, q.northing)
             })
             .unwrap_or((g.lon.to_degrees(), g.lat.to_degrees()));
-        (g, e, n)
+        let p = Position {
+            local: [v.x, v.y, v.z],
+            lat: g.lat.to_degrees(),
+            lon: g.lon.to_degrees(),
+            h: g.h,
+            easting,
+            northing,
+        };
+        (g, p)
     }
 
     /// The covariance of a block.
@@ -330,7 +337,7 @@ fn image_results(p: &Project, ctx: &Context, per_image: &[(usize, f64)]) -> Vec<
                         r: nalgebra::Matrix3::identity(),
                         centre: Vector3::zeros(),
                     });
-            let (g, e, n) = ctx.project(&pose.centre);
+            let (_, position) = ctx.project(&pose.centre);
             let Angles::OmegaPhiKappa { omega, phi, kappa } = Angles::omega_phi_kappa(&pose.r)
             else {
                 unreachable!("omega_phi_kappa returns that convention")
@@ -340,12 +347,7 @@ fn image_results(p: &Project, ctx: &Context, per_image: &[(usize, f64)]) -> Vec<
             ImageResult {
                 id: im.id.clone(),
                 strip: im.strip.clone(),
-                local: [pose.centre.x, pose.centre.y, pose.centre.z],
-                lat: g.lat.to_degrees(),
-                lon: g.lon.to_degrees(),
-                h: g.h,
-                easting: e,
-                northing: n,
+                position,
                 opk_deg: [omega, phi, kappa].map(f64::to_degrees),
                 sigma_centre: c.map(|c| sig3(c, 3)).unwrap_or_default(),
                 sigma_angles_deg: c
@@ -379,7 +381,7 @@ fn point_results(
         let Some(x) = ctx.pr.value(key).and_then(Value::as_point) else {
             continue;
         };
-        let (g, e, n) = ctx.project(&x);
+        let (g, position) = ctx.project(&x);
         let ground = p.ground.iter().find(|g| &g.id == id);
         let kind = ground.map(|g| g.kind).unwrap_or(PointKind::Tie);
         let sigma = ctx.cov_of(key).map(|c| sig3(c, 0)).unwrap_or_default();
@@ -398,12 +400,7 @@ fn point_results(
         points.push(PointResult {
             id: id.clone(),
             kind,
-            local: [x.x, x.y, x.z],
-            lat: g.lat.to_degrees(),
-            lon: g.lon.to_degrees(),
-            h: g.h,
-            easting: e,
-            northing: n,
+            position,
             sigma,
             rays: rays.get(id.as_str()).copied().unwrap_or(0),
         });

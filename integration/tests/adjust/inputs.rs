@@ -48,11 +48,11 @@ fn patb_measurements_equal_csv() {
         assert_eq!(a.id, b.id);
         for k in 0..3 {
             assert!(
-                (a.local[k] - b.local[k]).abs() < 2e-3,
+                (a.position.local[k] - b.position.local[k]).abs() < 2e-3,
                 "{} {:?} {:?}",
                 a.id,
-                a.local,
-                b.local
+                a.position.local,
+                b.position.local
             );
         }
     }
@@ -87,7 +87,7 @@ fn ground_point_formats_agree() {
         let e = g.to_ecef();
         utm += &format!(
             "{},{},{:.4},{:.4},{},{},{}\n",
-            f[0], f[1], p.easting, p.northing, f[4], f[5], f[6]
+            f[0], f[1], p.position.easting, p.position.northing, f[4], f[5], f[6]
         );
         xyz += &format!(
             "{},{},{:.4},{:.4},{:.4},{},{}\n",
@@ -189,11 +189,11 @@ fn trajectory_input_equals_the_antenna_table() {
     for (a, b) in traj.images.iter().zip(&table.images) {
         for k in 0..3 {
             assert!(
-                (a.local[k] - b.local[k]).abs() < 2e-3,
+                (a.position.local[k] - b.position.local[k]).abs() < 2e-3,
                 "{} {:?} {:?}",
                 a.id,
-                a.local,
-                b.local
+                a.position.local,
+                b.position.local
             );
         }
     }

@@ -199,7 +199,7 @@ fn measured_distances_join_the_adjustment() {
         .iter()
         .any(|q| q.group == "distances" && q.observations == 1));
     // The adjusted check points agree with the measured distance (v is adjusted − measured).
-    let pos = |id: &str| r.points.iter().find(|p| p.id == id).unwrap().local;
+    let pos = |id: &str| r.points.iter().find(|p| p.id == id).unwrap().position.local;
     let (a, b) = (pos(&checks[0].0), pos(&checks[1].0));
     let adjusted = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
     assert!(
