@@ -1,0 +1,68 @@
+//! `ppkat bench`: throughput and peak memory of the stages.
+
+use anyhow::Result;
+use clap::Subcommand;
+use integration::adjust::RunOptions;
+use integration::bench;
+use std::path::PathBuf;
+
+/// Benchmarks: observation parsing speed, and the joint adjustment's wall time and memory.
+///
+/// `ppkat bench ingest FILE` streams an observation file through the parser and prints MB/s
+/// of RINEX text and the peak memory. `ppkat bench adjust` simulates a block of photos and
+/// prints its joint adjustment's wall time and peak memory.
+#[derive(clap::Args)]
+pub struct Args {
+    #[command(subcommand)]
+    what: BenchCmd,
+}
+
+#[derive(Subcommand)]
+enum BenchCmd {
+    Ingest(IngestArgs),
+    Adjust(AdjustArgs),
+}
+
+/// Stream an observation file through the parser and report MB/s and peak RSS.
+///
+/// Reads the file keeping nothing (the pure parse cost); a compressed file (gzip, Hatanaka)
+/// is first expanded to a temporary plain RINEX file, so the figure is the parser's speed on
+/// plain text. Prints the megabytes of RINEX text, epochs and satellite records, the time,
+/// MB/s and the peak resident memory (Linux). Writes only that temporary file, removed after.
+#[derive(clap::Args)]
+struct IngestArgs {
+    /// RINEX observation file to parse (plain, Hatanaka or gzip).
+    #[arg(value_name = "FILE")]
+    file: PathBuf,
+}
+
+/// Simulate a block of STRIPS × PER_STRIP photos and time its joint adjustment.
+///
+/// Writes the simulated project into the output folder and the adjustment's outputs into its
+/// `out` subfolder, and prints the block's size (images, points, observations, unknowns), the
+/// simulation's and the adjustment's wall times, σ0 and the peak resident memory (Linux).
+#[derive(clap::Args)]
+struct AdjustArgs {
+    /// Number of strips of the simulated block.
+    #[arg(long, value_name = "N", default_value_t = 20)]
+    strips: usize,
+    /// Photos per strip.
+    #[arg(long, value_name = "N", default_value_t = 50)]
+    per_strip: usize,
+    /// Output folder of the simulated project; the adjustment writes into DIR/out (created;
+    /// files of the same names are replaced).
+    #[arg(long, value_name = "DIR", default_value = "ppkat-bench-adjust")]
+    out: PathBuf,
+}
+
+/// Run the benchmark asked for and print its report.
+pub fn run(args: Args, threads: Option<usize>) -> Result<()> {
+    match args.what {
+        BenchCmd::Ingest(a) => print!("{}", bench::ingest(&a.file)?),
+        BenchCmd::Adjust(a) => print!(
+            "{}",
+            bench::adjust(a.strips, a.per_strip, &a.out, &RunOptions { threads })?
+        ),
+    }
+    Ok(())
+}

@@ -1,0 +1,182 @@
+//! `ppkat exposures`: camera projection centres from exposure times on a trajectory.
+
+use super::triple;
+use anyhow::{bail, Context, Result};
+use clap::ValueEnum;
+use integration::exposure::attitude::{AngleConvention, AttitudeTable};
+use integration::exposure::events::TimeSystem;
+use integration::exposure::export::{Format, Projection};
+use integration::exposure::ExposureOptions;
+use integration::photo::lever::LeverArm;
+use integration::pipeline::{self, EventSource};
+use std::path::PathBuf;
+
+/// Camera projection centres: exposure times on a trajectory, lever arm rotated by the
+/// camera attitude, exported for photogrammetry software.
+///
+/// Reads a trajectory (.pos) and the exposure times (flag-5 events of the rover's RINEX file,
+/// a DJI Timestamp.MRK, or a CSV of times), interpolates the antenna position at each
+/// exposure, subtracts the lever arm rotated by the camera attitude (from --attitude, else the
+/// trajectory's heading with zero pitch and roll, flagged) and writes one camera station per
+/// exposure, with accuracy and flags, in the chosen format. The lever arm (u, v, w) is the
+/// antenna in the camera frame: X_antenna = X_camera + R·(u, v, w). Optionally matches the
+/// photographs of a folder to the exposures and writes geotagged copies (originals are never
+/// modified). Prints how many stations were written, what was refused and why, and warnings.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Antenna trajectory (.pos from ppkat or RTKLIB, llh or xyz).
+    #[arg(long, value_name = "FILE.pos")]
+    trajectory: PathBuf,
+    /// Exposure times: rover RINEX observation file with flag-5 event records (the receiver
+    /// clock is removed from the event times).
+    #[arg(long, value_name = "ROVER.obs", group = "src")]
+    events: Option<PathBuf>,
+    /// Exposure times: a DJI Timestamp.MRK file.
+    #[arg(long, value_name = "FILE.MRK", group = "src")]
+    mrk: Option<PathBuf>,
+    /// Exposure times: a CSV with a header naming an id column and either week,tow or time.
+    #[arg(long, value_name = "FILE.csv", group = "src")]
+    times: Option<PathBuf>,
+    /// Time system of the --times file.
+    #[arg(long, value_enum, default_value = "gpst")]
+    time_system: TimeSystemArg,
+    /// Antenna phase centre in the camera frame, metres: U,V,W (default: none, the stations
+    /// are the antenna positions).
+    #[arg(long, value_name = "U,V,W", allow_hyphen_values = true)]
+    lever_arm: Option<String>,
+    /// Camera attitude over time: a CSV with header week,tow,a1,a2,a3 (GPST, angles in
+    /// degrees, see --attitude-convention) (default: the trajectory heading, zero pitch and
+    /// roll).
+    #[arg(long, value_name = "FILE")]
+    attitude: Option<PathBuf>,
+    /// Meaning of the three angles of the --attitude file.
+    #[arg(long, value_enum, default_value = "ypr")]
+    attitude_convention: ConventionArg,
+    /// Camera latency added to every exposure time, milliseconds (may be negative).
+    #[arg(
+        long,
+        value_name = "MS",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    delay_ms: f64,
+    /// Longest trajectory gap to interpolate across, seconds (default: 2.5 trajectory
+    /// intervals); exposures in longer gaps are refused.
+    #[arg(long, value_name = "SECONDS")]
+    max_gap: Option<f64>,
+    /// Output layout.
+    #[arg(long, value_enum, default_value = "csv")]
+    format: ExportArg,
+    /// Folder of the photographs (JPEG), matched in name order to the exposures; their names
+    /// become the station labels.
+    #[arg(long, value_name = "DIR")]
+    photos: Option<PathBuf>,
+    /// Write geotagged copies of the --photos into this folder (originals are never touched).
+    #[arg(long, value_name = "OUTDIR", requires = "photos")]
+    geotag: Option<PathBuf>,
+    /// Horizontal coordinates of the output: geodetic, utm (zone of the first station),
+    /// utm:ZONE or gk:CENTRAL_MERIDIAN (Gauss–Krüger, degrees).
+    #[arg(long, value_name = "PROJECTION", default_value = "geodetic")]
+    projection: String,
+    /// Output file (replaced if it exists).
+    #[arg(short = 'o', long, value_name = "OUT")]
+    out: PathBuf,
+}
+
+/// Time system of a CSV of times.
+#[derive(Clone, Copy, ValueEnum)]
+enum TimeSystemArg {
+    /// GPS time
+    Gpst,
+    /// UTC (converted with the leap seconds)
+    Utc,
+}
+
+/// Convention of the three attitude angles.
+#[derive(Clone, Copy, ValueEnum)]
+enum ConventionArg {
+    /// yaw, pitch, roll (IMU, gimbal, compass)
+    Ypr,
+    /// omega, phi, kappa (R = Rω·Rφ·Rκ)
+    Opk,
+    /// phi, omega, kappa (R = Rφ·Rω·Rκ)
+    Pok,
+}
+
+/// Output layout of the camera stations.
+#[derive(Clone, Copy, ValueEnum)]
+enum ExportArg {
+    /// Agisoft Metashape reference CSV
+    Metashape,
+    /// Pix4D image geolocation CSV
+    Pix4d,
+    /// OpenDroneMap geo.txt
+    Odm,
+    /// Full CSV: time, coordinates, sigmas, quality, attitude, flags
+    Csv,
+    /// RTKLIB-compatible .pos
+    Pos,
+    /// Antenna positions with full covariance and segments: the GNSS input of `adjust`
+    Antenna,
+}
+
+/// Convert the arguments into a [`pipeline::ExposureJob`], run it and print its report.
+pub fn run(args: Args) -> Result<()> {
+    let events = match (args.events, args.mrk, args.times) {
+        (Some(p), _, _) => EventSource::Rinex(p),
+        (_, Some(p), _) => EventSource::Mrk(p),
+        (_, _, Some(p)) => EventSource::Times(
+            p,
+            match args.time_system {
+                TimeSystemArg::Gpst => TimeSystem::Gpst,
+                TimeSystemArg::Utc => TimeSystem::Utc,
+            },
+        ),
+        _ => bail!(
+            "give the exposure times: --events ROVER.obs, --mrk Timestamp.MRK or --times FILE.csv"
+        ),
+    };
+    let lever_arm = match args.lever_arm {
+        Some(s) => Some(LeverArm::new(triple("--lever-arm", &s)?.into())),
+        None => None,
+    };
+    let convention = match args.attitude_convention {
+        ConventionArg::Ypr => AngleConvention::YawPitchRoll,
+        ConventionArg::Opk => AngleConvention::OmegaPhiKappa,
+        ConventionArg::Pok => AngleConvention::PhiOmegaKappa,
+    };
+    let attitude = match args.attitude {
+        Some(p) => Some(AttitudeTable::read_csv(&p, convention)?),
+        None => None,
+    };
+    let projection = Projection::parse(&args.projection).with_context(|| {
+        format!(
+            "--projection {}: use geodetic, utm, utm:ZONE or gk:CENTRAL_MERIDIAN",
+            args.projection
+        )
+    })?;
+    let job = pipeline::ExposureJob {
+        trajectory: args.trajectory,
+        events,
+        options: ExposureOptions {
+            lever_arm,
+            attitude,
+            delay_ms: args.delay_ms,
+            max_gap: args.max_gap,
+        },
+        format: match args.format {
+            ExportArg::Metashape => Format::Metashape,
+            ExportArg::Pix4d => Format::Pix4d,
+            ExportArg::Odm => Format::Odm,
+            ExportArg::Csv => Format::Csv,
+            ExportArg::Pos => Format::Pos,
+            ExportArg::Antenna => Format::Antenna,
+        },
+        projection,
+        out: args.out,
+        photos: args.photos,
+        geotag: args.geotag,
+    };
+    print!("{}", pipeline::exposures(&job).context("exposures failed")?);
+    Ok(())
+}

@@ -1,0 +1,168 @@
+//! `ppkat ppk`: carrier-phase kinematic positioning of a rover against a base.
+
+use super::{elev_mask, systems, triple, PosFormatArg};
+use anyhow::{bail, Context, Result};
+use clap::ValueEnum;
+use integration::gnss::frame::{Ecef, Geodetic};
+use integration::gnss::model::antex::Antex;
+use integration::gnss::ppk::{ArMode, BasePosition, FilterMode, PpkOptions};
+use integration::pipeline;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// Carrier-phase kinematic positioning of a rover against a base (double differences,
+/// integer ambiguities), written as an RTKLIB-compatible .pos file.
+///
+/// Reads the rover's and the base's RINEX observation files and one or more navigation
+/// files, forms double differences of carrier phase and code between rover and base, runs a
+/// Kalman filter forward and/or backward in time, resolves the integer ambiguities (LAMBDA
+/// with a ratio test) and writes an RTKLIB-compatible `.pos` file in GPS time: Q = 1 fixed,
+/// Q = 2 float, with the filter's sigmas, the age of the base epoch and the ratio. Prints
+/// what was solved and fixed, and why epochs were not.
+///
+/// The base position comes from --base-pos or --base-llh; without either, the approximate
+/// position in the base file's header is used, with a warning (its error goes straight into
+/// every rover position). Give negative coordinates with '=', e.g.
+/// --base-pos=-3978241.958,3382840.234,3649900.853.
+#[derive(clap::Args)]
+pub struct Args {
+    /// RINEX observation file of the moving receiver.
+    #[arg(long, value_name = "FILE")]
+    rover: PathBuf,
+    /// RINEX observation file of the base (reference) receiver.
+    #[arg(long, value_name = "FILE")]
+    base: PathBuf,
+    /// Navigation file (RINEX 2/3/4 broadcast ephemerides); give the flag once per file
+    /// (e.g. one per constellation).
+    #[arg(long, value_name = "FILE", required = true)]
+    nav: Vec<PathBuf>,
+    /// Base marker position, ECEF metres: X,Y,Z (default: the base file's header position).
+    #[arg(
+        long,
+        value_name = "X,Y,Z",
+        allow_hyphen_values = true,
+        conflicts_with = "base_llh"
+    )]
+    base_pos: Option<String>,
+    /// Base marker position: latitude,longitude in degrees and ellipsoidal height in metres
+    /// (default: the base file's header position).
+    #[arg(long, value_name = "LAT,LON,H", allow_hyphen_values = true)]
+    base_llh: Option<String>,
+    /// Which filter passes run.
+    #[arg(long, value_enum, default_value = "combined")]
+    filter: FilterArg,
+    /// Integer ambiguity resolution.
+    #[arg(long, value_enum, default_value = "fix-and-hold")]
+    ar: ArArg,
+    /// Elevation mask, degrees (0 to 90), for the satellites used and the ambiguities fixed.
+    #[arg(long, value_name = "DEG", default_value_t = 15.0)]
+    elev_mask: f64,
+    /// Receiver antenna calibrations (ANTEX) for the antenna types in the file headers
+    /// (default: no phase-centre corrections).
+    #[arg(long, value_name = "FILE")]
+    antex: Option<PathBuf>,
+    /// Systems to use, letters separated by commas: G GPS, E Galileo, C BeiDou, J QZSS,
+    /// R GLONASS (float ambiguities only).
+    #[arg(long, value_name = "LIST", default_value = "G,E,C,J")]
+    systems: String,
+    /// Coordinates written into the .pos file.
+    #[arg(long, value_enum, default_value = "llh")]
+    format: PosFormatArg,
+    /// Output .pos file (replaced if it exists; not written on failure).
+    #[arg(short = 'o', long, value_name = "OUT.pos")]
+    out: PathBuf,
+}
+
+/// Which filter passes run.
+#[derive(Clone, Copy, ValueEnum)]
+enum FilterArg {
+    /// Forward in time only
+    Forward,
+    /// Backward in time only
+    Backward,
+    /// Forward and backward, combined epoch by epoch
+    Combined,
+}
+
+/// Integer ambiguity resolution mode.
+#[derive(Clone, Copy, ValueEnum)]
+enum ArArg {
+    /// Resolve every epoch; the filter keeps float ambiguities
+    Continuous,
+    /// Resolve every epoch from that epoch's data alone
+    Instantaneous,
+    /// Resolve, then constrain the filter to the fixed integers
+    FixAndHold,
+    /// Float ambiguities only
+    Off,
+}
+
+/// Convert the arguments into a [`pipeline::PpkJob`], run it with a progress spinner and
+/// print its report.
+pub fn run(args: Args) -> Result<()> {
+    let base_position = base_position(args.base_pos.as_deref(), args.base_llh.as_deref())?;
+    let systems = systems(&args.systems)?;
+    let elev_mask = elev_mask(args.elev_mask)?;
+    let options = PpkOptions {
+        elev_mask,
+        ar_elev_mask: elev_mask,
+        systems,
+        filter: match args.filter {
+            FilterArg::Forward => FilterMode::Forward,
+            FilterArg::Backward => FilterMode::Backward,
+            FilterArg::Combined => FilterMode::Combined,
+        },
+        ar: match args.ar {
+            ArArg::Continuous => ArMode::Continuous,
+            ArArg::Instantaneous => ArMode::Instantaneous,
+            ArArg::FixAndHold => ArMode::FixAndHold,
+            ArArg::Off => ArMode::Off,
+        },
+        antex: match args.antex {
+            Some(p) => Some(Arc::new(Antex::read(&p)?)),
+            None => None,
+        },
+        ..PpkOptions::default()
+    };
+    let job = pipeline::PpkJob {
+        rover: args.rover,
+        base: args.base,
+        nav: args.nav,
+        base_position,
+        options,
+        format: args.format.into(),
+        out: args.out,
+    };
+    let bar = indicatif::ProgressBar::new_spinner();
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} {pos} epoch-passes processed ({per_sec})",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    let report = pipeline::ppk(&job, &|n| bar.inc(n as u64));
+    bar.finish_and_clear();
+    print!("{}", report.context("carrier-phase positioning failed")?);
+    Ok(())
+}
+
+/// `--base-pos X,Y,Z` (ECEF metres) or `--base-llh LAT,LON,H`, else the header's position.
+fn base_position(pos: Option<&str>, llh: Option<&str>) -> Result<BasePosition> {
+    Ok(match (pos, llh) {
+        (Some(p), _) => {
+            let [x, y, z] = triple("--base-pos", p)?;
+            if Ecef::new(x, y, z).0.norm() < 6.0e6 {
+                bail!("--base-pos {p}: not an ECEF position on the Earth (metres expected)");
+            }
+            BasePosition::Given(Ecef::new(x, y, z))
+        }
+        (None, Some(l)) => {
+            let [lat, lon, h] = triple("--base-llh", l)?;
+            if lat.abs() > 90.0 || lon.abs() > 360.0 {
+                bail!("--base-llh {l}: latitude and longitude in degrees expected");
+            }
+            BasePosition::Given(Geodetic::from_degrees(lat, lon, h).to_ecef())
+        }
+        (None, None) => BasePosition::Header,
+    })
+}

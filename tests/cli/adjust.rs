@@ -1,0 +1,162 @@
+//! `ppkat demo`, `ppkat simulate` and `ppkat adjust`: the whole chain against truth, a
+//! simulated block end to end, and the same bits whatever `--threads`.
+
+use super::*;
+
+/// Simulate the built-in adjustment project `name` into `dir`.
+fn simulate_project(name: &str, dir: &Path) -> String {
+    succeeds(&ppkat(&["simulate", "--builtin", name, "--out", p(dir)]))
+}
+
+/// The numbers of a report line, parentheses and commas ignored.
+fn numbers(line: &str) -> Vec<f64> {
+    line.replace(['(', ')', ','], " ")
+        .split_whitespace()
+        .filter_map(|w| w.parse().ok())
+        .collect()
+}
+
+#[test]
+fn demo_runs_the_chain_and_reports_accuracy() {
+    let out = tmp("demo");
+    let t = succeeds(&ppkat(&["demo", "--out", p(&out)]));
+    // "carrier phase: N epochs, M fixed (P %), fixed 3D RMS X mm, worst Y mm vs truth"
+    let line = t
+        .lines()
+        .find(|l| l.starts_with("carrier phase:"))
+        .expect("a carrier-phase line");
+    let pct: f64 = line
+        .split('(')
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let rms: f64 = line
+        .split("3D RMS ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(pct >= 99.0 && rms <= 20.0, "{line}");
+    for f in [
+        "rover.obs",
+        "base.obs",
+        "nav.rnx",
+        "truth_trajectory.csv",
+        "truth_exposures.csv",
+        "image_observations.csv",
+        "rover_ppk.pos",
+        "antennas.csv",
+        "project.toml",
+        "adjust/report.html",
+        "adjust/report.json",
+        "adjust/orientations.csv",
+        "adjust/points.csv",
+    ] {
+        assert!(out.join(f).exists(), "{f} written");
+    }
+    // "check points: N, RMS E/N/U a b c m (theoretical d e f m)": the demo's adjustment is
+    // as good as its own precision says (6 check points: within 2×).
+    let line = t
+        .lines()
+        .find(|l| l.starts_with("check points:"))
+        .expect("a check-point line");
+    let nums = numbers(line);
+    assert_eq!(nums.len(), 7, "{line}");
+    for a in 0..3 {
+        assert!(nums[1 + a] < 2.0 * nums[4 + a] + 0.01, "{line}");
+    }
+}
+
+/// A simulated project through `ppkat adjust`: outputs, summary, and a broken project.
+#[test]
+fn adjust_a_simulated_block_end_to_end() {
+    let dir = tmp("adjust-classic");
+    let t = simulate_project("classic-block", &dir);
+    assert!(t.contains("29 images"), "{t}");
+    let out = dir.join("out");
+    let project = dir.join("project.toml");
+    let t = succeeds(&ppkat(&["adjust", "--project", p(&project), "-o", p(&out)]));
+    assert!(
+        t.contains("29 images") && t.contains("lever arm (cam)") && t.contains("check points:"),
+        "{t}"
+    );
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert_eq!(html.matches("<svg").count(), 4, "four plots");
+    let json = std::fs::read_to_string(out.join("report.json")).unwrap();
+    assert!(json.contains("\"checks\"") && json.contains("\"removed\""));
+    let orient = std::fs::read_to_string(out.join("orientations.csv")).unwrap();
+    assert_eq!(orient.lines().filter(|l| !l.starts_with('#')).count(), 30);
+    // A project naming a missing table: the file is named, no outputs.
+    let bad = dir.join("bad.toml");
+    let src = std::fs::read_to_string(&project).unwrap();
+    std::fs::write(&bad, src.replace("antennas.csv", "nosuch.csv")).unwrap();
+    let o = ppkat(&["adjust", "--project", p(&bad), "-o", p(&dir.join("out2"))]);
+    fails_with(&o, &["nosuch.csv", "cannot read"]);
+    assert!(!dir.join("out2/report.json").exists());
+}
+
+/// `--threads` changes the speed, never the results: the classic block adjusted on one and
+/// on two threads gives the same bytes in every output (the flag is global: before or after
+/// the subcommand).
+#[test]
+fn adjust_gives_the_same_bytes_on_one_and_two_threads() {
+    let dir = tmp("adjust-threads");
+    simulate_project("classic-block", &dir);
+    let project = dir.join("project.toml");
+    let (one, two) = (dir.join("out-1"), dir.join("out-2"));
+    succeeds(&ppkat(&[
+        "--threads",
+        "1",
+        "adjust",
+        "--project",
+        p(&project),
+        "-o",
+        p(&one),
+    ]));
+    succeeds(&ppkat(&[
+        "adjust",
+        "--project",
+        p(&project),
+        "-o",
+        p(&two),
+        "--threads",
+        "2",
+    ]));
+    for f in [
+        "orientations.csv",
+        "points.csv",
+        "image_residuals.csv",
+        "gnss_residuals.csv",
+        "report.json",
+    ] {
+        assert_eq!(
+            std::fs::read(one.join(f)).unwrap(),
+            std::fs::read(two.join(f)).unwrap(),
+            "{f} differs between 1 and 2 threads"
+        );
+    }
+}
+
+#[test]
+fn simulate_rejects_a_bad_scenario_naming_the_key() {
+    let src = std::fs::read_to_string(fixture("scenario_small.toml")).unwrap();
+    let f = tmp("bad-scenario.toml");
+    std::fs::write(&f, src.replace("speed = 55.0", "speed = -55.0")).unwrap();
+    let o = ppkat(&["simulate", "--scenario", p(&f), "--out", p(&tmp("bad-sim"))]);
+    fails_with(&o, &["bad-scenario.toml", "flight.speed"]);
+    let o = ppkat(&[
+        "simulate",
+        "--builtin",
+        "nosuch",
+        "--out",
+        p(&tmp("bad-sim2")),
+    ]);
+    fails_with(&o, &["nosuch", "demo", "classic-block"]);
+}

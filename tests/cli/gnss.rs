@@ -1,0 +1,270 @@
+//! `ppkat spp` and `ppkat ppk`: RTKLIB-compatible `.pos` files from real data, and clear
+//! errors for inputs that do not fit together.
+
+use super::*;
+
+/// `ppkat ppk` of `rover` against `base` with the navigation files and `extra` flags into
+/// `out`.
+fn ppk(rover: &Path, base: &Path, nav: &[&Path], out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec!["ppk", "--rover", p(rover), "--base", p(base)];
+    for n in nav {
+        args.extend(["--nav", p(n)]);
+    }
+    args.extend(["-o", p(out)]);
+    args.extend_from_slice(extra);
+    ppkat(&args)
+}
+
+#[test]
+fn observations_and_navigation_without_time_overlap() {
+    let Some([obs, nav]) = shared_all([
+        GEONET_ROVER,
+        "gnss/esbc-2020-177/ESBC00DNK_R_20201770000_01D_MN.rnx.gz",
+    ]) else {
+        return;
+    };
+    let out = tmp("nooverlap.pos");
+    let o = ppkat(&["spp", "--obs", p(&obs), "--nav", p(&nav), "-o", p(&out)]);
+    fails_with(
+        &o,
+        &[
+            "07590920.05o",
+            "do not overlap",
+            "ESBC00DNK_R_20201770000_01D_MN.rnx.gz",
+        ],
+    );
+    assert!(!out.exists(), "no output on failure");
+}
+
+#[test]
+fn spp_writes_an_rtklib_pos_file() {
+    let Some([obs, nav]) = shared_all([GEONET_ROVER, GEONET_NAV]) else {
+        return;
+    };
+    for (fmt, cols) in [("llh", "latitude(deg)"), ("xyz", "x-ecef(m)")] {
+        let out = tmp(&format!("geonet-{fmt}.pos"));
+        let o = ppkat(&[
+            "spp",
+            "--obs",
+            p(&obs),
+            "--nav",
+            p(&nav),
+            "--format",
+            fmt,
+            "-o",
+            p(&out),
+        ]);
+        succeeds(&o);
+        let pos = std::fs::read_to_string(&out).unwrap();
+        assert!(pos.lines().any(|l| l.starts_with('%') && l.contains(cols)));
+        let rows = pos_rows(&out);
+        assert!(rows.len() >= 110);
+        // yyyy/mm/dd hh:mm:ss.sss  a b c  Q ns sdn sde sdu sdne sdeu sdun age ratio
+        let f = &rows[0];
+        assert_eq!(f.len(), 15, "{f:?}");
+        assert_eq!(f[0], "2005/04/02");
+        assert_eq!(f[5], "5", "Q = 5 for single point");
+        if fmt == "llh" {
+            let lat: f64 = f[2].parse().unwrap();
+            assert!((lat - 35.1608).abs() < 1e-3);
+        }
+    }
+}
+
+#[test]
+fn ppk_geonet_writes_fixed_solutions_with_quality_columns() {
+    let Some([rover, base, nav]) = geonet() else {
+        return;
+    };
+    let out = tmp("geonet-ppk.pos");
+    let t = succeeds(&ppk(&rover, &base, &[&nav], &out, &[GEONET_BASE_POS]));
+    assert!(t.contains("115 fixed (100.0 % of solved)"), "{t}");
+    assert!(
+        t.contains("no single-point solution"),
+        "unsolved epochs say why: {t}"
+    );
+    let rows = pos_rows(&out);
+    assert_eq!(rows.len(), 115);
+    for r in &rows {
+        assert_eq!(r[5], "1", "Q = 1 fixed");
+        let sdu: f64 = r[9].parse().unwrap();
+        assert!(sdu > 0.001 && sdu < 0.1, "a real vertical sigma: {sdu}");
+        let ratio: f64 = r[14].parse().unwrap();
+        assert!(ratio >= 3.0);
+    }
+}
+
+#[test]
+fn ppk_without_common_epochs() {
+    let Some([rover, base, nav]) = shared_all([
+        GEONET_ROVER,
+        "gnss/spirent-rose-2023/Base-static_MO_Spirent.obs",
+        GEONET_NAV,
+    ]) else {
+        return;
+    };
+    let out = tmp("nocommon.pos");
+    fails_with(
+        &ppk(&rover, &base, &[&nav], &out, &[GEONET_BASE_POS]),
+        &[
+            "07590920.05o",
+            "Base-static_MO_Spirent.obs",
+            "no rover epoch has a base epoch",
+        ],
+    );
+}
+
+#[test]
+fn ppk_rover_without_phase() {
+    let src = std::fs::read_to_string(fixture("events_v304.rnx")).unwrap();
+    let f = tmp("codeonly.obs");
+    std::fs::write(
+        &f,
+        src.replace("G    4 C1C L1C C2W L2W", "G    4 C1C D1C C2W D2W")
+            .replace("E    2 C1C L1C", "E    2 C1C D1C"),
+    )
+    .unwrap();
+    let base = fixture("events_v304.rnx");
+    let out = tmp("codeonly.pos");
+    fails_with(
+        &ppk(&f, &base, &[&base], &out, &[]),
+        &["codeonly.obs", "no carrier-phase"],
+    );
+}
+
+#[test]
+fn ppk_without_any_base_position() {
+    let Some([rover, base, nav]) = geonet() else {
+        return;
+    };
+    let src = std::fs::read_to_string(&base).unwrap();
+    let nopos: String = src
+        .lines()
+        .filter(|l| !l.contains("APPROX POSITION XYZ"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let f = tmp("base-nopos.05o");
+    std::fs::write(&f, nopos).unwrap();
+    let out = tmp("nopos.pos");
+    fails_with(
+        &ppk(&rover, &f, &[&nav], &out, &[]),
+        &["base-nopos.05o", "--base-pos", "--base-llh"],
+    );
+    // With the header position only: solved, with a loud warning.
+    let t = succeeds(&ppk(&rover, &base, &[&nav], &out, &[]));
+    assert!(t.contains("BASE POSITION TAKEN FROM THE HEADER"), "{t}");
+}
+
+#[test]
+fn ppk_navigation_not_covering_the_span() {
+    let Some([rover, base, nav]) = shared_all([
+        GEONET_ROVER,
+        GEONET_BASE,
+        "gnss/cssrlib-2021-265/SEPT2650.21P",
+    ]) else {
+        return;
+    };
+    let out = tmp("navspan.pos");
+    fails_with(
+        &ppk(&rover, &base, &[&nav], &out, &[GEONET_BASE_POS]),
+        &["07590920.05o", "do not overlap", "SEPT2650.21P"],
+    );
+}
+
+/// A 1 Hz rover against a 30 s base (the base file decimated): every rover epoch is solved
+/// against the nearest base epoch within 30 s, and the age of that base epoch is reported.
+#[test]
+fn ppk_high_rate_rover_against_a_30_s_base() {
+    let Some([rover, base, gn, en]) = shared_all([
+        "gnss/spirent-rose-2023/Rover-static-2km-east_MO_Spirent.obs",
+        "gnss/spirent-rose-2023/Base-static_MO_Spirent.obs",
+        "gnss/spirent-rose-2023/RINEX_GN_Spirent.23N",
+        "gnss/spirent-rose-2023/RINEX_EN_Spirent.23L",
+    ]) else {
+        return;
+    };
+    let src = std::fs::read_to_string(&base).unwrap();
+    let mut keep = true;
+    let mut dec = String::new();
+    for l in src.lines() {
+        if l.starts_with('>') {
+            let sec: f64 = l[18..29].trim().parse().unwrap();
+            keep = sec == 0.0 || sec == 30.0;
+        }
+        if keep {
+            dec.push_str(l);
+            dec.push('\n');
+        }
+    }
+    let b30 = tmp("base-30s.obs");
+    std::fs::write(&b30, dec).unwrap();
+    let out = tmp("rate.pos");
+    let t = succeeds(&ppk(
+        &rover,
+        &b30,
+        &[&gn, &en],
+        &out,
+        &[
+            "--base-pos=4157177.06580187,671230.476590636,4774767.03105544",
+            "--format",
+            "xyz",
+        ],
+    ));
+    // x y z Q ns sdx sdy sdz sdxy sdyz sdzx age ratio (after date and time)
+    let rows: Vec<Vec<f64>> = pos_rows(&out)
+        .iter()
+        .map(|r| r[2..].iter().map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 601, "{t}");
+    let max_age = rows.iter().map(|r| r[11].abs()).fold(0.0, f64::max);
+    assert!(
+        (14.0..=15.0).contains(&max_age),
+        "age of the base epoch reported: {max_age}"
+    );
+    let truth = [4156857.1195929, 673209.028774142, 4774767.03105544];
+    let fixed: Vec<&Vec<f64>> = rows.iter().filter(|r| r[3] == 1.0).collect();
+    assert!(
+        fixed.len() as f64 >= 0.95 * rows.len() as f64,
+        "{} fixed",
+        fixed.len()
+    );
+    let worst = fixed
+        .iter()
+        .map(|r| {
+            ((r[0] - truth[0]).powi(2) + (r[1] - truth[1]).powi(2) + (r[2] - truth[2]).powi(2))
+                .sqrt()
+        })
+        .fold(0.0, f64::max);
+    assert!(worst < 0.02, "worst fixed error with a 30 s base: {worst}");
+}
+
+/// With an ANTEX calibration putting the rover's phase centre 10 cm above its reference point,
+/// the reported rover (reference point) is 10 cm lower than without it.
+#[test]
+fn ppk_applies_antex_phase_centre_offsets() {
+    let Some([rover, base, nav]) = geonet() else {
+        return;
+    };
+    let src = std::fs::read_to_string(&rover).unwrap();
+    let renamed = src.replacen("TRM29659.00         ", "PPKATTEST           ", 1);
+    assert_ne!(src, renamed);
+    let r2 = tmp("rover-testant.05o");
+    std::fs::write(&r2, renamed).unwrap();
+    let heights = |extra: &[&str]| -> Vec<f64> {
+        let out = tmp(&format!("antex-{}.pos", extra.len()));
+        let mut flags = vec![GEONET_BASE_POS];
+        flags.extend_from_slice(extra);
+        succeeds(&ppk(&r2, &base, &[&nav], &out, &flags));
+        pos_rows(&out)
+            .iter()
+            .map(|r| r[4].parse().unwrap())
+            .collect()
+    };
+    let atx = fixture("test.atx");
+    let without = heights(&[]);
+    let with = heights(&["--antex", p(&atx)]);
+    assert_eq!(without.len(), with.len());
+    for (a, b) in without.iter().zip(&with) {
+        assert!((a - b - 0.10).abs() < 0.003, "height change {}", a - b);
+    }
+}

@@ -1,0 +1,93 @@
+//! `--help` of every subcommand, and clap's exit code 2 for bad usage.
+
+use super::*;
+
+/// Every subcommand, as its words on the command line.
+const SUBCOMMANDS: [&[&str]; 12] = [
+    &["info"],
+    &["spp"],
+    &["ppk"],
+    &["exposures"],
+    &["leverarm"],
+    &["bal"],
+    &["simulate"],
+    &["adjust"],
+    &["demo"],
+    &["bench"],
+    &["bench", "ingest"],
+    &["bench", "adjust"],
+];
+
+/// In the long help, each option or positional line (`  -o, --out <OUT>`, `  <FILE>`) is
+/// followed by its description; the options `-h` and `-V` too.
+#[test]
+fn every_argument_of_every_subcommand_is_described() {
+    for words in SUBCOMMANDS {
+        let mut args = words.to_vec();
+        args.push("--help");
+        let t = succeeds(&ppkat(&args));
+        let name = words.join(" ");
+        assert!(t.contains(&format!("Usage: ppkat {name}")), "{t}");
+        let lines: Vec<&str> = t.lines().collect();
+        let arg_lines = lines.iter().enumerate().filter(|(_, l)| {
+            let l = l.trim_start();
+            let short = l.starts_with('-') && l.get(2..4) == Some(", ");
+            (l.starts_with("--") || short || l.starts_with('<')) && l.len() < 60
+        });
+        let mut seen = 0;
+        for (i, l) in arg_lines {
+            seen += 1;
+            let next = lines.get(i + 1).map(|n| n.trim()).unwrap_or("");
+            assert!(
+                !next.is_empty(),
+                "ppkat {name}: '{}' has no help:\n{t}",
+                l.trim()
+            );
+        }
+        assert!(seen >= 2, "ppkat {name}: no arguments found in\n{t}");
+        assert!(
+            t.contains("--threads <N>"),
+            "ppkat {name}: no --threads\n{t}"
+        );
+    }
+    // The flags the issue named, with their texts.
+    let t = succeeds(&ppkat(&["ppk", "--help"]));
+    for needle in [
+        "--rover <FILE>\n          RINEX observation file",
+        "--base <FILE>\n          RINEX observation file",
+        "--format <FORMAT>\n          Coordinates",
+        "-o, --out <OUT.pos>\n          Output .pos file",
+    ] {
+        assert!(t.contains(needle), "no '{needle}' in\n{t}");
+    }
+}
+
+#[test]
+fn bad_usage_exits_with_2() {
+    for args in [
+        &["nosuch"][..],
+        &["ppk", "--rover"],
+        &["spp", "--obs", "x.obs"],
+        &["ppk", "--format", "nosuch"],
+        &["--threads", "0", "info", "x.obs"],
+        &["bal", "x.bal", "--threads", "many"],
+        &[],
+    ] {
+        let o = ppkat(args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", text(&o));
+    }
+    let o = ppkat(&["--threads", "0", "info", "x.obs"]);
+    assert!(text(&o).contains("1 or more"), "{}", text(&o));
+}
+
+#[test]
+fn threads_is_accepted_before_and_after_any_subcommand() {
+    let f = fixture("events_v304.rnx");
+    for args in [
+        &["--threads", "1", "info", p(&f)][..],
+        &["info", p(&f), "--threads", "2"],
+    ] {
+        let t = succeeds(&ppkat(args));
+        assert!(t.contains("RINEX 3.04 observation"), "{t}");
+    }
+}

@@ -1,0 +1,123 @@
+//! End-to-end tests of the `ppkat` binary, one integration-test binary with topic modules.
+//!
+//! Bad input gives a clear error naming the file (and the line where it applies) with exit
+//! code 1, or a warning plus the usable data — never a panic (exit code 101); bad usage is
+//! clap's exit code 2. Tests on real data read `../shared/data` beside the repository: they
+//! skip with a message when it is absent, and fail on CI (`CI=true`), where it must be present.
+
+mod adjust;
+mod bal;
+mod exposures;
+mod gnss;
+mod help;
+mod info;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Run the binary with `args`.
+fn ppkat(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_ppkat"))
+        .args(args)
+        .output()
+        .expect("run ppkat")
+}
+
+/// Standard output followed by standard error.
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+/// Assert exit code 0; the output text.
+fn succeeds(o: &Output) -> String {
+    let t = text(o);
+    assert_eq!(o.status.code(), Some(0), "expected success: {t}");
+    t
+}
+
+/// Assert a clean failure (exit code 1) whose message contains every needle.
+fn fails_with(o: &Output, needles: &[&str]) {
+    let t = text(o);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "expected a clean failure, got {:?}: {t}",
+        o.status
+    );
+    for n in needles {
+        assert!(t.contains(n), "message lacks '{n}': {t}");
+    }
+}
+
+/// A path in this test run's own temporary folder.
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("ppkat-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d.join(name)
+}
+
+/// A file of the repository's `fixtures/`.
+fn fixture(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures")
+        .join(name)
+}
+
+/// A file of `../shared/data`, or `None` (with a "skipped" message) when it is absent;
+/// panics on CI, where the data must be present.
+fn shared(rel: &str) -> Option<PathBuf> {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/data")
+        .join(rel);
+    if p.exists() {
+        return Some(p);
+    }
+    assert!(
+        std::env::var("CI").map(|v| v != "true").unwrap_or(true),
+        "{} missing on CI",
+        p.display()
+    );
+    eprintln!("skipped: {} not found (shared data absent)", p.display());
+    None
+}
+
+/// Several files of `../shared/data` (see [`shared`]): all of them, or `None`.
+fn shared_all<const N: usize>(rel: [&str; N]) -> Option<[PathBuf; N]> {
+    let found = rel.map(shared);
+    if found.iter().any(Option::is_none) {
+        return None;
+    }
+    Some(found.map(Option::unwrap))
+}
+
+/// The GEONET rover, base and navigation files of 2 April 2005 (120 rover epochs).
+const GEONET_ROVER: &str = "gnss/geonet-2005/07590920.05o";
+const GEONET_BASE: &str = "gnss/geonet-2005/30400920.05o";
+const GEONET_NAV: &str = "gnss/geonet-2005/07590920.05n";
+
+/// The GEONET base station's marker position, as the flag.
+const GEONET_BASE_POS: &str = "--base-pos=-3978241.958,3382840.234,3649900.853";
+
+/// The GEONET rover, base and navigation files, or `None` (skipped) without shared data.
+fn geonet() -> Option<[PathBuf; 3]> {
+    shared_all([GEONET_ROVER, GEONET_BASE, GEONET_NAV])
+}
+
+/// The data rows of a `.pos` file (header lines start with '%'), split at blanks.
+fn pos_rows(path: &Path) -> Vec<Vec<String>> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with('%'))
+        .map(|l| l.split_whitespace().map(str::to_string).collect())
+        .collect()
+}
+
+/// A path as a command-line argument.
+fn p(x: &Path) -> &str {
+    x.to_str().unwrap()
+}
