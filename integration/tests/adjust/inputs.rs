@@ -87,7 +87,7 @@ fn ground_point_formats_agree() {
         let e = g.to_ecef();
         utm += &format!(
             "{},{},{:.4},{:.4},{},{},{}\n",
-            f[0], f[1], p.position.easting, p.position.northing, f[4], f[5], f[6]
+            f[0], f[1], p.easting, p.northing, f[4], f[5], f[6]
         );
         xyz += &format!(
             "{},{},{:.4},{:.4},{:.4},{},{}\n",
