@@ -70,7 +70,9 @@ fn main() {
     }
 }
 
-/// Size rayon's global pool once (every parallel stage runs on it), then run the subcommand.
+/// Size rayon's global pool once and run the subcommand on it: every parallel stage then
+/// starts from a worker of the pool, not from outside it (which costs a hand-over per
+/// parallel call).
 fn run(cli: Cli) -> Result<()> {
     let threads = cli.threads;
     if let Some(n) = threads {
@@ -79,7 +81,14 @@ fn run(cli: Cli) -> Result<()> {
             .build_global()
             .context("cannot start the worker threads")?;
     }
-    match cli.cmd {
+    let mut result = None;
+    rayon::scope(|_| result = Some(dispatch(cli.cmd, threads)));
+    result.unwrap_or_else(|| Ok(()))
+}
+
+/// Run one subcommand.
+fn dispatch(cmd: Cmd, threads: Option<usize>) -> Result<()> {
+    match cmd {
         Cmd::Info(a) => cmd::info::run(a),
         Cmd::Spp(a) => cmd::spp::run(a),
         Cmd::Ppk(a) => cmd::ppk::run(a),
