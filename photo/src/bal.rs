@@ -265,6 +265,9 @@ impl Factor for BalFactor {
         let (Some((rot, v)), Some(pt)) = (x.rotated(0), x.point(1)) else {
             return false;
         };
+        if v.len() != 6 {
+            return false;
+        }
         let cam = camera_of(rot, v);
         if j.iter().all(Option::is_none) {
             r.copy_from_slice((predict(&cam, &pt) - self.uv).as_slice());

@@ -4,7 +4,7 @@
 
 use super::error::SolveError;
 use super::factor::FactorId;
-use super::factor::Params;
+use super::factor::{Noise, Params};
 use super::model::{Entry, Model, MAX_FACTOR_KEYS};
 use super::slots::Slot;
 use super::structure::Structure;
@@ -19,6 +19,8 @@ use rayon::prelude::*;
 pub(crate) struct Linearisation {
     pub j: Vec<f64>,
     pub w: Vec<f64>,
+    /// (weight, cost, squares) per factor in buffer order (NaN weight: not evaluable).
+    scratch: Vec<[f64; 3]>,
 }
 
 impl Linearisation {
@@ -77,14 +79,14 @@ fn evaluate(
                 }
             }
             let ok = e.factor.evaluate(&x, r, &mut views[..n]);
-            if ok {
+            if ok && !(scale == 1.0 && e.noise == Noise::Unit) {
                 e.noise.whiten(scale, r, j);
             }
             ok
         }
         None => {
             let ok = e.factor.evaluate(&x, r, &mut views[..n]);
-            if ok {
+            if ok && !(scale == 1.0 && e.noise == Noise::Unit) {
                 e.noise.whiten(scale, r, &mut []);
             }
             ok
@@ -104,7 +106,8 @@ pub(crate) fn pieces(mut buf: &mut [f64], lens: impl Iterator<Item = usize>) -> 
 }
 
 impl Model {
-    /// Linearise every active factor at `values` into `lin` (buffers reused).
+    /// Linearise every active factor at `values` into `lin` (buffers reused): runs of factors
+    /// in buffer order, one task each, so every task writes one stretch of memory.
     pub(crate) fn linearise(
         &self,
         st: &Structure,
@@ -113,83 +116,88 @@ impl Model {
     ) -> Result<Cost, SolveError> {
         lin.j.resize(st.nbuf, 0.0);
         lin.w.resize(st.active.len(), 1.0);
-        // Regions in buffer order, each a residual followed by the Jacobian blocks.
-        let len = |k: usize| {
-            st.m[k]
-                + st.slots
-                    .get(k)
-                    .iter()
-                    .filter(|s| s.joff.is_some())
-                    .map(|s| st.m[k] * s.dim)
-                    .sum::<usize>()
-        };
-        let regions = pieces(&mut lin.j, st.order.iter().map(|&k| len(k)));
-        type Weighed = (usize, Option<(f64, f64, f64)>);
-        let results: Vec<Weighed> = regions
-            .into_par_iter()
-            .zip(&st.order)
-            .with_min_len(MIN_LEN)
-            .map(|(region, &k)| {
+        lin.scratch.resize(st.active.len(), [0.0; 3]);
+        let mut jobs = Vec::with_capacity(st.lin_groups.len());
+        let (mut buf, mut scratch): (&mut [f64], &mut [[f64; 3]]) = (&mut lin.j, &mut lin.scratch);
+        for &(a, b, start, end) in &st.lin_groups {
+            let (jb, rest) = std::mem::take(&mut buf).split_at_mut(end - start);
+            let (sb, srest) = std::mem::take(&mut scratch).split_at_mut(b - a);
+            (buf, scratch) = (rest, srest);
+            jobs.push((a, start, jb, sb));
+        }
+        jobs.into_par_iter().for_each(|(a, start, jb, sb)| {
+            for (i, out) in sb.iter_mut().enumerate() {
+                let k = st.order[a + i];
                 let e = &self.entries[st.active[k]];
                 let scale = self.group_scale[e.group.0];
-                let (r, j) = region.split_at_mut(st.m[k]);
-                if !evaluate(e, scale, values, st.slots.get(k), r, Some(j)) {
-                    return (k, None);
-                }
-                let s2: f64 = r.iter().map(|x| x * x).sum();
-                (k, Some((e.loss.weight(s2.sqrt()), e.loss.cost(s2), s2)))
-            })
-            .collect();
-        let mut parts = vec![None; st.active.len()];
-        for (k, p) in results {
-            if let Some((w, c, s2)) = p {
-                lin.w[k] = w;
-                parts[k] = Some((c, s2));
-            }
-        }
-        sum_costs(st, &parts)
-    }
-
-    /// The cost at `values` (no Jacobians).
-    pub(crate) fn cost_at(&self, st: &Structure, values: &[Value]) -> Result<Cost, SolveError> {
-        let parts: Vec<Option<(f64, f64)>> = st
-            .active
-            .par_iter()
-            .enumerate()
-            .with_min_len(MIN_LEN)
-            .map(|(k, &f)| {
                 let slots = st.slots.get(k);
-                let e = &self.entries[f];
-                let mut buf = [0.0; 16];
-                let mut big = Vec::new();
-                let m = e.factor.dim();
-                let r: &mut [f64] = if m <= 16 {
-                    &mut buf[..m]
+                let region = &mut jb[st.base[k] - start..];
+                let (r, j) = region.split_at_mut(st.m[k]);
+                let len = slots
+                    .iter()
+                    .filter(|s| s.joff.is_some())
+                    .map(|s| s.dim)
+                    .sum::<usize>();
+                *out = if evaluate(e, scale, values, slots, r, Some(&mut j[..st.m[k] * len])) {
+                    let s2: f64 = r.iter().map(|x| x * x).sum();
+                    [e.loss.weight(s2.sqrt()), e.loss.cost(s2), s2]
                 } else {
-                    big.resize(m, 0.0);
-                    &mut big
+                    [f64::NAN; 3]
                 };
-                let scale = self.group_scale[e.group.0];
-                if !evaluate(e, scale, values, slots, r, None) {
-                    return None;
+            }
+        });
+        let mut c = Cost::default();
+        for k in 0..st.active.len() {
+            let [w, cost, s2] = lin.scratch[st.pos[k]];
+            if w.is_nan() {
+                return Err(SolveError::Evaluation(FactorId(st.active[k])));
+            }
+            lin.w[k] = w;
+            c.cost += cost;
+            c.squares += s2;
+        }
+        Ok(c)
+    }
+
+    /// The cost at `values` (no Jacobians), summed in runs of factors, then the runs in order.
+    pub(crate) fn cost_at(&self, st: &Structure, values: &[Value]) -> Result<Cost, SolveError> {
+        let parts: Vec<Result<Cost, usize>> = st
+            .active
+            .par_chunks(MIN_LEN)
+            .enumerate()
+            .map(|(c, fs)| {
+                let mut sum = Cost::default();
+                for (i, &f) in fs.iter().enumerate() {
+                    let k = c * MIN_LEN + i;
+                    let e = &self.entries[f];
+                    let mut buf = [0.0; 16];
+                    let mut big = Vec::new();
+                    let m = e.factor.dim();
+                    let r: &mut [f64] = if m <= 16 {
+                        &mut buf[..m]
+                    } else {
+                        big.resize(m, 0.0);
+                        &mut big
+                    };
+                    let scale = self.group_scale[e.group.0];
+                    if !evaluate(e, scale, values, st.slots.get(k), r, None) {
+                        return Err(f);
+                    }
+                    let s2: f64 = r.iter().map(|x| x * x).sum();
+                    sum.cost += e.loss.cost(s2);
+                    sum.squares += s2;
                 }
-                let s2: f64 = r.iter().map(|x| x * x).sum();
-                Some((e.loss.cost(s2), s2))
+                Ok(sum)
             })
             .collect();
-        sum_costs(st, &parts)
+        let mut c = Cost::default();
+        for p in parts {
+            let p = p.map_err(|f| SolveError::Evaluation(FactorId(f)))?;
+            c.cost += p.cost;
+            c.squares += p.squares;
+        }
+        Ok(c)
     }
-}
-
-/// Sum per-factor costs in factor order (the same bits whatever the threads).
-fn sum_costs(st: &Structure, parts: &[Option<(f64, f64)>]) -> Result<Cost, SolveError> {
-    let mut c = Cost::default();
-    for (k, p) in parts.iter().enumerate() {
-        let (cost, sq) = p.ok_or(SolveError::Evaluation(FactorId(st.active[k])))?;
-        c.cost += cost;
-        c.squares += sq;
-    }
-    Ok(c)
 }
 
 /// out (p×q) += w·Aᵀ·B for A (m×p) and B (m×q), all column-major. Common block sizes

@@ -57,6 +57,7 @@ impl Problem {
             ..Summary::default()
         };
         let mut red = Reduced::default();
+        let mut cand = Vec::new();
         let (mut radius, mut nu) = (self.options.initial_radius, 2.0);
         let mut fresh = true;
         while s.iterations < self.options.max_iterations {
@@ -76,7 +77,7 @@ impl Problem {
                 }
                 continue;
             };
-            let cand = self.model.apply(&st, &step);
+            self.model.apply_into(&st, &step, &mut cand);
             let new = self
                 .model
                 .cost_at(&st, &cand)
@@ -90,7 +91,7 @@ impl Problem {
             };
             let change = (cost.cost - new) / cost.cost.max(f64::MIN_POSITIVE);
             if new.is_finite() && rho > 1e-3 && change >= 1e-14 {
-                self.model.values = cand;
+                std::mem::swap(&mut self.model.values, &mut cand);
                 (fresh, s.successful) = (false, s.successful + 1);
                 cost.cost = new;
                 radius /= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));

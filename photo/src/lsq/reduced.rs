@@ -228,16 +228,29 @@ impl Model {
         lin: &Linearisation,
         (lambda, robust): (f64, bool),
         range: std::ops::Range<usize>,
-        parts: Vec<EParts<'_>>,
+        all: EParts<'_>,
         sums: &mut Sums,
     ) -> bool {
         sums.zeroed(st);
         let mut t = Vec::new();
-        for (eb, mut out) in st.eblocks[range].iter().zip(parts) {
+        let Some(first) = st.eblocks.get(range.start).copied() else {
+            return true;
+        };
+        for eb in &st.eblocks[range] {
+            let (v0, g0, w0) = (
+                eb.vbase - first.vbase,
+                eb.gbase - first.gbase,
+                eb.wbase - first.wbase,
+            );
+            let d = eb.dim;
+            let mut out = EParts {
+                vinv: &mut all.vinv[v0..v0 + d * d],
+                g: &mut all.g[g0..g0 + d],
+                w: &mut all.w[w0..w0 + eb.wlen],
+            };
             if !Self::eliminate_block(st, eb, lin, lambda, robust, &mut out, &mut t, sums) {
                 return false;
             }
-            let d = eb.dim;
             let (nbrs, woff) = (st.nbrs(eb), st.woff(eb));
             let pairs = st.pairs(eb);
             let same = |k: usize| nbrs.iter().all(|&c| st.cdim[c] == k);
@@ -275,25 +288,47 @@ impl Model {
         for (buf, n) in [(&mut red.vinv, z.v), (&mut red.ge, z.g), (&mut red.w, z.w)] {
             buf.resize(n, 0.0);
         }
+        // Each range's part of the shared buffers (consecutive blocks, consecutive data).
         let eb = &st.eblocks;
-        let mut parts = pieces(&mut red.vinv, eb.iter().map(|e| e.dim * e.dim))
+        let base = |r: &std::ops::Range<usize>, f: fn(&EBlock) -> usize, len: usize| {
+            let at = |i: usize| eb.get(i).map_or(len, f);
+            at(r.end) - at(r.start)
+        };
+        let vl: Vec<usize> = st
+            .chunks
+            .iter()
+            .map(|r| base(r, |e| e.vbase, z.v))
+            .collect();
+        let gl: Vec<usize> = st
+            .chunks
+            .iter()
+            .map(|r| base(r, |e| e.gbase, z.g))
+            .collect();
+        let wl: Vec<usize> = st
+            .chunks
+            .iter()
+            .map(|r| base(r, |e| e.wbase, z.w))
+            .collect();
+        let mut parts = pieces(&mut red.vinv, vl.into_iter())
             .into_iter()
-            .zip(pieces(&mut red.ge, eb.iter().map(|e| e.dim)))
-            .zip(pieces(&mut red.w, eb.iter().map(|e| e.wlen)))
-            .map(|((vinv, g), w)| EParts { vinv, g, w });
+            .zip(pieces(&mut red.ge, gl.into_iter()))
+            .zip(pieces(&mut red.w, wl.into_iter()));
         red.sums.resize_with(st.chunks.len() + 1, Sums::default);
         let (tail_sums, range_sums) = red.sums.split_last_mut().expect("one job at least");
         let jobs: Vec<_> = st
             .chunks
             .iter()
             .zip(range_sums.iter_mut())
-            .map(|(r, sums)| (r.clone(), parts.by_ref().take(r.len()).collect(), sums))
+            .map(|(r, sums)| {
+                let ((vinv, g), w) = parts.next().expect("one part per range");
+                (r.clone(), EParts { vinv, g, w }, sums)
+            })
             .collect();
         let (ok, ()) = rayon::join(
             || {
                 jobs.into_par_iter()
-                    .map(|(range, parts, sums)| {
-                        Self::eliminate_range(st, lin, (lambda, robust), range, parts, sums)
+                    .map(|(range, all, sums)| {
+                        Self::eliminate_range(st, lin, (lambda, robust), range, all, sums)
                     })
                     .collect::<Vec<bool>>()
             },
@@ -341,23 +376,31 @@ impl Model {
         }
     }
 
-    /// The eliminated blocks' steps from the reduced one: δe = V⁻¹·(−gₑ − Σ Wₙ·δcₙ).
+    /// The eliminated blocks' steps from the reduced one: δe = V⁻¹·(−gₑ − Σ Wₙ·δcₙ), in runs
+    /// of blocks (one task each).
     pub(crate) fn back_substitute(st: &Structure, red: &Reduced, dc: Vec<f64>) -> Step {
         let mut de = vec![0.0; st.esizes.g];
-        let outs = pieces(&mut de, st.eblocks.iter().map(|e| e.dim));
-        st.eblocks
-            .par_iter()
-            .zip(outs)
-            .with_min_len(MIN_LEN)
-            .for_each(|(eb, out)| {
-                let d = eb.dim;
+        let eb = &st.eblocks;
+        let runs: Vec<(usize, usize)> = (0..eb.len())
+            .step_by(MIN_LEN)
+            .map(|a| (a, (a + MIN_LEN).min(eb.len())))
+            .collect();
+        let lens = runs.iter().map(|&(a, b)| {
+            let end = eb.get(b).map_or(st.esizes.g, |e| e.gbase);
+            end - eb[a].gbase
+        });
+        let outs = pieces(&mut de, lens);
+        runs.into_par_iter().zip(outs).for_each(|((a, b), out)| {
+            let g0 = eb[a].gbase;
+            for e in &eb[a..b] {
+                let d = e.dim;
                 let mut rhs = [0.0; 16];
                 let rhs = &mut rhs[..d];
-                for (x, g) in rhs.iter_mut().zip(&red.ge[eb.gbase..eb.gbase + d]) {
+                for (x, g) in rhs.iter_mut().zip(&red.ge[e.gbase..e.gbase + d]) {
                     *x = -g;
                 }
-                for (&c, &wo) in st.nbrs(eb).iter().zip(st.woff(eb)) {
-                    let (dn, o) = (st.cdim[c], eb.wbase + wo);
+                for (&c, &wo) in st.nbrs(e).iter().zip(st.woff(e)) {
+                    let (dn, o) = (st.cdim[c], e.wbase + wo);
                     add_av(
                         -1.0,
                         &red.w[o..o + d * dn],
@@ -365,55 +408,74 @@ impl Model {
                         rhs,
                     );
                 }
-                add_av(1.0, &red.vinv[eb.vbase..eb.vbase + d * d], rhs, out);
-            });
+                let o = e.gbase - g0;
+                add_av(
+                    1.0,
+                    &red.vinv[e.vbase..e.vbase + d * d],
+                    rhs,
+                    &mut out[o..o + d],
+                );
+            }
+        });
         Step { dc, de }
     }
 
-    /// The values after a step.
-    pub(crate) fn apply(&self, st: &Structure, step: &Step) -> Vec<Value> {
-        let mut v = self.values.clone();
+    /// The values after a step, written into `out` (its vectors reused).
+    pub(crate) fn apply_into(&self, st: &Structure, step: &Step, out: &mut Vec<Value>) {
+        if out.len() != self.values.len() {
+            *out = self.values.clone();
+        } else {
+            for (o, v) in out.iter_mut().zip(&self.values) {
+                o.assign(v);
+            }
+        }
         for (i, &b) in st.cblocks.iter().enumerate() {
-            v[b].plus(&step.dc[st.coff[i]..st.coff[i] + st.cdim[i]]);
+            out[b].plus(&step.dc[st.coff[i]..st.coff[i] + st.cdim[i]]);
         }
         for eb in &st.eblocks {
-            v[eb.block].plus(&step.de[eb.gbase..eb.gbase + eb.dim]);
+            out[eb.block].plus(&step.de[eb.gbase..eb.gbase + eb.dim]);
         }
-        v
     }
 
-    /// The cost decrease the linear model predicts for a step: −Σ w·(Jδ)ᵀr − ½Σ w·‖Jδ‖².
+    /// The cost decrease the linear model predicts for a step: −Σ w·(Jδ)ᵀr − ½Σ w·‖Jδ‖², summed
+    /// in runs of factors, then the runs in order.
     pub(crate) fn model_decrease(st: &Structure, lin: &Linearisation, step: &Step) -> f64 {
-        let parts: Vec<f64> = (0..st.slots.len())
+        let n = st.slots.len();
+        let parts: Vec<f64> = (0..n.div_ceil(MIN_LEN))
             .into_par_iter()
-            .with_min_len(MIN_LEN)
-            .map(|k| {
-                let slots = st.slots.get(k);
-                let r = lin.res(st, k);
-                let (mut stack, mut heap) = ([0.0; 16], Vec::new());
-                let jd: &mut [f64] = if r.len() <= 16 {
-                    &mut stack[..r.len()]
-                } else {
-                    heap.resize(r.len(), 0.0);
-                    &mut heap
-                };
-                for s in slots {
-                    let Some(j) = lin.jac(st, k, s) else { continue };
-                    let d = match (s.c, s.e) {
-                        (Some(c), _) => &step.dc[st.coff[c]..st.coff[c] + s.dim],
-                        (_, Some(e)) => {
-                            let g = st.eblocks[e].gbase;
-                            &step.de[g..g + s.dim]
-                        }
-                        _ => continue,
-                    };
-                    add_av(1.0, j, d, jd);
-                }
-                let jr: f64 = jd.iter().zip(r).map(|(a, b)| a * b).sum();
-                let jj: f64 = jd.iter().map(|a| a * a).sum();
-                -lin.weight(st, k) * (jr + 0.5 * jj)
+            .map(|c| {
+                (c * MIN_LEN..((c + 1) * MIN_LEN).min(n))
+                    .map(|k| Self::factor_decrease(st, lin, step, k))
+                    .sum()
             })
             .collect();
         parts.iter().sum()
+    }
+
+    /// One factor's part of the model decrease.
+    fn factor_decrease(st: &Structure, lin: &Linearisation, step: &Step, k: usize) -> f64 {
+        let r = lin.res(st, k);
+        let (mut stack, mut heap) = ([0.0; 16], Vec::new());
+        let jd: &mut [f64] = if r.len() <= 16 {
+            &mut stack[..r.len()]
+        } else {
+            heap.resize(r.len(), 0.0);
+            &mut heap
+        };
+        for s in st.slots.get(k) {
+            let Some(j) = lin.jac(st, k, s) else { continue };
+            let d = match (s.c, s.e) {
+                (Some(c), _) => &step.dc[st.coff[c]..st.coff[c] + s.dim],
+                (_, Some(e)) => {
+                    let g = st.eblocks[e].gbase;
+                    &step.de[g..g + s.dim]
+                }
+                _ => continue,
+            };
+            add_av(1.0, j, d, jd);
+        }
+        let jr: f64 = jd.iter().zip(r).map(|(a, b)| a * b).sum();
+        let jj: f64 = jd.iter().map(|a| a * a).sum();
+        -lin.weight(st, k) * (jr + 0.5 * jj)
     }
 }

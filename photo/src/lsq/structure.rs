@@ -26,6 +26,11 @@ pub(crate) struct Structure {
     /// Jacobian blocks) starts in the linearisation buffer.
     pub m: Vec<usize>,
     pub base: Vec<usize>,
+    /// Where each active factor is in `order`.
+    pub pos: Vec<usize>,
+    /// Consecutive runs of `order` linearised by one task each: (first, end) positions in
+    /// `order` and the buffer range of their regions.
+    pub lin_groups: Vec<(usize, usize, usize, usize)>,
     /// Active factors in buffer order: grouped by the first eliminated block they touch, so
     /// that eliminating a block reads one stretch of memory.
     pub order: Vec<usize>,
@@ -68,6 +73,9 @@ pub(crate) struct Structure {
     /// Length of the reduced value buffer.
     pub nvals: usize,
 }
+
+/// Factors linearised by one task.
+const LIN_GROUP: usize = 256;
 
 impl Structure {
     /// Reduced-block index of a block, when it is one.
@@ -175,6 +183,22 @@ impl Model {
             order,
             nbuf,
         } = layout;
+        let mut pos = vec![0; order.len()];
+        for (i, &k) in order.iter().enumerate() {
+            pos[k] = i;
+        }
+        let lin_groups = (0..order.len())
+            .step_by(LIN_GROUP)
+            .map(|a| {
+                let b = (a + LIN_GROUP).min(order.len());
+                let end = if b < order.len() {
+                    base[order[b]]
+                } else {
+                    nbuf
+                };
+                (a, b, base[order[a]], end)
+            })
+            .collect();
         let nres = m.iter().sum();
         link_eliminated(&mut eblocks, &slots);
         let (rows, nvals) = rows(&cdim, &slots, &mut eblocks);
@@ -191,6 +215,8 @@ impl Model {
             slots,
             m,
             base,
+            pos,
+            lin_groups,
             order,
             nres,
             nbuf,

@@ -87,6 +87,19 @@ impl Value {
         }
     }
 
+    /// Become a copy of `other`, reusing this value's storage when the shapes agree.
+    pub(crate) fn assign(&mut self, other: &Value) {
+        match (self, other) {
+            (Value::Vector(a), Value::Vector(b)) if a.len() == b.len() => a.copy_from(b),
+            (Value::Pose(a), Value::Pose(b)) => *a = *b,
+            (Value::Rotated { r, v }, Value::Rotated { r: rb, v: vb }) if v.len() == vb.len() => {
+                *r = *rb;
+                v.copy_from(vb);
+            }
+            (s, o) => *s = o.clone(),
+        }
+    }
+
     /// Feed the exact bits of the value to a hasher (cache keys).
     pub(crate) fn hash_bits<H: Hasher>(&self, h: &mut H) {
         let bits = |it: &mut dyn Iterator<Item = &f64>, h: &mut H| {
