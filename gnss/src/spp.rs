@@ -2,17 +2,16 @@
 //! receiver clocks, elevation-dependent weights, broadcast ionosphere and troposphere models,
 //! a chi-square validation of every solution and exclusion of faulty satellites (RAIM FDE).
 
-use crate::frame::{az_el, enu_rotation, Ecef, Geodetic};
+use crate::frame::{az_el, enu_rotation, rotate_to_reception, Ecef, Geodetic};
 use crate::model;
 use crate::orbit::{Orbits, C};
-use crate::rinex::{ObsEpoch, ObsHeader};
+use crate::rinex::nav::Klobuchar;
+use crate::rinex::{ObsEpoch, ObsHeader, SatObs};
 use crate::signal::{find_code, frequency, primary_codes};
 use crate::sv::{Constellation, Sv};
 use hifitime::{Duration, Epoch};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use std::collections::BTreeMap;
-
-const OMEGA_E: f64 = 7.292_115_146_7e-5;
 
 /// Options of the single-point solution.
 #[derive(Clone, Debug)]
@@ -31,13 +30,7 @@ impl Default for SppOptions {
     fn default() -> Self {
         SppOptions {
             elev_mask: 15f64.to_radians(),
-            systems: vec![
-                Constellation::Gps,
-                Constellation::Galileo,
-                Constellation::BeiDou,
-                Constellation::Qzss,
-                Constellation::Glonass,
-            ],
+            systems: [Constellation::CDMA.as_slice(), &[Constellation::Glonass]].concat(),
             fde: true,
             max_gdop: 30.0,
         }
@@ -190,11 +183,16 @@ pub fn chi2_999(dof: usize) -> f64 {
     k * (1.0 - 2.0 / (9.0 * k) + z * (2.0 / (9.0 * k)).sqrt()).powi(3)
 }
 
+/// A satellite's first-frequency code with the satellite at its transmission time.
 struct Meas {
     sv: Sv,
+    /// Pseudorange, metres.
     pr: f64,
+    /// Carrier frequency of the code, Hz.
     freq: f64,
+    /// Satellite position at transmission, ECEF (before the Earth-rotation correction).
     sat: Ecef,
+    /// Satellite clock minus group delay, seconds.
     sat_clock: f64,
 }
 
@@ -209,47 +207,10 @@ pub fn solve_epoch(
     let mut rejected = Vec::new();
     let mut meas = Vec::with_capacity(epoch.sats.len());
     for s in &epoch.sats {
-        let sys = s.sv.sys;
-        if !opts.systems.contains(&sys) {
-            rejected.push((s.sv, Rejection::SystemNotSelected));
-            continue;
+        match measurement(s, epoch.time, header, orbits, opts) {
+            Ok(m) => meas.push(m),
+            Err(r) => rejected.push((s.sv, r)),
         }
-        let types = header.types_of(sys);
-        let Some(k) = find_code(types, primary_codes(sys)) else {
-            rejected.push((s.sv, Rejection::NoCode));
-            continue;
-        };
-        let pr = s.obs[k].value;
-        if !(pr.is_finite() && pr > 1.0e7 && pr < 6.0e7) {
-            rejected.push((s.sv, Rejection::NoCode));
-            continue;
-        }
-        let band = types[k].band();
-        let chan = header
-            .glonass_channel(s.sv)
-            .or_else(|| orbits.broadcast.glonass_channel(s.sv.prn));
-        let Some(freq) = frequency(sys, band, chan) else {
-            rejected.push((s.sv, Rejection::NoCode));
-            continue;
-        };
-        // Transmission time: receiver time − pseudorange/c − satellite clock.
-        let t0 = epoch.time - Duration::from_seconds(pr / C);
-        let Some(first) = orbits.sat(s.sv, t0, band) else {
-            rejected.push((s.sv, Rejection::NoEphemeris));
-            continue;
-        };
-        let ttx = t0 - Duration::from_seconds(first.pv.clock - first.group_delay);
-        let Some(si) = orbits.sat(s.sv, ttx, band) else {
-            rejected.push((s.sv, Rejection::NoEphemeris));
-            continue;
-        };
-        meas.push(Meas {
-            sv: s.sv,
-            pr,
-            freq,
-            sat: si.pv.pos,
-            sat_clock: si.pv.clock - si.group_delay,
-        });
     }
     let mut x0 = prior.map(|p| p.0).unwrap_or_else(Vector3::zeros);
     if x0.norm() > 1.0e8 {
@@ -269,45 +230,16 @@ pub fn solve_epoch(
             .iter()
             .map(|&i| (meas[i].sv, Rejection::BelowMask)),
     );
-    let threshold = |s: &Lsq| chi2_999(s.used.len() - s.nx);
     if opts.fde {
-        let mut excluded: Vec<usize> = Vec::new();
-        while best.used.len() > best.nx && best.chi2 > threshold(&best) {
-            // Try excluding each used satellite; keep the exclusion with the smallest chi-square.
-            if best.used.len() < best.nx + 2 || excluded.len() >= 3 {
-                break;
-            }
-            let mut cand: Option<(usize, Lsq)> = None;
-            for &i in &best.used {
-                let subset: Vec<usize> = best.used.iter().copied().filter(|&j| j != i).collect();
-                if let Ok(s) = lsq(&meas, &subset, best.x, epoch.time, orbits, opts) {
-                    let better = match &cand {
-                        None => true,
-                        Some((_, c)) => {
-                            s.chi2 / ((s.used.len() - s.nx).max(1) as f64)
-                                < c.chi2 / ((c.used.len() - c.nx).max(1) as f64)
-                        }
-                    };
-                    if better {
-                        cand = Some((i, s));
-                    }
-                }
-            }
-            match cand {
-                Some((i, s)) => {
-                    excluded.push(i);
-                    best = s;
-                }
-                None => break,
-            }
-        }
+        let excluded;
+        (best, excluded) = exclude_faulty(&meas, best, epoch.time, orbits, opts);
         rejected.extend(excluded.iter().map(|&i| (meas[i].sv, Rejection::Faulty)));
     }
-    if best.used.len() > best.nx && best.chi2 > threshold(&best) {
+    if best.inconsistent() {
         return Err((
             SppFailure::Inconsistent {
                 chi2: best.chi2,
-                threshold: threshold(&best),
+                threshold: best.chi2_threshold(),
             },
             rejected,
         ));
@@ -334,18 +266,123 @@ pub fn solve_epoch(
     })
 }
 
+/// The first-frequency code of a satellite and the satellite at its transmission time
+/// (receiver time `t` − pseudorange/c − satellite clock), or why it cannot be used.
+fn measurement(
+    s: &SatObs,
+    t: Epoch,
+    header: &ObsHeader,
+    orbits: &Orbits,
+    opts: &SppOptions,
+) -> Result<Meas, Rejection> {
+    let sys = s.sv.sys;
+    if !opts.systems.contains(&sys) {
+        return Err(Rejection::SystemNotSelected);
+    }
+    let types = header.types_of(sys);
+    let k = find_code(types, primary_codes(sys)).ok_or(Rejection::NoCode)?;
+    let pr = s.obs[k].value;
+    if !(pr.is_finite() && pr > 1.0e7 && pr < 6.0e7) {
+        return Err(Rejection::NoCode);
+    }
+    let band = types[k].band();
+    let chan = header
+        .glonass_channel(s.sv)
+        .or_else(|| orbits.broadcast.glonass_channel(s.sv.prn));
+    let freq = frequency(sys, band, chan).ok_or(Rejection::NoCode)?;
+    let t0 = t - Duration::from_seconds(pr / C);
+    let first = orbits.sat(s.sv, t0, band).ok_or(Rejection::NoEphemeris)?;
+    let ttx = t0 - Duration::from_seconds(first.pv.clock - first.group_delay);
+    let si = orbits.sat(s.sv, ttx, band).ok_or(Rejection::NoEphemeris)?;
+    Ok(Meas {
+        sv: s.sv,
+        pr,
+        freq,
+        sat: si.pv.pos,
+        sat_clock: si.pv.clock - si.group_delay,
+    })
+}
+
+/// Fault detection and exclusion: while the solution fails the chi-square test, exclude the
+/// satellite whose removal leaves the smallest chi-square per degree of freedom (at most
+/// three, keeping at least two redundant satellites). Returns the solution and the indices
+/// excluded.
+fn exclude_faulty(
+    meas: &[Meas],
+    mut best: Lsq,
+    t: Epoch,
+    orbits: &Orbits,
+    opts: &SppOptions,
+) -> (Lsq, Vec<usize>) {
+    let mut excluded: Vec<usize> = Vec::new();
+    while best.inconsistent() {
+        if best.used.len() < best.nx + 2 || excluded.len() >= 3 {
+            break;
+        }
+        let mut cand: Option<(usize, Lsq)> = None;
+        for &i in &best.used {
+            let subset: Vec<usize> = best.used.iter().copied().filter(|&j| j != i).collect();
+            if let Ok(s) = lsq(meas, &subset, best.x, t, orbits, opts) {
+                let better = match &cand {
+                    None => true,
+                    Some((_, c)) => s.chi2_per_dof() < c.chi2_per_dof(),
+                };
+                if better {
+                    cand = Some((i, s));
+                }
+            }
+        }
+        match cand {
+            Some((i, s)) => {
+                excluded.push(i);
+                best = s;
+            }
+            None => break,
+        }
+    }
+    (best, excluded)
+}
+
+/// A converged least-squares solution.
 struct Lsq {
+    /// Receiver position, ECEF.
     x: Vector3<f64>,
+    /// Receiver clock per system, metres.
     clocks: BTreeMap<Constellation, f64>,
+    /// Position covariance, ECEF, m².
     cov: Matrix3<f64>,
+    /// Weighted sum of squared post-fit residuals.
     chi2: f64,
+    /// RMS of the post-fit residuals, metres.
     rms: f64,
     dop: Dop,
+    /// Indices (into the measurements) used.
     used: Vec<usize>,
+    /// Indices below the elevation mask.
     masked: Vec<usize>,
+    /// Number of unknowns: position and one clock per system.
     nx: usize,
 }
 
+impl Lsq {
+    fn chi2_threshold(&self) -> f64 {
+        chi2_999(self.used.len() - self.nx)
+    }
+    /// Redundant and failing the chi-square test.
+    fn inconsistent(&self) -> bool {
+        self.used.len() > self.nx && self.chi2 > self.chi2_threshold()
+    }
+    fn chi2_per_dof(&self) -> f64 {
+        self.chi2 / ((self.used.len() - self.nx).max(1) as f64)
+    }
+}
+
+/// One linearised code observation: measurement index, unit vector receiver → satellite
+/// (ECEF), observed − computed (m), variance (m²).
+type Row = (usize, Vector3<f64>, f64, f64);
+
+/// Iterated weighted least squares on the measurements `subset` from `x0` (ECEF): position
+/// and one clock per system, up to 12 iterations until the position step is below 0.1 mm.
 fn lsq(
     meas: &[Meas],
     subset: &[usize],
@@ -358,67 +395,7 @@ fn lsq(
     let mut clk: BTreeMap<Constellation, f64> = BTreeMap::new();
     let (_, tow) = crate::time::week_tow(t);
     for iter in 0..12 {
-        let near_earth = x.norm() > 6.0e6;
-        let g = Ecef(x).to_geodetic();
-        let rx = Ecef(x);
-        // Rows: (meas index, unit vector, residual, variance).
-        let mut rows = Vec::with_capacity(subset.len());
-        let mut masked = Vec::new();
-        for &i in subset {
-            let m = &meas[i];
-            let tau = (m.sat.0 - x).norm() / C;
-            let th = OMEGA_E * tau;
-            let (s, c) = th.sin_cos();
-            let sp = Vector3::new(
-                c * m.sat.0.x + s * m.sat.0.y,
-                -s * m.sat.0.x + c * m.sat.0.y,
-                m.sat.0.z,
-            );
-            let d = sp - x;
-            let rho = d.norm();
-            let (az, el) = if near_earth {
-                az_el(&rx, &g, &Ecef(sp))
-            } else {
-                (0.0, std::f64::consts::FRAC_PI_2)
-            };
-            if near_earth && el < opts.elev_mask {
-                masked.push(i);
-                continue;
-            }
-            let (iono, tropo) = if near_earth && g.h > -1000.0 && g.h < 1.0e5 {
-                let f1 = 1575.42e6;
-                let ion = match m.sv.sys {
-                    Constellation::BeiDou => orbits
-                        .broadcast
-                        .bds_iono
-                        .map(|k| {
-                            model::klobuchar_bds(&k, &g, az, el, (tow - 14.0).rem_euclid(604800.0))
-                                * (1561.098e6 / m.freq).powi(2)
-                        })
-                        .or_else(|| {
-                            orbits.broadcast.gps_iono.map(|k| {
-                                model::klobuchar_gps(&k, &g, az, el, tow) * (f1 / m.freq).powi(2)
-                            })
-                        }),
-                    _ => orbits
-                        .broadcast
-                        .gps_iono
-                        .map(|k| model::klobuchar_gps(&k, &g, az, el, tow) * (f1 / m.freq).powi(2)),
-                };
-                (ion.unwrap_or(0.0), model::troposphere(&g, el))
-            } else {
-                (0.0, 0.0)
-            };
-            let dtr = *clk.get(&m.sv.sys).unwrap_or(&0.0);
-            let pred = rho + dtr - C * m.sat_clock + iono + tropo;
-            let var = variance(m.sv.sys, el, iono, tropo)
-                + if near_earth && orbits.broadcast.gps_iono.is_none() {
-                    25.0
-                } else {
-                    0.0
-                };
-            rows.push((i, d / rho, m.pr - pred, var));
-        }
+        let (rows, masked) = linearize(meas, subset, &x, &clk, tow, orbits, opts);
         // Unknowns: position + one clock per system present.
         let mut systems: Vec<Constellation> = rows.iter().map(|r| meas[r.0].sv.sys).collect();
         systems.sort();
@@ -431,21 +408,7 @@ fn lsq(
             });
         }
         let n = rows.len();
-        let mut h = DMatrix::<f64>::zeros(n, nx);
-        let mut v = DVector::<f64>::zeros(n);
-        let mut w = DVector::<f64>::zeros(n);
-        for (r, (i, e, res, var)) in rows.iter().enumerate() {
-            h[(r, 0)] = -e.x;
-            h[(r, 1)] = -e.y;
-            h[(r, 2)] = -e.z;
-            let k = systems
-                .iter()
-                .position(|s| *s == meas[*i].sv.sys)
-                .unwrap_or(0);
-            h[(r, 3 + k)] = 1.0;
-            v[r] = *res;
-            w[r] = 1.0 / var;
-        }
+        let (h, v, w) = design(meas, &rows, &systems);
         let mut htw = h.transpose();
         for c in 0..n {
             for r in 0..nx {
@@ -485,6 +448,108 @@ fn lsq(
         }
     }
     Err(SppFailure::NoConvergence)
+}
+
+/// The observation rows at receiver position `x` (ECEF) with clocks `clk` (m) at GPS
+/// seconds of week `tow`, and the measurements below the elevation mask. Elevation, mask
+/// and atmosphere apply only once `x` is near the Earth's surface.
+fn linearize(
+    meas: &[Meas],
+    subset: &[usize],
+    x: &Vector3<f64>,
+    clk: &BTreeMap<Constellation, f64>,
+    tow: f64,
+    orbits: &Orbits,
+    opts: &SppOptions,
+) -> (Vec<Row>, Vec<usize>) {
+    let near_earth = x.norm() > 6.0e6;
+    let g = Ecef(*x).to_geodetic();
+    let rx = Ecef(*x);
+    let mut rows = Vec::with_capacity(subset.len());
+    let mut masked = Vec::new();
+    for &i in subset {
+        let m = &meas[i];
+        let sp = rotate_to_reception(&m.sat.0, (m.sat.0 - x).norm() / C);
+        let d = sp - x;
+        let rho = d.norm();
+        let (az, el) = if near_earth {
+            az_el(&rx, &g, &Ecef(sp))
+        } else {
+            (0.0, std::f64::consts::FRAC_PI_2)
+        };
+        if near_earth && el < opts.elev_mask {
+            masked.push(i);
+            continue;
+        }
+        let (iono, tropo) = if near_earth && g.h > -1000.0 && g.h < 1.0e5 {
+            let ion = broadcast_iono(m, orbits, &g, az, el, tow);
+            (ion.unwrap_or(0.0), model::troposphere(&g, el))
+        } else {
+            (0.0, 0.0)
+        };
+        let dtr = *clk.get(&m.sv.sys).unwrap_or(&0.0);
+        let pred = rho + dtr - C * m.sat_clock + iono + tropo;
+        let var = variance(m.sv.sys, el, iono, tropo)
+            + if near_earth && orbits.broadcast.gps_iono.is_none() {
+                25.0
+            } else {
+                0.0
+            };
+        rows.push((i, d / rho, m.pr - pred, var));
+    }
+    (rows, masked)
+}
+
+/// Broadcast ionosphere delay (m) on the measurement's frequency: Klobuchar, BeiDou's own
+/// parameters for BeiDou when broadcast; `None` without parameters.
+fn broadcast_iono(
+    m: &Meas,
+    orbits: &Orbits,
+    g: &Geodetic,
+    az: f64,
+    el: f64,
+    tow: f64,
+) -> Option<f64> {
+    let f1 = 1575.42e6;
+    let gps = |k: &Klobuchar| model::klobuchar_gps(k, g, az, el, tow) * (f1 / m.freq).powi(2);
+    match m.sv.sys {
+        Constellation::BeiDou => orbits
+            .broadcast
+            .bds_iono
+            .map(|k| {
+                model::klobuchar_bds(&k, g, az, el, (tow - 14.0).rem_euclid(604800.0))
+                    * (1561.098e6 / m.freq).powi(2)
+            })
+            .or_else(|| orbits.broadcast.gps_iono.map(|k| gps(&k))),
+        _ => orbits.broadcast.gps_iono.map(|k| gps(&k)),
+    }
+}
+
+/// Design matrix (−unit vector, 1 in the system's clock column), residual vector and weights
+/// (1/variance) of the rows.
+fn design(
+    meas: &[Meas],
+    rows: &[Row],
+    systems: &[Constellation],
+) -> (DMatrix<f64>, DVector<f64>, DVector<f64>) {
+    let n = rows.len();
+    let nx = 3 + systems.len();
+    let mut h = DMatrix::<f64>::zeros(n, nx);
+    let mut v = DVector::<f64>::zeros(n);
+    let mut w = DVector::<f64>::zeros(n);
+    for (r, (i, e, res, var)) in rows.iter().enumerate() {
+        h[(r, 0)] = -e.x;
+        h[(r, 1)] = -e.y;
+        h[(r, 2)] = -e.z;
+        let k = systems
+            .iter()
+            .position(|s| *s == meas[*i].sv.sys)
+            .unwrap_or(0);
+        h[(r, 3 + k)] = 1.0;
+        v[r] = *res;
+        w[r] = 1.0 / var;
+    }
+    (h, v, w)
 }
 
 fn dops(h: &DMatrix<f64>, g: &Geodetic, nx: usize) -> Dop {
