@@ -153,31 +153,127 @@ fn terrain(relief: f64, x: f64, y: f64) -> f64 {
     relief * (0.6 * (x / 1700.0).sin() * (y / 1300.0).cos() + 0.4 * ((x + y) / 2900.0).sin())
 }
 
+/// An image of a simulated block: id, strip (from 0), pose (ENU at the origin), GPST seconds.
+type Image = (String, usize, Pose, f64);
+
+/// A ground point: id, kind (`gcp`, `check` or `tie`), ENU at the origin.
+pub(super) type Point = (String, &'static str, Vector3<f64>);
+
+/// An image measurement: image index, point index, image coordinates (m).
+type Measurement = (usize, usize, Vector2<f64>);
+
+/// GPST seconds of the first exposure of a block.
+const T_FIRST: f64 = 1_400_000_000.0 + 3600.0 * 3.0;
+
+/// The block's layout in metres, from the spec.
+struct Layout {
+    /// Square format side.
+    fmt: f64,
+    /// Ground footprint of an image side.
+    foot: f64,
+    /// Air base (distance between exposures along a strip).
+    base: f64,
+    /// Distance between strips.
+    spacing: f64,
+    /// Flying height above the origin.
+    height: f64,
+}
+
+impl Layout {
+    fn of(spec: &BlockSpec) -> Layout {
+        let f = spec.focal_mm * 1e-3;
+        let fmt = spec.format_mm * 1e-3;
+        let foot = spec.scale * fmt;
+        Layout {
+            fmt,
+            foot,
+            base: foot * (1.0 - spec.forward_overlap),
+            spacing: foot * (1.0 - spec.side_overlap),
+            height: spec.scale * f,
+        }
+    }
+
+    /// Along-track extent of the longest strip and across-track extent of the block.
+    fn extent(&self, spec: &BlockSpec) -> (f64, f64) {
+        let xmax = (spec
+            .strips
+            .iter()
+            .copied()
+            .max()
+            .unwrap_or(1)
+            .saturating_sub(1)) as f64
+            * self.base;
+        let ymax = (spec.strips.len().saturating_sub(1)) as f64 * self.spacing;
+        (xmax, ymax)
+    }
+}
+
 /// Simulate the block and write the project (`project.toml` and its tables) into `dir`.
 pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
     let mut rng = Rng::new(spec.seed);
-    let f = spec.focal_mm * 1e-3;
-    let fmt = spec.format_mm * 1e-3;
     let npx = (spec.format_mm * 1e3 / spec.pixel_um).round() as usize;
-    let nominal = Camera::ideal(f, spec.pixel_um * 1e-6, npx, npx);
-    let mut cam = nominal;
+    let nominal = Camera::ideal(spec.focal_mm * 1e-3, spec.pixel_um * 1e-6, npx, npx);
+    let cam = true_camera(spec, &nominal);
+    let layout = Layout::of(spec);
+    let origin = Geodetic::from_degrees(spec.lat_deg, spec.lon_deg, spec.ground_h);
+    let images = fly_strips(spec, &layout, &mut rng);
+    let points = place_points(spec, &layout, images.len(), &mut rng);
+    let (mut meas, count) = measure(spec, &layout, &cam, &images, &points, &mut rng);
+    let blunders = inject_blunders(spec, &mut meas, &count, &images, &points, &mut rng);
+    write(dir, "images.csv", &images_table(&images))?;
+    write(
+        dir,
+        "image_observations.csv",
+        &measurements_table(spec, &nominal, &meas, &images, &points),
+    )?;
+    let control = points
+        .iter()
+        .enumerate()
+        .filter(|(k, p)| p.1 != "tie" && count[*k] >= 2)
+        .map(|(_, p)| p);
+    let wrong = write_ground_points(
+        dir,
+        control,
+        (spec.gcp_sigma[0], spec.gcp_sigma[2]),
+        spec.wrong_gcp,
+        &origin,
+        &mut rng,
+    )?;
+    write_antennas(spec, dir, &images, &origin, layout.base, &mut rng)?;
+    write(dir, "project.toml", &project_toml(spec, npx))?;
+    let measurements = meas.len();
+    Ok(BlockTruth {
+        origin,
+        images,
+        points,
+        t_first: T_FIRST,
+        blunders,
+        wrong_gcp: wrong,
+        measurements,
+    })
+}
+
+/// The camera the images are simulated with: the nominal one with the spec's true principal
+/// distance, principal point and k1.
+fn true_camera(spec: &BlockSpec, nominal: &Camera) -> Camera {
+    let mut cam = *nominal;
     cam.f += spec.true_focal_delta_mm * 1e-3;
     cam.x0 = spec.true_principal_point_mm[0] * 1e-3;
     cam.y0 = spec.true_principal_point_mm[1] * 1e-3;
     cam.k[0] = spec.true_k1;
-    let hgt = spec.scale * f;
-    let foot = spec.scale * fmt;
-    let base = foot * (1.0 - spec.forward_overlap);
-    let spacing = foot * (1.0 - spec.side_overlap);
-    let origin = Geodetic::from_degrees(spec.lat_deg, spec.lon_deg, spec.ground_h);
-    let t_first = 1_400_000_000.0 + 3600.0 * 3.0;
-    let mut t = t_first;
+    cam
+}
+
+/// The exposures strip by strip (alternate strips flown west), each with a random tilt and
+/// a few metres of position noise, timed at the spec's speed with a turn between strips.
+fn fly_strips(spec: &BlockSpec, layout: &Layout, rng: &mut Rng) -> Vec<Image> {
+    let mut t = T_FIRST;
     let mut images = Vec::new();
     for (s, &n) in spec.strips.iter().enumerate() {
         let east = s % 2 == 0;
         for k in 0..n {
             let i = if east { k } else { n - 1 - k };
-            let (x, y) = (i as f64 * base, s as f64 * spacing);
+            let (x, y) = (i as f64 * layout.base, s as f64 * layout.spacing);
             let heading = if east { 0.0 } else { std::f64::consts::PI };
             let sd = spec.tilt_sigma_deg.to_radians();
             let tilt = Angles::OmegaPhiKappa {
@@ -186,28 +282,27 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
                 kappa: sd * rng.normal(),
             }
             .matrix();
-            let z = hgt + spec.ground_h * 0.0 + 3.0 * rng.normal();
+            let z = layout.height + spec.ground_h * 0.0 + 3.0 * rng.normal();
             let pose = Pose {
                 r: rot_z(heading) * tilt,
                 centre: Vector3::new(x + 2.0 * rng.normal(), y + 2.0 * rng.normal(), z),
             };
             images.push((format!("{}{:02}", s + 1, i + 1), s, pose, t));
-            t += base / spec.speed;
+            t += layout.base / spec.speed;
         }
         t += spec.turn_s;
     }
-    let xmax = (spec
-        .strips
-        .iter()
-        .copied()
-        .max()
-        .unwrap_or(1)
-        .saturating_sub(1)) as f64
-        * base;
-    let ymax = (spec.strips.len().saturating_sub(1)) as f64 * spacing;
+    images
+}
+
+/// Ground points on the terrain: four corner control points (when asked), check points over
+/// the block, tie points a little beyond it.
+fn place_points(spec: &BlockSpec, layout: &Layout, n_images: usize, rng: &mut Rng) -> Vec<Point> {
+    let (xmax, ymax) = layout.extent(spec);
+    let (foot, base) = (layout.foot, layout.base);
     // Across the outer strips: 90 % of the measurable half-width.
-    let margin = 0.9 * spec.scale * (fmt / 2.0 - 0.005);
-    let mut points: Vec<(String, &'static str, Vector3<f64>)> = Vec::new();
+    let margin = 0.9 * spec.scale * (layout.fmt / 2.0 - 0.005);
+    let mut points: Vec<Point> = Vec::new();
     let ground = |x: f64, y: f64| Vector3::new(x, y, terrain(spec.relief, x, y));
     if spec.corner_gcps {
         let inset = 0.06 * foot;
@@ -233,7 +328,7 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
         );
         points.push((format!("C{}", k + 1), "check", ground(x, y)));
     }
-    let n_ties = spec.ties_per_image * images.len() / 3;
+    let n_ties = spec.ties_per_image * n_images / 3;
     for k in 0..n_ties {
         let (x, y) = (
             rng.range(-0.4 * foot, xmax + 0.4 * foot),
@@ -241,10 +336,22 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
         );
         points.push((format!("T{}", k + 1), "tie", ground(x, y)));
     }
-    // Measurements.
+    points
+}
+
+/// Noisy image coordinates of every point inside the measurable format (5 mm from the edge),
+/// keeping points seen at least twice; also how often each point was seen.
+fn measure(
+    spec: &BlockSpec,
+    layout: &Layout,
+    cam: &Camera,
+    images: &[Image],
+    points: &[Point],
+    rng: &mut Rng,
+) -> (Vec<Measurement>, Vec<usize>) {
     let sig = spec.sigma_image_um * 1e-6;
-    let lim = fmt / 2.0 - 0.005;
-    let mut meas: Vec<(usize, usize, Vector2<f64>)> = Vec::new();
+    let lim = layout.fmt / 2.0 - 0.005;
+    let mut meas: Vec<Measurement> = Vec::new();
     for (i, im) in images.iter().enumerate() {
         for (k, p) in points.iter().enumerate() {
             if let Some(xy) = cam.project(&im.2, &p.2) {
@@ -254,12 +361,24 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
             }
         }
     }
-    // Keep points seen at least twice.
     let mut count = vec![0usize; points.len()];
     for m in &meas {
         count[m.1] += 1;
     }
     meas.retain(|m| count[m.1] >= 2);
+    (meas, count)
+}
+
+/// Gross errors of 60, 75, 90 … µm on tie-point measurements of points seen at least four
+/// times; returns (image, point) of each.
+fn inject_blunders(
+    spec: &BlockSpec,
+    meas: &mut [Measurement],
+    count: &[usize],
+    images: &[Image],
+    points: &[Point],
+    rng: &mut Rng,
+) -> Vec<(String, String)> {
     let mut blunders = Vec::new();
     for b in 0..spec.image_blunders {
         let ties: Vec<usize> = (0..meas.len())
@@ -274,16 +393,29 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
         meas[j].2 += Vector2::new(a.cos(), a.sin()) * size;
         blunders.push((images[meas[j].0].0.clone(), points[meas[j].1].0.clone()));
     }
-    let g_ecef = |v: &Vector3<f64>| Enu(*v).to_ecef(&origin.to_ecef()).to_geodetic();
-    // Tables.
+    blunders
+}
+
+/// `images.csv`: image, camera, strip (from 1), GPS week and seconds of week.
+fn images_table(images: &[Image]) -> String {
     let mut s = String::from("image,camera,strip,week,tow\n");
-    for im in &images {
+    for im in images {
         let (week, tow) = gnss::time::week_tow(gnss::time::from_week_tow(0, im.3));
         let _ = writeln!(s, "{},cam,{},{week},{tow:.6}", im.0, im.1 + 1);
     }
-    write(dir, "images.csv", &s)?;
+    s
+}
+
+/// `image_observations.csv`: the measurements in pixels of the nominal camera.
+fn measurements_table(
+    spec: &BlockSpec,
+    nominal: &Camera,
+    meas: &[Measurement],
+    images: &[Image],
+    points: &[Point],
+) -> String {
     let mut s = String::from("image,point,x_px,y_px,sigma_px\n");
-    for (i, k, xy) in &meas {
+    for (i, k, xy) in meas {
         let px = nominal.image_to_pixel(*xy);
         let _ = writeln!(
             s,
@@ -295,23 +427,39 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
             spec.sigma_image_um / spec.pixel_um
         );
     }
-    write(dir, "image_observations.csv", &s)?;
+    s
+}
+
+/// Geodetic coordinates of a point of the ENU frame at `origin`.
+pub(super) fn geodetic(origin: &Geodetic, v: &Vector3<f64>) -> Geodetic {
+    Enu(*v).to_ecef(&origin.to_ecef()).to_geodetic()
+}
+
+/// Write `ground_points.csv` (point, kind, lat, lon in degrees, h and sigmas in metres) for
+/// the control and check points given (ENU at `origin`). Control points are observed with
+/// noise of σ = (σ_xy, σ_xy, σ_z) = `sigma` per ENU axis drawn from `rng`; the first one also
+/// carries the `wrong` shift (E, N, U, metres) when given — its id is returned.
+pub(super) fn write_ground_points<'a>(
+    dir: &Path,
+    points: impl IntoIterator<Item = &'a Point>,
+    sigma: (f64, f64),
+    wrong: Option<[f64; 3]>,
+    origin: &Geodetic,
+    rng: &mut Rng,
+) -> Result<Option<String>, SimError> {
+    let (sx, sz) = sigma;
     let mut s = String::from("point,kind,lat,lon,h,sigma_xy,sigma_z\n");
-    let mut wrong = None;
-    for (id, kind, x) in &points {
-        if *kind == "tie" || count[points.iter().position(|p| &p.0 == id).unwrap_or(0)] < 2 {
-            continue;
-        }
+    let mut wrong_id = None;
+    for (id, kind, x) in points {
         let mut v = *x;
-        let (sx, sz) = (spec.gcp_sigma[0], spec.gcp_sigma[2]);
         if *kind == "gcp" {
             v += Vector3::new(sx * rng.normal(), sx * rng.normal(), sz * rng.normal());
-            if let (Some(d), None) = (spec.wrong_gcp, &wrong) {
+            if let (Some(d), None) = (wrong, &wrong_id) {
                 v += Vector3::from(d);
-                wrong = Some(id.clone());
+                wrong_id = Some(id.clone());
             }
         }
-        let g = g_ecef(&v);
+        let g = geodetic(origin, &v);
         let _ = writeln!(
             s,
             "{id},{kind},{:.10},{:.10},{:.4},{sx},{sz}",
@@ -321,7 +469,12 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
         );
     }
     write(dir, "ground_points.csv", &s)?;
-    // GNSS antennas.
+    Ok(wrong_id)
+}
+
+/// The GNSS antenna covariance in the site's ENU frame (m²) from the spec's σ and
+/// correlations, and its Cholesky factor (the diagonal of σ when not positive definite).
+fn gnss_covariance(spec: &BlockSpec) -> (Matrix3<f64>, Matrix3<f64>) {
     let [se, sn, su] = spec.gnss_sigma;
     let [ren, reu, rnu] = spec.gnss_corr;
     let cov = Matrix3::new(
@@ -339,10 +492,25 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
         .cholesky()
         .map(|c| c.l())
         .unwrap_or_else(|| Matrix3::from_diagonal(&Vector3::from(spec.gnss_sigma)));
+    (cov, l)
+}
+
+/// Write `antennas.csv` (antenna = centre + R·lever arm + drift + correlated noise, with the
+/// segment jump) and `trajectory.pos` (the same antennas as a fixed trajectory, with epochs
+/// every air-base interval through the turns so that it has no gaps).
+fn write_antennas(
+    spec: &BlockSpec,
+    dir: &Path,
+    images: &[Image],
+    origin: &Geodetic,
+    air_base: f64,
+    rng: &mut Rng,
+) -> Result<(), SimError> {
+    let (cov, l) = gnss_covariance(spec);
     let mut rows = Vec::new();
     let mut track: Vec<gnss::solution::PosRecord> = Vec::new();
     for (k, im) in images.iter().enumerate() {
-        let dt = im.3 - t_first;
+        let dt = im.3 - T_FIRST;
         let mut drift = Vector3::from(spec.drift_a) + Vector3::from(spec.drift_b) * dt;
         let segment = match spec.segment_jump {
             Some((from, jump)) if k >= from => {
@@ -354,10 +522,10 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
         let noise = l * Vector3::new(rng.normal(), rng.normal(), rng.normal());
         let lever = photo::lever::LeverArm::new(Vector3::from(spec.lever_arm));
         let a = lever.antenna(&im.2.centre, &im.2.r) + drift + noise;
-        let g = g_ecef(&a);
+        let g = geodetic(origin, &a);
         // Noise drawn in the site ENU: express the covariance in the ENU at the antenna.
         let ra = enu_rotation(&g);
-        let m = ra * enu_rotation(&origin).transpose();
+        let m = ra * enu_rotation(origin).transpose();
         let c = m * cov * m.transpose();
         let time = gnss::time::from_week_tow(0, im.3);
         let rec = gnss::solution::PosRecord {
@@ -369,20 +537,7 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
             age: 0.0,
             ratio: 99.0,
         };
-        // Through the turns: epochs every base/speed seconds on the straight line (their
-        // positions matter to nobody, they keep the trajectory free of gaps).
-        if let Some(prev) = track.last().cloned() {
-            let gap = (rec.time - prev.time).to_seconds();
-            let step = base / spec.speed;
-            let n = (gap / step).floor() as usize;
-            for j in 1..n {
-                let f = j as f64 / n as f64;
-                let mut mid = prev.clone();
-                mid.time = prev.time + hifitime::Duration::from_seconds(gap * f);
-                mid.pos = gnss::frame::Ecef(prev.pos.0 * (1.0 - f) + rec.pos.0 * f);
-                track.push(mid);
-            }
-        }
+        bridge_turn(&mut track, &rec, air_base / spec.speed);
         track.push(rec);
         rows.push(AntennaRow {
             id: &im.0,
@@ -408,21 +563,37 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
         &track,
         gnss::solution::PosFormat::Llh,
     )?;
-    let project = format!(
+    Ok(())
+}
+
+/// Epochs every `step` seconds on the straight line from the last record of `track` to
+/// `next` (through the turns: their positions matter to nobody, they keep the trajectory
+/// free of gaps).
+fn bridge_turn(
+    track: &mut Vec<gnss::solution::PosRecord>,
+    next: &gnss::solution::PosRecord,
+    step: f64,
+) {
+    let Some(prev) = track.last().cloned() else {
+        return;
+    };
+    let gap = (next.time - prev.time).to_seconds();
+    let n = (gap / step).floor() as usize;
+    for j in 1..n {
+        let f = j as f64 / n as f64;
+        let mut mid = prev.clone();
+        mid.time = prev.time + hifitime::Duration::from_seconds(gap * f);
+        mid.pos = gnss::frame::Ecef(prev.pos.0 * (1.0 - f) + next.pos.0 * f);
+        track.push(mid);
+    }
+}
+
+/// The project file: one camera (nominal values), the tables, the spec's extra sections.
+fn project_toml(spec: &BlockSpec, npx: usize) -> String {
+    format!(
         "name = \"{}\"\noutput = \"utm\"\n\n[[camera]]\nid = \"cam\"\nfocal_mm = {}\npixel_um = {}\nwidth_px = {npx}\nheight_px = {npx}\nsigma_px = {}\n{}\n[images]\nlist = \"images.csv\"\nmeasurements = \"image_observations.csv\"\n\n[ground]\nfile = \"ground_points.csv\"\n\n{}",
         spec.name, spec.focal_mm, spec.pixel_um, spec.sigma_image_um / spec.pixel_um, spec.camera_options, spec.project_options
-    );
-    write(dir, "project.toml", &project)?;
-    let measurements = meas.len();
-    Ok(BlockTruth {
-        origin,
-        images,
-        points,
-        t_first,
-        blunders,
-        wrong_gcp: wrong,
-        measurements,
-    })
+    )
 }
 
 /// How far the simulated tape measurement of the lever arm is off truth (m).
