@@ -81,10 +81,7 @@ fn unwrap_to(a: f64, reference: f64) -> f64 {
 impl AttitudeTable {
     /// CSV with header `week,tow,a1,a2,a3` (degrees), GPST.
     pub fn read_csv(path: &Path, conv: AngleConvention) -> Result<AttitudeTable> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = std::fs::read_to_string(path).map_err(Error::io(path))?;
         let mut times = Vec::new();
         let mut angles = Vec::new();
         for (i, line) in text.lines().enumerate() {
@@ -99,17 +96,19 @@ impl AttitudeTable {
                 .split(',')
                 .map(|x| x.trim().parse::<f64>())
                 .collect::<std::result::Result<_, _>>()
-                .map_err(|_| Error::Parse {
-                    path: path.to_path_buf(),
-                    line: i + 1,
-                    what: "numbers expected: week,tow,angle1,angle2,angle3 (degrees)".into(),
+                .map_err(|_| {
+                    Error::parse(
+                        path,
+                        i + 1,
+                        "numbers expected: week,tow,angle1,angle2,angle3 (degrees)",
+                    )
                 })?;
             if f.len() < 5 {
-                return Err(Error::Parse {
-                    path: path.to_path_buf(),
-                    line: i + 1,
-                    what: "five columns expected: week,tow,angle1,angle2,angle3".into(),
-                });
+                return Err(Error::parse(
+                    path,
+                    i + 1,
+                    "five columns expected: week,tow,angle1,angle2,angle3",
+                ));
             }
             times.push(from_week_tow(f[0] as u32, f[1]));
             angles.push([f[2].to_radians(), f[3].to_radians(), f[4].to_radians()]);

@@ -8,6 +8,7 @@ use gnss::error::Result;
 use gnss::frame::enu_rotation;
 use gnss::solution::{write_atomic, write_pos, PosFormat, PosRecord};
 use gnss::tmerc::{Projected, TransverseMercator};
+use std::io::Write;
 use std::path::Path;
 
 /// Output layout.
@@ -141,117 +142,127 @@ fn rows(st: &[CameraStation], proj: Projection) -> (Vec<Row>, String) {
 
 /// Write stations in a format.
 pub fn write(path: &Path, st: &[CameraStation], format: Format, proj: Projection) -> Result<()> {
-    if format == Format::Pos {
-        let recs: Vec<PosRecord> = st
-            .iter()
-            .map(|s| PosRecord {
-                time: s.time,
-                pos: s.centre,
-                quality: s.quality,
-                nsat: 0,
-                cov: s.cov,
-                age: 0.0,
-                ratio: 0.0,
-            })
-            .collect();
-        return write_pos(
-            path,
-            &["program   : ppkat exposures (projection centres)".to_string()],
-            &recs,
-            PosFormat::Llh,
-        );
-    }
-    if format == Format::Antenna {
-        return write_antenna(path, st);
-    }
+    let text_format: TextFormat = match format {
+        Format::Pos => return write_centres_pos(path, st),
+        Format::Antenna => return write_antenna(path, st),
+        Format::Metashape => write_metashape,
+        Format::Pix4d => write_pix4d,
+        Format::Odm => write_odm,
+        Format::Csv => write_csv,
+    };
     let (rows, crs) = rows(st, proj);
     let geo = proj == Projection::Geodetic;
-    write_atomic(path, |w| {
-        match format {
-            Format::Metashape => {
-                writeln!(w, "# ppkat camera stations; {crs}")?;
-                if geo {
-                    writeln!(
-                        w,
-                        "#label,longitude,latitude,altitude,sx,sy,sz,yaw,pitch,roll"
-                    )?;
-                } else {
-                    writeln!(
-                        w,
-                        "#label,easting,northing,altitude,sx,sy,sz,yaw,pitch,roll"
-                    )?;
-                }
-                for r in &rows {
-                    let (a, b) = if geo { (r.y, r.x) } else { (r.x, r.y) };
-                    writeln!(
-                        w,
-                        "{},{a:.9},{b:.9},{:.4},{:.4},{:.4},{:.4},{:.3},{:.3},{:.3}",
-                        r.id,
-                        r.h,
-                        r.sigma_enu[0],
-                        r.sigma_enu[1],
-                        r.sigma_enu[2],
-                        r.ypr[0],
-                        r.ypr[1],
-                        r.ypr[2]
-                    )?;
-                }
-            }
-            Format::Pix4d => {
-                writeln!(
-                    w,
-                    "imagename,{},altitude,omega,phi,kappa,accuracy_horz,accuracy_vert",
-                    if geo {
-                        "latitude,longitude"
-                    } else {
-                        "easting,northing"
-                    }
-                )?;
-                for r in &rows {
-                    let sh = r.sigma_enu[0].hypot(r.sigma_enu[1]);
-                    writeln!(
-                        w,
-                        "{},{:.9},{:.9},{:.4},{:.4},{:.4},{:.4},{sh:.4},{:.4}",
-                        r.id, r.x, r.y, r.h, r.opk[0], r.opk[1], r.opk[2], r.sigma_enu[2]
-                    )?;
-                }
-            }
-            Format::Odm => {
-                // geo.txt: projection line, then image geo_x geo_y geo_z omega phi kappa horz vert.
-                writeln!(
-                    w,
-                    "{}",
-                    if geo {
-                        "EPSG:4326".to_string()
-                    } else {
-                        crs.clone()
-                    }
-                )?;
-                for r in &rows {
-                    let (a, b) = if geo { (r.y, r.x) } else { (r.x, r.y) };
-                    let sh = r.sigma_enu[0].hypot(r.sigma_enu[1]);
-                    writeln!(
-                        w,
-                        "{} {a:.9} {b:.9} {:.4} {:.4} {:.4} {:.4} {sh:.4} {:.4}",
-                        r.id, r.h, r.opk[0], r.opk[1], r.opk[2], r.sigma_enu[2]
-                    )?;
-                }
-            }
-            Format::Csv => {
-                writeln!(w, "# ppkat camera stations (projection centres), GPST; {crs}; sigmas ENU (m); Q as RTKLIB; angles degrees, R camera->ENU, omega/phi/kappa: R = Rw*Rp*Rk")?;
-                writeln!(w, "id,week,tow,{},h,sigma_e,sigma_n,sigma_u,quality,yaw,pitch,roll,omega,phi,kappa,flags", if geo { "lat,lon" } else { "easting,northing" })?;
-                for r in &rows {
-                    writeln!(
-                        w,
-                        "{},{},{:.6},{:.9},{:.9},{:.4},{:.4},{:.4},{:.4},{},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5},\"{}\"",
-                        r.id, r.week, r.tow, r.x, r.y, r.h, r.sigma_enu[0], r.sigma_enu[1], r.sigma_enu[2], r.quality, r.ypr[0], r.ypr[1], r.ypr[2], r.opk[0], r.opk[1], r.opk[2], r.flags
-                    )?;
-                }
-            }
-            Format::Pos | Format::Antenna => unreachable!("handled above"),
+    write_atomic(path, |w| text_format(w, &rows, &crs, geo))
+}
+
+/// A writer of one text layout: the rows, the name of their coordinate system, and whether
+/// they are geodetic (x = latitude, y = longitude, degrees) rather than projected (easting,
+/// northing, metres).
+type TextFormat = fn(&mut dyn Write, &[Row], &str, bool) -> std::io::Result<()>;
+
+/// The projection centres as an RTKLIB `.pos` (llh) with their ECEF covariance.
+fn write_centres_pos(path: &Path, st: &[CameraStation]) -> Result<()> {
+    let recs: Vec<PosRecord> = st
+        .iter()
+        .map(|s| PosRecord {
+            time: s.time,
+            pos: s.centre,
+            quality: s.quality,
+            nsat: 0,
+            cov: s.cov,
+            age: 0.0,
+            ratio: 0.0,
+        })
+        .collect();
+    write_pos(
+        path,
+        &["program   : ppkat exposures (projection centres)".to_string()],
+        &recs,
+        PosFormat::Llh,
+    )
+}
+
+/// Metashape reference CSV: label, longitude/latitude (or easting/northing), altitude,
+/// sigmas, yaw/pitch/roll.
+fn write_metashape(w: &mut dyn Write, rows: &[Row], crs: &str, geo: bool) -> std::io::Result<()> {
+    writeln!(w, "# ppkat camera stations; {crs}")?;
+    if geo {
+        writeln!(
+            w,
+            "#label,longitude,latitude,altitude,sx,sy,sz,yaw,pitch,roll"
+        )?;
+    } else {
+        writeln!(
+            w,
+            "#label,easting,northing,altitude,sx,sy,sz,yaw,pitch,roll"
+        )?;
+    }
+    for r in rows {
+        let (a, b) = if geo { (r.y, r.x) } else { (r.x, r.y) };
+        writeln!(
+            w,
+            "{},{a:.9},{b:.9},{:.4},{:.4},{:.4},{:.4},{:.3},{:.3},{:.3}",
+            r.id, r.h, r.sigma_enu[0], r.sigma_enu[1], r.sigma_enu[2], r.ypr[0], r.ypr[1], r.ypr[2]
+        )?;
+    }
+    Ok(())
+}
+
+/// Pix4D image geolocation CSV: name, coordinates, altitude, ω-φ-κ, horizontal and vertical
+/// accuracy.
+fn write_pix4d(w: &mut dyn Write, rows: &[Row], _crs: &str, geo: bool) -> std::io::Result<()> {
+    writeln!(
+        w,
+        "imagename,{},altitude,omega,phi,kappa,accuracy_horz,accuracy_vert",
+        if geo {
+            "latitude,longitude"
+        } else {
+            "easting,northing"
         }
-        Ok(())
-    })
+    )?;
+    for r in rows {
+        let sh = r.sigma_enu[0].hypot(r.sigma_enu[1]);
+        writeln!(
+            w,
+            "{},{:.9},{:.9},{:.4},{:.4},{:.4},{:.4},{sh:.4},{:.4}",
+            r.id, r.x, r.y, r.h, r.opk[0], r.opk[1], r.opk[2], r.sigma_enu[2]
+        )?;
+    }
+    Ok(())
+}
+
+/// OpenDroneMap `geo.txt`: the projection line, then image geo_x geo_y geo_z omega phi kappa
+/// horizontal and vertical accuracy.
+fn write_odm(w: &mut dyn Write, rows: &[Row], crs: &str, geo: bool) -> std::io::Result<()> {
+    writeln!(w, "{}", if geo { "EPSG:4326" } else { crs })?;
+    for r in rows {
+        let (a, b) = if geo { (r.y, r.x) } else { (r.x, r.y) };
+        let sh = r.sigma_enu[0].hypot(r.sigma_enu[1]);
+        writeln!(
+            w,
+            "{} {a:.9} {b:.9} {:.4} {:.4} {:.4} {:.4} {sh:.4} {:.4}",
+            r.id, r.h, r.opk[0], r.opk[1], r.opk[2], r.sigma_enu[2]
+        )?;
+    }
+    Ok(())
+}
+
+/// The full CSV: time, coordinates, ENU sigmas, quality, both attitude conventions, flags.
+fn write_csv(w: &mut dyn Write, rows: &[Row], crs: &str, geo: bool) -> std::io::Result<()> {
+    writeln!(w, "# ppkat camera stations (projection centres), GPST; {crs}; sigmas ENU (m); Q as RTKLIB; angles degrees, R camera->ENU, omega/phi/kappa: R = Rw*Rp*Rk")?;
+    writeln!(
+        w,
+        "id,week,tow,{},h,sigma_e,sigma_n,sigma_u,quality,yaw,pitch,roll,omega,phi,kappa,flags",
+        if geo { "lat,lon" } else { "easting,northing" }
+    )?;
+    for r in rows {
+        writeln!(
+            w,
+            "{},{},{:.6},{:.9},{:.9},{:.4},{:.4},{:.4},{:.4},{},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5},\"{}\"",
+            r.id, r.week, r.tow, r.x, r.y, r.h, r.sigma_enu[0], r.sigma_enu[1], r.sigma_enu[2], r.quality, r.ypr[0], r.ypr[1], r.ypr[2], r.opk[0], r.opk[1], r.opk[2], r.flags
+        )?;
+    }
+    Ok(())
 }
 
 /// One row of the antenna table read by `ppkat adjust` (`adjust::tables::read_antennas`).

@@ -119,10 +119,7 @@ impl std::fmt::Display for SimReport {
 
 /// Write a simulated file atomically, creating its folder.
 fn write(dir: &Path, name: &str, text: &str) -> Result<PathBuf, SimError> {
-    std::fs::create_dir_all(dir).map_err(|source| gnss::Error::Io {
-        path: dir.to_path_buf(),
-        source,
-    })?;
+    std::fs::create_dir_all(dir).map_err(gnss::Error::io(dir))?;
     let p = dir.join(name);
     gnss::solution::write_atomic(&p, |w| w.write_all(text.as_bytes()))?;
     Ok(p)
@@ -162,10 +159,7 @@ pub fn truth_flight(s: &Scenario) -> Result<impl Fn(Epoch) -> Ecef, SimError> {
 pub fn run(s: &Scenario, dir: &Path) -> Result<SimReport, SimError> {
     s.validate()?;
     let t_start = std::time::Instant::now();
-    std::fs::create_dir_all(dir).map_err(|source| gnss::Error::Io {
-        path: dir.to_path_buf(),
-        source,
-    })?;
+    std::fs::create_dir_all(dir).map_err(gnss::Error::io(dir))?;
     let rng = Rng::new(s.seed);
     let start = s.start_epoch()?;
     let site = SiteFrame::of(s);
