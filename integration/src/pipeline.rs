@@ -80,6 +80,13 @@ pub fn load_orbits(nav: &[PathBuf], sp3: Option<&Path>) -> Result<(Orbits, Vec<S
     ))
 }
 
+/// What reading an observation file noticed, each as `path:line: what`.
+fn file_warnings(f: &ObsFile) -> impl Iterator<Item = String> + '_ {
+    f.warnings
+        .iter()
+        .map(|w| format!("{}:{}: {}", f.path.display(), w.line, w.what))
+}
+
 /// Check that observations and orbits overlap in time; error naming both files if not.
 pub fn check_overlap(obs: &ObsFile, orbits: &Orbits, nav: &[PathBuf]) -> Result<()> {
     let (Some(a), Some(b)) = (obs.epochs.first(), obs.epochs.last()) else {
@@ -115,9 +122,7 @@ pub fn spp(job: &SppJob) -> Result<SppReport> {
     let obs = ObsFile::read(&job.obs)?;
     let (orbits, mut warnings) = load_orbits(&job.nav, job.sp3.as_deref())?;
     check_overlap(&obs, &orbits, &job.nav)?;
-    for w in &obs.warnings {
-        warnings.push(format!("{}:{}: {}", obs.path.display(), w.line, w.what));
-    }
+    warnings.extend(file_warnings(&obs));
     let run = gnss::spp::run(&obs.epochs, &obs.header, &orbits, &job.options);
     let records: Vec<PosRecord> = run
         .solutions
@@ -239,11 +244,7 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
     gnss::ppk::require_phase(&base, "base")?;
     let (orbits, mut warnings) = load_orbits(&job.nav, None)?;
     check_overlap(&rover, &orbits, &job.nav)?;
-    for f in [&rover, &base] {
-        for w in &f.warnings {
-            warnings.push(format!("{}:{}: {}", f.path.display(), w.line, w.what));
-        }
-    }
+    warnings.extend(file_warnings(&rover).chain(file_warnings(&base)));
     let result = gnss::ppk::process(
         &rover,
         &base,
