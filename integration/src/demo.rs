@@ -3,6 +3,13 @@
 //! truth. The stages pass values: the exposures are computed on the carrier-phase
 //! [`gnss::trajectory::Trajectory`] in memory, with the filter's ambiguity segments
 //! (`rover_ppk.pos` is written for the user, not read back).
+//!
+//! Enters: an output folder and the adjustment's run options. Leaves: the simulator's files,
+//! `rover_ppk.pos`, `imu_attitude.csv`, `camera_stations.csv`, the adjustment's inputs
+//! (`antennas.csv`, `images.csv`, `project.toml`) and outputs (`adjust/`) in that folder, and a
+//! [`DemoReport`] of errors against truth (metres). Uses [`crate::simulate`], `gnss::spp`,
+//! `gnss::ppk`, [`crate::exposure`] and [`crate::adjust`]. Also used by the tests: the truth
+//! reader ([`read_truth`], [`truth_at`]) and [`SimInputs`].
 
 use crate::exposure::attitude::{AngleConvention, AttitudeTable};
 use crate::exposure::export::{self, Format, Projection};

@@ -1,5 +1,11 @@
 //! Whole-stage runs used by the command line: read inputs, check they fit together, process,
 //! write outputs atomically, and return a report of what was done and what was rejected.
+//!
+//! Enters: a job naming the input files and holding the library options ([`SppJob`],
+//! [`PpkJob`], [`ExposureJob`]). Leaves: the output file (`.pos` or an exposure export) and a
+//! report ([`SppReport`], [`PpkReport`], [`ExposureReport`]) whose `Display` is what `ppkat`
+//! prints. Uses `gnss` (RINEX, orbits, SPP, PPK, `.pos`) and [`crate::exposure`]; prints
+//! nothing itself.
 
 use gnss::error::{Error, Result};
 use gnss::orbit::{Ephemerides, Orbits, Sp3};

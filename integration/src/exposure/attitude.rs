@@ -3,6 +3,9 @@
 //! angles (ω-φ-κ with R = Rω·Rφ·Rκ, or φ-ω-κ with R = Rφ·Rω·Rκ and the Chinese-text Rφ),
 //! or — when nothing else exists — from the trajectory heading with zero pitch and roll.
 //! R maps the camera frame into the local ENU frame at the exposure.
+//!
+//! Enters: an attitude CSV (`week,tow,a1,a2,a3`, GPST, degrees) or angles in radians. Leaves:
+//! rotation matrices (camera → ENU) and ω-φ-κ of a matrix. Uses `photo::rotation::Angles`.
 
 use gnss::error::{Error, Result};
 use gnss::time::from_week_tow;
@@ -19,7 +22,7 @@ pub enum AngleConvention {
     YawPitchRoll,
     /// ω-φ-κ, R = Rω·Rφ·Rκ.
     OmegaPhiKappa,
-    /// φ-ω-κ, R = Rφ·Rω·Rκ, Rφ = [[cφ,0,−sφ],[0,1,0],[sφ,0,cφ]].
+    /// φ-ω-κ, R = Rφ·Rω·Rκ, Rφ = `[[cφ,0,−sφ],[0,1,0],[sφ,0,cφ]]`.
     PhiOmegaKappa,
 }
 
@@ -61,9 +64,11 @@ pub fn omega_phi_kappa(r: &Matrix3<f64>) -> [f64; 3] {
 /// Attitude samples over time.
 #[derive(Clone, Debug)]
 pub struct AttitudeTable {
+    /// Convention of the angles.
     pub conv: AngleConvention,
+    /// Sample times, GPST, increasing.
     pub times: Vec<Epoch>,
-    /// Radians.
+    /// The three angles of each sample, radians.
     pub angles: Vec<[f64; 3]>,
 }
 

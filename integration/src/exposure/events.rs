@@ -1,5 +1,9 @@
 //! Exposure times: RINEX flag-5 events (receiver time, corrected by the receiver clock seen in
 //! the trajectory), DJI `Timestamp.MRK`, or a CSV of times in GPST or UTC.
+//!
+//! Enters: an observation file with its trajectory, an MRK file or a CSV. Leaves:
+//! [`ExposureEvent`]s in GPST (with the MRK's own position and offsets when given), sorting
+//! and duplicate checks, and the test for UTC times declared as GPST.
 
 use gnss::error::{Error, Result};
 use gnss::frame::{Ecef, Geodetic};

@@ -1,6 +1,11 @@
 //! Exports of camera stations: Metashape and Pix4D reference CSVs, OpenDroneMap `geo.txt`, a
 //! full CSV (time, coordinates, sigmas, quality, attitude, flags) and an RTKLIB `.pos`; in
 //! geodetic coordinates or projected (UTM, Gauss–Krüger).
+//!
+//! Enters: camera stations ([`super::CameraStation`], ECEF with ECEF covariance). Leaves: files
+//! written atomically; times GPST, sigmas in the local ENU frame (m), angles degrees (R camera
+//! → ENU). Also the antenna table that [`crate::adjust`] reads ([`antenna_table`]), shared with
+//! the simulator. Uses `gnss::tmerc` for the projections and `gnss::solution` for `.pos`.
 
 use super::attitude::omega_phi_kappa;
 use super::CameraStation;
@@ -14,10 +19,15 @@ use std::path::Path;
 /// Output layout.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
+    /// Agisoft Metashape reference CSV (label, coordinates, sigmas, yaw/pitch/roll).
     Metashape,
+    /// Pix4D image geolocation CSV (coordinates, ω-φ-κ, accuracies).
     Pix4d,
+    /// OpenDroneMap `geo.txt`.
     Odm,
+    /// Every column ppkat knows (time, coordinates, sigmas, Q, both angle sets, flags).
     Csv,
+    /// RTKLIB `.pos` of the projection centres (llh, with the ECEF covariance).
     Pos,
     /// Antenna positions with their full ENU covariance, ambiguity segment and attitude:
     /// the GNSS input of `ppkat adjust` (lever arm not applied).
@@ -27,6 +37,7 @@ pub enum Format {
 /// Horizontal coordinates of the outputs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Projection {
+    /// WGS84 latitude and longitude (degrees), ellipsoidal height.
     Geodetic,
     /// UTM; the zone of the first station when `None`.
     Utm(Option<u8>),
@@ -267,13 +278,17 @@ fn write_csv(w: &mut dyn Write, rows: &[Row], crs: &str, geo: bool) -> std::io::
 
 /// One row of the antenna table read by `ppkat adjust` (`adjust::tables::read_antennas`).
 pub struct AntennaRow<'a> {
+    /// Image (station) id.
     pub id: &'a str,
+    /// Exposure time, GPST.
     pub time: hifitime::Epoch,
+    /// Antenna position, WGS84.
     pub pos: gnss::frame::Geodetic,
     /// Covariance in the ENU frame at `pos`, m².
     pub cov_enu: nalgebra::Matrix3<f64>,
     /// RTKLIB's Q (1 fixed).
     pub quality: u8,
+    /// Ambiguity segment of the trajectory (the adjustment's drift groups).
     pub segment: u32,
     /// ω, φ, κ (degrees) of R camera → ENU, when known.
     pub opk_deg: Option<[f64; 3]>,

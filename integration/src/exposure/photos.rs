@@ -1,6 +1,10 @@
 //! Photographs beside the exposures: the photo list is matched to the events (counts and, where
 //! the images carry `DateTimeOriginal`, the rhythm of their intervals), and geotagged copies are
 //! written with the projection centres — originals are never modified.
+//!
+//! Enters: a folder of JPEG files and the camera stations. Leaves: the matched photo list (or
+//! why it does not match) and geotagged copies in another folder (WGS84 latitude, longitude,
+//! ellipsoidal height of the projection centre). Uses `little_exif`.
 
 use super::CameraStation;
 use gnss::error::{Error, Result};
@@ -12,8 +16,11 @@ use std::path::{Path, PathBuf};
 /// A photograph and the camera-clock time it was taken (seconds, camera time scale).
 #[derive(Clone, Debug)]
 pub struct Photo {
+    /// The file.
     pub path: PathBuf,
+    /// Its file name (becomes the station's label once matched).
     pub name: String,
+    /// EXIF `DateTimeOriginal` as seconds of the camera's clock (read as UTC), when present.
     pub taken: Option<f64>,
 }
 

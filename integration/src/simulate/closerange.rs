@@ -1,6 +1,12 @@
 //! A simulated close-range job: one camera at a few ground stations whose positions come from
 //! GNSS, approximate angles from a compass, a distant target with control, check and feature
 //! points. Written as a `mode = "close-range"` project for `ppkat adjust`.
+//!
+//! Enters: a [`CloseRangeSpec`] and a folder. Leaves: `project.toml`, `images.csv` (with
+//! compass azimuth, elevation, roll), `image_observations.csv`, `ground_points.csv` and
+//! `antennas.csv` in the folder, and the [`CloseRangeTruth`]. Uses the compass rotation of
+//! [`crate::adjust::build`] and the table writers of [`super::block`]. Frame: ENU at the site,
+//! the target to the north; angles in the files are degrees.
 
 use super::block::{geodetic, write_ground_points, Point};
 use super::rng::Rng;
@@ -13,25 +19,40 @@ use photo::camera::{Camera, Pose};
 use std::fmt::Write as _;
 use std::path::Path;
 
+/// A close-range job.
 #[derive(Clone, Debug)]
 pub struct CloseRangeSpec {
+    /// Seed of every random draw.
     pub seed: u64,
+    /// Latitude of the site, degrees.
     pub lat_deg: f64,
+    /// Longitude of the site, degrees.
     pub lon_deg: f64,
+    /// Ellipsoidal height of the site, metres.
     pub h: f64,
     /// Station east coordinates (north = 0, up = 1.5 m).
     pub stations: Vec<f64>,
     /// Distance to the target, m.
     pub distance: f64,
+    /// Principal distance, mm.
     pub focal_mm: f64,
+    /// Pixel size, µm.
     pub pixel_um: f64,
+    /// Image width, pixels.
     pub width_px: usize,
+    /// Image height, pixels.
     pub height_px: usize,
+    /// σ of an image measurement, pixels.
     pub sigma_px: f64,
+    /// GNSS σ of a station (E, N, U), metres.
     pub gnss_sigma: [f64; 3],
+    /// σ of the compass azimuth, degrees (elevation and roll: half of it).
     pub compass_sigma_deg: f64,
+    /// Control points on the target.
     pub controls: usize,
+    /// Check points on the target.
     pub checks: usize,
+    /// Feature (tie) points on the target.
     pub features: usize,
 }
 
@@ -62,8 +83,11 @@ impl Default for CloseRangeSpec {
 /// What the simulation knows: the stations' true poses and the points (ENU at the site).
 #[derive(Clone, Debug)]
 pub struct CloseRangeTruth {
+    /// Origin of the ENU frame.
     pub origin: Geodetic,
+    /// True poses of the stations, in order S1, S2 …
     pub poses: Vec<Pose>,
+    /// Point id, kind (gcp|check|tie), ENU.
     pub points: Vec<(String, &'static str, Vector3<f64>)>,
 }
 

@@ -2,6 +2,12 @@
 //! rotation, satellite and receiver clocks, troposphere, frequency-scaled ionosphere,
 //! elevation-dependent code and phase noise, multipath, integer ambiguities, cycle slips and
 //! data gaps — each switchable — and flag-5 event records at exposure times.
+//!
+//! Enters: a [`Receiver`] (true position as a function of true GPST, clock model, rate,
+//! event times), the ephemerides read back from the synthetic navigation file, its Klobuchar
+//! parameters and the [`ErrorModel`]. Leaves: the RINEX text (C, L, D, S on L1 and L2/E5a;
+//! time tags in receiver time = true time + clock offset) and [`ObsStats`]. Uses
+//! `gnss::orbit`, `gnss::model` and `gnss::frame`.
 
 use super::rng::Rng;
 use super::ErrorModel;

@@ -102,7 +102,7 @@ pub struct FlightSpec {
     pub static_start_s: f64,
 }
 
-/// The camera as the scenario gives it (converted to SI units by [`Scenario::camera`]).
+/// The camera as the scenario gives it (the simulator converts it to metres).
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraToml {
