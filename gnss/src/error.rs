@@ -50,6 +50,13 @@ impl Error {
             what: what.into(),
         }
     }
+    /// A function turning an I/O failure on `path` into an [`Error::Io`] (for `map_err`).
+    pub fn io(path: &std::path::Path) -> impl Fn(std::io::Error) -> Error + Copy + '_ {
+        move |source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
     /// An [`Error::Input`] about `path`.
     pub fn input(path: &std::path::Path, what: impl Into<String>) -> Self {
         Error::Input {

@@ -9,6 +9,17 @@ pub const WGS84_F: f64 = 1.0 / 298.257_223_563;
 /// WGS84 first eccentricity squared.
 pub const WGS84_E2: f64 = WGS84_F * (2.0 - WGS84_F);
 
+/// WGS84 rotation rate of the Earth, rad/s (the value GPS broadcasts, IS-GPS-200).
+pub const OMEGA_E: f64 = 7.292_115_146_7e-5;
+
+/// A satellite position `sat` (ECEF of the transmission time, metres) expressed in the ECEF
+/// frame of the reception time, `tau` seconds of signal travel later: the Earth has turned by
+/// `OMEGA_E·tau` about z meanwhile (the Sagnac correction). Also rotates velocities.
+pub fn rotate_to_reception(sat: &Vector3<f64>, tau: f64) -> Vector3<f64> {
+    let (s, c) = (OMEGA_E * tau).sin_cos();
+    Vector3::new(c * sat.x + s * sat.y, -s * sat.x + c * sat.y, sat.z)
+}
+
 /// Earth-centred, Earth-fixed Cartesian position in WGS84, metres.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ecef(pub Vector3<f64>);

@@ -87,10 +87,7 @@ pub fn write_atomic(
     path: &Path,
     f: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<()> {
-    let io = |source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    };
+    let io = Error::io(path);
     let dir = path
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
@@ -117,48 +114,44 @@ pub fn write_atomic(
 /// Format one record as RTKLIB does.
 pub fn format_record(r: &PosRecord, format: PosFormat) -> String {
     let t = crate::time::format_ymdhms_us(r.time);
-    match format {
+    // Coordinates, then the covariance in RTKLIB's order: sn se su sne seu sun (llh) or
+    // sx sy sz sxy syz szx (xyz), as signed square roots.
+    let (coords, c, order) = match format {
         PosFormat::Llh => {
             let g = r.pos.to_geodetic();
             let rot = enu_rotation(&g);
-            let c = rot * r.cov * rot.transpose();
-            format!(
-                "{t} {:14.9} {:14.9} {:10.4} {:3} {:3} {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:6.2} {:6.1}",
-                g.lat.to_degrees(),
-                g.lon.to_degrees(),
-                g.h,
-                r.quality as u8,
-                r.nsat,
-                c[(1, 1)].max(0.0).sqrt(),
-                c[(0, 0)].max(0.0).sqrt(),
-                c[(2, 2)].max(0.0).sqrt(),
-                sqvar(c[(1, 0)]),
-                sqvar(c[(0, 2)]),
-                sqvar(c[(2, 1)]),
-                r.age,
-                r.ratio
+            (
+                format!(
+                    "{:14.9} {:14.9} {:10.4}",
+                    g.lat.to_degrees(),
+                    g.lon.to_degrees(),
+                    g.h
+                ),
+                rot * r.cov * rot.transpose(),
+                [(1, 1), (0, 0), (2, 2), (1, 0), (0, 2), (2, 1)],
             )
         }
-        PosFormat::Xyz => {
-            let c = r.cov;
-            format!(
-                "{t} {:14.4} {:14.4} {:14.4} {:3} {:3} {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:6.2} {:6.1}",
-                r.pos.0.x,
-                r.pos.0.y,
-                r.pos.0.z,
-                r.quality as u8,
-                r.nsat,
-                c[(0, 0)].max(0.0).sqrt(),
-                c[(1, 1)].max(0.0).sqrt(),
-                c[(2, 2)].max(0.0).sqrt(),
-                sqvar(c[(0, 1)]),
-                sqvar(c[(1, 2)]),
-                sqvar(c[(2, 0)]),
-                r.age,
-                r.ratio
-            )
-        }
-    }
+        PosFormat::Xyz => (
+            format!("{:14.4} {:14.4} {:14.4}", r.pos.0.x, r.pos.0.y, r.pos.0.z),
+            r.cov,
+            [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)],
+        ),
+    };
+    let sd = |k: usize| c[order[k]].max(0.0).sqrt();
+    let cross = |k: usize| sqvar(c[order[k]]);
+    format!(
+        "{t} {coords} {:3} {:3} {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:6.2} {:6.1}",
+        r.quality as u8,
+        r.nsat,
+        sd(0),
+        sd(1),
+        sd(2),
+        cross(3),
+        cross(4),
+        cross(5),
+        r.age,
+        r.ratio
+    )
 }
 
 /// The column header line.
@@ -201,10 +194,7 @@ fn sqvar_inv(v: f64) -> f64 {
 /// without one, by the size of the first coordinate; GPST; `%` comments), in file order.
 /// Columns after the ratio (RTKLIB's velocities) are ignored.
 pub fn read_pos(path: &Path) -> Result<Vec<PosRecord>> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = std::fs::read_to_string(path).map_err(Error::io(path))?;
     let mut records = Vec::new();
     let mut xyz: Option<bool> = None;
     for (i, line) in text.lines().enumerate() {

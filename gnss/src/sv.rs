@@ -33,6 +33,15 @@ impl Constellation {
         Constellation::Irnss,
     ];
 
+    /// The code-division systems ppkat processes by default, in report order (GLONASS, on
+    /// FDMA, is added where inter-frequency biases do not matter).
+    pub const CDMA: [Constellation; 4] = [
+        Constellation::Gps,
+        Constellation::Galileo,
+        Constellation::BeiDou,
+        Constellation::Qzss,
+    ];
+
     /// From the RINEX system letter (G R E C J S I).
     pub fn from_letter(c: u8) -> Option<Self> {
         Some(match c {

@@ -43,6 +43,24 @@ pub fn diff_s(a: Epoch, b: Epoch) -> f64 {
     (a - b).to_seconds()
 }
 
+/// Median spacing of consecutive times in seconds, pairs that do not increase left out;
+/// 1 when there is no such pair.
+pub fn median_spacing(times: impl IntoIterator<Item = Epoch>) -> f64 {
+    let mut d: Vec<f64> = Vec::new();
+    let mut prev: Option<Epoch> = None;
+    for t in times {
+        if let Some(p) = prev {
+            let x = (t - p).to_seconds();
+            if x > 0.0 {
+                d.push(x);
+            }
+        }
+        prev = Some(t);
+    }
+    d.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+    d.get(d.len() / 2).copied().unwrap_or(1.0)
+}
+
 /// Calendar string `yyyy/mm/dd hh:mm:ss.sss` in GPST, as RTKLIB writes it.
 pub fn format_ymdhms(e: Epoch) -> String {
     // Round to the millisecond first so that 59.9996 s does not print as 60.000.

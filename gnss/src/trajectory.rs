@@ -176,13 +176,7 @@ pub struct Interpolated {
 
 /// Median spacing of epochs, seconds (1 when there is none).
 fn median_interval(epochs: &[TrajectoryEpoch]) -> f64 {
-    let mut d: Vec<f64> = epochs
-        .windows(2)
-        .map(|w| (w[1].time - w[0].time).to_seconds())
-        .filter(|x| *x > 0.0)
-        .collect();
-    d.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
-    d.get(d.len() / 2).copied().unwrap_or(1.0)
+    crate::time::median_spacing(epochs.iter().map(|e| e.time))
 }
 
 impl Trajectory {

@@ -21,7 +21,7 @@ fn broadcast_orbits_match_precise_orbits() {
     let mut radial: BTreeMap<Constellation, Vec<f64>> = BTreeMap::new();
     let mut worst: BTreeMap<Constellation, (f64, String)> = BTreeMap::new();
     let (t0, t1) = sp3.span().unwrap();
-    for (&sv, _) in &sp3.sats {
+    for &sv in sp3.sats.keys() {
         let mut t = t0 + hifitime::Duration::from_seconds(2.5 * 3600.0);
         while t < t1 - hifitime::Duration::from_seconds(2.5 * 3600.0) {
             if let (Some(e), Some(p)) = (eph.select(sv, t), sp3.compute(sv, t)) {

@@ -1,4 +1,9 @@
-//! Benchmarks run by `ppkat bench`: throughput and peak memory of the stages.
+//! Benchmarks run by `ppkat bench`: throughput and peak memory of the stages. Enters: an
+//! observation file ([`ingest`]: plain, gzip or Hatanaka; parsed by `gnss::rinex`) or a block
+//! size ([`adjust`]: simulated by [`crate::simulate::block`], adjusted by [`crate::adjust`]).
+//! Leaves: an [`IngestBench`] or [`AdjustBench`] with wall times (s) and the peak resident
+//! memory of the process (Linux `VmHWM`, KiB); nothing is kept but a temporary file (removed)
+//! and the benchmark block's folder.
 
 use gnss::error::Result;
 use gnss::rinex::{ObsReader, Record};
@@ -8,10 +13,15 @@ use std::time::Instant;
 /// Result of an ingest benchmark.
 #[derive(Clone, Debug)]
 pub struct IngestBench {
+    /// Bytes of plain RINEX text parsed.
     pub bytes: u64,
+    /// Wall time of the parse, seconds.
     pub seconds: f64,
+    /// Observation epochs read.
     pub epochs: usize,
+    /// Satellite records read.
     pub sat_records: usize,
+    /// Peak resident set size of the process, KiB (None where unknown).
     pub peak_rss_kib: Option<u64>,
 }
 
@@ -26,10 +36,15 @@ impl std::fmt::Display for IngestBench {
             self.seconds,
             self.bytes as f64 / 1e6 / self.seconds
         )?;
-        match self.peak_rss_kib {
-            Some(k) => writeln!(f, "peak RSS: {:.1} MiB", k as f64 / 1024.0),
-            None => writeln!(f, "peak RSS: unknown"),
-        }
+        writeln!(f, "peak RSS: {}", mib(self.peak_rss_kib))
+    }
+}
+
+/// A memory size in KiB as `12.3 MiB`, or `unknown`.
+fn mib(kib: Option<u64>) -> String {
+    match kib {
+        Some(k) => format!("{:.1} MiB", k as f64 / 1024.0),
+        None => "unknown".into(),
     }
 }
 
@@ -47,21 +62,12 @@ pub fn peak_rss_kib() -> Option<u64> {
 /// figure is the parser's speed on plain text, as the benchmark target is stated.
 pub fn ingest(path: &Path) -> Result<IngestBench> {
     let plain = std::env::temp_dir().join(format!("ppkat-bench-{}.rnx", std::process::id()));
-    let expanded = {
-        let mut f = std::io::BufWriter::new(std::fs::File::create(&plain).map_err(|source| {
-            gnss::Error::Io {
-                path: plain.clone(),
-                source,
-            }
-        })?);
-        gnss::rinex::write_plain_text(path, &mut f)?;
-        std::io::Write::flush(&mut f).map_err(|source| gnss::Error::Io {
-            path: plain.clone(),
-            source,
-        })?;
-        plain.clone()
-    };
-    let r = ingest_plain(&expanded);
+    let io = gnss::Error::io(&plain);
+    let mut f = std::io::BufWriter::new(std::fs::File::create(&plain).map_err(io)?);
+    gnss::rinex::write_plain_text(path, &mut f)?;
+    std::io::Write::flush(&mut f).map_err(io)?;
+    drop(f);
+    let r = ingest_plain(&plain);
     let _ = std::fs::remove_file(&plain);
     r
 }
@@ -90,13 +96,21 @@ fn ingest_plain(path: &Path) -> Result<IngestBench> {
 /// Wall time and peak memory of the joint adjustment of a simulated block.
 #[derive(Clone, Debug)]
 pub struct AdjustBench {
+    /// Images adjusted.
     pub images: usize,
+    /// Ground points adjusted.
     pub points: usize,
+    /// Observations (components).
     pub observations: usize,
+    /// Unknowns.
     pub unknowns: usize,
+    /// Wall time of the simulation, seconds.
     pub simulate_s: f64,
+    /// Wall time of the adjustment with statistics and reports, seconds.
     pub adjust_s: f64,
+    /// A-posteriori σ0.
     pub sigma0: f64,
+    /// Peak resident set size of the process, KiB (None where unknown).
     pub peak_rss_kib: Option<u64>,
 }
 
@@ -112,10 +126,7 @@ impl std::fmt::Display for AdjustBench {
             "simulated in {:.2} s; adjusted (snooping, variance components, statistics, reports) in {:.2} s; σ0 {:.3}",
             self.simulate_s, self.adjust_s, self.sigma0
         )?;
-        match self.peak_rss_kib {
-            Some(k) => writeln!(f, "peak RSS {:.1} MiB", k as f64 / 1024.0),
-            None => writeln!(f, "peak RSS unknown"),
-        }
+        writeln!(f, "peak RSS {}", mib(self.peak_rss_kib))
     }
 }
 

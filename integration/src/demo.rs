@@ -3,7 +3,17 @@
 //! truth. The stages pass values: the exposures are computed on the carrier-phase
 //! [`gnss::trajectory::Trajectory`] in memory, with the filter's ambiguity segments
 //! (`rover_ppk.pos` is written for the user, not read back).
+//!
+//! Enters: an output folder and the adjustment's run options. Leaves: the simulator's files,
+//! `rover_ppk.pos`, `imu_attitude.csv`, `camera_stations.csv`, the adjustment's inputs
+//! (`antennas.csv`, `images.csv`, `project.toml`) and outputs (`adjust/`) in that folder, and a
+//! [`DemoReport`] of errors against truth (metres). Uses [`crate::simulate`], `gnss::spp`,
+//! `gnss::ppk`, [`crate::exposure`] and [`crate::adjust`]. Also used by the tests: the truth
+//! reader ([`read_truth`], [`truth_at`]) and [`SimInputs`].
 
+use crate::exposure::attitude::{AngleConvention, AttitudeTable};
+use crate::exposure::export::{self, Format, Projection};
+use crate::exposure::{CameraStation, ExposureResult};
 use crate::simulate::{self, SimError, SimReport};
 use gnss::frame::Ecef;
 use gnss::orbit::{Ephemerides, Orbits};
@@ -12,6 +22,7 @@ use gnss::rinex::nav::NavFile;
 use gnss::rinex::ObsFile;
 use gnss::solution::{PosFormat, Quality};
 use gnss::spp::{self, SppOptions};
+use gnss::trajectory::Trajectory;
 use nalgebra::Vector3;
 use std::fmt;
 use std::path::Path;
@@ -258,31 +269,12 @@ pub fn run(out: &Path, run: &crate::adjust::RunOptions) -> Result<DemoReport, Ch
     let truth = read_truth(&out.join("truth_trajectory.csv"))?;
     let inputs = SimInputs::read(&sim)?;
     let (rover, orbits) = (&inputs.rover, &inputs.orbits);
-    let t_of = |t: hifitime::Epoch| t.to_gpst_seconds();
     // Single point.
     let sppr = spp::run(&rover.epochs, &rover.header, orbits, &SppOptions::default());
-    let (mut h, mut v) = (Vec::new(), Vec::new());
-    for s in &sppr.solutions {
-        let clock = s.clocks.values().next().copied().unwrap_or(0.0) / gnss::orbit::C;
-        if let Some(p) = truth_at(&truth, t_of(s.time) - clock) {
-            let e = s.pos.enu_from(&Ecef(p));
-            h.push(e.horizontal());
-            v.push(e.up());
-        }
-    }
+    let (h, v) = spp_errors(&sppr.solutions, &truth);
     // Carrier phase.
     let res = inputs.ppk(&sim, &PpkOptions::default())?;
-    let mut d = Vec::new();
-    for s in res
-        .trajectory
-        .epochs
-        .iter()
-        .filter(|s| s.quality == Quality::Fixed)
-    {
-        if let Some(p) = truth_at(&truth, t_of(s.time)) {
-            d.push((s.pos.0 - p).norm());
-        }
-    }
+    let d = fixed_errors(&res.trajectory, &truth);
     // The trajectory as a file for the user; the chain goes on with the value itself (full
     // precision, the filter's ambiguity segments).
     res.trajectory.write_pos(
@@ -290,93 +282,9 @@ pub fn run(out: &Path, run: &crate::adjust::RunOptions) -> Result<DemoReport, Ch
         &["program   : ppkat demo (carrier-phase kinematic)".to_string()],
         PosFormat::Llh,
     )?;
-    let traj = &res.trajectory;
-    // Exposures: events of the rover file on the PPK trajectory, lever arm rotated by the
-    // attitude an IMU would give (the simulated attitude, written as an attitude file).
-    let (events, _) = crate::exposure::events::from_rinex(rover, traj);
-    let att_path = out.join("imu_attitude.csv");
-    let truth_text = |name: &str| {
-        std::fs::read_to_string(out.join(name)).map_err(|e| ChainError::Truth {
-            path: name.into(),
-            what: e.to_string(),
-        })
-    };
-    let mut att = String::from("# simulated IMU attitude: week,tow,yaw,pitch,roll (degrees)\n");
-    for l in truth_text("truth_trajectory.csv")?.lines() {
-        let f: Vec<&str> = l.split(',').collect();
-        if f.len() == 11 && f[0].chars().all(|c| c.is_ascii_digit()) {
-            att.push_str(&format!("{},{},{},{},{}\n", f[0], f[1], f[10], f[9], f[8]));
-        }
-    }
-    gnss::solution::write_atomic(&att_path, |w| w.write_all(att.as_bytes()))?;
-    let attitude = crate::exposure::attitude::AttitudeTable::read_csv(
-        &att_path,
-        crate::exposure::attitude::AngleConvention::YawPitchRoll,
-    )?;
-    let lever = photo::lever::LeverArm::new(Vector3::from(scenario.camera.lever_arm));
-    let opts = crate::exposure::ExposureOptions {
-        lever_arm: Some(lever),
-        attitude: Some(attitude),
-        ..Default::default()
-    };
-    let ex = crate::exposure::compute(events, traj, &opts);
-    crate::exposure::export::write(
-        &out.join("camera_stations.csv"),
-        &ex.stations,
-        crate::exposure::export::Format::Csv,
-        crate::exposure::export::Projection::Geodetic,
-    )?;
-    let truth_centres: Vec<(f64, Vector3<f64>)> = truth_text("truth_exposures.csv")?
-        .lines()
-        .filter(|l| l.chars().next().is_some_and(|c| c.is_ascii_digit()))
-        .filter_map(|l| {
-            let f: Vec<f64> = l
-                .split(',')
-                .map(|x| x.parse().ok())
-                .collect::<Option<_>>()?;
-            Some((
-                f[2] * gnss::time::WEEK_SECONDS + f[3],
-                Vector3::new(f[4], f[5], f[6]),
-            ))
-        })
-        .collect();
-    let mut ce = Vec::new();
-    for st in &ex.stations {
-        let t = st.time.to_gpst_seconds();
-        if let Some((_, c)) = truth_centres.iter().find(|(tt, _)| (tt - t).abs() < 0.01) {
-            ce.push((st.centre.0 - c).norm());
-        }
-    }
-    // The joint adjustment: the antenna table of the exposures stage, the flight plan's
-    // strips, the simulated image measurements and ground points.
-    crate::exposure::export::write(
-        &out.join("antennas.csv"),
-        &ex.stations,
-        crate::exposure::export::Format::Antenna,
-        crate::exposure::export::Projection::Geodetic,
-    )?;
-    // Photographs in which nothing was measured (over the turns' edges) stay out of the list.
-    let measured: std::collections::BTreeSet<String> = truth_text("image_observations.csv")?
-        .lines()
-        .filter_map(|l| l.split(',').next().map(str::to_string))
-        .collect();
-    let mut images = String::from("image,strip\n");
-    for l in truth_text("truth_exposures.csv")?.lines() {
-        let f: Vec<&str> = l.split(',').collect();
-        if f.len() > 2 && f[0].chars().all(|c| c.is_ascii_digit()) && measured.contains(f[0]) {
-            images.push_str(&format!("{},{}\n", f[0], f[1]));
-        }
-    }
-    gnss::solution::write_atomic(&out.join("images.csv"), |w| w.write_all(images.as_bytes()))?;
-    let c = &scenario.camera;
-    let l = c.lever_arm;
-    let project = format!(
-        "name = \"ppkat demo flight\"\noutput = \"utm\"\n\n[[camera]]\nid = \"demo\"\nfocal_mm = {}\npixel_um = {}\nwidth_px = {}\nheight_px = {}\n\n[images]\nlist = \"images.csv\"\nmeasurements = \"image_observations.csv\"\n\n[ground]\nfile = \"ground_points.csv\"\n\n[gnss]\nantennas = \"antennas.csv\"\nlever_arm = [{}, {}, {}]\nlever_arm_sigma = [0.02, 0.02, 0.02]\ndrift = \"segment\"\ndrift_model = \"offset\"\n",
-        c.focal_mm, c.pixel_um, c.width_px, c.height_px, l[0], l[1], l[2]
-    );
-    gnss::solution::write_atomic(&out.join("project.toml"), |w| {
-        w.write_all(project.as_bytes())
-    })?;
+    let ex = exposures(out, &scenario, rover, &res.trajectory)?;
+    let ce = centre_errors(out, &ex.stations)?;
+    write_adjust_project(out, &scenario, &ex.stations)?;
     let (adjust, adjust_error) =
         match crate::adjust::run(&out.join("project.toml"), &out.join("adjust"), run) {
             Ok(r) => (Some(r), None),
@@ -398,4 +306,144 @@ pub fn run(out: &Path, run: &crate::adjust::RunOptions) -> Result<DemoReport, Ch
         seconds: t0.elapsed().as_secs_f64(),
         sim,
     })
+}
+
+/// Horizontal and vertical errors (m) of single-point solutions against the truth at the
+/// true time (receiver time tag minus the first system's clock).
+fn spp_errors(solutions: &[spp::SppSolution], truth: &[TruthSample]) -> (Vec<f64>, Vec<f64>) {
+    let (mut h, mut v) = (Vec::new(), Vec::new());
+    for s in solutions {
+        let clock = s.clocks.values().next().copied().unwrap_or(0.0) / gnss::orbit::C;
+        if let Some(p) = truth_at(truth, s.time.to_gpst_seconds() - clock) {
+            let e = s.pos.enu_from(&Ecef(p));
+            h.push(e.horizontal());
+            v.push(e.up());
+        }
+    }
+    (h, v)
+}
+
+/// 3D errors (m) of the fixed epochs of a trajectory against the truth.
+fn fixed_errors(traj: &Trajectory, truth: &[TruthSample]) -> Vec<f64> {
+    let mut d = Vec::new();
+    for s in traj.epochs.iter().filter(|s| s.quality == Quality::Fixed) {
+        if let Some(p) = truth_at(truth, s.time.to_gpst_seconds()) {
+            d.push((s.pos.0 - p).norm());
+        }
+    }
+    d
+}
+
+/// A truth file of the simulation in `out`, as text.
+fn truth_text(out: &Path, name: &str) -> Result<String, ChainError> {
+    std::fs::read_to_string(out.join(name)).map_err(|e| ChainError::Truth {
+        path: name.into(),
+        what: e.to_string(),
+    })
+}
+
+/// Camera stations from the rover's events on the PPK trajectory, the lever arm rotated by
+/// the attitude an IMU would give (the simulated attitude, written as `imu_attitude.csv`);
+/// written as `camera_stations.csv`.
+fn exposures(
+    out: &Path,
+    scenario: &simulate::Scenario,
+    rover: &ObsFile,
+    traj: &Trajectory,
+) -> Result<ExposureResult, ChainError> {
+    let (events, _) = crate::exposure::events::from_rinex(rover, traj);
+    let att_path = out.join("imu_attitude.csv");
+    let mut att = String::from("# simulated IMU attitude: week,tow,yaw,pitch,roll (degrees)\n");
+    for l in truth_text(out, "truth_trajectory.csv")?.lines() {
+        let f: Vec<&str> = l.split(',').collect();
+        if f.len() == 11 && f[0].chars().all(|c| c.is_ascii_digit()) {
+            att.push_str(&format!("{},{},{},{},{}\n", f[0], f[1], f[10], f[9], f[8]));
+        }
+    }
+    gnss::solution::write_atomic(&att_path, |w| w.write_all(att.as_bytes()))?;
+    let attitude = AttitudeTable::read_csv(&att_path, AngleConvention::YawPitchRoll)?;
+    let lever = photo::lever::LeverArm::new(Vector3::from(scenario.camera.lever_arm));
+    let opts = crate::exposure::ExposureOptions {
+        lever_arm: Some(lever),
+        attitude: Some(attitude),
+        ..Default::default()
+    };
+    let ex = crate::exposure::compute(events, traj, &opts);
+    write_stations(out, "camera_stations.csv", &ex.stations, Format::Csv)?;
+    Ok(ex)
+}
+
+/// Stations in `out/name`, in a format, with geodetic coordinates.
+fn write_stations(
+    out: &Path,
+    name: &str,
+    stations: &[CameraStation],
+    format: Format,
+) -> Result<(), ChainError> {
+    Ok(export::write(
+        &out.join(name),
+        stations,
+        format,
+        Projection::Geodetic,
+    )?)
+}
+
+/// 3D errors (m) of the projection centres against the truth exposure within 10 ms.
+fn centre_errors(out: &Path, stations: &[CameraStation]) -> Result<Vec<f64>, ChainError> {
+    let truth_centres: Vec<(f64, Vector3<f64>)> = truth_text(out, "truth_exposures.csv")?
+        .lines()
+        .filter(|l| l.chars().next().is_some_and(|c| c.is_ascii_digit()))
+        .filter_map(|l| {
+            let f: Vec<f64> = l
+                .split(',')
+                .map(|x| x.parse().ok())
+                .collect::<Option<_>>()?;
+            Some((
+                f[2] * gnss::time::WEEK_SECONDS + f[3],
+                Vector3::new(f[4], f[5], f[6]),
+            ))
+        })
+        .collect();
+    let mut ce = Vec::new();
+    for st in stations {
+        let t = st.time.to_gpst_seconds();
+        if let Some((_, c)) = truth_centres.iter().find(|(tt, _)| (tt - t).abs() < 0.01) {
+            ce.push((st.centre.0 - c).norm());
+        }
+    }
+    Ok(ce)
+}
+
+/// The joint adjustment's inputs in `out`: the antenna table of the exposures stage, the
+/// images with their strips (photographs in which nothing was measured, over the turns'
+/// edges, stay out) and `project.toml` (the scenario's camera and lever arm, drift per
+/// ambiguity segment); the image measurements and ground points are the simulator's.
+fn write_adjust_project(
+    out: &Path,
+    scenario: &simulate::Scenario,
+    stations: &[CameraStation],
+) -> Result<(), ChainError> {
+    write_stations(out, "antennas.csv", stations, Format::Antenna)?;
+    let measured: std::collections::BTreeSet<String> = truth_text(out, "image_observations.csv")?
+        .lines()
+        .filter_map(|l| l.split(',').next().map(str::to_string))
+        .collect();
+    let mut images = String::from("image,strip\n");
+    for l in truth_text(out, "truth_exposures.csv")?.lines() {
+        let f: Vec<&str> = l.split(',').collect();
+        if f.len() > 2 && f[0].chars().all(|c| c.is_ascii_digit()) && measured.contains(f[0]) {
+            images.push_str(&format!("{},{}\n", f[0], f[1]));
+        }
+    }
+    gnss::solution::write_atomic(&out.join("images.csv"), |w| w.write_all(images.as_bytes()))?;
+    let c = &scenario.camera;
+    let l = c.lever_arm;
+    let project = format!(
+        "name = \"ppkat demo flight\"\noutput = \"utm\"\n\n[[camera]]\nid = \"demo\"\nfocal_mm = {}\npixel_um = {}\nwidth_px = {}\nheight_px = {}\n\n[images]\nlist = \"images.csv\"\nmeasurements = \"image_observations.csv\"\n\n[ground]\nfile = \"ground_points.csv\"\n\n[gnss]\nantennas = \"antennas.csv\"\nlever_arm = [{}, {}, {}]\nlever_arm_sigma = [0.02, 0.02, 0.02]\ndrift = \"segment\"\ndrift_model = \"offset\"\n",
+        c.focal_mm, c.pixel_um, c.width_px, c.height_px, l[0], l[1], l[2]
+    );
+    gnss::solution::write_atomic(&out.join("project.toml"), |w| {
+        w.write_all(project.as_bytes())
+    })?;
+    Ok(())
 }

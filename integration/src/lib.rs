@@ -1,8 +1,23 @@
 //! # integration — where the GNSS and photogrammetric halves meet
 //!
-//! Exposures, lever arm, the joint GNSS-supported adjustment, project files, reports and the
-//! flight simulator (later issues). Today: [`pipeline`], the whole-stage runs the `ppkat`
-//! binary calls. It uses `gnss` and `photo`; the binary uses it.
+//! Everything that needs both `gnss` and `photo`; the `ppkat` binary calls one function of it
+//! per command and prints what comes back.
+//!
+//! - [`pipeline`]: the whole-stage runs of `ppkat spp`, `ppk` and `exposures` — job (input
+//!   paths, library options) in, output file and report out.
+//! - [`exposure`]: exposure times (RINEX flag-5 events, DJI MRK, CSV) on a trajectory → camera
+//!   stations (projection centres with covariance, attitude, ambiguity segment), exports for
+//!   photogrammetry software, photo matching and geotags, the lever arm from tape measurements.
+//! - [`adjust`]: the joint GNSS-supported adjustment of a project (images, measurements,
+//!   ground points, antenna table) with statistics and reports.
+//! - [`simulate`]: a flight simulator (scenario → RINEX, navigation and truth files) and
+//!   simulated adjustment projects with truth (aerial block, close-range pair).
+//! - [`demo`]: the whole chain on a simulated flight, compared with the truth.
+//! - [`bench`](mod@bench): throughput and peak memory of ingest and adjustment.
+//!
+//! Dependency direction: `pipeline` and `demo` use `exposure`; `demo` and `bench` use
+//! `simulate` and `adjust`; `simulate` writes the files `adjust` reads. Times are GPST, angles
+//! radians unless a file says degrees, lengths metres.
 
 pub mod adjust;
 pub mod bench;

@@ -1,5 +1,11 @@
 //! Whole-stage runs used by the command line: read inputs, check they fit together, process,
 //! write outputs atomically, and return a report of what was done and what was rejected.
+//!
+//! Enters: a job naming the input files and holding the library options ([`SppJob`],
+//! [`PpkJob`], [`ExposureJob`]). Leaves: the output file (`.pos` or an exposure export) and a
+//! report ([`SppReport`], [`PpkReport`], [`ExposureReport`]) whose `Display` is what `ppkat`
+//! prints. Uses `gnss` (RINEX, orbits, SPP, PPK, `.pos`) and [`crate::exposure`]; prints
+//! nothing itself.
 
 use gnss::error::{Error, Result};
 use gnss::orbit::{Ephemerides, Orbits, Sp3};
@@ -80,6 +86,13 @@ pub fn load_orbits(nav: &[PathBuf], sp3: Option<&Path>) -> Result<(Orbits, Vec<S
     ))
 }
 
+/// What reading an observation file noticed, each as `path:line: what`.
+fn file_warnings(f: &ObsFile) -> impl Iterator<Item = String> + '_ {
+    f.warnings
+        .iter()
+        .map(|w| format!("{}:{}: {}", f.path.display(), w.line, w.what))
+}
+
 /// Check that observations and orbits overlap in time; error naming both files if not.
 pub fn check_overlap(obs: &ObsFile, orbits: &Orbits, nav: &[PathBuf]) -> Result<()> {
     let (Some(a), Some(b)) = (obs.epochs.first(), obs.epochs.last()) else {
@@ -115,9 +128,7 @@ pub fn spp(job: &SppJob) -> Result<SppReport> {
     let obs = ObsFile::read(&job.obs)?;
     let (orbits, mut warnings) = load_orbits(&job.nav, job.sp3.as_deref())?;
     check_overlap(&obs, &orbits, &job.nav)?;
-    for w in &obs.warnings {
-        warnings.push(format!("{}:{}: {}", obs.path.display(), w.line, w.what));
-    }
+    warnings.extend(file_warnings(&obs));
     let run = gnss::spp::run(&obs.epochs, &obs.header, &orbits, &job.options);
     let records: Vec<PosRecord> = run
         .solutions
@@ -239,11 +250,7 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
     gnss::ppk::require_phase(&base, "base")?;
     let (orbits, mut warnings) = load_orbits(&job.nav, None)?;
     check_overlap(&rover, &orbits, &job.nav)?;
-    for f in [&rover, &base] {
-        for w in &f.warnings {
-            warnings.push(format!("{}:{}: {}", f.path.display(), w.line, w.what));
-        }
-    }
+    warnings.extend(file_warnings(&rover).chain(file_warnings(&base)));
     let result = gnss::ppk::process(
         &rover,
         &base,

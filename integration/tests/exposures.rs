@@ -3,7 +3,7 @@
 
 use gnss::frame::Ecef;
 use gnss::ppk::PpkOptions;
-use gnss::solution::{write_pos, PosFormat, PosRecord, Quality};
+use gnss::solution::{PosFormat, Quality};
 use gnss::time::from_week_tow;
 use gnss::trajectory::{Trajectory, TrajectoryEpoch};
 use integration::demo::SimInputs;

@@ -106,7 +106,7 @@ fn ppk_round_trip_on_a_20_minute_flight() {
     );
     assert!(fixed >= 0.99, "fixed {fixed}");
     assert!(rms <= 0.02, "3D RMS {rms}");
-    let spp = gnss::spp::run(&rover.epochs, &rover.header, &orbits, &Default::default());
+    let spp = gnss::spp::run(&rover.epochs, &rover.header, orbits, &Default::default());
     let mut h = Vec::new();
     for s in &spp.solutions {
         let clock = s.clocks.values().next().copied().unwrap_or(0.0) / C;

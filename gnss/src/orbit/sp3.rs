@@ -3,8 +3,8 @@
 use super::kepler::{SatPosClock, C};
 use crate::error::{Error, Result};
 use crate::frame::Ecef;
-use crate::rinex::body::make_epoch;
-use crate::rinex::lines::{cols, parse_int, parse_real, Lines};
+use crate::rinex::body::DateCols;
+use crate::rinex::lines::{cols, parse_real, Lines};
 use crate::sv::Sv;
 use hifitime::{Epoch, TimeScale};
 use nalgebra::Vector3;
@@ -13,6 +13,13 @@ use std::path::Path;
 
 /// Points used by the interpolator (degree 10 over 15-minute samples: millimetres).
 const NPTS: usize = 11;
+
+/// Epoch line `*  yyyy mm dd hh mm ss.ssssssss`.
+const EPOCH: DateCols = DateCols {
+    ymdhm: [(3, 7), (8, 10), (11, 13), (14, 16), (17, 19)],
+    sec: (20, 31),
+    two_digit_years: false,
+};
 
 /// Precise orbits: per satellite, samples on the file's epoch grid.
 #[derive(Clone, Debug, Default)]
@@ -54,19 +61,9 @@ impl Sp3 {
                     }
                 }
                 Some(b'*') => {
-                    let g = |a, b| parse_int(cols(line, a, b)).ok().flatten();
-                    let e = (|| {
-                        make_epoch(
-                            g(3, 7)?,
-                            g(8, 10)?,
-                            g(11, 13)?,
-                            g(14, 16)?,
-                            g(17, 19)?,
-                            cols(line, 20, 31),
-                            scale,
-                        )
-                    })()
-                    .ok_or_else(|| Error::parse(path, ln, "unreadable SP3 epoch line"))?;
+                    let e = EPOCH
+                        .epoch(line, scale)
+                        .ok_or_else(|| Error::parse(path, ln, "unreadable SP3 epoch line"))?;
                     sp3.epochs.push(e);
                     let n = sp3.epochs.len();
                     for v in sp3.sats.values_mut() {

@@ -3,13 +3,11 @@
 //! satellite clocks and the troposphere.
 
 use super::obs::SatMeas;
-use crate::frame::{az_el, Ecef, Geodetic};
+use crate::frame::{az_el, rotate_to_reception, Ecef, Geodetic};
 use crate::model::troposphere;
 use crate::orbit::{Orbits, C};
 use hifitime::{Duration, Epoch};
 use nalgebra::Vector3;
-
-const OMEGA_E: f64 = 7.292_115_146_7e-5;
 
 /// A satellite as seen by one receiver at its epoch.
 #[derive(Clone, Copy, Debug)]
@@ -40,13 +38,7 @@ impl SatView {
 
     /// Geometric range with Earth rotation, unit vector receiver→satellite.
     pub fn range(&self, rx: &Vector3<f64>) -> (f64, Vector3<f64>) {
-        let tau = (self.pos - rx).norm() / C;
-        let (s, c) = (OMEGA_E * tau).sin_cos();
-        let sp = Vector3::new(
-            c * self.pos.x + s * self.pos.y,
-            -s * self.pos.x + c * self.pos.y,
-            self.pos.z,
-        );
+        let sp = rotate_to_reception(&self.pos, (self.pos - rx).norm() / C);
         let d = sp - rx;
         let r = d.norm();
         (r, d / r)

@@ -118,12 +118,7 @@ impl Default for PpkOptions {
     fn default() -> Self {
         PpkOptions {
             elev_mask: 15f64.to_radians(),
-            systems: vec![
-                Constellation::Gps,
-                Constellation::Galileo,
-                Constellation::BeiDou,
-                Constellation::Qzss,
-            ],
+            systems: Constellation::CDMA.to_vec(),
             nf: 2,
             ar: ArMode::FixAndHold,
             filter: FilterMode::Combined,
@@ -196,14 +191,7 @@ fn arp_offset(h: &ObsHeader, at: &Ecef) -> Vector3<f64> {
 
 /// Median spacing of epochs, seconds.
 fn interval(f: &ObsFile) -> f64 {
-    let mut d: Vec<f64> = f
-        .epochs
-        .windows(2)
-        .map(|w| (w[1].time - w[0].time).to_seconds())
-        .filter(|x| *x > 0.0)
-        .collect();
-    d.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
-    d.get(d.len() / 2).copied().unwrap_or(1.0)
+    crate::time::median_spacing(f.epochs.iter().map(|e| e.time))
 }
 
 /// Error unless the file holds carrier-phase observations.

@@ -129,7 +129,10 @@ pub(super) fn output_segments(
 mod tests {
     use super::*;
 
-    fn ints(groups: &[(Constellation, usize, &[(u64, i64)])]) -> FixedIntegers {
+    /// System, frequency slot and (arc, integer) pairs of one DD group.
+    type Group<'a> = (Constellation, usize, &'a [(u64, i64)]);
+
+    fn ints(groups: &[Group]) -> FixedIntegers {
         FixedIntegers(
             groups
                 .iter()

@@ -360,7 +360,7 @@ pub(crate) struct EpochHead {
 }
 
 /// Calendar fields to a GPST epoch; `None` for impossible dates.
-pub(crate) fn make_epoch(
+fn make_epoch(
     y: i64,
     mo: i64,
     d: i64,
@@ -423,7 +423,7 @@ fn int(line: &[u8], a: usize, b: usize) -> Option<i64> {
 }
 
 /// Two-digit RINEX 2 years: 80–99 → 1980–1999, 00–79 → 2000–2079.
-pub(crate) fn full_year(yy: i64) -> i64 {
+fn full_year(yy: i64) -> i64 {
     match yy {
         0..=79 => 2000 + yy,
         80..=99 => 1900 + yy,
@@ -431,11 +431,44 @@ pub(crate) fn full_year(yy: i64) -> i64 {
     }
 }
 
+/// Columns (0-based, end exclusive) of a calendar date and time written as fixed-width
+/// integers (year, month, day, hour, minute) followed by a seconds field `ss.sssssss`: the
+/// layout of RINEX observation epoch lines, RINEX navigation times of clock and SP3 epochs.
+pub(crate) struct DateCols {
+    /// Year, month, day, hour, minute.
+    pub ymdhm: [(usize, usize); 5],
+    /// Seconds.
+    pub sec: (usize, usize),
+    /// Read years below 100 as RINEX 2 two-digit years (80–99 → 19xx, 00–79 → 20xx).
+    pub two_digit_years: bool,
+}
+
+impl DateCols {
+    /// The epoch written in these columns of `line` in time scale `ts`, converted to GPST;
+    /// `None` when a field is blank, unreadable or out of range.
+    pub fn epoch(&self, line: &[u8], ts: TimeScale) -> Option<Epoch> {
+        let f = |k: usize| int(line, self.ymdhm[k].0, self.ymdhm[k].1);
+        let year = if self.two_digit_years {
+            full_year(f(0)?)
+        } else {
+            f(0)?
+        };
+        make_epoch(
+            year,
+            f(1)?,
+            f(2)?,
+            f(3)?,
+            f(4)?,
+            cols(line, self.sec.0, self.sec.1),
+            ts,
+        )
+    }
+}
+
 /// Column ranges (0-based, end exclusive) of an epoch line.
 struct EpochCols {
-    /// Year, month, day, hour, minute.
-    ymdhm: [(usize, usize); 5],
-    sec: (usize, usize),
+    /// Date and time.
+    time: DateCols,
     flag: (usize, usize),
     nsat: (usize, usize),
     clock: (usize, usize),
@@ -447,8 +480,11 @@ struct EpochCols {
 
 /// RINEX 2 epoch line: ` yy mm dd hh mm ss.sssssss  f nnn` + satellites + clock (cols 69–80).
 const V2: EpochCols = EpochCols {
-    ymdhm: [(0, 3), (3, 6), (6, 9), (9, 12), (12, 15)],
-    sec: (15, 26),
+    time: DateCols {
+        ymdhm: [(0, 3), (3, 6), (6, 9), (9, 12), (12, 15)],
+        sec: (15, 26),
+        two_digit_years: true,
+    },
     flag: (26, 29),
     nsat: (29, 32),
     clock: (68, 80),
@@ -456,10 +492,14 @@ const V2: EpochCols = EpochCols {
     first_sat: Some((32, 35)),
 };
 
-/// RINEX 3/4 epoch line: `> yyyy mm dd hh mm ss.sssssss  f nnn      clock`.
+/// RINEX 3/4 epoch line: `> yyyy mm dd hh mm ss.sssssss  f nnn      clock` (a two-digit year
+/// is read as in RINEX 2).
 const V3: EpochCols = EpochCols {
-    ymdhm: [(2, 6), (7, 9), (10, 12), (13, 15), (16, 18)],
-    sec: (18, 29),
+    time: DateCols {
+        ymdhm: [(2, 6), (7, 9), (10, 12), (13, 15), (16, 18)],
+        sec: (18, 29),
+        two_digit_years: true,
+    },
     flag: (31, 32),
     nsat: (32, 35),
     clock: (41, 56),
@@ -490,16 +530,7 @@ fn parse_epoch(line: &[u8], c: &EpochCols, ts: TimeScale) -> Option<EpochHead> {
     let time = if cols(line, c.date.0, c.date.1).iter().all(|&b| b == b' ') {
         None
     } else {
-        let f = |k: usize| int(line, c.ymdhm[k].0, c.ymdhm[k].1);
-        Some(make_epoch(
-            full_year(f(0)?),
-            f(1)?,
-            f(2)?,
-            f(3)?,
-            f(4)?,
-            cols(line, c.sec.0, c.sec.1),
-            ts,
-        )?)
+        Some(c.time.epoch(line, ts)?)
     };
     if time.is_none() && flag < 2 {
         return None;

@@ -42,6 +42,23 @@ impl Diff {
         }
         self.u[0]
     }
+    /// The next value from a compressed field: blank → missing (the difference chain
+    /// stops), `n&value` → initialised, a difference → decoded. `Err` for junk or for a
+    /// difference with no live chain to add it to.
+    fn take(&mut self, f: &[u8]) -> std::result::Result<Option<i64>, ()> {
+        if f.is_empty() {
+            self.live = false;
+            return Ok(None);
+        }
+        match parse_num(f) {
+            Some((Some(o), v)) => {
+                self.init(o, v);
+                Ok(Some(v))
+            }
+            Some((None, d)) if self.live => Ok(Some(self.decode(d))),
+            _ => Err(()),
+        }
+    }
 }
 
 #[derive(Default)]
@@ -192,6 +209,49 @@ impl Crx {
 
     /// Decode one epoch into the queue. Returns false at the end of the file.
     fn decode_epoch(&mut self, warnings: &mut Vec<Warning>) -> Result<bool> {
+        if !self.next_epoch_text()? {
+            return Ok(false);
+        }
+        let et = self.epoch_text.clone();
+        let (flag_col, n_a, sat_a) = if self.v3 { (31, 32, 41) } else { (28, 29, 32) };
+        let flag = et.get(flag_col).map(|c| c.wrapping_sub(b'0')).unwrap_or(0);
+        let nsat = super::lines::parse_int(super::lines::cols(&et, n_a, n_a + 3))
+            .ok()
+            .flatten()
+            .unwrap_or(0)
+            .max(0) as usize;
+        if (2..=5).contains(&flag) {
+            self.queue_special_record(&et, nsat)?;
+            return Ok(true);
+        }
+        let clock = self.decode_clock()?;
+        let svs = self.epoch_satellites(&et, nsat, sat_a);
+        self.queue_epoch_lines(&et, nsat, sat_a, clock);
+        let mut present = Vec::with_capacity(nsat);
+        for (i, sv) in svs.iter().enumerate() {
+            let Some(data) = self.src.next_line()?.map(|l| l.to_vec()) else {
+                warnings.push(Warning {
+                    line: self.qline,
+                    what: format!("CRINEX epoch truncated after {i} of {nsat} satellites"),
+                });
+                break;
+            };
+            let Some(sv) = *sv else {
+                // Keep the RINEX text consistent: an unreadable identifier gives an unreadable record.
+                let l = self.new_line();
+                l.extend_from_slice(b"???");
+                continue;
+            };
+            present.push(sv);
+            self.decode_satellite(sv, &data, warnings);
+        }
+        self.prev = present;
+        Ok(true)
+    }
+
+    /// Read the next non-blank line as the epoch line's text difference and apply it to
+    /// `epoch_text` (trailing blanks removed). Returns false at the end of the file.
+    fn next_epoch_text(&mut self) -> Result<bool> {
         let line = loop {
             match self.src.next_line()? {
                 None => return Ok(false),
@@ -214,201 +274,188 @@ impl Crx {
         while self.epoch_text.last() == Some(&b' ') {
             self.epoch_text.pop();
         }
-        let et = self.epoch_text.clone();
-        let (flag_col, n_a, sat_a) = if self.v3 { (31, 32, 41) } else { (28, 29, 32) };
-        let flag = et.get(flag_col).map(|c| c.wrapping_sub(b'0')).unwrap_or(0);
-        let nsat = super::lines::parse_int(super::lines::cols(&et, n_a, n_a + 3))
-            .ok()
-            .flatten()
-            .unwrap_or(0)
-            .max(0) as usize;
-        if (2..=5).contains(&flag) {
-            let head_len = if self.v3 { 35 } else { 32 };
-            let l = super::lines::cols(&et, 0, head_len).to_vec();
-            self.queue.push(l);
-            for _ in 0..nsat {
-                match self.src.next_line()? {
-                    Some(l) => {
-                        let l = l.to_vec();
-                        self.queue.push(l);
-                    }
-                    None => break,
+        Ok(true)
+    }
+
+    /// A special record (flags 2–5): the epoch line and its `nsat` uncompressed lines.
+    fn queue_special_record(&mut self, et: &[u8], nsat: usize) -> Result<()> {
+        let head_len = if self.v3 { 35 } else { 32 };
+        let l = super::lines::cols(et, 0, head_len).to_vec();
+        self.queue.push(l);
+        for _ in 0..nsat {
+            match self.src.next_line()? {
+                Some(l) => {
+                    let l = l.to_vec();
+                    self.queue.push(l);
                 }
+                None => break,
             }
-            return Ok(true);
         }
-        // Receiver clock line.
+        Ok(())
+    }
+
+    /// The receiver clock line: the clock offset in units of 10⁻¹² s (RINEX 3) or 10⁻⁹ s
+    /// (RINEX 2), `None` when blank.
+    fn decode_clock(&mut self) -> Result<Option<i64>> {
         let clock_line = self
             .src
             .next_line()?
             .map(|l| super::lines::trim(l).to_vec())
             .unwrap_or_default();
-        let clock = if clock_line.is_empty() {
-            self.clock.live = false;
-            None
-        } else {
-            match parse_num(&clock_line) {
-                Some((Some(o), v)) => {
-                    self.clock.init(o, v);
-                    Some(v)
-                }
-                Some((None, d)) if self.clock.live => Some(self.clock.decode(d)),
-                _ => return Err(self.bad("unreadable CRINEX clock line")),
-            }
-        };
-        // Epoch line(s) of the RINEX text.
-        let svs: Vec<Option<Sv>> = (0..nsat)
+        self.clock
+            .take(&clock_line)
+            .map_err(|()| self.bad("unreadable CRINEX clock line"))
+    }
+
+    /// The satellites listed on the epoch text (the file's system for a blank letter).
+    fn epoch_satellites(&self, et: &[u8], nsat: usize, sat_a: usize) -> Vec<Option<Sv>> {
+        (0..nsat)
             .map(|i| {
                 let a = sat_a + 3 * i;
-                Sv::parse(super::lines::cols(&et, a, a + 3)).map(|sv| match self.file_system {
+                Sv::parse(super::lines::cols(et, a, a + 3)).map(|sv| match self.file_system {
                     Some(sys) if et.get(a) == Some(&b' ') => Sv::new(sys, sv.prn),
                     _ => sv,
                 })
             })
-            .collect();
+            .collect()
+    }
+
+    /// The RINEX epoch line(s): RINEX 3 one line with the clock in columns 42–56; RINEX 2
+    /// twelve satellites a line, the clock in columns 69–80 of the first.
+    fn queue_epoch_lines(&mut self, et: &[u8], nsat: usize, sat_a: usize, clock: Option<i64>) {
         if self.v3 {
             let l = self.new_line();
-            l.extend_from_slice(super::lines::cols(&et, 0, 35));
+            l.extend_from_slice(super::lines::cols(et, 0, 35));
             if let Some(c) = clock {
                 while l.len() < 41 {
                     l.push(b' ');
                 }
                 push_fixed(l, c, 15, 12);
             }
-        } else {
-            for chunk in 0..nsat.div_ceil(12).max(1) {
-                let l = self.new_line();
-                if chunk == 0 {
-                    l.extend_from_slice(super::lines::cols(&et, 0, 32));
-                } else {
-                    l.extend_from_slice(&[b' '; 32]);
-                }
-                let a = sat_a + 36 * chunk;
-                l.extend_from_slice(super::lines::cols(&et, a, a + 36));
-                if chunk == 0 {
-                    if let Some(c) = clock {
-                        while l.len() < 68 {
-                            l.push(b' ');
-                        }
-                        push_fixed(l, c, 12, 9);
+            return;
+        }
+        for chunk in 0..nsat.div_ceil(12).max(1) {
+            let l = self.new_line();
+            if chunk == 0 {
+                l.extend_from_slice(super::lines::cols(et, 0, 32));
+            } else {
+                l.extend_from_slice(&[b' '; 32]);
+            }
+            let a = sat_a + 36 * chunk;
+            l.extend_from_slice(super::lines::cols(et, a, a + 36));
+            if chunk == 0 {
+                if let Some(c) = clock {
+                    while l.len() < 68 {
+                        l.push(b' ');
                     }
+                    push_fixed(l, c, 12, 9);
                 }
             }
         }
-        // Satellite records.
-        let mut present = Vec::with_capacity(nsat);
-        for (i, sv) in svs.iter().enumerate() {
-            let Some(data) = self.src.next_line()?.map(|l| l.to_vec()) else {
-                warnings.push(Warning {
-                    line: self.qline,
-                    what: format!("CRINEX epoch truncated after {i} of {nsat} satellites"),
-                });
-                break;
-            };
-            let Some(sv) = *sv else {
-                // Keep the RINEX text consistent: an unreadable identifier gives an unreadable record.
-                let l = self.new_line();
-                l.extend_from_slice(b"???");
-                continue;
-            };
-            present.push(sv);
-            let nt = if self.v3 {
-                self.ntypes[sv.sys.index()]
-            } else {
-                self.ntypes[Constellation::Gps.index()]
-            };
-            let was_present = self.prev.contains(&sv);
-            let st = self.sats.entry(sv).or_default();
-            if st.fields.len() != nt {
-                st.fields = vec![Diff::default(); nt];
-            }
-            if !was_present {
-                st.flags.clear();
-            }
-            self.values.clear();
-            let mut pos = 0usize;
-            for k in 0..nt {
-                let end = if pos >= data.len() {
-                    data.len()
-                } else {
-                    data[pos..]
-                        .iter()
-                        .position(|&c| c == b' ')
-                        .map(|p| pos + p)
-                        .unwrap_or(data.len())
-                };
-                let f = if pos < data.len() {
-                    &data[pos..end]
-                } else {
-                    &[][..]
-                };
-                pos = end + 1;
-                let v = if f.is_empty() {
-                    st.fields[k].live = false;
-                    None
-                } else {
-                    match parse_num(f) {
-                        Some((Some(o), v)) => {
-                            st.fields[k].init(o, v);
-                            Some(v)
-                        }
-                        Some((None, d)) if st.fields[k].live => Some(st.fields[k].decode(d)),
-                        _ => {
-                            st.fields[k].live = false;
-                            warnings.push(Warning {
-                                line: self.src.line_no,
-                                what: format!(
-                                    "CRINEX value '{}' of {sv} cannot be decoded: left missing",
-                                    String::from_utf8_lossy(f)
-                                ),
-                            });
-                            None
-                        }
-                    }
-                };
-                self.values.push(v);
-            }
-            if pos < data.len() {
-                apply_text_diff(&mut st.flags, &data[pos..]);
-            }
-            // Emit the RINEX record.
-            let flags = st.flags.clone();
-            let values = std::mem::take(&mut self.values);
-            let fl = |j: usize| flags.get(j).copied().unwrap_or(b' ');
-            if self.v3 {
-                let l = self.new_line();
-                l.extend_from_slice(sv.to_string().as_bytes());
-                for (k, v) in values.iter().enumerate() {
-                    match v {
-                        Some(v) => push_fixed(l, *v, 14, 3),
-                        None => l.extend_from_slice(&[b' '; 14]),
-                    }
-                    l.push(fl(2 * k));
-                    l.push(fl(2 * k + 1));
-                }
-            } else {
-                for chunk in values.chunks(5).enumerate() {
-                    let (c, vals) = chunk;
-                    let l = self.new_line();
-                    for (j, v) in vals.iter().enumerate() {
-                        let k = 5 * c + j;
-                        match v {
-                            Some(v) => push_fixed(l, *v, 14, 3),
-                            None => l.extend_from_slice(&[b' '; 14]),
-                        }
-                        l.push(fl(2 * k));
-                        l.push(fl(2 * k + 1));
-                    }
-                }
-                if values.is_empty() {
-                    self.new_line();
-                }
-            }
-            self.values = values;
-        }
-        self.prev = present;
-        Ok(true)
     }
+
+    /// Decode one satellite's compressed line `data` and queue its RINEX record.
+    fn decode_satellite(&mut self, sv: Sv, data: &[u8], warnings: &mut Vec<Warning>) {
+        let nt = if self.v3 {
+            self.ntypes[sv.sys.index()]
+        } else {
+            self.ntypes[Constellation::Gps.index()]
+        };
+        let was_present = self.prev.contains(&sv);
+        let st = self.sats.entry(sv).or_default();
+        if st.fields.len() != nt {
+            st.fields = vec![Diff::default(); nt];
+        }
+        if !was_present {
+            st.flags.clear();
+        }
+        let mut values = std::mem::take(&mut self.values);
+        values.clear();
+        let line_no = self.src.line_no;
+        decode_fields(st, sv, data, &mut values, warnings, line_no);
+        let flags = st.flags.clone();
+        self.queue_sat_record(sv, &values, &flags);
+        self.values = values;
+    }
+
+    /// The RINEX record of a satellite: RINEX 3 one line led by the satellite, RINEX 2 five
+    /// values a line.
+    fn queue_sat_record(&mut self, sv: Sv, values: &[Option<i64>], flags: &[u8]) {
+        if self.v3 {
+            let l = self.new_line();
+            l.extend_from_slice(sv.to_string().as_bytes());
+            for (k, v) in values.iter().enumerate() {
+                push_value(l, *v, flags, k);
+            }
+            return;
+        }
+        for (c, vals) in values.chunks(5).enumerate() {
+            let l = self.new_line();
+            for (j, v) in vals.iter().enumerate() {
+                push_value(l, *v, flags, 5 * c + j);
+            }
+        }
+        if values.is_empty() {
+            self.new_line();
+        }
+    }
+}
+
+/// Decode the `st.fields.len()` blank-separated fields of a satellite line into `values`, then
+/// apply the LLI/SSI text difference that follows them. An undecodable field is left missing
+/// with a warning at `line_no`.
+fn decode_fields(
+    st: &mut SatState,
+    sv: Sv,
+    data: &[u8],
+    values: &mut Vec<Option<i64>>,
+    warnings: &mut Vec<Warning>,
+    line_no: usize,
+) {
+    let mut pos = 0usize;
+    for field in st.fields.iter_mut() {
+        let end = if pos >= data.len() {
+            data.len()
+        } else {
+            data[pos..]
+                .iter()
+                .position(|&c| c == b' ')
+                .map(|p| pos + p)
+                .unwrap_or(data.len())
+        };
+        let f = if pos < data.len() {
+            &data[pos..end]
+        } else {
+            &[][..]
+        };
+        pos = end + 1;
+        let v = field.take(f).unwrap_or_else(|()| {
+            field.live = false;
+            warnings.push(Warning {
+                line: line_no,
+                what: format!(
+                    "CRINEX value '{}' of {sv} cannot be decoded: left missing",
+                    String::from_utf8_lossy(f)
+                ),
+            });
+            None
+        });
+        values.push(v);
+    }
+    if pos < data.len() {
+        apply_text_diff(&mut st.flags, &data[pos..]);
+    }
+}
+
+/// Value `k` as an F14.3 field (blank when missing) followed by its LLI and SSI flags.
+fn push_value(l: &mut Vec<u8>, v: Option<i64>, flags: &[u8], k: usize) {
+    let fl = |j: usize| flags.get(j).copied().unwrap_or(b' ');
+    match v {
+        Some(v) => push_fixed(l, v, 14, 3),
+        None => l.extend_from_slice(&[b' '; 14]),
+    }
+    l.push(fl(2 * k));
+    l.push(fl(2 * k + 1));
 }
 
 #[cfg(test)]

@@ -7,6 +7,7 @@ use crate::frame::Ecef;
 use crate::sv::{Constellation, Sv};
 use hifitime::TimeScale;
 use std::collections::BTreeMap;
+use std::path::Path;
 
 /// Antenna reference point offset from the marker (RINEX "ANTENNA: DELTA H/E/N"), metres.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -99,7 +100,18 @@ pub fn v2_code(sys: Constellation, t: &[u8]) -> Option<ObsCode> {
     Some(ObsCode([kind, band, attr]))
 }
 
-/// Read the header, stopping after END OF HEADER. `first` is the first line (already read).
+/// Observation types as the header lists them, gathered over continuation lines.
+#[derive(Default)]
+struct TypeLists {
+    /// RINEX 2 two-character types (one list for every system).
+    v2: Vec<[u8; 2]>,
+    /// How many RINEX 2 types the first `# / TYPES OF OBSERV` line announced.
+    v2_count: usize,
+    /// RINEX 3/4: the system being listed and how many types it announced.
+    v3_sys: Option<(Constellation, usize)>,
+}
+
+/// Read the header, stopping after END OF HEADER, from the first line on.
 pub(crate) fn read_header(src: &mut Lines, crinex: Option<f64>) -> Result<ObsHeader> {
     let path = src.path.clone();
     let mut h = ObsHeader {
@@ -120,10 +132,7 @@ pub(crate) fn read_header(src: &mut Lines, crinex: Option<f64>) -> Result<ObsHea
         notes: Vec::new(),
         lines: 0,
     };
-    let mut v2_types: Vec<[u8; 2]> = Vec::new();
-    let mut v2_count = 0usize;
-    let mut v3_sys: Option<(Constellation, usize)> = None;
-    let mut glo_pending = 0usize;
+    let mut types = TypeLists::default();
     let mut saw_version = false;
     loop {
         let line_no = src.line_no + 1;
@@ -155,143 +164,186 @@ pub(crate) fn read_header(src: &mut Lines, crinex: Option<f64>) -> Result<ObsHea
                 ));
             }
             saw_version = true;
-            let v = parse_real(cols(line, 0, 9))
-                .ok()
-                .flatten()
-                .ok_or_else(|| bad("unreadable version"))?;
-            if !(2.0..5.0).contains(&v) {
-                return Err(Error::input(
-                    &path,
-                    format!("RINEX version {v} is not supported (2.x, 3.x and 4.x are)"),
-                ));
-            }
-            h.version = v;
-            let kind = cols(line, 20, 21).first().copied().unwrap_or(b' ');
-            if kind != b'O' {
-                let what = match kind {
-                    b'N' | b'G' | b'H' | b'L' | b'C' | b'E' | b'J' | b'I' => {
-                        "a navigation file, not observations: give it with --nav"
-                    }
-                    b'M' => "a meteorological file, not observations",
-                    _ => "not an observation file (type in column 21 is not 'O')",
-                };
-                return Err(Error::input(&path, format!("this is {what}")));
-            }
-            let sys = cols(line, 40, 41).first().copied().unwrap_or(b'G');
-            h.file_system = if sys == b'M' {
-                None
-            } else {
-                Constellation::from_letter(sys).or(Some(Constellation::Gps))
-            };
+            read_version_line(&mut h, line, &path, bad)?;
             continue;
         }
-        match lab {
-            b"END OF HEADER" => break,
-            b"MARKER NAME" => h.marker = col_str(line, 0, 60),
-            b"MARKER NUMBER" => h.marker_number = col_str(line, 0, 20),
-            b"REC # / TYPE / VERS" => {
-                h.receiver = format!("{} {}", col_str(line, 20, 40), col_str(line, 40, 60))
-                    .trim()
-                    .to_string()
-            }
-            b"ANT # / TYPE" => h.antenna = col_str(line, 20, 40),
-            b"APPROX POSITION XYZ" => {
-                let f = |a| parse_real(cols(line, a, a + 14)).ok().flatten();
-                if let (Some(x), Some(y), Some(z)) = (f(0), f(14), f(28)) {
-                    if x != 0.0 || y != 0.0 || z != 0.0 {
-                        h.approx_position = Some(Ecef::new(x, y, z));
-                    }
-                }
-            }
-            b"ANTENNA: DELTA H/E/N" => {
-                let f = |a| {
-                    parse_real(cols(line, a, a + 14))
-                        .ok()
-                        .flatten()
-                        .unwrap_or(0.0)
-                };
-                h.antenna_delta = AntennaDelta {
-                    up: f(0),
-                    east: f(14),
-                    north: f(28),
-                };
-            }
-            b"INTERVAL" => h.interval = parse_real(cols(line, 0, 10)).ok().flatten(),
-            b"LEAP SECONDS" => {
-                h.leap_seconds = parse_int(cols(line, 0, 6)).ok().flatten().map(|v| v as i32)
-            }
-            b"TIME OF FIRST OBS" => {
-                h.time_scale = match cols(line, 48, 51) {
-                    b"GLO" => TimeScale::UTC,
-                    b"GAL" => TimeScale::GST,
-                    b"BDT" => TimeScale::BDT,
-                    _ => TimeScale::GPST,
-                };
-            }
-            b"# / TYPES OF OBSERV" => {
-                if v2_types.is_empty() {
-                    v2_count = parse_int(cols(line, 0, 6))
-                        .ok()
-                        .flatten()
-                        .ok_or_else(|| bad("missing count"))?
-                        as usize;
-                }
-                for k in 0..9 {
-                    let t = cols(line, 10 + 6 * k, 12 + 6 * k);
-                    if t.len() == 2 && t != b"  " && v2_types.len() < v2_count {
-                        v2_types.push([t[0], t[1]]);
-                    }
-                }
-            }
-            b"SYS / # / OBS TYPES" => {
-                let first = cols(line, 0, 1).first().copied().unwrap_or(b' ');
-                if first != b' ' {
-                    let sys = Constellation::from_letter(first)
-                        .ok_or_else(|| bad("unknown satellite system"))?;
-                    let n = parse_int(cols(line, 3, 6))
-                        .ok()
-                        .flatten()
-                        .ok_or_else(|| bad("missing count"))? as usize;
-                    h.obs_types.insert(sys, Vec::with_capacity(n));
-                    v3_sys = Some((sys, n));
-                }
-                let Some((sys, n)) = v3_sys else {
-                    return Err(bad("continuation without a system"));
-                };
-                let list = h.obs_types.entry(sys).or_default();
-                for k in 0..13 {
-                    let t = cols(line, 7 + 4 * k, 10 + 4 * k);
-                    if t.len() == 3 && list.len() < n {
-                        list.push(ObsCode([t[0], t[1], t[2]]));
-                    }
-                }
-            }
-            b"GLONASS SLOT / FRQ #" => {
-                if glo_pending == 0 {
-                    glo_pending = parse_int(cols(line, 0, 3)).ok().flatten().unwrap_or(0) as usize;
-                }
-                for k in 0..8 {
-                    let a = 4 + 7 * k;
-                    if let Some(sv) = Sv::parse(cols(line, a, a + 3)) {
-                        if let Ok(Some(ch)) = parse_int(cols(line, a + 4, a + 6)) {
-                            h.glonass_channels.insert(sv.prn, ch as i8);
-                            glo_pending = glo_pending.saturating_sub(1);
-                        }
-                    }
-                }
-            }
-            b"SYS / SCALE FACTOR" => h.notes.push(
-                "SYS / SCALE FACTOR present: observations are used as written (factor not applied)"
-                    .into(),
-            ),
-            _ => {}
+        if lab == b"END OF HEADER" {
+            break;
         }
+        read_header_line(&mut h, &mut types, lab, line, bad)?;
     }
     h.lines = src.line_no;
+    set_obs_types(&mut h, &types.v2, &path)?;
+    Ok(h)
+}
+
+/// `RINEX VERSION / TYPE`: the version (2.x–4.x) and the file's system; anything but an
+/// observation file is refused, saying what it is.
+fn read_version_line(
+    h: &mut ObsHeader,
+    line: &[u8],
+    path: &Path,
+    bad: impl Fn(&str) -> Error,
+) -> Result<()> {
+    let v = parse_real(cols(line, 0, 9))
+        .ok()
+        .flatten()
+        .ok_or_else(|| bad("unreadable version"))?;
+    if !(2.0..5.0).contains(&v) {
+        return Err(Error::input(
+            path,
+            format!("RINEX version {v} is not supported (2.x, 3.x and 4.x are)"),
+        ));
+    }
+    h.version = v;
+    let kind = cols(line, 20, 21).first().copied().unwrap_or(b' ');
+    if kind != b'O' {
+        let what = match kind {
+            b'N' | b'G' | b'H' | b'L' | b'C' | b'E' | b'J' | b'I' => {
+                "a navigation file, not observations: give it with --nav"
+            }
+            b'M' => "a meteorological file, not observations",
+            _ => "not an observation file (type in column 21 is not 'O')",
+        };
+        return Err(Error::input(path, format!("this is {what}")));
+    }
+    let sys = cols(line, 40, 41).first().copied().unwrap_or(b'G');
+    h.file_system = if sys == b'M' {
+        None
+    } else {
+        Constellation::from_letter(sys).or(Some(Constellation::Gps))
+    };
+    Ok(())
+}
+
+/// One header line after the version line, by its label; labels ppkat does not use are
+/// ignored.
+fn read_header_line(
+    h: &mut ObsHeader,
+    types: &mut TypeLists,
+    lab: &[u8],
+    line: &[u8],
+    bad: impl Fn(&str) -> Error,
+) -> Result<()> {
+    match lab {
+        b"MARKER NAME" => h.marker = col_str(line, 0, 60),
+        b"MARKER NUMBER" => h.marker_number = col_str(line, 0, 20),
+        b"REC # / TYPE / VERS" => {
+            h.receiver = format!("{} {}", col_str(line, 20, 40), col_str(line, 40, 60))
+                .trim()
+                .to_string()
+        }
+        b"ANT # / TYPE" => h.antenna = col_str(line, 20, 40),
+        b"APPROX POSITION XYZ" => {
+            let f = |a| parse_real(cols(line, a, a + 14)).ok().flatten();
+            if let (Some(x), Some(y), Some(z)) = (f(0), f(14), f(28)) {
+                if x != 0.0 || y != 0.0 || z != 0.0 {
+                    h.approx_position = Some(Ecef::new(x, y, z));
+                }
+            }
+        }
+        b"ANTENNA: DELTA H/E/N" => {
+            let f = |a| {
+                parse_real(cols(line, a, a + 14))
+                    .ok()
+                    .flatten()
+                    .unwrap_or(0.0)
+            };
+            h.antenna_delta = AntennaDelta {
+                up: f(0),
+                east: f(14),
+                north: f(28),
+            };
+        }
+        b"INTERVAL" => h.interval = parse_real(cols(line, 0, 10)).ok().flatten(),
+        b"LEAP SECONDS" => {
+            h.leap_seconds = parse_int(cols(line, 0, 6)).ok().flatten().map(|v| v as i32)
+        }
+        b"TIME OF FIRST OBS" => {
+            h.time_scale = match cols(line, 48, 51) {
+                b"GLO" => TimeScale::UTC,
+                b"GAL" => TimeScale::GST,
+                b"BDT" => TimeScale::BDT,
+                _ => TimeScale::GPST,
+            };
+        }
+        b"# / TYPES OF OBSERV" => read_v2_types(types, line, bad)?,
+        b"SYS / # / OBS TYPES" => read_v3_types(h, types, line, bad)?,
+        b"GLONASS SLOT / FRQ #" => {
+            for k in 0..8 {
+                let a = 4 + 7 * k;
+                if let Some(sv) = Sv::parse(cols(line, a, a + 3)) {
+                    if let Ok(Some(ch)) = parse_int(cols(line, a + 4, a + 6)) {
+                        h.glonass_channels.insert(sv.prn, ch as i8);
+                    }
+                }
+            }
+        }
+        b"SYS / SCALE FACTOR" => h.notes.push(
+            "SYS / SCALE FACTOR present: observations are used as written (factor not applied)"
+                .into(),
+        ),
+        _ => {}
+    }
+    Ok(())
+}
+
+/// A RINEX 2 `# / TYPES OF OBSERV` line (the first gives the count, nine types a line).
+fn read_v2_types(types: &mut TypeLists, line: &[u8], bad: impl Fn(&str) -> Error) -> Result<()> {
+    if types.v2.is_empty() {
+        types.v2_count = parse_int(cols(line, 0, 6))
+            .ok()
+            .flatten()
+            .ok_or_else(|| bad("missing count"))? as usize;
+    }
+    for k in 0..9 {
+        let t = cols(line, 10 + 6 * k, 12 + 6 * k);
+        if t.len() == 2 && t != b"  " && types.v2.len() < types.v2_count {
+            types.v2.push([t[0], t[1]]);
+        }
+    }
+    Ok(())
+}
+
+/// A RINEX 3/4 `SYS / # / OBS TYPES` line: a system letter and count start a list, a blank
+/// letter continues it (13 types a line).
+fn read_v3_types(
+    h: &mut ObsHeader,
+    types: &mut TypeLists,
+    line: &[u8],
+    bad: impl Fn(&str) -> Error,
+) -> Result<()> {
+    let first = cols(line, 0, 1).first().copied().unwrap_or(b' ');
+    if first != b' ' {
+        let sys =
+            Constellation::from_letter(first).ok_or_else(|| bad("unknown satellite system"))?;
+        let n = parse_int(cols(line, 3, 6))
+            .ok()
+            .flatten()
+            .ok_or_else(|| bad("missing count"))? as usize;
+        h.obs_types.insert(sys, Vec::with_capacity(n));
+        types.v3_sys = Some((sys, n));
+    }
+    let Some((sys, n)) = types.v3_sys else {
+        return Err(bad("continuation without a system"));
+    };
+    let list = h.obs_types.entry(sys).or_default();
+    for k in 0..13 {
+        let t = cols(line, 7 + 4 * k, 10 + 4 * k);
+        if t.len() == 3 && list.len() < n {
+            list.push(ObsCode([t[0], t[1], t[2]]));
+        }
+    }
+    Ok(())
+}
+
+/// The observation types per system once the header is read: RINEX 2 types translated to
+/// 3-letter codes for every system; an error when the header lists none.
+fn set_obs_types(h: &mut ObsHeader, v2_types: &[[u8; 2]], path: &Path) -> Result<()> {
     if h.is_v2() {
         if v2_types.is_empty() {
             return Err(Error::input(
-                &path,
+                path,
                 "the header has no '# / TYPES OF OBSERV': cannot read observations",
             ));
         }
@@ -304,9 +356,9 @@ pub(crate) fn read_header(src: &mut Lines, crinex: Option<f64>) -> Result<ObsHea
         }
     } else if h.obs_types.is_empty() {
         return Err(Error::input(
-            &path,
+            path,
             "the header has no 'SYS / # / OBS TYPES': cannot read observations",
         ));
     }
-    Ok(h)
+    Ok(())
 }

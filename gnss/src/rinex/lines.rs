@@ -22,10 +22,7 @@ pub struct Lines {
 impl Lines {
     /// Open a file (gzip detected by its magic bytes).
     pub fn open(path: &Path) -> Result<Self> {
-        let io = |source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        };
+        let io = Error::io(path);
         let mut file = File::open(path).map_err(io)?;
         let mut magic = [0u8; 2];
         let n = read_up_to(&mut file, &mut magic).map_err(io)?;
@@ -64,10 +61,7 @@ impl Lines {
         let n = self
             .inner
             .read_until(b'\n', &mut self.buf)
-            .map_err(|source| Error::Io {
-                path: self.path.clone(),
-                source,
-            })?;
+            .map_err(Error::io(&self.path))?;
         if n == 0 {
             return Ok(None);
         }

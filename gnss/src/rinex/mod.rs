@@ -280,10 +280,7 @@ impl ObsFile {
 
 /// Write the plain RINEX text of an observation file (gunzipped, Hatanaka-decompressed) to `w`.
 pub fn write_plain_text(path: &Path, w: &mut dyn std::io::Write) -> Result<()> {
-    let io = |source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    };
+    let io = Error::io(path);
     let mut src = Lines::open(path)?;
     let first = match src.next_line()? {
         Some(l) => l.to_vec(),

@@ -3,6 +3,9 @@
 //! angles (ω-φ-κ with R = Rω·Rφ·Rκ, or φ-ω-κ with R = Rφ·Rω·Rκ and the Chinese-text Rφ),
 //! or — when nothing else exists — from the trajectory heading with zero pitch and roll.
 //! R maps the camera frame into the local ENU frame at the exposure.
+//!
+//! Enters: an attitude CSV (`week,tow,a1,a2,a3`, GPST, degrees) or angles in radians. Leaves:
+//! rotation matrices (camera → ENU) and ω-φ-κ of a matrix. Uses `photo::rotation::Angles`.
 
 use gnss::error::{Error, Result};
 use gnss::time::from_week_tow;
@@ -19,7 +22,7 @@ pub enum AngleConvention {
     YawPitchRoll,
     /// ω-φ-κ, R = Rω·Rφ·Rκ.
     OmegaPhiKappa,
-    /// φ-ω-κ, R = Rφ·Rω·Rκ, Rφ = [[cφ,0,−sφ],[0,1,0],[sφ,0,cφ]].
+    /// φ-ω-κ, R = Rφ·Rω·Rκ, Rφ = `[[cφ,0,−sφ],[0,1,0],[sφ,0,cφ]]`.
     PhiOmegaKappa,
 }
 
@@ -61,9 +64,11 @@ pub fn omega_phi_kappa(r: &Matrix3<f64>) -> [f64; 3] {
 /// Attitude samples over time.
 #[derive(Clone, Debug)]
 pub struct AttitudeTable {
+    /// Convention of the angles.
     pub conv: AngleConvention,
+    /// Sample times, GPST, increasing.
     pub times: Vec<Epoch>,
-    /// Radians.
+    /// The three angles of each sample, radians.
     pub angles: Vec<[f64; 3]>,
 }
 
@@ -81,10 +86,7 @@ fn unwrap_to(a: f64, reference: f64) -> f64 {
 impl AttitudeTable {
     /// CSV with header `week,tow,a1,a2,a3` (degrees), GPST.
     pub fn read_csv(path: &Path, conv: AngleConvention) -> Result<AttitudeTable> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = std::fs::read_to_string(path).map_err(Error::io(path))?;
         let mut times = Vec::new();
         let mut angles = Vec::new();
         for (i, line) in text.lines().enumerate() {
@@ -99,17 +101,19 @@ impl AttitudeTable {
                 .split(',')
                 .map(|x| x.trim().parse::<f64>())
                 .collect::<std::result::Result<_, _>>()
-                .map_err(|_| Error::Parse {
-                    path: path.to_path_buf(),
-                    line: i + 1,
-                    what: "numbers expected: week,tow,angle1,angle2,angle3 (degrees)".into(),
+                .map_err(|_| {
+                    Error::parse(
+                        path,
+                        i + 1,
+                        "numbers expected: week,tow,angle1,angle2,angle3 (degrees)",
+                    )
                 })?;
             if f.len() < 5 {
-                return Err(Error::Parse {
-                    path: path.to_path_buf(),
-                    line: i + 1,
-                    what: "five columns expected: week,tow,angle1,angle2,angle3".into(),
-                });
+                return Err(Error::parse(
+                    path,
+                    i + 1,
+                    "five columns expected: week,tow,angle1,angle2,angle3",
+                ));
             }
             times.push(from_week_tow(f[0] as u32, f[1]));
             angles.push([f[2].to_radians(), f[3].to_radians(), f[4].to_radians()]);

@@ -1,5 +1,9 @@
 //! Exposure times: RINEX flag-5 events (receiver time, corrected by the receiver clock seen in
 //! the trajectory), DJI `Timestamp.MRK`, or a CSV of times in GPST or UTC.
+//!
+//! Enters: an observation file with its trajectory, an MRK file or a CSV. Leaves:
+//! [`ExposureEvent`]s in GPST (with the MRK's own position and offsets when given), sorting
+//! and duplicate checks, and the test for UTC times declared as GPST.
 
 use gnss::error::{Error, Result};
 use gnss::frame::{Ecef, Geodetic};
@@ -104,20 +108,13 @@ fn num_before_comma(s: &str) -> Option<f64> {
 
 /// Read a DJI `Timestamp.MRK`.
 pub fn read_mrk(path: &Path) -> Result<Vec<ExposureEvent>> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = std::fs::read_to_string(path).map_err(Error::io(path))?;
     let mut out = Vec::new();
     for (i, line) in text.lines().enumerate() {
         if line.trim().is_empty() {
             continue;
         }
-        let bad = |what: &str| Error::Parse {
-            path: path.to_path_buf(),
-            line: i + 1,
-            what: what.to_string(),
-        };
+        let bad = |what: &str| Error::parse(path, i + 1, what);
         let f: Vec<&str> = line.split('\t').collect();
         if f.len() < 11 {
             return Err(bad("an MRK line has 11 tab-separated fields (index, seconds of week, [week], N, E, V, lat, lon, height, sigmas, quality)"));
@@ -174,10 +171,7 @@ pub fn read_mrk(path: &Path) -> Result<Vec<ExposureEvent>> {
 /// Read a CSV of times: a header naming `id` and either `week`,`tow` or `time` (ISO
 /// `YYYY-MM-DDTHH:MM:SS.sss`), in the declared time system.
 pub fn read_times_csv(path: &Path, system: TimeSystem) -> Result<Vec<ExposureEvent>> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = std::fs::read_to_string(path).map_err(Error::io(path))?;
     let mut lines = text
         .lines()
         .enumerate()
@@ -204,11 +198,7 @@ pub fn read_times_csv(path: &Path, system: TimeSystem) -> Result<Vec<ExposureEve
     let mut out = Vec::new();
     for (i, line) in lines {
         let f: Vec<&str> = line.split(',').map(|x| x.trim()).collect();
-        let bad = |what: &str| Error::Parse {
-            path: path.to_path_buf(),
-            line: i + 1,
-            what: what.to_string(),
-        };
+        let bad = |what: &str| Error::parse(path, i + 1, what);
         let t = if let (Some(w), Some(s)) = (week, tow) {
             let w: u32 = f
                 .get(w)
@@ -220,9 +210,7 @@ pub fn read_times_csv(path: &Path, system: TimeSystem) -> Result<Vec<ExposureEve
                 .ok_or_else(|| bad("unreadable seconds of week"))?;
             let g = from_week_tow(w, s);
             if system == TimeSystem::Utc {
-                // The same calendar reading, taken as UTC.
-                let (y, mo, d, h, mi, se, ns) = g.to_gregorian(TimeScale::GPST);
-                Epoch::from_gregorian(y, mo, d, h, mi, se, ns, TimeScale::UTC)
+                calendar_as_utc(g)
             } else {
                 g
             }
@@ -301,8 +289,14 @@ pub fn utc_as_gpst_shift(events: &[ExposureEvent], traj: &Trajectory) -> Option<
 
 /// GPST − UTC (the leap seconds since 1980) at `t`, seconds.
 pub fn gpst_minus_utc(t: Epoch) -> f64 {
+    (calendar_as_utc(t) - t).to_seconds()
+}
+
+/// The epoch whose UTC calendar reading is `t`'s GPST calendar reading (a GPST time that was
+/// really UTC).
+fn calendar_as_utc(t: Epoch) -> Epoch {
     let (y, mo, d, h, mi, se, ns) = t.to_gregorian(TimeScale::GPST);
-    (Epoch::from_gregorian(y, mo, d, h, mi, se, ns, TimeScale::UTC) - t).to_seconds()
+    Epoch::from_gregorian(y, mo, d, h, mi, se, ns, TimeScale::UTC)
 }
 
 /// Sort by time; report unsorted input and refuse duplicate times (kept: the first).
@@ -334,12 +328,18 @@ pub fn mrk_ecef(m: &MrkInfo) -> Ecef {
 mod tests {
     use super::*;
 
+    /// `text` written to `name` in a folder of its own under the temporary directory.
+    fn temp_file(folder: &str, name: &str, text: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("ppkat-{folder}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
     #[test]
     fn parses_a_dji_mrk_line() {
-        let dir = std::env::temp_dir().join(format!("ppkat-mrk-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let p = dir.join("Timestamp.MRK");
-        std::fs::write(&p, "1\t275295.301059\t[2024]\t   -26,N\t    19,E\t   191,V\t-36.41144502,Lat\t174.63075195,Lon\t170.415,Ellh\t1.492559, 1.368525, 3.180128\t16,Q\n").unwrap();
+        let p = temp_file("mrk", "Timestamp.MRK", "1\t275295.301059\t[2024]\t   -26,N\t    19,E\t   191,V\t-36.41144502,Lat\t174.63075195,Lon\t170.415,Ellh\t1.492559, 1.368525, 3.180128\t16,Q\n");
         let ev = read_mrk(&p).unwrap();
         assert_eq!(ev.len(), 1);
         let e = &ev[0];
@@ -358,10 +358,7 @@ mod tests {
 
     #[test]
     fn utc_times_are_shifted_by_the_leap_seconds() {
-        let dir = std::env::temp_dir().join(format!("ppkat-csv-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let p = dir.join("t.csv");
-        std::fs::write(&p, "id,time\nA,2024-06-12T09:00:00.5\n").unwrap();
+        let p = temp_file("csv", "t.csv", "id,time\nA,2024-06-12T09:00:00.5\n");
         let g = read_times_csv(&p, TimeSystem::Gpst).unwrap();
         let u = read_times_csv(&p, TimeSystem::Utc).unwrap();
         assert!(((u[0].time - g[0].time).to_seconds() - 18.0).abs() < 1e-9);

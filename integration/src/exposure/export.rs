@@ -1,6 +1,11 @@
 //! Exports of camera stations: Metashape and Pix4D reference CSVs, OpenDroneMap `geo.txt`, a
 //! full CSV (time, coordinates, sigmas, quality, attitude, flags) and an RTKLIB `.pos`; in
 //! geodetic coordinates or projected (UTM, Gauss–Krüger).
+//!
+//! Enters: camera stations ([`super::CameraStation`], ECEF with ECEF covariance). Leaves: files
+//! written atomically; times GPST, sigmas in the local ENU frame (m), angles degrees (R camera
+//! → ENU). Also the antenna table that [`crate::adjust`] reads ([`antenna_table`]), shared with
+//! the simulator. Uses `gnss::tmerc` for the projections and `gnss::solution` for `.pos`.
 
 use super::attitude::omega_phi_kappa;
 use super::CameraStation;
@@ -8,15 +13,21 @@ use gnss::error::Result;
 use gnss::frame::enu_rotation;
 use gnss::solution::{write_atomic, write_pos, PosFormat, PosRecord};
 use gnss::tmerc::{Projected, TransverseMercator};
+use std::io::Write;
 use std::path::Path;
 
 /// Output layout.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
+    /// Agisoft Metashape reference CSV (label, coordinates, sigmas, yaw/pitch/roll).
     Metashape,
+    /// Pix4D image geolocation CSV (coordinates, ω-φ-κ, accuracies).
     Pix4d,
+    /// OpenDroneMap `geo.txt`.
     Odm,
+    /// Every column ppkat knows (time, coordinates, sigmas, Q, both angle sets, flags).
     Csv,
+    /// RTKLIB `.pos` of the projection centres (llh, with the ECEF covariance).
     Pos,
     /// Antenna positions with their full ENU covariance, ambiguity segment and attitude:
     /// the GNSS input of `ppkat adjust` (lever arm not applied).
@@ -26,6 +37,7 @@ pub enum Format {
 /// Horizontal coordinates of the outputs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Projection {
+    /// WGS84 latitude and longitude (degrees), ellipsoidal height.
     Geodetic,
     /// UTM; the zone of the first station when `None`.
     Utm(Option<u8>),
@@ -141,128 +153,142 @@ fn rows(st: &[CameraStation], proj: Projection) -> (Vec<Row>, String) {
 
 /// Write stations in a format.
 pub fn write(path: &Path, st: &[CameraStation], format: Format, proj: Projection) -> Result<()> {
-    if format == Format::Pos {
-        let recs: Vec<PosRecord> = st
-            .iter()
-            .map(|s| PosRecord {
-                time: s.time,
-                pos: s.centre,
-                quality: s.quality,
-                nsat: 0,
-                cov: s.cov,
-                age: 0.0,
-                ratio: 0.0,
-            })
-            .collect();
-        return write_pos(
-            path,
-            &["program   : ppkat exposures (projection centres)".to_string()],
-            &recs,
-            PosFormat::Llh,
-        );
-    }
-    if format == Format::Antenna {
-        return write_antenna(path, st);
-    }
+    let text_format: TextFormat = match format {
+        Format::Pos => return write_centres_pos(path, st),
+        Format::Antenna => return write_antenna(path, st),
+        Format::Metashape => write_metashape,
+        Format::Pix4d => write_pix4d,
+        Format::Odm => write_odm,
+        Format::Csv => write_csv,
+    };
     let (rows, crs) = rows(st, proj);
     let geo = proj == Projection::Geodetic;
-    write_atomic(path, |w| {
-        match format {
-            Format::Metashape => {
-                writeln!(w, "# ppkat camera stations; {crs}")?;
-                if geo {
-                    writeln!(
-                        w,
-                        "#label,longitude,latitude,altitude,sx,sy,sz,yaw,pitch,roll"
-                    )?;
-                } else {
-                    writeln!(
-                        w,
-                        "#label,easting,northing,altitude,sx,sy,sz,yaw,pitch,roll"
-                    )?;
-                }
-                for r in &rows {
-                    let (a, b) = if geo { (r.y, r.x) } else { (r.x, r.y) };
-                    writeln!(
-                        w,
-                        "{},{a:.9},{b:.9},{:.4},{:.4},{:.4},{:.4},{:.3},{:.3},{:.3}",
-                        r.id,
-                        r.h,
-                        r.sigma_enu[0],
-                        r.sigma_enu[1],
-                        r.sigma_enu[2],
-                        r.ypr[0],
-                        r.ypr[1],
-                        r.ypr[2]
-                    )?;
-                }
-            }
-            Format::Pix4d => {
-                writeln!(
-                    w,
-                    "imagename,{},altitude,omega,phi,kappa,accuracy_horz,accuracy_vert",
-                    if geo {
-                        "latitude,longitude"
-                    } else {
-                        "easting,northing"
-                    }
-                )?;
-                for r in &rows {
-                    let sh = r.sigma_enu[0].hypot(r.sigma_enu[1]);
-                    writeln!(
-                        w,
-                        "{},{:.9},{:.9},{:.4},{:.4},{:.4},{:.4},{sh:.4},{:.4}",
-                        r.id, r.x, r.y, r.h, r.opk[0], r.opk[1], r.opk[2], r.sigma_enu[2]
-                    )?;
-                }
-            }
-            Format::Odm => {
-                // geo.txt: projection line, then image geo_x geo_y geo_z omega phi kappa horz vert.
-                writeln!(
-                    w,
-                    "{}",
-                    if geo {
-                        "EPSG:4326".to_string()
-                    } else {
-                        crs.clone()
-                    }
-                )?;
-                for r in &rows {
-                    let (a, b) = if geo { (r.y, r.x) } else { (r.x, r.y) };
-                    let sh = r.sigma_enu[0].hypot(r.sigma_enu[1]);
-                    writeln!(
-                        w,
-                        "{} {a:.9} {b:.9} {:.4} {:.4} {:.4} {:.4} {sh:.4} {:.4}",
-                        r.id, r.h, r.opk[0], r.opk[1], r.opk[2], r.sigma_enu[2]
-                    )?;
-                }
-            }
-            Format::Csv => {
-                writeln!(w, "# ppkat camera stations (projection centres), GPST; {crs}; sigmas ENU (m); Q as RTKLIB; angles degrees, R camera->ENU, omega/phi/kappa: R = Rw*Rp*Rk")?;
-                writeln!(w, "id,week,tow,{},h,sigma_e,sigma_n,sigma_u,quality,yaw,pitch,roll,omega,phi,kappa,flags", if geo { "lat,lon" } else { "easting,northing" })?;
-                for r in &rows {
-                    writeln!(
-                        w,
-                        "{},{},{:.6},{:.9},{:.9},{:.4},{:.4},{:.4},{:.4},{},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5},\"{}\"",
-                        r.id, r.week, r.tow, r.x, r.y, r.h, r.sigma_enu[0], r.sigma_enu[1], r.sigma_enu[2], r.quality, r.ypr[0], r.ypr[1], r.ypr[2], r.opk[0], r.opk[1], r.opk[2], r.flags
-                    )?;
-                }
-            }
-            Format::Pos | Format::Antenna => unreachable!("handled above"),
+    write_atomic(path, |w| text_format(w, &rows, &crs, geo))
+}
+
+/// A writer of one text layout: the rows, the name of their coordinate system, and whether
+/// they are geodetic (x = latitude, y = longitude, degrees) rather than projected (easting,
+/// northing, metres).
+type TextFormat = fn(&mut dyn Write, &[Row], &str, bool) -> std::io::Result<()>;
+
+/// The projection centres as an RTKLIB `.pos` (llh) with their ECEF covariance.
+fn write_centres_pos(path: &Path, st: &[CameraStation]) -> Result<()> {
+    let recs: Vec<PosRecord> = st
+        .iter()
+        .map(|s| PosRecord {
+            time: s.time,
+            pos: s.centre,
+            quality: s.quality,
+            nsat: 0,
+            cov: s.cov,
+            age: 0.0,
+            ratio: 0.0,
+        })
+        .collect();
+    write_pos(
+        path,
+        &["program   : ppkat exposures (projection centres)".to_string()],
+        &recs,
+        PosFormat::Llh,
+    )
+}
+
+/// Metashape reference CSV: label, longitude/latitude (or easting/northing), altitude,
+/// sigmas, yaw/pitch/roll.
+fn write_metashape(w: &mut dyn Write, rows: &[Row], crs: &str, geo: bool) -> std::io::Result<()> {
+    writeln!(w, "# ppkat camera stations; {crs}")?;
+    if geo {
+        writeln!(
+            w,
+            "#label,longitude,latitude,altitude,sx,sy,sz,yaw,pitch,roll"
+        )?;
+    } else {
+        writeln!(
+            w,
+            "#label,easting,northing,altitude,sx,sy,sz,yaw,pitch,roll"
+        )?;
+    }
+    for r in rows {
+        let (a, b) = if geo { (r.y, r.x) } else { (r.x, r.y) };
+        writeln!(
+            w,
+            "{},{a:.9},{b:.9},{:.4},{:.4},{:.4},{:.4},{:.3},{:.3},{:.3}",
+            r.id, r.h, r.sigma_enu[0], r.sigma_enu[1], r.sigma_enu[2], r.ypr[0], r.ypr[1], r.ypr[2]
+        )?;
+    }
+    Ok(())
+}
+
+/// Pix4D image geolocation CSV: name, coordinates, altitude, ω-φ-κ, horizontal and vertical
+/// accuracy.
+fn write_pix4d(w: &mut dyn Write, rows: &[Row], _crs: &str, geo: bool) -> std::io::Result<()> {
+    writeln!(
+        w,
+        "imagename,{},altitude,omega,phi,kappa,accuracy_horz,accuracy_vert",
+        if geo {
+            "latitude,longitude"
+        } else {
+            "easting,northing"
         }
-        Ok(())
-    })
+    )?;
+    for r in rows {
+        let sh = r.sigma_enu[0].hypot(r.sigma_enu[1]);
+        writeln!(
+            w,
+            "{},{:.9},{:.9},{:.4},{:.4},{:.4},{:.4},{sh:.4},{:.4}",
+            r.id, r.x, r.y, r.h, r.opk[0], r.opk[1], r.opk[2], r.sigma_enu[2]
+        )?;
+    }
+    Ok(())
+}
+
+/// OpenDroneMap `geo.txt`: the projection line, then image geo_x geo_y geo_z omega phi kappa
+/// horizontal and vertical accuracy.
+fn write_odm(w: &mut dyn Write, rows: &[Row], crs: &str, geo: bool) -> std::io::Result<()> {
+    writeln!(w, "{}", if geo { "EPSG:4326" } else { crs })?;
+    for r in rows {
+        let (a, b) = if geo { (r.y, r.x) } else { (r.x, r.y) };
+        let sh = r.sigma_enu[0].hypot(r.sigma_enu[1]);
+        writeln!(
+            w,
+            "{} {a:.9} {b:.9} {:.4} {:.4} {:.4} {:.4} {sh:.4} {:.4}",
+            r.id, r.h, r.opk[0], r.opk[1], r.opk[2], r.sigma_enu[2]
+        )?;
+    }
+    Ok(())
+}
+
+/// The full CSV: time, coordinates, ENU sigmas, quality, both attitude conventions, flags.
+fn write_csv(w: &mut dyn Write, rows: &[Row], crs: &str, geo: bool) -> std::io::Result<()> {
+    writeln!(w, "# ppkat camera stations (projection centres), GPST; {crs}; sigmas ENU (m); Q as RTKLIB; angles degrees, R camera->ENU, omega/phi/kappa: R = Rw*Rp*Rk")?;
+    writeln!(
+        w,
+        "id,week,tow,{},h,sigma_e,sigma_n,sigma_u,quality,yaw,pitch,roll,omega,phi,kappa,flags",
+        if geo { "lat,lon" } else { "easting,northing" }
+    )?;
+    for r in rows {
+        writeln!(
+            w,
+            "{},{},{:.6},{:.9},{:.9},{:.4},{:.4},{:.4},{:.4},{},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5},\"{}\"",
+            r.id, r.week, r.tow, r.x, r.y, r.h, r.sigma_enu[0], r.sigma_enu[1], r.sigma_enu[2], r.quality, r.ypr[0], r.ypr[1], r.ypr[2], r.opk[0], r.opk[1], r.opk[2], r.flags
+        )?;
+    }
+    Ok(())
 }
 
 /// One row of the antenna table read by `ppkat adjust` (`adjust::tables::read_antennas`).
 pub struct AntennaRow<'a> {
+    /// Image (station) id.
     pub id: &'a str,
+    /// Exposure time, GPST.
     pub time: hifitime::Epoch,
+    /// Antenna position, WGS84.
     pub pos: gnss::frame::Geodetic,
     /// Covariance in the ENU frame at `pos`, m².
     pub cov_enu: nalgebra::Matrix3<f64>,
     /// RTKLIB's Q (1 fixed).
     pub quality: u8,
+    /// Ambiguity segment of the trajectory (the adjustment's drift groups).
     pub segment: u32,
     /// ω, φ, κ (degrees) of R camera → ENU, when known.
     pub opk_deg: Option<[f64; 3]>,

@@ -2,6 +2,15 @@
 //! interpolated on the trajectory → lever arm rotated by the camera attitude → projection
 //! centres with covariance and quality, and exports for photogrammetry software.
 //!
+//! Enters: [`events::ExposureEvent`]s (GPST, from [`events`]), a `gnss::trajectory::Trajectory`
+//! (ECEF, GPST; from `gnss::ppk::process` in memory or a `.pos` read back) and
+//! [`ExposureOptions`] (lever arm, [`attitude::AttitudeTable`], delay, gap limit). Leaves: an
+//! [`ExposureResult`] — [`CameraStation`]s (antenna and centre in ECEF, ECEF covariance in m²,
+//! quality, ambiguity segment, rotation camera → ENU) and the exposures refused — which
+//! [`export`] writes and [`photos`] matches to photographs. [`leverarm`] solves a lever arm
+//! from tape measurements. Uses `gnss` (trajectory, frames, time) and `photo` (rotations,
+//! lever arm); used by [`crate::pipeline`] and [`crate::demo`].
+//!
 //! Lever-arm convention (as the whole project): X_A = X_S + R·(u, v, w), (u, v, w) the antenna
 //! phase centre in the camera frame, R camera → local ENU.
 

@@ -1,6 +1,10 @@
 //! Photographs beside the exposures: the photo list is matched to the events (counts and, where
 //! the images carry `DateTimeOriginal`, the rhythm of their intervals), and geotagged copies are
 //! written with the projection centres — originals are never modified.
+//!
+//! Enters: a folder of JPEG files and the camera stations. Leaves: the matched photo list (or
+//! why it does not match) and geotagged copies in another folder (WGS84 latitude, longitude,
+//! ellipsoidal height of the projection centre). Uses `little_exif`.
 
 use super::CameraStation;
 use gnss::error::{Error, Result};
@@ -12,8 +16,11 @@ use std::path::{Path, PathBuf};
 /// A photograph and the camera-clock time it was taken (seconds, camera time scale).
 #[derive(Clone, Debug)]
 pub struct Photo {
+    /// The file.
     pub path: PathBuf,
+    /// Its file name (becomes the station's label once matched).
     pub name: String,
+    /// EXIF `DateTimeOriginal` as seconds of the camera's clock (read as UTC), when present.
     pub taken: Option<f64>,
 }
 
@@ -48,10 +55,7 @@ fn exif_seconds(s: &str) -> Option<f64> {
 
 /// JPEG photographs of a folder, sorted by name, with their EXIF capture times.
 pub fn list(dir: &Path) -> Result<Vec<Photo>> {
-    let rd = std::fs::read_dir(dir).map_err(|source| Error::Io {
-        path: dir.to_path_buf(),
-        source,
-    })?;
+    let rd = std::fs::read_dir(dir).map_err(Error::io(dir))?;
     let mut out: Vec<Photo> = rd
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| {
@@ -143,10 +147,7 @@ pub fn geotag(
     stations: &[CameraStation],
     out_dir: &Path,
 ) -> Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(out_dir).map_err(|source| Error::Io {
-        path: out_dir.to_path_buf(),
-        source,
-    })?;
+    std::fs::create_dir_all(out_dir).map_err(Error::io(out_dir))?;
     let mut written = Vec::new();
     for (p, s) in photos.iter().zip(stations) {
         let dest = out_dir.join(&p.name);
@@ -156,10 +157,7 @@ pub fn geotag(
                 "refusing to overwrite an original photograph: choose another output folder",
             ));
         }
-        let io = |source| Error::Io {
-            path: dest.clone(),
-            source,
-        };
+        let io = Error::io(&dest);
         std::fs::copy(&p.path, &dest).map_err(io)?;
         let g = s.centre.to_geodetic();
         let mut m = Metadata::new_from_path(&dest).unwrap_or_else(|_| Metadata::new());

@@ -1,4 +1,5 @@
-//! The built-in flight scenarios: `demo`, `block20`, `long`.
+//! The built-in flight scenarios: `demo`, `block20`, `long` — the `demo` scenario as TOML,
+//! the others derived from it with more and longer strips. Leaves: a [`Scenario`].
 
 use super::Scenario;
 
@@ -59,4 +60,5 @@ pub fn builtin(name: &str) -> Option<Scenario> {
     Some(s)
 }
 
+/// Names of the built-in flight scenarios.
 pub const BUILTINS: [&str; 3] = ["demo", "block20", "long"];

@@ -1,6 +1,11 @@
 //! The photogrammetric side of a simulated flight: exposure times at a forward overlap,
 //! camera attitude and projection centres (lever arm X_A = X_S + R·(u, v, w)), ground points
 //! and noisy image observations with optional blunders.
+//!
+//! Enters: the [`Flight`], a [`CameraSpec`] and a random stream. Leaves: [`Exposure`]s,
+//! [`GroundPoint`]s and [`ImageObs`]. Everything is in the site's ENU frame (metres); the
+//! camera rotation R maps the camera frame (x along track, z up, looking down −z) into ENU
+//! and comes from yaw/pitch/roll through [`crate::exposure::attitude::from_yaw_pitch_roll`].
 
 use super::flight::{Flight, FlightState};
 use super::rng::Rng;
@@ -10,10 +15,13 @@ use nalgebra::{Matrix3, Vector3};
 /// Camera of the simulation (pinhole, principal point at the image centre).
 #[derive(Clone, Debug)]
 pub struct CameraSpec {
+    /// Principal distance, metres.
     pub focal: f64,
     /// Image size in pixels: x along the flight direction, y across it.
     pub width_px: usize,
+    /// Image size across the flight direction, pixels.
     pub height_px: usize,
+    /// Pixel size, metres.
     pub pixel: f64,
     /// Antenna phase centre in the camera frame.
     pub lever: photo::lever::LeverArm,
@@ -22,25 +30,33 @@ pub struct CameraSpec {
 /// One simulated exposure (true values, local ENU frame of the site).
 #[derive(Clone, Debug)]
 pub struct Exposure {
+    /// Number of the exposure, from 1 in flight order.
     pub id: usize,
+    /// Strip, from 0.
     pub strip: usize,
     /// Seconds from the start of the flight (true GPST).
     pub t: f64,
+    /// The aircraft at the exposure (its position is the antenna's).
     pub state: FlightState,
     /// Rotation camera → ENU.
     pub r: Matrix3<f64>,
+    /// Projection centre, ENU metres.
     pub centre: Vector3<f64>,
 }
 
 /// Kind of a ground point.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PointKind {
+    /// Ground control point.
     Gcp,
+    /// Check point (known, not used as control).
     Check,
+    /// Tie point (unknown).
     Tie,
 }
 
 impl PointKind {
+    /// The kind as the tables write it: `gcp`, `check`, `tie`.
     pub fn name(self) -> &'static str {
         match self {
             PointKind::Gcp => "gcp",
@@ -50,20 +66,29 @@ impl PointKind {
     }
 }
 
+/// A simulated ground point.
 #[derive(Clone, Debug)]
 pub struct GroundPoint {
+    /// Id: `G0001`, `C0001`, `T0001` …
     pub id: String,
+    /// Control, check or tie.
     pub kind: PointKind,
+    /// True position, ENU metres.
     pub enu: Vector3<f64>,
 }
 
 /// An image measurement (pixels, x right/along track, y down).
 #[derive(Clone, Debug)]
 pub struct ImageObs {
+    /// The exposure's id.
     pub image: usize,
+    /// The point's id.
     pub point: String,
+    /// Column, pixels from the left edge.
     pub x: f64,
+    /// Row, pixels from the top edge.
     pub y: f64,
+    /// σ of the measurement, pixels.
     pub sigma: f64,
     /// Size of an injected blunder, pixels (0 for good observations).
     pub blunder: f64,

@@ -5,6 +5,9 @@
 //!
 //! The simulator computes every satellite position from this file as read back by our own
 //! reader, so simulated observations and processing use the very same numbers.
+//!
+//! Enters: the GPST span of the flight and a seed. Leaves: the text of the navigation file
+//! (times of ephemeris every 2 h, GPST; angles radians; lengths metres as RINEX has them).
 
 use super::rng::Rng;
 use gnss::time::{from_week_tow, week_tow, WEEK_SECONDS};
@@ -12,10 +15,10 @@ use hifitime::Epoch;
 use std::f64::consts::PI;
 use std::fmt::Write;
 
-const OMEGA_E: f64 = 7.292_115_146_7e-5;
-
-/// Klobuchar parameters broadcast by the synthetic constellation (typical mid-activity values).
+/// Klobuchar α0–α3 broadcast by the synthetic constellation (typical mid-activity values;
+/// s, s/semicircle, s/semicircle², s/semicircle³).
 pub const KLOB_ALPHA: [f64; 4] = [1.1176e-08, 7.4506e-09, -5.9605e-08, -5.9605e-08];
+/// Klobuchar β0–β3 broadcast by the synthetic constellation (s, s/semicircle …).
 pub const KLOB_BETA: [f64; 4] = [9.0112e-04, 1.6384e+04, -1.9661e+05, -6.5536e+04];
 
 struct Sat {
@@ -116,7 +119,7 @@ pub fn navigation_text(start: Epoch, end: Epoch, seed: u64) -> String {
             let n = (sat.mu / sat.sqrt_a.powi(6)).sqrt();
             let m0 = (sat.m_ref + n * dt_ref).rem_euclid(2.0 * PI);
             // Ω(t) = RAAN − ωe·(t − t_ref): broadcast Ω0 refers to the record's week start.
-            let omega0 = (sat.raan - OMEGA_E * dweek).rem_euclid(2.0 * PI);
+            let omega0 = (sat.raan - gnss::frame::OMEGA_E * dweek).rem_euclid(2.0 * PI);
             let af0 = sat.af0 + sat.af1 * dt_ref;
             let _ = writeln!(
                 s,

@@ -2,6 +2,11 @@
 //! joined by half-circle turns at constant speed. Positions and velocities are analytic in a
 //! local east-north-up frame at the site; attitude follows the path (banked in turns) with a
 //! small smooth wobble.
+//!
+//! Enters: a [`FlightPlan`] (metres, m/s, radians, seconds) and a random stream (the wobble).
+//! Leaves: a [`Flight`] that gives the [`FlightState`] at any time since the start (seconds)
+//! and the time spans of the strips. Used by the simulator's GNSS observations, exposures and
+//! truth files.
 
 use super::rng::Rng;
 use nalgebra::Vector3;
@@ -40,23 +45,34 @@ struct Piece {
 /// State of the aircraft at a time: ENU position and velocity, attitude (radians).
 #[derive(Clone, Copy, Debug)]
 pub struct FlightState {
+    /// Antenna position, ENU metres.
     pub pos: Vector3<f64>,
+    /// Velocity, ENU m/s.
     pub vel: Vector3<f64>,
-    /// Yaw from north clockwise, pitch nose up, roll right wing down (NED body convention).
+    /// Yaw from north clockwise, radians (NED body convention).
     pub yaw: f64,
+    /// Pitch, nose up, radians.
     pub pitch: f64,
+    /// Roll, right wing down, radians.
     pub roll: f64,
 }
 
 /// Parameters of the path.
 #[derive(Clone, Debug)]
 pub struct FlightPlan {
+    /// Height of the strips above the site origin, metres.
     pub altitude: f64,
+    /// Speed, m/s.
     pub speed: f64,
+    /// Number of strips.
     pub strips: usize,
+    /// Length of each strip, metres (centred on the site).
     pub strip_length: f64,
+    /// Distance between strips, metres.
     pub strip_spacing: f64,
+    /// Direction of the first strip, radians clockwise from north.
     pub heading: f64,
+    /// Seconds on the ground before take-off.
     pub static_start: f64,
     /// Where the aircraft waits on the ground (ENU).
     pub start: Vector3<f64>,
@@ -71,6 +87,7 @@ pub struct Flight {
 }
 
 impl Flight {
+    /// The path of a plan; the attitude wobble is drawn from `rng`.
     pub fn new(p: &FlightPlan, rng: &mut Rng) -> Flight {
         let (sh, ch) = p.heading.sin_cos();
         let along = Vector3::new(sh, ch, 0.0); // heading from north, clockwise
@@ -157,6 +174,7 @@ impl Flight {
         }
     }
 
+    /// Seconds from the start to the end of the last strip.
     pub fn duration(&self) -> f64 {
         self.pieces.last().map(|p| p.t0 + p.dur).unwrap_or(0.0)
     }

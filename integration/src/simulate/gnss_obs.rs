@@ -2,10 +2,16 @@
 //! rotation, satellite and receiver clocks, troposphere, frequency-scaled ionosphere,
 //! elevation-dependent code and phase noise, multipath, integer ambiguities, cycle slips and
 //! data gaps — each switchable — and flag-5 event records at exposure times.
+//!
+//! Enters: a [`Receiver`] (true position as a function of true GPST, clock model, rate,
+//! event times), the ephemerides read back from the synthetic navigation file, its Klobuchar
+//! parameters and the [`ErrorModel`]. Leaves: the RINEX text (C, L, D, S on L1 and L2/E5a;
+//! time tags in receiver time = true time + clock offset) and [`ObsStats`]. Uses
+//! `gnss::orbit`, `gnss::model` and `gnss::frame`.
 
 use super::rng::Rng;
 use super::ErrorModel;
-use gnss::frame::{az_el, Ecef};
+use gnss::frame::{az_el, rotate_to_reception, Ecef};
 use gnss::model::{klobuchar_gps, troposphere};
 use gnss::orbit::{Ephemerides, C};
 use gnss::rinex::nav::Klobuchar;
@@ -16,7 +22,6 @@ use nalgebra::Vector3;
 use std::collections::HashMap;
 use std::fmt::Write as _;
 
-const OMEGA_E: f64 = 7.292_115_146_7e-5;
 const F1: f64 = 1575.42e6;
 /// Second frequency: GPS L2, Galileo E5a.
 fn f2(sys: Constellation) -> f64 {
@@ -31,13 +36,17 @@ const SIM_MASK_DEG: f64 = 5.0;
 
 /// A receiver to simulate.
 pub struct Receiver<'a> {
+    /// Marker name written in the header.
     pub name: &'a str,
     /// ECEF position at a true GPST time.
     pub pos: &'a dyn Fn(Epoch) -> Ecef,
     /// Clock offset (s) at the start and drift (s/s).
     pub clock: (f64, f64),
+    /// First epoch, receiver time (GPST).
     pub start: Epoch,
+    /// Last epoch (at most), receiver time (GPST).
     pub end: Epoch,
+    /// Observation interval, seconds.
     pub interval: f64,
     /// True times of external events (camera exposures), written as flag-5 records.
     pub events: &'a [Epoch],
@@ -48,27 +57,99 @@ pub struct Receiver<'a> {
 /// One satellite as observed (before formatting).
 #[derive(Clone, Copy, Debug)]
 pub struct SatObs {
+    /// The satellite.
     pub sv: Sv,
-    /// C1, L1 (cycles), D1 (Hz), S1, C2, L2, D2, S2.
+    /// C1 (m), L1 (cycles), D1 (Hz), S1 (dB-Hz), C2, L2, D2, S2.
     pub v: [f64; 8],
+    /// Loss-of-lock indicator of L1 and L2 (1: a slip before this epoch).
     pub lli: [u8; 2],
 }
 
 /// Per-satellite persistent state of a receiver.
 struct Track {
+    /// Integer ambiguities of L1 and L2, cycles.
     amb: [f64; 2],
+    /// Multipath phase (rad) and period (s).
     mp_phase: f64,
     mp_period: f64,
+}
+
+impl Track {
+    /// A satellite coming into view: random ambiguities (when simulated) and multipath.
+    fn new(err: &ErrorModel, rng: &mut Rng) -> Track {
+        Track {
+            amb: if err.ambiguities {
+                [
+                    (rng.uniform() * 2.0e6 - 1.0e6).round(),
+                    (rng.uniform() * 2.0e6 - 1.0e6).round(),
+                ]
+            } else {
+                [0.0, 0.0]
+            },
+            mp_phase: rng.range(0.0, 6.3),
+            mp_period: rng.range(200.0, 600.0),
+        }
+    }
 }
 
 /// What was simulated, for the report.
 #[derive(Clone, Debug, Default)]
 pub struct ObsStats {
+    /// Observation epochs written.
     pub epochs: usize,
+    /// Satellite records written.
     pub sat_records: usize,
+    /// Cycle slips injected.
     pub slips: usize,
+    /// Satellite records left out by injected gaps.
     pub gap_records: usize,
+    /// Size of the RINEX text, bytes.
     pub bytes: usize,
+}
+
+/// Cycle slips and data gaps of a receiver, drawn before the run.
+#[derive(Default)]
+struct Faults {
+    /// (epoch, satellite index, frequency).
+    slips: Vec<(usize, usize, usize)>,
+    /// (first epoch, length in epochs, satellite index).
+    gaps: Vec<(usize, usize, usize)>,
+}
+
+impl Faults {
+    /// The scenario's slips and gaps (5–30 s) at random epochs and satellites.
+    fn draw(
+        err: &ErrorModel,
+        interval: f64,
+        n_epochs: usize,
+        nsat: usize,
+        rng: &mut Rng,
+    ) -> Faults {
+        let mut f = Faults::default();
+        for _ in 0..err.cycle_slips {
+            f.slips.push((
+                (rng.uniform() * n_epochs as f64) as usize,
+                (rng.uniform() * nsat as f64) as usize,
+                (rng.uniform() * 2.0) as usize,
+            ));
+        }
+        for _ in 0..err.gaps {
+            let len = (rng.range(5.0, 30.0) / interval) as usize;
+            f.gaps.push((
+                (rng.uniform() * n_epochs as f64) as usize,
+                len,
+                (rng.uniform() * nsat as f64) as usize,
+            ));
+        }
+        f
+    }
+
+    /// Whether satellite `si` is in a gap at epoch `k`.
+    fn in_gap(&self, k: usize, si: usize) -> bool {
+        self.gaps
+            .iter()
+            .any(|&(s, len, gs)| gs == si && k >= s && k < s + len)
+    }
 }
 
 fn clock_at(rx: &Receiver, t: Epoch, on: bool) -> f64 {
@@ -93,11 +174,8 @@ pub fn geometry(
         let ttx = t - Duration::from_seconds(tau);
         let e = eph.select(sv, ttx)?;
         let s = e.compute(ttx);
-        let th = OMEGA_E * tau;
-        let (sn, cs) = th.sin_cos();
-        let rot = |v: Vector3<f64>| Vector3::new(cs * v.x + sn * v.y, -sn * v.x + cs * v.y, v.z);
-        let sp = rot(s.pos.0);
-        let sv_vel = rot(s.vel);
+        let sp = rotate_to_reception(&s.pos.0, tau);
+        let sv_vel = rotate_to_reception(&s.vel, tau);
         let d = sp - rx;
         let rho = d.norm();
         let rate = d.dot(&(sv_vel - rx_vel)) / rho;
@@ -116,90 +194,118 @@ pub fn simulate(
     rng: &Rng,
 ) -> (String, ObsStats) {
     let sats: Vec<Sv> = eph.satellites().copied().collect();
-    let mut rng_noise = rng.fork(1);
-    let mut rng_fault = rng.fork(2);
-    let mut tracks: HashMap<Sv, Track> = HashMap::new();
-    let mut stats = ObsStats::default();
     let n_epochs = ((rx.end - rx.start).to_seconds() / rx.interval).floor() as usize + 1;
-    // Faults: slips (epoch, satellite index, frequency) and gaps (start epoch, length, satellite).
-    let mut slips: Vec<(usize, usize, usize)> = Vec::new();
-    let mut gaps: Vec<(usize, usize, usize)> = Vec::new();
-    if rx.faults {
-        for _ in 0..err.cycle_slips {
-            slips.push((
-                (rng_fault.uniform() * n_epochs as f64) as usize,
-                (rng_fault.uniform() * sats.len() as f64) as usize,
-                (rng_fault.uniform() * 2.0) as usize,
-            ));
-        }
-        for _ in 0..err.gaps {
-            let len = (rng_fault.range(5.0, 30.0) / rx.interval) as usize;
-            gaps.push((
-                (rng_fault.uniform() * n_epochs as f64) as usize,
-                len,
-                (rng_fault.uniform() * sats.len() as f64) as usize,
-            ));
-        }
-    }
+    let mut rng_fault = rng.fork(2);
+    let faults = if rx.faults {
+        Faults::draw(err, rx.interval, n_epochs, sats.len(), &mut rng_fault)
+    } else {
+        Faults::default()
+    };
+    let mut sim = Sim {
+        rx,
+        eph,
+        klob,
+        err,
+        sats,
+        tracks: HashMap::new(),
+        rng_noise: rng.fork(1),
+        rng_fault,
+        faults,
+        stats: ObsStats::default(),
+    };
     let mut body = String::with_capacity(n_epochs * 600);
-    let mut events: Vec<Epoch> = rx
-        .events
-        .iter()
-        .map(|t| *t + Duration::from_seconds(clock_at(rx, *t, err.receiver_clock)))
-        .collect();
-    events.sort();
+    let events = event_tags(rx, err);
     let mut ev_i = 0;
     let mut first_pos = None;
     for k in 0..n_epochs {
         let tag = rx.start + Duration::from_seconds(k as f64 * rx.interval);
         // Event records that fall before this epoch's tag.
         while ev_i < events.len() && events[ev_i] < tag {
-            let _ = writeln!(body, "> {}  5  0", epoch_fields(events[ev_i]));
+            write_event(&mut body, events[ev_i]);
             ev_i += 1;
         }
+        let (p, recs) = sim.epoch(k, tag);
+        first_pos.get_or_insert(p);
+        sim.stats.epochs += 1;
+        sim.stats.sat_records += recs.len();
+        write_epoch(&mut body, tag, &recs);
+    }
+    for &e in &events[ev_i..] {
+        write_event(&mut body, e);
+    }
+    let header = header(rx, first_pos.unwrap_or(Ecef::new(0.0, 0.0, 0.0)));
+    let text = header + &body;
+    let mut stats = sim.stats;
+    stats.bytes = text.len();
+    (text, stats)
+}
+
+/// The receiver's event times as tags in receiver time (true time + clock offset), sorted.
+fn event_tags(rx: &Receiver, err: &ErrorModel) -> Vec<Epoch> {
+    let mut events: Vec<Epoch> = rx
+        .events
+        .iter()
+        .map(|t| *t + Duration::from_seconds(clock_at(rx, *t, err.receiver_clock)))
+        .collect();
+    events.sort();
+    events
+}
+
+/// One receiver's simulation in progress.
+struct Sim<'a> {
+    rx: &'a Receiver<'a>,
+    eph: &'a Ephemerides,
+    klob: &'a Klobuchar,
+    err: &'a ErrorModel,
+    /// Every satellite of the ephemerides, in order (faults refer to their indices).
+    sats: Vec<Sv>,
+    /// Satellites in view and their state.
+    tracks: HashMap<Sv, Track>,
+    /// Noise, ambiguities and multipath.
+    rng_noise: Rng,
+    /// Slip sizes (and, before the run, the faults).
+    rng_fault: Rng,
+    faults: Faults,
+    stats: ObsStats,
+}
+
+impl Sim<'_> {
+    /// Epoch `k` with receiver time tag `tag`: the receiver's true position (ECEF) and the
+    /// observations of every satellite above the tracking mask and outside a gap.
+    fn epoch(&mut self, k: usize, tag: Epoch) -> (Ecef, Vec<SatObs>) {
+        let (rx, err) = (self.rx, self.err);
         let dtr = clock_at(rx, tag, err.receiver_clock);
         let t = tag - Duration::from_seconds(dtr);
         let p = (rx.pos)(t);
         let p2 = (rx.pos)(t + Duration::from_seconds(0.01));
         let vel = (p2.0 - p.0) / 0.01;
-        first_pos.get_or_insert(p);
         let g = p.to_geodetic();
         let (_, tow) = week_tow(t);
         let mut recs: Vec<SatObs> = Vec::new();
-        for (si, &sv) in sats.iter().enumerate() {
-            if gaps
-                .iter()
-                .any(|&(s, len, gs)| gs == si && k >= s && k < s + len)
-            {
-                stats.gap_records += 1;
+        for (si, &sv) in self.sats.iter().enumerate() {
+            if self.faults.in_gap(k, si) {
+                self.stats.gap_records += 1;
                 continue;
             }
-            let Some((rho, rate, dts, dts_rate, sp)) = geometry(eph, sv, t, &p.0, &vel) else {
+            let Some((rho, rate, dts, dts_rate, sp)) = geometry(self.eph, sv, t, &p.0, &vel) else {
                 continue;
             };
             let (az, el) = az_el(&p, &g, &Ecef(sp));
             if el < SIM_MASK_DEG.to_radians() {
-                tracks.remove(&sv);
+                self.tracks.remove(&sv);
                 continue;
             }
-            let tr = tracks.entry(sv).or_insert_with(|| Track {
-                amb: if err.ambiguities {
-                    [
-                        (rng_noise.uniform() * 2.0e6 - 1.0e6).round(),
-                        (rng_noise.uniform() * 2.0e6 - 1.0e6).round(),
-                    ]
-                } else {
-                    [0.0, 0.0]
-                },
-                mp_phase: rng_noise.range(0.0, 6.3),
-                mp_period: rng_noise.range(200.0, 600.0),
-            });
+            let rng_noise = &mut self.rng_noise;
+            let tr = self
+                .tracks
+                .entry(sv)
+                .or_insert_with(|| Track::new(err, rng_noise));
             let mut lli = [0u8; 2];
-            for &(s, gs, f) in &slips {
+            for &(s, gs, f) in &self.faults.slips {
                 if s == k && gs == si {
-                    tr.amb[f] += rng_fault.range(1.0, 20.0).round();
+                    tr.amb[f] += self.rng_fault.range(1.0, 20.0).round();
                     lli[f] |= 1;
-                    stats.slips += 1;
+                    self.stats.slips += 1;
                 }
             }
             let trop = if err.troposphere {
@@ -208,17 +314,9 @@ pub fn simulate(
                 0.0
             };
             let i1 = if err.ionosphere {
-                klobuchar_gps(klob, &g, az, el, tow)
+                klobuchar_gps(self.klob, &g, az, el, tow)
             } else {
                 0.0
-            };
-            let se = el.sin();
-            let noise = |sigma: f64, r: &mut Rng| {
-                if sigma > 0.0 {
-                    sigma * (0.5 + 0.5 / se) * r.normal()
-                } else {
-                    0.0
-                }
             };
             let ts = (t - rx.start).to_seconds();
             let mp = if err.multipath {
@@ -227,52 +325,99 @@ pub fn simulate(
             } else {
                 0.0
             };
-            let base = rho + C * (dtr - dts);
-            let rate_all = rate + C * (err.receiver_clock as u8 as f64 * rx.clock.1 - dts_rate);
-            let mut v = [0.0; 8];
-            for (f, freq) in [F1, f2(sv.sys)].into_iter().enumerate() {
-                let lam = C / freq;
-                let i = i1 * (F1 / freq).powi(2);
-                let code = base + trop + i + 0.5 * mp + noise(err.code_noise, &mut rng_noise);
-                let phase = base + trop - i + 0.005 * mp + noise(err.phase_noise, &mut rng_noise);
-                v[4 * f] = code;
-                v[4 * f + 1] = phase / lam + tr.amb[f];
-                v[4 * f + 2] = -rate_all / lam
-                    + if err.code_noise > 0.0 {
-                        0.02 * rng_noise.normal()
-                    } else {
-                        0.0
-                    };
-                v[4 * f + 3] = (30.0 + 20.0 * se).round();
-            }
+            let signal = Signal {
+                base: rho + C * (dtr - dts),
+                rate: rate + C * (err.receiver_clock as u8 as f64 * rx.clock.1 - dts_rate),
+                trop,
+                i1,
+                mp,
+                el,
+            };
+            let v = signal.observables(sv.sys, &tr.amb, err, &mut self.rng_noise);
             recs.push(SatObs { sv, v, lli });
         }
-        stats.epochs += 1;
-        stats.sat_records += recs.len();
-        let _ = writeln!(body, "> {}  0{:3}", epoch_fields(tag), recs.len());
-        for r in &recs {
-            let _ = write!(body, "{}", r.sv);
-            let ssi = char::from(b'0' + ((r.v[3].min(54.0) / 6.0) as u8).clamp(1, 9));
-            for (j, val) in r.v.iter().enumerate() {
-                let lli = match j {
-                    1 if r.lli[0] > 0 => char::from(b'0' + r.lli[0]),
-                    5 if r.lli[1] > 0 => char::from(b'0' + r.lli[1]),
-                    _ => ' ',
-                };
-                let ssi = if j % 4 < 2 { ssi } else { ' ' };
-                let _ = write!(body, "{val:14.3}{lli}{ssi}");
+        (p, recs)
+    }
+}
+
+/// What a satellite's signals carry at one epoch, before noise.
+struct Signal {
+    /// Range plus receiver minus satellite clock, metres.
+    base: f64,
+    /// Range rate plus clock rates, m/s.
+    rate: f64,
+    /// Slant troposphere, metres.
+    trop: f64,
+    /// Ionosphere delay on L1, metres.
+    i1: f64,
+    /// Multipath factor (code gets 0.5 m of it, phase 5 mm).
+    mp: f64,
+    /// Elevation, radians.
+    el: f64,
+}
+
+impl Signal {
+    /// Code (m), phase (cycles, with the ambiguities `amb`), Doppler (Hz) and SNR (dB-Hz) on
+    /// L1 and the system's second frequency, with elevation-dependent noise drawn from `rng`.
+    fn observables(
+        &self,
+        sys: Constellation,
+        amb: &[f64; 2],
+        err: &ErrorModel,
+        rng: &mut Rng,
+    ) -> [f64; 8] {
+        let se = self.el.sin();
+        let noise = |sigma: f64, r: &mut Rng| {
+            if sigma > 0.0 {
+                sigma * (0.5 + 0.5 / se) * r.normal()
+            } else {
+                0.0
             }
-            body.push('\n');
+        };
+        let (base, trop, mp) = (self.base, self.trop, self.mp);
+        let mut v = [0.0; 8];
+        for (f, freq) in [F1, f2(sys)].into_iter().enumerate() {
+            let lam = C / freq;
+            let i = self.i1 * (F1 / freq).powi(2);
+            let code = base + trop + i + 0.5 * mp + noise(err.code_noise, rng);
+            let phase = base + trop - i + 0.005 * mp + noise(err.phase_noise, rng);
+            v[4 * f] = code;
+            v[4 * f + 1] = phase / lam + amb[f];
+            v[4 * f + 2] = -self.rate / lam
+                + if err.code_noise > 0.0 {
+                    0.02 * rng.normal()
+                } else {
+                    0.0
+                };
+            v[4 * f + 3] = (30.0 + 20.0 * se).round();
         }
+        v
     }
-    while ev_i < events.len() {
-        let _ = writeln!(body, "> {}  5  0", epoch_fields(events[ev_i]));
-        ev_i += 1;
+}
+
+/// A flag-5 (external event) record at receiver time `t`.
+fn write_event(body: &mut String, t: Epoch) {
+    let _ = writeln!(body, "> {}  5  0", epoch_fields(t));
+}
+
+/// An observation epoch: the epoch line, then one line per satellite (SSI from the SNR on
+/// code and phase, LLI on the phases).
+fn write_epoch(body: &mut String, tag: Epoch, recs: &[SatObs]) {
+    let _ = writeln!(body, "> {}  0{:3}", epoch_fields(tag), recs.len());
+    for r in recs {
+        let _ = write!(body, "{}", r.sv);
+        let ssi = char::from(b'0' + ((r.v[3].min(54.0) / 6.0) as u8).clamp(1, 9));
+        for (j, val) in r.v.iter().enumerate() {
+            let lli = match j {
+                1 if r.lli[0] > 0 => char::from(b'0' + r.lli[0]),
+                5 if r.lli[1] > 0 => char::from(b'0' + r.lli[1]),
+                _ => ' ',
+            };
+            let ssi = if j % 4 < 2 { ssi } else { ' ' };
+            let _ = write!(body, "{val:14.3}{lli}{ssi}");
+        }
+        body.push('\n');
     }
-    let header = header(rx, first_pos.unwrap_or(Ecef::new(0.0, 0.0, 0.0)));
-    let text = header + &body;
-    stats.bytes = text.len();
-    (text, stats)
 }
 
 /// `yyyy mm dd hh mm ss.sssssss` as RINEX 3 epoch lines have it (seconds F11.7).

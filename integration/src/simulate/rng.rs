@@ -1,11 +1,14 @@
 //! A small deterministic random generator (SplitMix64 + Box–Muller). Our own rather than the
-//! `rand` crate so that a seed gives bit-identical files whatever the crate versions.
+//! `rand` crate so that a seed gives bit-identical files whatever the crate versions. Enters:
+//! a seed; leaves: uniform and normal numbers, and independent streams ([`Rng::fork`]) for
+//! each purpose of the simulator.
 
 /// Deterministic pseudo-random numbers.
 #[derive(Clone, Debug)]
 pub struct Rng(u64);
 
 impl Rng {
+    /// The stream of a seed.
     pub fn new(seed: u64) -> Self {
         Rng(seed ^ 0x9E37_79B9_7F4A_7C15)
     }
@@ -16,6 +19,7 @@ impl Rng {
         r.next_u64();
         r
     }
+    /// The next 64 random bits.
     pub fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
@@ -27,6 +31,7 @@ impl Rng {
     pub fn uniform(&mut self) -> f64 {
         (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
     }
+    /// Uniform in [a, b).
     pub fn range(&mut self, a: f64, b: f64) -> f64 {
         a + (b - a) * self.uniform()
     }

@@ -1,67 +1,96 @@
 //! Simulated photogrammetric blocks with known truth, written as a ready-to-run `ppkat adjust`
 //! project: an aerial block flown in strips (the classic 2-strip test block, or a large one
 //! for benchmarks) with GNSS antenna positions carrying a lever arm, a drift and correlated
-//! noise; or a close-range pair of terrestrial stations. Deterministic per seed.
+//! noise; the close-range pair of terrestrial stations is in [`super::closerange`].
+//! Deterministic per seed.
+//!
+//! Enters: a [`BlockSpec`] and a folder. Leaves: `project.toml`, `images.csv`,
+//! `image_observations.csv`, `ground_points.csv`, `antennas.csv` (written by
+//! [`crate::exposure::export::antenna_table`]) and `trajectory.pos` in the folder, and the
+//! [`BlockTruth`]. Uses `photo` (camera, rotations, lever arm) and `gnss` (frames, time,
+//! `.pos`); read back by [`crate::adjust`]. This module simulates; `files` writes the tables.
 //!
 //! Frame: ENU tangent plane at the site (`lat`, `lon`, `ground_h`); files carry geodetic
-//! coordinates, so the adjustment sees only what a user would give it.
+//! coordinates, so the adjustment sees only what a user would give it. Times are GPST
+//! seconds from the GPS epoch (week 0).
+
+mod files;
 
 use super::rng::Rng;
 use super::{write, SimError};
-use crate::exposure::export::{antenna_table, AntennaRow};
-use gnss::frame::{enu_rotation, Enu, Geodetic};
-use nalgebra::{Matrix3, Vector2, Vector3};
+pub(super) use files::{geodetic, write_ground_points};
+use files::{images_table, measurements_table, project_toml, write_antennas};
+use gnss::frame::Geodetic;
+use nalgebra::{Vector2, Vector3};
 use photo::camera::{Camera, Pose};
 use photo::rotation::{rot_z, Angles};
-use std::fmt::Write as _;
 use std::path::Path;
 
 /// An aerial block.
 #[derive(Clone, Debug)]
 pub struct BlockSpec {
+    /// Project name.
     pub name: String,
+    /// Seed of every random draw.
     pub seed: u64,
+    /// Latitude of the origin (first image of the first strip), degrees.
     pub lat_deg: f64,
+    /// Longitude of the origin, degrees.
     pub lon_deg: f64,
+    /// Ellipsoidal height of the origin (the mean terrain), metres.
     pub ground_h: f64,
+    /// Nominal principal distance, mm.
     pub focal_mm: f64,
     /// Square format side, mm.
     pub format_mm: f64,
+    /// Pixel size, µm.
     pub pixel_um: f64,
     /// Photo scale denominator (flying height = scale · f).
     pub scale: f64,
+    /// Forward overlap of consecutive images (0–1).
     pub forward_overlap: f64,
+    /// Side overlap of neighbouring strips (0–1).
     pub side_overlap: f64,
     /// Photos in each strip (alternate strips are flown in opposite directions).
     pub strips: Vec<usize>,
+    /// Ground speed, m/s.
     pub speed: f64,
     /// Time between strips (turn), seconds.
     pub turn_s: f64,
     /// Terrain relief amplitude, m.
     pub relief: f64,
+    /// σ of each of ω, φ, κ away from a level photo, degrees.
     pub tilt_sigma_deg: f64,
+    /// σ of an image measurement, µm.
     pub sigma_image_um: f64,
     /// Tie points per image on average.
     pub ties_per_image: usize,
+    /// Check points.
     pub checks: usize,
     /// Four corner control points.
     pub corner_gcps: bool,
+    /// σ of the control coordinates (E, N, U), metres (E and U are used: σ_xy, σ_z).
     pub gcp_sigma: [f64; 3],
-    /// GNSS antenna σ per axis (E, N, U) and the E–N, E–U, N–U correlations.
+    /// GNSS antenna σ per axis (E, N, U), metres.
     pub gnss_sigma: [f64; 3],
+    /// GNSS antenna correlations E–N, E–U, N–U.
     pub gnss_corr: [f64; 3],
     /// Lever arm (u, v, w), camera frame, m.
     pub lever_arm: [f64; 3],
-    /// Drift a + b·(t − t_first) over the whole block, m and m/s.
+    /// Drift a + b·(t − t_first) over the whole block: a (E, N, U), m.
     pub drift_a: [f64; 3],
+    /// Drift rate b (E, N, U), m/s.
     pub drift_b: [f64; 3],
+    /// Gross errors injected in tie-point measurements (60 µm and up).
     pub image_blunders: usize,
     /// A control point with a wrong coordinate: shift (E, N, U) in metres.
     pub wrong_gcp: Option<[f64; 3]>,
     /// The true camera differs from the nominal one written to the project: principal
-    /// distance (mm), principal point (mm), radial k1 (1/m²) — for self-calibration.
+    /// distance offset (mm) — for self-calibration.
     pub true_focal_delta_mm: f64,
+    /// True principal point (x0, y0), mm.
     pub true_principal_point_mm: [f64; 2],
+    /// True radial distortion k1, 1/m².
     pub true_k1: f64,
     /// An ambiguity re-fix in the trajectory: from this image on (in flight order) the
     /// antenna positions carry this extra offset (m) and a new segment id.
@@ -137,15 +166,19 @@ impl BlockSpec {
 /// What the simulation knows.
 #[derive(Clone, Debug)]
 pub struct BlockTruth {
+    /// Origin of the ENU frame of the poses and points.
     pub origin: Geodetic,
     /// Image id, strip, pose (ENU at the origin), GPST seconds.
     pub images: Vec<(String, usize, Pose, f64)>,
     /// Point id, kind (gcp|check|tie), ENU.
     pub points: Vec<(String, &'static str, Vector3<f64>)>,
+    /// GPST seconds of the first exposure (the drift's reference time).
     pub t_first: f64,
     /// (image, point) of every blundered measurement.
     pub blunders: Vec<(String, String)>,
+    /// The control point given the wrong coordinate, if any.
     pub wrong_gcp: Option<String>,
+    /// Image measurements written.
     pub measurements: usize,
 }
 
@@ -153,31 +186,127 @@ fn terrain(relief: f64, x: f64, y: f64) -> f64 {
     relief * (0.6 * (x / 1700.0).sin() * (y / 1300.0).cos() + 0.4 * ((x + y) / 2900.0).sin())
 }
 
+/// An image of a simulated block: id, strip (from 0), pose (ENU at the origin), GPST seconds.
+type Image = (String, usize, Pose, f64);
+
+/// A ground point: id, kind (`gcp`, `check` or `tie`), ENU at the origin.
+pub(super) type Point = (String, &'static str, Vector3<f64>);
+
+/// An image measurement: image index, point index, image coordinates (m).
+type Measurement = (usize, usize, Vector2<f64>);
+
+/// GPST seconds of the first exposure of a block.
+const T_FIRST: f64 = 1_400_000_000.0 + 3600.0 * 3.0;
+
+/// The block's layout in metres, from the spec.
+struct Layout {
+    /// Square format side.
+    fmt: f64,
+    /// Ground footprint of an image side.
+    foot: f64,
+    /// Air base (distance between exposures along a strip).
+    base: f64,
+    /// Distance between strips.
+    spacing: f64,
+    /// Flying height above the origin.
+    height: f64,
+}
+
+impl Layout {
+    fn of(spec: &BlockSpec) -> Layout {
+        let f = spec.focal_mm * 1e-3;
+        let fmt = spec.format_mm * 1e-3;
+        let foot = spec.scale * fmt;
+        Layout {
+            fmt,
+            foot,
+            base: foot * (1.0 - spec.forward_overlap),
+            spacing: foot * (1.0 - spec.side_overlap),
+            height: spec.scale * f,
+        }
+    }
+
+    /// Along-track extent of the longest strip and across-track extent of the block.
+    fn extent(&self, spec: &BlockSpec) -> (f64, f64) {
+        let xmax = (spec
+            .strips
+            .iter()
+            .copied()
+            .max()
+            .unwrap_or(1)
+            .saturating_sub(1)) as f64
+            * self.base;
+        let ymax = (spec.strips.len().saturating_sub(1)) as f64 * self.spacing;
+        (xmax, ymax)
+    }
+}
+
 /// Simulate the block and write the project (`project.toml` and its tables) into `dir`.
 pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
     let mut rng = Rng::new(spec.seed);
-    let f = spec.focal_mm * 1e-3;
-    let fmt = spec.format_mm * 1e-3;
     let npx = (spec.format_mm * 1e3 / spec.pixel_um).round() as usize;
-    let nominal = Camera::ideal(f, spec.pixel_um * 1e-6, npx, npx);
-    let mut cam = nominal;
+    let nominal = Camera::ideal(spec.focal_mm * 1e-3, spec.pixel_um * 1e-6, npx, npx);
+    let cam = true_camera(spec, &nominal);
+    let layout = Layout::of(spec);
+    let origin = Geodetic::from_degrees(spec.lat_deg, spec.lon_deg, spec.ground_h);
+    let images = fly_strips(spec, &layout, &mut rng);
+    let points = place_points(spec, &layout, images.len(), &mut rng);
+    let (mut meas, count) = measure(spec, &layout, &cam, &images, &points, &mut rng);
+    let blunders = inject_blunders(spec, &mut meas, &count, &images, &points, &mut rng);
+    write(dir, "images.csv", &images_table(&images))?;
+    write(
+        dir,
+        "image_observations.csv",
+        &measurements_table(spec, &nominal, &meas, &images, &points),
+    )?;
+    let control = points
+        .iter()
+        .enumerate()
+        .filter(|(k, p)| p.1 != "tie" && count[*k] >= 2)
+        .map(|(_, p)| p);
+    let wrong = write_ground_points(
+        dir,
+        control,
+        (spec.gcp_sigma[0], spec.gcp_sigma[2]),
+        spec.wrong_gcp,
+        &origin,
+        &mut rng,
+    )?;
+    write_antennas(spec, dir, &images, &origin, layout.base, &mut rng)?;
+    write(dir, "project.toml", &project_toml(spec, npx))?;
+    let measurements = meas.len();
+    Ok(BlockTruth {
+        origin,
+        images,
+        points,
+        t_first: T_FIRST,
+        blunders,
+        wrong_gcp: wrong,
+        measurements,
+    })
+}
+
+/// The camera the images are simulated with: the nominal one with the spec's true principal
+/// distance, principal point and k1.
+fn true_camera(spec: &BlockSpec, nominal: &Camera) -> Camera {
+    let mut cam = *nominal;
     cam.f += spec.true_focal_delta_mm * 1e-3;
     cam.x0 = spec.true_principal_point_mm[0] * 1e-3;
     cam.y0 = spec.true_principal_point_mm[1] * 1e-3;
     cam.k[0] = spec.true_k1;
-    let hgt = spec.scale * f;
-    let foot = spec.scale * fmt;
-    let base = foot * (1.0 - spec.forward_overlap);
-    let spacing = foot * (1.0 - spec.side_overlap);
-    let origin = Geodetic::from_degrees(spec.lat_deg, spec.lon_deg, spec.ground_h);
-    let t_first = 1_400_000_000.0 + 3600.0 * 3.0;
-    let mut t = t_first;
+    cam
+}
+
+/// The exposures strip by strip (alternate strips flown west), each with a random tilt and
+/// a few metres of position noise, timed at the spec's speed with a turn between strips.
+fn fly_strips(spec: &BlockSpec, layout: &Layout, rng: &mut Rng) -> Vec<Image> {
+    let mut t = T_FIRST;
     let mut images = Vec::new();
     for (s, &n) in spec.strips.iter().enumerate() {
         let east = s % 2 == 0;
         for k in 0..n {
             let i = if east { k } else { n - 1 - k };
-            let (x, y) = (i as f64 * base, s as f64 * spacing);
+            let (x, y) = (i as f64 * layout.base, s as f64 * layout.spacing);
             let heading = if east { 0.0 } else { std::f64::consts::PI };
             let sd = spec.tilt_sigma_deg.to_radians();
             let tilt = Angles::OmegaPhiKappa {
@@ -186,28 +315,27 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
                 kappa: sd * rng.normal(),
             }
             .matrix();
-            let z = hgt + spec.ground_h * 0.0 + 3.0 * rng.normal();
+            let z = layout.height + spec.ground_h * 0.0 + 3.0 * rng.normal();
             let pose = Pose {
                 r: rot_z(heading) * tilt,
                 centre: Vector3::new(x + 2.0 * rng.normal(), y + 2.0 * rng.normal(), z),
             };
             images.push((format!("{}{:02}", s + 1, i + 1), s, pose, t));
-            t += base / spec.speed;
+            t += layout.base / spec.speed;
         }
         t += spec.turn_s;
     }
-    let xmax = (spec
-        .strips
-        .iter()
-        .copied()
-        .max()
-        .unwrap_or(1)
-        .saturating_sub(1)) as f64
-        * base;
-    let ymax = (spec.strips.len().saturating_sub(1)) as f64 * spacing;
+    images
+}
+
+/// Ground points on the terrain: four corner control points (when asked), check points over
+/// the block, tie points a little beyond it.
+fn place_points(spec: &BlockSpec, layout: &Layout, n_images: usize, rng: &mut Rng) -> Vec<Point> {
+    let (xmax, ymax) = layout.extent(spec);
+    let (foot, base) = (layout.foot, layout.base);
     // Across the outer strips: 90 % of the measurable half-width.
-    let margin = 0.9 * spec.scale * (fmt / 2.0 - 0.005);
-    let mut points: Vec<(String, &'static str, Vector3<f64>)> = Vec::new();
+    let margin = 0.9 * spec.scale * (layout.fmt / 2.0 - 0.005);
+    let mut points: Vec<Point> = Vec::new();
     let ground = |x: f64, y: f64| Vector3::new(x, y, terrain(spec.relief, x, y));
     if spec.corner_gcps {
         let inset = 0.06 * foot;
@@ -233,7 +361,7 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
         );
         points.push((format!("C{}", k + 1), "check", ground(x, y)));
     }
-    let n_ties = spec.ties_per_image * images.len() / 3;
+    let n_ties = spec.ties_per_image * n_images / 3;
     for k in 0..n_ties {
         let (x, y) = (
             rng.range(-0.4 * foot, xmax + 0.4 * foot),
@@ -241,10 +369,22 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
         );
         points.push((format!("T{}", k + 1), "tie", ground(x, y)));
     }
-    // Measurements.
+    points
+}
+
+/// Noisy image coordinates of every point inside the measurable format (5 mm from the edge),
+/// keeping points seen at least twice; also how often each point was seen.
+fn measure(
+    spec: &BlockSpec,
+    layout: &Layout,
+    cam: &Camera,
+    images: &[Image],
+    points: &[Point],
+    rng: &mut Rng,
+) -> (Vec<Measurement>, Vec<usize>) {
     let sig = spec.sigma_image_um * 1e-6;
-    let lim = fmt / 2.0 - 0.005;
-    let mut meas: Vec<(usize, usize, Vector2<f64>)> = Vec::new();
+    let lim = layout.fmt / 2.0 - 0.005;
+    let mut meas: Vec<Measurement> = Vec::new();
     for (i, im) in images.iter().enumerate() {
         for (k, p) in points.iter().enumerate() {
             if let Some(xy) = cam.project(&im.2, &p.2) {
@@ -254,12 +394,24 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
             }
         }
     }
-    // Keep points seen at least twice.
     let mut count = vec![0usize; points.len()];
     for m in &meas {
         count[m.1] += 1;
     }
     meas.retain(|m| count[m.1] >= 2);
+    (meas, count)
+}
+
+/// Gross errors of 60, 75, 90 … µm on tie-point measurements of points seen at least four
+/// times; returns (image, point) of each.
+fn inject_blunders(
+    spec: &BlockSpec,
+    meas: &mut [Measurement],
+    count: &[usize],
+    images: &[Image],
+    points: &[Point],
+    rng: &mut Rng,
+) -> Vec<(String, String)> {
     let mut blunders = Vec::new();
     for b in 0..spec.image_blunders {
         let ties: Vec<usize> = (0..meas.len())
@@ -274,155 +426,7 @@ pub fn aerial(spec: &BlockSpec, dir: &Path) -> Result<BlockTruth, SimError> {
         meas[j].2 += Vector2::new(a.cos(), a.sin()) * size;
         blunders.push((images[meas[j].0].0.clone(), points[meas[j].1].0.clone()));
     }
-    let g_ecef = |v: &Vector3<f64>| Enu(*v).to_ecef(&origin.to_ecef()).to_geodetic();
-    // Tables.
-    let mut s = String::from("image,camera,strip,week,tow\n");
-    for im in &images {
-        let (week, tow) = gnss::time::week_tow(gnss::time::from_week_tow(0, im.3));
-        let _ = writeln!(s, "{},cam,{},{week},{tow:.6}", im.0, im.1 + 1);
-    }
-    write(dir, "images.csv", &s)?;
-    let mut s = String::from("image,point,x_px,y_px,sigma_px\n");
-    for (i, k, xy) in &meas {
-        let px = nominal.image_to_pixel(*xy);
-        let _ = writeln!(
-            s,
-            "{},{},{:.3},{:.3},{}",
-            images[*i].0,
-            points[*k].0,
-            px.x,
-            px.y,
-            spec.sigma_image_um / spec.pixel_um
-        );
-    }
-    write(dir, "image_observations.csv", &s)?;
-    let mut s = String::from("point,kind,lat,lon,h,sigma_xy,sigma_z\n");
-    let mut wrong = None;
-    for (id, kind, x) in &points {
-        if *kind == "tie" || count[points.iter().position(|p| &p.0 == id).unwrap_or(0)] < 2 {
-            continue;
-        }
-        let mut v = *x;
-        let (sx, sz) = (spec.gcp_sigma[0], spec.gcp_sigma[2]);
-        if *kind == "gcp" {
-            v += Vector3::new(sx * rng.normal(), sx * rng.normal(), sz * rng.normal());
-            if let (Some(d), None) = (spec.wrong_gcp, &wrong) {
-                v += Vector3::from(d);
-                wrong = Some(id.clone());
-            }
-        }
-        let g = g_ecef(&v);
-        let _ = writeln!(
-            s,
-            "{id},{kind},{:.10},{:.10},{:.4},{sx},{sz}",
-            g.lat.to_degrees(),
-            g.lon.to_degrees(),
-            g.h
-        );
-    }
-    write(dir, "ground_points.csv", &s)?;
-    // GNSS antennas.
-    let [se, sn, su] = spec.gnss_sigma;
-    let [ren, reu, rnu] = spec.gnss_corr;
-    let cov = Matrix3::new(
-        se * se,
-        ren * se * sn,
-        reu * se * su,
-        ren * se * sn,
-        sn * sn,
-        rnu * sn * su,
-        reu * se * su,
-        rnu * sn * su,
-        su * su,
-    );
-    let l = cov
-        .cholesky()
-        .map(|c| c.l())
-        .unwrap_or_else(|| Matrix3::from_diagonal(&Vector3::from(spec.gnss_sigma)));
-    let mut rows = Vec::new();
-    let mut track: Vec<gnss::solution::PosRecord> = Vec::new();
-    for (k, im) in images.iter().enumerate() {
-        let dt = im.3 - t_first;
-        let mut drift = Vector3::from(spec.drift_a) + Vector3::from(spec.drift_b) * dt;
-        let segment = match spec.segment_jump {
-            Some((from, jump)) if k >= from => {
-                drift += Vector3::from(jump);
-                1
-            }
-            _ => 0,
-        };
-        let noise = l * Vector3::new(rng.normal(), rng.normal(), rng.normal());
-        let lever = photo::lever::LeverArm::new(Vector3::from(spec.lever_arm));
-        let a = lever.antenna(&im.2.centre, &im.2.r) + drift + noise;
-        let g = g_ecef(&a);
-        // Noise drawn in the site ENU: express the covariance in the ENU at the antenna.
-        let ra = enu_rotation(&g);
-        let m = ra * enu_rotation(&origin).transpose();
-        let c = m * cov * m.transpose();
-        let time = gnss::time::from_week_tow(0, im.3);
-        let rec = gnss::solution::PosRecord {
-            time,
-            pos: g.to_ecef(),
-            quality: gnss::solution::Quality::Fixed,
-            nsat: 12,
-            cov: ra.transpose() * c * ra,
-            age: 0.0,
-            ratio: 99.0,
-        };
-        // Through the turns: epochs every base/speed seconds on the straight line (their
-        // positions matter to nobody, they keep the trajectory free of gaps).
-        if let Some(prev) = track.last().cloned() {
-            let gap = (rec.time - prev.time).to_seconds();
-            let step = base / spec.speed;
-            let n = (gap / step).floor() as usize;
-            for j in 1..n {
-                let f = j as f64 / n as f64;
-                let mut mid = prev.clone();
-                mid.time = prev.time + hifitime::Duration::from_seconds(gap * f);
-                mid.pos = gnss::frame::Ecef(prev.pos.0 * (1.0 - f) + rec.pos.0 * f);
-                track.push(mid);
-            }
-        }
-        track.push(rec);
-        rows.push(AntennaRow {
-            id: &im.0,
-            time,
-            pos: g,
-            cov_enu: c,
-            quality: 1,
-            segment,
-            opk_deg: None,
-        });
-    }
-    write(
-        dir,
-        "antennas.csv",
-        &antenna_table(
-            "simulated: antenna = centre + R*lever + drift + noise",
-            &rows,
-        ),
-    )?;
-    gnss::solution::write_pos(
-        &dir.join("trajectory.pos"),
-        &["program   : ppkat simulate (block antenna trajectory)".to_string()],
-        &track,
-        gnss::solution::PosFormat::Llh,
-    )?;
-    let project = format!(
-        "name = \"{}\"\noutput = \"utm\"\n\n[[camera]]\nid = \"cam\"\nfocal_mm = {}\npixel_um = {}\nwidth_px = {npx}\nheight_px = {npx}\nsigma_px = {}\n{}\n[images]\nlist = \"images.csv\"\nmeasurements = \"image_observations.csv\"\n\n[ground]\nfile = \"ground_points.csv\"\n\n{}",
-        spec.name, spec.focal_mm, spec.pixel_um, spec.sigma_image_um / spec.pixel_um, spec.camera_options, spec.project_options
-    );
-    write(dir, "project.toml", &project)?;
-    let measurements = meas.len();
-    Ok(BlockTruth {
-        origin,
-        images,
-        points,
-        t_first,
-        blunders,
-        wrong_gcp: wrong,
-        measurements,
-    })
+    blunders
 }
 
 /// How far the simulated tape measurement of the lever arm is off truth (m).
