@@ -61,8 +61,7 @@ pub fn fails(dir: &std::path::Path) -> String {
         &dir.join("out"),
         &Default::default(),
     )
-    .err()
-    .expect("must fail");
+    .expect_err("must fail");
     assert!(
         !dir.join("out/report.json").exists(),
         "no output on failure"

@@ -19,15 +19,14 @@ fn self_calibration_recovers_the_camera() {
     let (_, cal) = run(&spec, "selfcal-on");
     let i = &cal.interiors[0];
     let truth = [0.152030, 0.000015, -0.000010, 6.5e-3];
-    for k in 0..4 {
-        let z = (i.values[k] - truth[k]) / i.sigmas[k];
+    for (k, t) in truth.iter().enumerate() {
+        let z = (i.values[k] - t) / i.sigmas[k];
         assert!(
             z.abs() < 3.0,
-            "{}: {} ± {} (truth {})",
+            "{}: {} ± {} (truth {t})",
             i.labels[k],
             i.values[k],
             i.sigmas[k],
-            truth[k]
         );
     }
     let rms3 = |r: &Results| (r.checks.rms.iter().map(|x| x * x).sum::<f64>()).sqrt();
