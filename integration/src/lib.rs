@@ -1,3 +1,4 @@
+#![deny(missing_docs)]
 //! # integration — where the GNSS and photogrammetric halves meet
 //!
 //! Everything that needs both `gnss` and `photo`; the `ppkat` binary calls one function of it
