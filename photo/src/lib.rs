@@ -17,7 +17,7 @@
 //!
 //! Conventions (see the house plan): R maps the camera frame into the object frame; image
 //! coordinates are metric with x right, y up, origin at the image centre; a rotation step is a
-//! left perturbation R ← exp([δ]×)·R.
+//! left perturbation R ← exp(\[δ\]×)·R.
 
 pub mod bal;
 pub mod camera;

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 /// folder: rover.obs (10 Hz, flag-5 events at the exposures), base.obs, nav.rnx (a synthetic
 /// constellation), truth_trajectory.csv, truth_exposures.csv, ground_points.csv,
 /// image_observations.csv and truth_blunders.csv. The scenario keys are shown in
-/// fixtures/scenario_small.toml; every error source can be switched under [errors].
+/// fixtures/scenario_small.toml; every error source can be switched under `[errors]`.
 ///
 /// An adjustment project (--builtin classic-block, close-range or block1000: the classic
 /// 2-strip 1:8000 block, a close-range pair, a 1000-image block) writes project.toml and its
