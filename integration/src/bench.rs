@@ -112,6 +112,8 @@ pub struct AdjustBench {
     pub sigma0: f64,
     /// Peak resident set size of the process, KiB (None where unknown).
     pub peak_rss_kib: Option<u64>,
+    /// The solver's timed stages: what, how many times, seconds in all.
+    pub stages: Vec<(&'static str, usize, f64)>,
 }
 
 impl std::fmt::Display for AdjustBench {
@@ -126,6 +128,13 @@ impl std::fmt::Display for AdjustBench {
             "simulated in {:.2} s; adjusted (snooping, variance components, statistics, reports) in {:.2} s; σ0 {:.3}",
             self.simulate_s, self.adjust_s, self.sigma0
         )?;
+        for (what, n, s) in &self.stages {
+            writeln!(
+                f,
+                "  {what}: {n} × {:.2} s on average, {s:.2} s in all",
+                s / *n as f64
+            )?;
+        }
         writeln!(f, "peak RSS {}", mib(self.peak_rss_kib))
     }
 }
@@ -145,6 +154,13 @@ pub fn adjust(
     let simulate_s = t0.elapsed().as_secs_f64();
     let t1 = std::time::Instant::now();
     let r = crate::adjust::run(&dir.join("project.toml"), &dir.join("out"), opts)?;
+    let mut stages: Vec<(&'static str, usize, f64)> = Vec::new();
+    for t in &r.timings {
+        match stages.iter_mut().find(|s| s.0 == t.what) {
+            Some(s) => (s.1, s.2) = (s.1 + 1, s.2 + t.seconds),
+            None => stages.push((t.what, 1, t.seconds)),
+        }
+    }
     Ok(AdjustBench {
         images: r.images.len(),
         points: r.points.len(),
@@ -154,5 +170,6 @@ pub fn adjust(
         adjust_s: t1.elapsed().as_secs_f64(),
         sigma0: r.sigma0,
         peak_rss_kib: peak_rss_kib(),
+        stages,
     })
 }

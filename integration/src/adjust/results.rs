@@ -169,6 +169,10 @@ pub struct Results {
     pub distance_residuals: Vec<DistanceResidual>,
     /// What the user should know (inputs left out, float positions …).
     pub warnings: Vec<String>,
+    /// The solver's timed stages (solves, cofactor computations), for benchmarks; not
+    /// written to the reports (their bytes must not depend on the machine).
+    #[serde(skip)]
+    pub timings: Vec<photo::lsq::Timing>,
 }
 
 /// σ of ω, φ, κ from the covariance of the rotation's left perturbation (first 3×3 of the
@@ -317,6 +321,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         gnss_residuals: res.gnss,
         distance_residuals: res.distance,
         warnings: warnings(p, b),
+        timings: pr.take_timings(),
     })
 }
 
