@@ -5,19 +5,6 @@
 
 use super::slots::Slots;
 
-/// An eliminated block and what touches it, as it is gathered.
-#[derive(Clone, Debug, Default)]
-pub(crate) struct EDraft {
-    pub block: usize,
-    pub dim: usize,
-    pub terms: Vec<(usize, usize)>,
-    pub nbrs: Vec<usize>,
-    pub links: Vec<Vec<(usize, usize, usize)>>,
-    pub woff: Vec<usize>,
-    pub wlen: usize,
-    pub pairs: Vec<(usize, usize, usize)>,
-}
-
 /// A factor touching an eliminated block: the factor, the offsets of its Jacobian of the
 /// block and of its residual, its residual dimension, and the range of its links (reduced
 /// blocks of the same factor) in `Structure::elinks`.
@@ -69,95 +56,93 @@ pub(crate) struct Flat {
     pub pairs: Vec<(usize, usize, usize)>,
 }
 
-/// The drafts packed into flat arrays, with the buffer layout.
-pub(crate) fn pack(
-    drafts: Vec<EDraft>,
+/// The eliminated blocks (`(block, dim)` in order) with their terms, neighbours, links and
+/// buffer layout, gathered straight into flat arrays (pairs come later, with the pattern).
+pub(crate) fn gather(
+    blocks: &[(usize, usize)],
+    slots: &Slots,
     m: &[usize],
     base: &[usize],
 ) -> (Vec<EBlock>, Flat, ESizes) {
-    let mut f = Flat::default();
+    // Terms bucketed by eliminated block, each bucket in factor order.
+    let mut count = vec![0usize; blocks.len() + 1];
+    for ss in slots.iter() {
+        for s in ss.iter().filter(|s| s.joff.is_some()) {
+            if let Some(e) = s.e {
+                count[e + 1] += 1;
+            }
+        }
+    }
+    for i in 1..count.len() {
+        count[i] += count[i - 1];
+    }
+    let mut at = count.clone();
+    let mut raw = vec![(0usize, 0usize); count[blocks.len()]];
+    for (f, ss) in slots.iter().enumerate() {
+        for s in ss {
+            if let (Some(e), Some(j)) = (s.e, s.joff) {
+                raw[at[e]] = (f, j);
+                at[e] += 1;
+            }
+        }
+    }
+    let mut fl = Flat::default();
     let mut sizes = ESizes::default();
-    let range = |v: usize, n: usize| (v, v + n);
-    let blocks = drafts
-        .into_iter()
-        .map(|d| {
-            let t0 = f.terms.len();
-            for (&(fa, jo), l) in d.terms.iter().zip(&d.links) {
-                let links = range(f.links.len(), l.len());
-                f.links.extend_from_slice(l);
-                f.terms.push(ETerm {
-                    f: fa,
+    let mut nbrs: Vec<(usize, usize)> = Vec::new();
+    let eblocks = blocks
+        .iter()
+        .enumerate()
+        .map(|(e, &(block, dim))| {
+            let terms = &raw[count[e]..count[e + 1]];
+            nbrs.clear();
+            for &(f, _) in terms {
+                nbrs.extend(slots.get(f).iter().filter_map(|s| s.c.map(|c| (c, s.dim))));
+            }
+            nbrs.sort_unstable();
+            nbrs.dedup();
+            let t0 = fl.terms.len();
+            for &(f, jo) in terms {
+                let l0 = fl.links.len();
+                for s in slots.get(f) {
+                    if let (Some(c), Some(j)) = (s.c, s.joff) {
+                        let ni = nbrs.partition_point(|n| n.0 < c);
+                        fl.links.push((j, s.dim, ni));
+                    }
+                }
+                let links = (l0, fl.links.len());
+                fl.terms.push(ETerm {
+                    f,
                     jo,
-                    ro: base[fa],
-                    m: m[fa],
+                    ro: base[f],
+                    m: m[f],
                     links,
                 });
             }
+            let n0 = fl.nbrs.len();
+            let mut wlen = 0;
+            for &(c, d) in &nbrs {
+                fl.nbrs.push(c);
+                fl.woff.push(wlen);
+                wlen += dim * d;
+            }
             let eb = EBlock {
-                block: d.block,
-                dim: d.dim,
-                terms: (t0, f.terms.len()),
-                nbrs: range(f.nbrs.len(), d.nbrs.len()),
-                pairs: range(f.pairs.len(), d.pairs.len()),
-                wlen: d.wlen,
+                block,
+                dim,
+                terms: (t0, fl.terms.len()),
+                nbrs: (n0, fl.nbrs.len()),
+                pairs: (0, 0),
+                wlen,
                 wbase: sizes.w,
                 vbase: sizes.v,
                 gbase: sizes.g,
             };
-            f.nbrs.extend_from_slice(&d.nbrs);
-            f.woff.extend_from_slice(&d.woff);
-            f.pairs.extend_from_slice(&d.pairs);
-            sizes.w += d.wlen;
-            sizes.v += d.dim * d.dim;
-            sizes.g += d.dim;
+            sizes.w += wlen;
+            sizes.v += dim * dim;
+            sizes.g += dim;
             eb
         })
         .collect();
-    (blocks, f, sizes)
-}
-
-/// Terms, neighbours and W layout of every eliminated block.
-pub(crate) fn link_eliminated(eblocks: &mut [EDraft], slots: &Slots) {
-    for (f, ss) in slots.iter().enumerate() {
-        for s in ss {
-            if let (Some(e), Some(j)) = (s.e, s.joff) {
-                eblocks[e].terms.push((f, j));
-            }
-        }
-    }
-    for eb in eblocks.iter_mut() {
-        let mut nbrs: Vec<(usize, usize)> = eb
-            .terms
-            .iter()
-            .flat_map(|&(f, _)| slots.get(f).iter().filter_map(|s| s.c.map(|c| (c, s.dim))))
-            .collect();
-        nbrs.sort_unstable();
-        nbrs.dedup();
-        eb.links = eb
-            .terms
-            .iter()
-            .map(|&(f, _)| {
-                slots
-                    .get(f)
-                    .iter()
-                    .filter_map(|s| {
-                        let (c, j) = (s.c?, s.joff?);
-                        Some((j, s.dim, nbrs.iter().position(|n| n.0 == c)?))
-                    })
-                    .collect()
-            })
-            .collect();
-        let mut at = 0;
-        eb.woff = nbrs
-            .iter()
-            .map(|&(_, d)| {
-                at += eb.dim * d;
-                at - eb.dim * d
-            })
-            .collect();
-        eb.wlen = at;
-        eb.nbrs = nbrs.into_iter().map(|n| n.0).collect();
-    }
+    (eblocks, fl, sizes)
 }
 
 /// Ranges of eliminated blocks summed separately: one per 50 000 block products (`work`), up

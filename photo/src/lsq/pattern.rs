@@ -1,7 +1,7 @@
 //! The block pattern of the reduced system: which lower blocks each row stores and where,
 //! and every factor's direct terms (Jₐᵀ·r and Jₐᵀ·J_b) with the offsets they add to.
 
-use super::elim::EDraft;
+use super::elim::{EBlock, Flat};
 use super::slots::Slots;
 
 /// One block row of the reduced system: where its lower blocks are stored.
@@ -49,7 +49,12 @@ pub(crate) struct Direct {
 
 /// The lower block pattern of the reduced system, every direct term of each row, and where
 /// each eliminated block's products go.
-pub(crate) fn rows(cdim: &[usize], slots: &Slots, eblocks: &mut [EDraft]) -> (Vec<Row>, usize) {
+pub(crate) fn rows(
+    cdim: &[usize],
+    slots: &Slots,
+    eblocks: &mut [EBlock],
+    fl: &mut Flat,
+) -> (Vec<Row>, usize) {
     let nc = cdim.len();
     // Column blocks of each row.
     let mut cols: Vec<Vec<usize>> = (0..nc).map(|r| vec![r]).collect();
@@ -61,8 +66,9 @@ pub(crate) fn rows(cdim: &[usize], slots: &Slots, eblocks: &mut [EDraft]) -> (Ve
         }
     }
     for eb in eblocks.iter() {
-        for (i, &a) in eb.nbrs.iter().enumerate() {
-            cols[a].extend_from_slice(&eb.nbrs[..i]);
+        let nbrs = &fl.nbrs[eb.nbrs.0..eb.nbrs.1];
+        for (i, &a) in nbrs.iter().enumerate() {
+            cols[a].extend_from_slice(&nbrs[..i]);
         }
     }
     let mut rows: Vec<Row> = Vec::with_capacity(nc);
@@ -87,11 +93,14 @@ pub(crate) fn rows(cdim: &[usize], slots: &Slots, eblocks: &mut [EDraft]) -> (Ve
         start += at;
     }
     for eb in eblocks.iter_mut() {
-        for (ia, &a) in eb.nbrs.iter().enumerate() {
-            for (ib, &b) in eb.nbrs[..=ia].iter().enumerate() {
-                eb.pairs.push((ia, ib, entry(&rows, a, b)));
+        let p0 = fl.pairs.len();
+        let nbrs = &fl.nbrs[eb.nbrs.0..eb.nbrs.1];
+        for (ia, &a) in nbrs.iter().enumerate() {
+            for (ib, &b) in nbrs[..=ia].iter().enumerate() {
+                fl.pairs.push((ia, ib, entry(&rows, a, b)));
             }
         }
+        eb.pairs = (p0, fl.pairs.len());
     }
     (rows, start)
 }

@@ -9,7 +9,7 @@
 //! each row is assembled by its own task, summing its terms in a fixed order (factors in
 //! order, then eliminated blocks in order), so the result does not depend on the threads.
 
-use super::elim::{chunks, link_eliminated, pack, EBlock, EDraft, ESizes, ETerm};
+use super::elim::{chunks, gather, EBlock, ESizes, ETerm};
 use super::key::KeyKind;
 use super::model::Model;
 use super::pattern::{direct_terms, rows, Direct, Grad, Pair, Row};
@@ -159,11 +159,7 @@ impl Model {
             n += v.dim();
             if elim[b] {
                 eidx[b] = Some(eblocks.len());
-                eblocks.push(EDraft {
-                    block: b,
-                    dim: v.dim(),
-                    ..EDraft::default()
-                });
+                eblocks.push((b, v.dim()));
             } else {
                 cidx[b] = Some(cblocks.len());
                 cblocks.push(b);
@@ -200,15 +196,13 @@ impl Model {
             })
             .collect();
         let nres = m.iter().sum();
-        link_eliminated(&mut eblocks, &slots);
-        let (rows, nvals) = rows(&cdim, &slots, &mut eblocks);
+        let (mut eblocks, mut flat, esizes) = gather(&eblocks, &slots, &m, &base);
+        let (rows, nvals) = rows(&cdim, &slots, &mut eblocks, &mut flat);
         let (direct, grads, pairs) = direct_terms(&cdim, &coff, &slots, &m, &base, &rows);
         let tail: Vec<usize> = (0..active.len())
             .filter(|&k| slots.get(k).iter().all(|s| s.e.is_none()))
             .collect();
-        let work: usize = eblocks.iter().map(|e| e.pairs.len()).sum();
-        let chunks = chunks(eblocks.len(), work, nvals + nr);
-        let (eblocks, flat, esizes) = pack(eblocks, &m, &base);
+        let chunks = chunks(eblocks.len(), flat.pairs.len(), nvals + nr);
         Structure {
             hash,
             active,
