@@ -10,8 +10,8 @@
 //! write `ppkat adjust` inputs instead of GNSS files.
 //!
 //! Shared by the parts, each importing none of its users: `error` ([`SimError`]), `io` (the
-//! file writer), `scenario` (the schema, [`ErrorModel`] among it) and `site` (the ENU frame).
-//! This module only runs a scenario from them.
+//! file writer), `scenario` (the schema, [`ErrorModel`] among it), `site` (the ENU frame) and
+//! `ground_points`. This module only runs a scenario from them.
 //!
 //! Frames and time: positions are built in the east-north-up frame at the site and written in
 //! ECEF or geodetic coordinates; true times are GPST, receiver time tags are true time plus the
@@ -26,6 +26,7 @@ pub mod constellation;
 mod error;
 pub mod flight;
 pub mod gnss_obs;
+mod ground_points;
 mod io;
 pub mod rng;
 mod scenario;
