@@ -12,12 +12,16 @@
 //!   state; then partial fixing drops the newest, then the lowest satellite.
 //! - Fixed position: x_pos − Q_pos,a·Q_a⁻¹·(a − ǎ), covariance P_pos − Q_pos,a·Q_a⁻¹·Q_a,pos.
 //! - Fix-and-hold: the float state is constrained to D·x = ǎ with variance `hold_variance`.
+//!
+//! What enters: the filter state (read only), the options and the epoch's pairs. What leaves:
+//! a [`Fix`] (or none) and the best ratio tried, from [`resolve`]; [`hold`] constrains the
+//! state. The filter calls both; this module does not know the filter.
 
 use super::dd::DdGroup;
-use super::filter::{Filter, Pair};
 use super::lambda::lambda;
-use super::measure::has_phase;
-use super::state::{AmbKey, StateKey};
+use super::options::PpkOptions;
+use super::pair::{has_phase, Pair};
+use super::state::{AmbKey, State, StateKey};
 use crate::sv::{Constellation, Sv};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use std::collections::BTreeMap;
@@ -113,182 +117,189 @@ fn constrain(
     true
 }
 
-impl Filter<'_> {
-    /// The ambiguities that may be fixed this epoch, in state order.
-    fn candidates(&self, pairs: &[Pair]) -> Vec<Candidate> {
-        let o = self.opts;
-        let mut cands = Vec::new();
-        for (state, s) in self.state.sats() {
-            let StateKey::Ambiguity(amb) = s.key else {
-                continue;
-            };
-            if amb.sv.sys == Constellation::Glonass || s.track.lock < o.min_lock {
-                continue;
-            }
-            let Some(p) = pairs
-                .iter()
-                .find(|p| p.r.sv == amb.sv && has_phase(p, amb.slot))
-            else {
-                continue;
-            };
-            if p.el >= o.ar_elev_mask {
-                cands.push(Candidate {
-                    state,
-                    amb,
-                    elevation: p.el,
-                    lock: s.track.lock,
-                    arc: s.track.arc,
-                });
-            }
+/// The ambiguities that may be fixed this epoch, in state order.
+fn candidates(st: &State, o: &PpkOptions, pairs: &[Pair]) -> Vec<Candidate> {
+    let mut cands = Vec::new();
+    for (state, s) in st.sats() {
+        let StateKey::Ambiguity(amb) = s.key else {
+            continue;
+        };
+        if amb.sv.sys == Constellation::Glonass || s.track.lock < o.min_lock {
+            continue;
         }
-        cands
+        let Some(p) = pairs
+            .iter()
+            .find(|p| p.r.sv == amb.sv && has_phase(p, amb.slot))
+        else {
+            continue;
+        };
+        if p.el >= o.ar_elev_mask {
+            cands.push(Candidate {
+                state,
+                amb,
+                elevation: p.el,
+                lock: s.track.lock,
+                arc: s.track.arc,
+            });
+        }
     }
+    cands
+}
 
-    /// Offsets of the position block.
-    fn position_range(&self) -> Range<usize> {
-        self.state
-            .index()
-            .range(StateKey::Position)
-            .expect("the position block exists")
+/// Offsets of the position block.
+fn position_range(st: &State) -> Range<usize> {
+    st.index()
+        .range(StateKey::Position)
+        .expect("the position block exists")
+}
+
+/// LAMBDA on the groups' DDs; the fix when the ratio test passes. Records the best ratio
+/// seen in `best_ratio`.
+fn try_fix(
+    st: &State,
+    o: &PpkOptions,
+    best_ratio: &mut Option<f64>,
+    x: &DVector<f64>,
+    p: &DMatrix<f64>,
+    groups: Vec<DdGroup<Candidate>>,
+) -> Option<Fix> {
+    let d = dd_operator(&groups, x.len());
+    let m = d.nrows();
+    let a = &d * x;
+    let q = &d * p * d.transpose();
+    let q = (&q + q.transpose()) * 0.5;
+    let c = lambda(a.as_slice(), q.as_slice(), 2)?;
+    let ratio = c.ratio().min(999.9);
+    *best_ratio = Some(best_ratio.map_or(ratio, |r: f64| r.max(ratio)));
+    if ratio < o.ratio_threshold {
+        return None;
     }
+    let fix = DVector::from_vec(c.fixes[0].clone());
+    let pos = position_range(st);
+    let (p0, n) = (pos.start, pos.len());
+    let qxa = p.rows(p0, n) * d.transpose();
+    let ch = q.cholesky()?;
+    let x_fixed = x.rows(p0, n) - &qxa * ch.solve(&(&a - &fix));
+    let cov = p.view((p0, p0), (n, n)) - &qxa * ch.solve(&qxa.transpose());
+    Some(Fix {
+        position: Vector3::new(x_fixed[0], x_fixed[1], x_fixed[2]),
+        covariance: Matrix3::from_fn(|i, j| cov[(i, j)]),
+        ratio,
+        n_fixed: m,
+        dd_operator: d,
+        integers: fix,
+        groups,
+    })
+}
 
-    /// LAMBDA on the groups' DDs; the fix when the ratio test passes. Records the best ratio
-    /// seen.
-    fn try_fix(
-        &mut self,
-        x: &DVector<f64>,
-        p: &DMatrix<f64>,
-        groups: Vec<DdGroup<Candidate>>,
-    ) -> Option<Fix> {
-        let d = dd_operator(&groups, x.len());
-        let m = d.nrows();
-        let a = &d * x;
-        let q = &d * p * d.transpose();
-        let q = (&q + q.transpose()) * 0.5;
-        let c = lambda(a.as_slice(), q.as_slice(), 2)?;
-        let ratio = c.ratio().min(999.9);
-        self.last_ratio = Some(self.last_ratio.map_or(ratio, |r: f64| r.max(ratio)));
-        if ratio < self.opts.ratio_threshold {
+/// Wide-lane (slot 0 − slot 1) double differences fixed on a copy of the state.
+fn widelane(
+    st: &State,
+    o: &PpkOptions,
+    cands: &[Candidate],
+) -> Option<(DVector<f64>, DMatrix<f64>)> {
+    let n = st.x.len();
+    let mut rows: Vec<[(usize, f64); 4]> = Vec::new();
+    for sys in Constellation::ALL {
+        // Satellites of this system with both slot-0 and slot-1 candidates.
+        let both: Vec<(Candidate, Candidate)> = cands
+            .iter()
+            .filter(|c| c.amb.sv.sys == sys && c.amb.slot == 0)
+            .filter_map(|c1| {
+                cands
+                    .iter()
+                    .find(|c2| c2.amb.sv == c1.amb.sv && c2.amb.slot == 1)
+                    .map(|c2| (*c1, *c2))
+            })
+            .collect();
+        let Some(g) = DdGroup::form(0, both, |(c1, _)| c1.elevation) else {
+            continue;
+        };
+        let (r1, r2) = g.pivot;
+        for (s1, s2) in &g.others {
+            rows.push([
+                (s1.state, 1.0),
+                (s2.state, -1.0),
+                (r1.state, -1.0),
+                (r2.state, 1.0),
+            ]);
+        }
+    }
+    if rows.len() < o.min_fix_ambiguities {
+        return None;
+    }
+    let mut d = DMatrix::zeros(rows.len(), n);
+    for (i, row) in rows.iter().enumerate() {
+        for (k, v) in row {
+            d[(i, *k)] = *v;
+        }
+    }
+    let (x, p) = (&st.x, &st.p);
+    let a = &d * x;
+    let q = &d * p * d.transpose();
+    let q = (&q + q.transpose()) * 0.5;
+    let c = lambda(a.as_slice(), q.as_slice(), 2)?;
+    if c.ratio() < o.ratio_threshold {
+        return None;
+    }
+    let (mut x, mut p) = (x.clone(), p.clone());
+    let z = DVector::from_vec(c.fixes[0].clone());
+    constrain(&mut x, &mut p, &d, &z, o.hold_variance).then_some((x, p))
+}
+
+/// Resolve the ambiguities of this epoch on the filter state `st`: full set, wide lane
+/// first, then partial sets. `best_ratio` is set to the best ratio tried (None when no
+/// set was tried).
+pub(super) fn resolve(
+    st: &State,
+    o: &PpkOptions,
+    pairs: &[Pair],
+    best_ratio: &mut Option<f64>,
+) -> Option<Fix> {
+    let cands = candidates(st, o, pairs);
+    let (mut x, mut p) = (st.x.clone(), st.p.clone());
+    let mut excluded: Vec<Sv> = Vec::new();
+    let mut widelane_tried = o.nf < 2;
+    *best_ratio = None;
+    let mut attempt = 0;
+    while attempt <= o.max_partial_drops {
+        let groups = dd_groups(&cands, &excluded, o.mature_lock);
+        let n_dd: usize = groups.iter().map(|g| g.others.len()).sum();
+        if n_dd < o.min_fix_ambiguities {
             return None;
         }
-        let fix = DVector::from_vec(c.fixes[0].clone());
-        let pos = self.position_range();
-        let (p0, n) = (pos.start, pos.len());
-        let qxa = p.rows(p0, n) * d.transpose();
-        let ch = q.cholesky()?;
-        let x_fixed = x.rows(p0, n) - &qxa * ch.solve(&(&a - &fix));
-        let cov = p.view((p0, p0), (n, n)) - &qxa * ch.solve(&qxa.transpose());
-        Some(Fix {
-            position: Vector3::new(x_fixed[0], x_fixed[1], x_fixed[2]),
-            covariance: Matrix3::from_fn(|i, j| cov[(i, j)]),
-            ratio,
-            n_fixed: m,
-            dd_operator: d,
-            integers: fix,
-            groups,
-        })
-    }
-
-    /// Wide-lane (slot 0 − slot 1) double differences fixed on a copy of the state.
-    fn widelane(&mut self, cands: &[Candidate]) -> Option<(DVector<f64>, DMatrix<f64>)> {
-        let n = self.state.x.len();
-        let mut rows: Vec<[(usize, f64); 4]> = Vec::new();
-        for sys in Constellation::ALL {
-            // Satellites of this system with both slot-0 and slot-1 candidates.
-            let both: Vec<(Candidate, Candidate)> = cands
-                .iter()
-                .filter(|c| c.amb.sv.sys == sys && c.amb.slot == 0)
-                .filter_map(|c1| {
-                    cands
-                        .iter()
-                        .find(|c2| c2.amb.sv == c1.amb.sv && c2.amb.slot == 1)
-                        .map(|c2| (*c1, *c2))
-                })
-                .collect();
-            let Some(g) = DdGroup::form(0, both, |(c1, _)| c1.elevation) else {
-                continue;
-            };
-            let (r1, r2) = g.pivot;
-            for (s1, s2) in &g.others {
-                rows.push([
-                    (s1.state, 1.0),
-                    (s2.state, -1.0),
-                    (r1.state, -1.0),
-                    (r2.state, 1.0),
-                ]);
-            }
-        }
-        if rows.len() < self.opts.min_fix_ambiguities {
-            return None;
-        }
-        let mut d = DMatrix::zeros(rows.len(), n);
-        for (i, row) in rows.iter().enumerate() {
-            for (k, v) in row {
-                d[(i, *k)] = *v;
-            }
-        }
-        let (x, p) = (&self.state.x, &self.state.p);
-        let a = &d * x;
-        let q = &d * p * d.transpose();
-        let q = (&q + q.transpose()) * 0.5;
-        let c = lambda(a.as_slice(), q.as_slice(), 2)?;
-        if c.ratio() < self.opts.ratio_threshold {
-            return None;
-        }
-        let (mut x, mut p) = (x.clone(), p.clone());
-        let z = DVector::from_vec(c.fixes[0].clone());
-        constrain(&mut x, &mut p, &d, &z, self.opts.hold_variance).then_some((x, p))
-    }
-
-    /// Resolve the ambiguities of this epoch: full set, wide lane first, then partial sets.
-    pub(super) fn resolve(&mut self, pairs: &[Pair]) -> Option<Fix> {
-        let o = self.opts;
-        let cands = self.candidates(pairs);
-        let (mut x, mut p) = (self.state.x.clone(), self.state.p.clone());
-        let mut excluded: Vec<Sv> = Vec::new();
-        let mut widelane_tried = o.nf < 2;
-        self.last_ratio = None;
-        let mut attempt = 0;
-        while attempt <= o.max_partial_drops {
-            let groups = dd_groups(&cands, &excluded, o.mature_lock);
-            let n_dd: usize = groups.iter().map(|g| g.others.len()).sum();
-            if n_dd < o.min_fix_ambiguities {
+        if let Some(f) = try_fix(st, o, best_ratio, &x, &p, groups) {
+            // A partial fix that leaves the position at several centimetres is no fix:
+            // the solution stays float rather than claim what it does not have.
+            if !excluded.is_empty() && f.covariance.trace().sqrt() > o.max_partial_fix_sigma {
                 return None;
             }
-            if let Some(f) = self.try_fix(&x, &p, groups) {
-                // A partial fix that leaves the position at several centimetres is no fix:
-                // the solution stays float rather than claim what it does not have.
-                if !excluded.is_empty() && f.covariance.trace().sqrt() > o.max_partial_fix_sigma {
-                    return None;
-                }
-                return Some(f);
-            }
-            if !widelane_tried {
-                widelane_tried = true;
-                if let Some((xw, pw)) = self.widelane(&cands) {
-                    (x, p) = (xw, pw);
-                    continue;
-                }
-            }
-            // Partial fixing: drop the newest, then the lowest satellite.
-            let worst = cands
-                .iter()
-                .filter(|c| !excluded.contains(&c.sv()))
-                .min_by(|a, b| {
-                    let ka = (a.lock >= o.mature_lock, a.elevation);
-                    let kb = (b.lock >= o.mature_lock, b.elevation);
-                    ka.partial_cmp(&kb).unwrap_or(std::cmp::Ordering::Equal)
-                })?;
-            excluded.push(worst.sv());
-            attempt += 1;
+            return Some(f);
         }
-        None
+        if !widelane_tried {
+            widelane_tried = true;
+            if let Some((xw, pw)) = widelane(st, o, &cands) {
+                (x, p) = (xw, pw);
+                continue;
+            }
+        }
+        // Partial fixing: drop the newest, then the lowest satellite.
+        let worst = cands
+            .iter()
+            .filter(|c| !excluded.contains(&c.sv()))
+            .min_by(|a, b| {
+                let ka = (a.lock >= o.mature_lock, a.elevation);
+                let kb = (b.lock >= o.mature_lock, b.elevation);
+                ka.partial_cmp(&kb).unwrap_or(std::cmp::Ordering::Equal)
+            })?;
+        excluded.push(worst.sv());
+        attempt += 1;
     }
+    None
+}
 
-    /// Fix-and-hold: constrain the float ambiguities to the fixed integers.
-    pub(super) fn hold(&mut self, fix: &Fix) {
-        let var = self.opts.hold_variance;
-        let s = &mut self.state;
-        constrain(&mut s.x, &mut s.p, &fix.dd_operator, &fix.integers, var);
-    }
+/// Fix-and-hold: constrain the float ambiguities of `st` to the fixed integers with
+/// variance `var` (cycles²).
+pub(super) fn hold(st: &mut State, fix: &Fix, var: f64) {
+    constrain(&mut st.x, &mut st.p, &fix.dd_operator, &fix.integers, var);
 }

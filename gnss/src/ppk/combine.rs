@@ -4,7 +4,7 @@
 //! two fixes within 4σ and 5 cm of each other, or a fix inside the 4σ ellipsoid of the other
 //! pass's float solution. Otherwise it is float (covariance-weighted mean of the two).
 
-use super::filter::EpochSol;
+use super::output::EpochSol;
 use crate::frame::Ecef;
 use crate::solution::Quality;
 use nalgebra::Matrix3;

@@ -22,20 +22,22 @@
 //! 8. resolution: the float solution, replaced by the fixed one when the integers pass;
 //!    the epoch's ambiguity segment ([`super::segment`]).
 
+use super::ar;
 use super::geometry::{tropo, SatView};
-use super::measure::{self, GateReason, ObsKind};
+use super::measure::{self, ObsKind};
 use super::obs::{SatMeas, NF};
+use super::options::{ArMode, PpkOptions};
+use super::output::{EpochSol, PassStats};
+use super::pair::{observes, Pair};
 use super::segment::{FixedIntegers, SegmentTracker};
 use super::slip::{SlipCause, SlipDetector};
 use super::state::{AmbKey, State, StateKey};
-use super::{ArMode, PpkOptions};
 use crate::frame::{Ecef, Geodetic};
 use crate::model::antex::AntennaPcv;
 use crate::orbit::Orbits;
 use crate::solution::Quality;
 use crate::sv::Sv;
 use hifitime::Epoch;
-use nalgebra::Matrix3;
 use std::collections::BTreeMap;
 
 /// Slips of one receiver's satellites at one epoch, per slot.
@@ -44,79 +46,13 @@ type Slips = BTreeMap<Sv, [Option<SlipCause>; NF]>;
 /// Sigma of the predicted position (the code solution), metres.
 const POSITION_SIGMA: f64 = 30.0;
 
-/// A satellite observed by both receivers this epoch.
-pub(super) struct Pair {
-    /// Rover measurements.
-    pub(super) r: SatMeas,
-    /// Base measurements.
-    pub(super) b: SatMeas,
-    /// The satellite seen by the rover.
-    pub(super) vr: SatView,
-    /// The satellite seen by the base.
-    pub(super) vb: SatView,
-    /// Geometric range base → satellite, metres.
-    pub(super) rho_b: f64,
-    /// Base troposphere, metres.
-    pub(super) tropo_b: f64,
-    /// Rover elevation, radians.
-    pub(super) el: f64,
-    /// Antenna phase-centre correction per slot, rover minus base, metres.
-    pub(super) ant: [f64; NF],
-}
-
-/// Result of one epoch of one pass.
-#[derive(Clone, Debug)]
-pub struct EpochSol {
-    /// Receiver time tag of the rover epoch (GPST).
-    pub time: Epoch,
-    /// Rover antenna position, ECEF.
-    pub pos: Ecef,
-    /// Its covariance, ECEF, m².
-    pub cov: Matrix3<f64>,
-    /// Fixed or float.
-    pub quality: Quality,
-    /// Satellites used in the double differences.
-    pub nsat: usize,
-    /// Ratio test value (of the fix, or the best tried when float).
-    pub ratio: f64,
-    /// Rover minus base time, seconds.
-    pub age: f64,
-    /// Number of double-difference ambiguities fixed.
-    pub nfix: usize,
-    /// Ambiguity segment of this epoch within its pass (see [`crate::trajectory`]).
-    pub segment: u32,
-}
-
-/// Counters of a pass.
-#[derive(Clone, Debug, Default)]
-pub struct PassStats {
-    /// Ambiguity resets per cause.
-    pub slips: BTreeMap<SlipCause, usize>,
-    /// Ambiguities reset because their post-fit residual was too large.
-    pub outlier_resets: usize,
-    /// Measurement rows removed by the innovation gate, per reason (counted at each of the
-    /// two linearisations of an epoch).
-    pub rejected: BTreeMap<GateReason, usize>,
-    /// Satellite-epochs below the elevation mask.
-    pub below_mask: usize,
-    /// Satellite-epochs without an orbit.
-    pub no_orbit: usize,
-}
-
-impl PassStats {
-    /// Rows removed by the innovation gate, all reasons.
-    pub fn rejected_innovations(&self) -> usize {
-        self.rejected.values().sum()
-    }
-}
-
 /// The filter of one pass.
 pub struct Filter<'a> {
-    pub(super) opts: &'a PpkOptions,
+    opts: &'a PpkOptions,
     orbits: &'a Orbits,
     base: Ecef,
     base_geo: Geodetic,
-    pub(super) state: State,
+    state: State,
     rover_slip: SlipDetector,
     base_slip: SlipDetector,
     last_base_time: Option<Epoch>,
@@ -127,8 +63,6 @@ pub struct Filter<'a> {
     last_time: Option<Epoch>,
     /// Counters of the pass.
     pub stats: PassStats,
-    /// Best ratio of the last resolution attempt.
-    pub(super) last_ratio: Option<f64>,
     rover_ant: Option<AntennaPcv>,
     base_ant: Option<AntennaPcv>,
     segments: SegmentTracker,
@@ -177,7 +111,6 @@ impl<'a> Filter<'a> {
             pending_reset: Vec::new(),
             last_time: None,
             stats: PassStats::default(),
-            last_ratio: None,
             rover_ant: antennas.0,
             base_ant: antennas.1,
             segments: SegmentTracker::new(segment_gap),
@@ -373,7 +306,7 @@ impl<'a> Filter<'a> {
         if o.estimate_iono {
             for pr in pairs {
                 let key = StateKey::Iono(pr.r.sv);
-                if measure::observes(pr, key) && !self.state.has(key) {
+                if observes(pr, key) && !self.state.has(key) {
                     self.state.add(key, t, 0.0, iono_sigma0.powi(2));
                 }
             }
@@ -433,7 +366,7 @@ impl<'a> Filter<'a> {
     /// Lock counts and last-seen epochs of the states observed this epoch.
     fn count_locks(&mut self, t: Epoch, pairs: &[Pair]) {
         for (key, track) in self.state.tracks_mut() {
-            if pairs.iter().any(|p| measure::observes(p, key)) {
+            if pairs.iter().any(|p| observes(p, key)) {
                 track.lock += 1;
                 track.last = t;
             }
@@ -460,17 +393,18 @@ impl<'a> Filter<'a> {
             sol.segment = self.segments.next(t, fixed);
             return sol;
         }
-        if let Some(fix) = self.resolve(pairs) {
+        let mut best_ratio = None;
+        if let Some(fix) = ar::resolve(&self.state, o, pairs, &mut best_ratio) {
             sol.pos = Ecef(fix.position);
             sol.cov = fix.covariance;
             sol.quality = Quality::Fixed;
             sol.ratio = fix.ratio;
             sol.nfix = fix.n_fixed;
             if o.ar == ArMode::FixAndHold {
-                self.hold(&fix);
+                ar::hold(&mut self.state, &fix, o.hold_variance);
             }
             fixed = Some(FixedIntegers::of(&fix));
-        } else if let Some(r) = self.last_ratio {
+        } else if let Some(r) = best_ratio {
             sol.ratio = r;
         }
         sol.segment = self.segments.next(t, fixed);

@@ -17,11 +17,10 @@
 //! - Row order: system (`Constellation::ALL`), slot, phase before code, then the pairs' order.
 
 use super::dd::DdGroup;
-use super::filter::Pair;
 use super::geometry::tropo;
-use super::obs::NF;
+use super::options::PpkOptions;
+use super::pair::{has_phase, Pair};
 use super::state::{AmbKey, State, StateKey};
-use super::PpkOptions;
 use crate::frame::Ecef;
 use crate::orbit::C;
 use crate::sv::{Constellation, Sv};
@@ -86,21 +85,6 @@ pub(super) struct Linearised {
     pub(super) r: DMatrix<f64>,
     /// Satellites used (as satellite or pivot of a row).
     pub(super) used_sats: usize,
-}
-
-/// Whether a pair observes the phase of slot `slot` on both receivers.
-pub(super) fn has_phase(p: &Pair, slot: usize) -> bool {
-    p.r.l[slot].is_finite() && p.b.l[slot].is_finite()
-}
-
-/// Whether a pair observes what a per-satellite state describes: the phase of its slot for an
-/// ambiguity, any phase for the ionosphere.
-pub(super) fn observes(p: &Pair, key: StateKey) -> bool {
-    match key {
-        StateKey::Position => true,
-        StateKey::Ambiguity(a) => p.r.sv == a.sv && has_phase(p, a.slot),
-        StateKey::Iono(sv) => p.r.sv == sv && (0..NF).any(|k| has_phase(p, k)),
-    }
 }
 
 fn var_phase(el: f64, o: &PpkOptions) -> f64 {

@@ -2,10 +2,13 @@
 //! backward and combined passes of a double-difference Kalman filter with integer ambiguity
 //! resolution, returning a [`Trajectory`] whose ambiguity segments the filter assigns.
 //!
-//! Modules: `state` (typed state layout), `measure` (pure DD residuals, innovation gate),
-//! `dd` (DD groups and their pivot), `filter` (one pass, epoch by epoch), `ar` (LAMBDA,
-//! partial fixing, fix-and-hold), `segment` (ambiguity segments), [`combine`]
-//! (forward/backward), [`slip`], `geometry`, [`obs`], [`lambda`].
+//! Modules, each using only the ones before it: `options` (the settings), [`obs`], [`slip`],
+//! `geometry`, `state` (typed state layout), `dd` (DD groups and their pivot), [`lambda`],
+//! `pair` (a satellite seen by both receivers), `measure` (pure DD residuals, innovation
+//! gate), `ar` (LAMBDA, partial fixing, fix-and-hold: functions on the state), `segment`
+//! (ambiguity segments), `output` (what a pass and a run hand out), `filter` (one pass, epoch
+//! by epoch: owns the state, calls `measure` and `ar`), [`combine`] (forward/backward). This
+//! module prepares the inputs and runs the passes.
 
 mod ar;
 pub mod combine;
@@ -15,12 +18,16 @@ mod geometry;
 pub mod lambda;
 mod measure;
 pub mod obs;
+mod options;
+mod output;
+mod pair;
 mod segment;
 pub mod slip;
 mod state;
 
-pub use filter::{EpochSol, PassStats};
 pub use measure::GateReason;
+pub use options::{ArMode, BasePosition, FilterMode, PpkOptions};
+pub use output::{EpochSol, PassStats, PpkResult};
 
 use crate::error::{Error, Result};
 use crate::frame::{enu_rotation, Ecef};
@@ -29,158 +36,10 @@ use crate::orbit::Orbits;
 use crate::rinex::{ObsFile, ObsHeader};
 use crate::solution::Quality;
 use crate::spp::{self, SppOptions};
-use crate::sv::Constellation;
 use crate::trajectory::{SegmentSource, Trajectory, TrajectoryEpoch};
 use hifitime::Epoch;
 use nalgebra::Vector3;
 use obs::{extract, SatMeas, SignalPlan};
-
-/// Integer ambiguity resolution mode.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ArMode {
-    /// Float ambiguities only.
-    Off,
-    /// Resolve every epoch; the filter keeps float ambiguities.
-    Continuous,
-    /// Resolve every epoch from that epoch's data alone.
-    Instantaneous,
-    /// Resolve, then constrain the filter to the fixed integers.
-    FixAndHold,
-}
-
-/// Which passes to run.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum FilterMode {
-    /// Forward in time only.
-    Forward,
-    /// Backward in time only.
-    Backward,
-    /// Forward and backward, combined epoch by epoch.
-    Combined,
-}
-
-/// Options of the carrier-phase engine.
-#[derive(Clone, Debug)]
-pub struct PpkOptions {
-    /// Elevation mask, radians.
-    pub elev_mask: f64,
-    /// Systems used.
-    pub systems: Vec<Constellation>,
-    /// Frequency slots used (1–3).
-    pub nf: usize,
-    /// Integer ambiguity resolution mode.
-    pub ar: ArMode,
-    /// Which passes run.
-    pub filter: FilterMode,
-    /// Ratio-test threshold (second best / best squared distance).
-    pub ratio_threshold: f64,
-    /// Largest base-rover time difference, seconds.
-    pub max_age: f64,
-    /// Gap after which an ambiguity is reset, seconds (0: five rover intervals, at least 5 s).
-    pub max_gap: f64,
-    /// Undifferenced phase sigma a + b/sin(el), metres.
-    pub phase_sigma: (f64, f64),
-    /// Code sigma over phase sigma.
-    pub code_phase_ratio: f64,
-    /// Ambiguity random walk, cycles/√s.
-    pub amb_process_noise: f64,
-    /// Initial ambiguity sigma, cycles.
-    pub amb_init_sigma: f64,
-    /// Innovation gate, metres.
-    pub max_innovation: f64,
-    /// Post-fit phase residual that resets an ambiguity, metres.
-    pub max_phase_residual: f64,
-    /// Epochs an ambiguity must be locked before it may be fixed.
-    pub min_lock: usize,
-    /// Lock count below which a satellite counts as newly risen for partial fixing.
-    pub mature_lock: usize,
-    /// Elevation mask of the ambiguities fixed, radians.
-    pub ar_elev_mask: f64,
-    /// Satellites partial fixing may drop, at most.
-    pub max_partial_drops: usize,
-    /// A partial fix whose 3D position sigma exceeds this (m) is not accepted.
-    pub max_partial_fix_sigma: f64,
-    /// Fewest double-difference ambiguities for a fix.
-    pub min_fix_ambiguities: usize,
-    /// Variance of the fix-and-hold constraint, cycles².
-    pub hold_variance: f64,
-    /// Estimate a single-difference slant ionosphere per satellite (ionosphere-weighted model).
-    pub estimate_iono: bool,
-    /// Prior sigma of that delay per km of baseline, metres.
-    pub iono_sigma_per_km: f64,
-    /// Its random walk per km of baseline, m/√s.
-    pub iono_process_noise_per_km: f64,
-    /// Receiver antenna calibrations (ANTEX); the header antenna types are looked up in it.
-    pub antex: Option<std::sync::Arc<crate::model::antex::Antex>>,
-}
-
-impl Default for PpkOptions {
-    fn default() -> Self {
-        PpkOptions {
-            elev_mask: 15f64.to_radians(),
-            systems: Constellation::CDMA.to_vec(),
-            nf: 2,
-            ar: ArMode::FixAndHold,
-            filter: FilterMode::Combined,
-            ratio_threshold: 3.0,
-            max_age: 30.0,
-            max_gap: 0.0,
-            phase_sigma: (0.003, 0.003),
-            code_phase_ratio: 100.0,
-            amb_process_noise: 1e-4,
-            amb_init_sigma: 30.0,
-            max_innovation: 30.0,
-            max_phase_residual: 0.1,
-            min_lock: 1,
-            mature_lock: 5,
-            ar_elev_mask: 15f64.to_radians(),
-            max_partial_drops: 6,
-            max_partial_fix_sigma: 0.03,
-            min_fix_ambiguities: 4,
-            hold_variance: 0.001,
-            estimate_iono: false,
-            iono_sigma_per_km: 0.001,
-            iono_process_noise_per_km: 1e-4,
-            antex: None,
-        }
-    }
-}
-
-/// Where the base antenna is.
-#[derive(Clone, Copy, Debug)]
-pub enum BasePosition {
-    /// Given by the user (marker, ECEF).
-    Given(Ecef),
-    /// The header's approximate position (warned about loudly).
-    Header,
-}
-
-/// Output of a carrier-phase run.
-#[derive(Clone, Debug)]
-pub struct PpkResult {
-    /// The rover trajectory (of the chosen filter mode): marker positions at the true
-    /// reception times, with the filter's ambiguity segments.
-    pub trajectory: Trajectory,
-    /// Counters of the forward pass, when it ran.
-    pub forward: Option<PassStats>,
-    /// Counters of the backward pass, when it ran.
-    pub backward: Option<PassStats>,
-    /// Rover epochs without a solution and why.
-    pub unsolved: Vec<(Epoch, String)>,
-    /// Rover epochs read.
-    pub rover_epochs: usize,
-    /// Base marker position used, ECEF.
-    pub base_marker: Ecef,
-    /// What the run noticed (base position from the header, antennas not calibrated).
-    pub warnings: Vec<String>,
-}
-
-impl PpkResult {
-    /// Number of fixed epochs.
-    pub fn fixed(&self) -> usize {
-        self.trajectory.fixed()
-    }
-}
 
 /// ENU antenna offset (header H/E/N) as an ECEF vector at `at`.
 fn arp_offset(h: &ObsHeader, at: &Ecef) -> Vector3<f64> {

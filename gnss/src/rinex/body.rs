@@ -2,8 +2,9 @@
 //! RINEX 3/4 text (CRINEX is first decoded to that text by [`super::crx`]).
 
 use super::crx::Crx;
+use super::header::ObsHeader;
 use super::lines::{cols, parse_int, parse_real, Lines};
-use super::{Event, IngestStats, Obs, ObsEpoch, ObsHeader, Record, SatObs, Warning};
+use super::record::{Event, IngestStats, Obs, ObsEpoch, Record, SatObs, Warning};
 use crate::error::Result;
 use crate::sv::{Constellation, Sv};
 use hifitime::{Epoch, TimeScale};

@@ -6,8 +6,9 @@
 //! (initialise an n-th order difference) or the n-th difference, followed by the LLI/SSI text
 //! difference. Special records (flags 2–5) are carried uncompressed.
 
+use super::header::ObsHeader;
 use super::lines::Lines;
-use super::{ObsHeader, Warning};
+use super::record::Warning;
 use crate::error::{Error, Result};
 use crate::sv::{Constellation, Sv};
 use std::collections::HashMap;

@@ -1,7 +1,7 @@
 //! RINEX observation header (2.x, 3.x, 4.x; also the header inside a CRINEX file).
 
 use super::lines::{col_str, cols, label, parse_int, parse_real, Lines};
-use super::ObsCode;
+use super::record::ObsCode;
 use crate::error::{Error, Result};
 use crate::frame::Ecef;
 use crate::sv::{Constellation, Sv};

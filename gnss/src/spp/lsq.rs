@@ -8,7 +8,7 @@
 //! position (ECEF, metres). Leaves: an [`Lsq`] (position ECEF, clocks in metres, covariance
 //! m²) or the [`SppFailure`]. Residuals are observed − computed, metres.
 
-use super::{chi2_999, Dop, Meas, SppFailure, SppOptions};
+use super::types::{chi2_999, Dop, Meas, SppFailure, SppOptions};
 use crate::frame::{az_el, enu_rotation, rotate_to_reception, Ecef, Geodetic};
 use crate::model;
 use crate::orbit::{Orbits, C};

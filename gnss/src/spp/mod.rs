@@ -5,188 +5,24 @@
 //! Enters: observation epochs (receiver time tags, GPST) with their header, the orbits and
 //! [`SppOptions`]. Leaves: per epoch an [`SppSolution`] (receiver position ECEF, clocks per
 //! system in metres, covariance m², DOPs) or the [`SppFailure`] with the satellites rejected;
-//! [`run`] counts them over a file. The least squares of one epoch is in `lsq`.
+//! [`run`] counts them over a file. The least squares of one epoch is in `lsq`; the types both
+//! use are in `types`.
 
 mod lsq;
+mod types;
 
-use crate::frame::{enu_rotation, Ecef};
+pub use types::{chi2_999, Dop, Rejection, SppFailure, SppOptions, SppSolution};
+
+use crate::frame::Ecef;
 use crate::orbit::{Orbits, C};
 use crate::rinex::{ObsEpoch, ObsHeader, SatObs};
 use crate::signal::{find_code, frequency, primary_codes};
-use crate::sv::{Constellation, Sv};
+use crate::sv::Sv;
 use hifitime::{Duration, Epoch};
 use lsq::{lsq, Lsq};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 use std::collections::BTreeMap;
-
-/// Options of the single-point solution.
-#[derive(Clone, Debug)]
-pub struct SppOptions {
-    /// Elevation mask, radians.
-    pub elev_mask: f64,
-    /// Systems to use.
-    pub systems: Vec<Constellation>,
-    /// Detect and exclude faulty satellites.
-    pub fde: bool,
-    /// Solutions with a larger geometric dilution of precision are refused.
-    pub max_gdop: f64,
-}
-
-impl Default for SppOptions {
-    fn default() -> Self {
-        SppOptions {
-            elev_mask: 15f64.to_radians(),
-            systems: [Constellation::CDMA.as_slice(), &[Constellation::Glonass]].concat(),
-            fde: true,
-            max_gdop: 30.0,
-        }
-    }
-}
-
-/// Dilutions of precision.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Dop {
-    /// Geometric.
-    pub gdop: f64,
-    /// Position.
-    pub pdop: f64,
-    /// Horizontal.
-    pub hdop: f64,
-    /// Vertical.
-    pub vdop: f64,
-}
-
-/// Why a satellite was not used in an epoch.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub enum Rejection {
-    /// The satellite's system was not asked for.
-    SystemNotSelected,
-    /// No usable code observation.
-    NoCode,
-    /// No valid healthy ephemeris.
-    NoEphemeris,
-    /// Below the elevation mask.
-    BelowMask,
-    /// Excluded by fault detection.
-    Faulty,
-}
-
-impl std::fmt::Display for Rejection {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Rejection::SystemNotSelected => "system not selected",
-            Rejection::NoCode => "no usable code observation",
-            Rejection::NoEphemeris => "no valid healthy ephemeris",
-            Rejection::BelowMask => "below elevation mask",
-            Rejection::Faulty => "excluded by fault detection",
-        })
-    }
-}
-
-/// Why an epoch has no solution.
-#[derive(Clone, Debug, PartialEq)]
-pub enum SppFailure {
-    /// Fewer satellites than unknowns.
-    TooFewSatellites {
-        /// Satellites usable.
-        usable: usize,
-        /// Satellites needed (the number of unknowns).
-        needed: usize,
-    },
-    /// The least squares did not converge.
-    NoConvergence,
-    /// The solution failed the chi-square test and no exclusion repaired it.
-    Inconsistent {
-        /// Chi-square of the residuals.
-        chi2: f64,
-        /// Its critical value.
-        threshold: f64,
-    },
-    /// Geometric dilution of precision above 30.
-    PoorGeometry {
-        /// The GDOP.
-        gdop: f64,
-    },
-}
-
-impl SppFailure {
-    /// The kind of failure without its numbers (for grouping in reports).
-    pub fn kind(&self) -> &'static str {
-        match self {
-            SppFailure::TooFewSatellites { .. } => "too few satellites",
-            SppFailure::NoConvergence => "no convergence",
-            SppFailure::Inconsistent { .. } => "inconsistent residuals",
-            SppFailure::PoorGeometry { .. } => "poor geometry (GDOP > 30)",
-        }
-    }
-}
-
-impl std::fmt::Display for SppFailure {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            SppFailure::TooFewSatellites { usable, needed } => {
-                write!(f, "too few satellites ({usable} usable, {needed} needed)")
-            }
-            SppFailure::NoConvergence => write!(f, "least squares did not converge"),
-            SppFailure::Inconsistent { chi2, threshold } => write!(
-                f,
-                "residuals inconsistent (chi-square {chi2:.1} > {threshold:.1}) and no single exclusion repairs them"
-            ),
-            SppFailure::PoorGeometry { gdop } => write!(f, "poor geometry (GDOP {gdop:.1})"),
-        }
-    }
-}
-
-/// A single-point solution.
-#[derive(Clone, Debug)]
-pub struct SppSolution {
-    /// Receiver time tag, GPST.
-    pub time: Epoch,
-    /// Position, ECEF.
-    pub pos: Ecef,
-    /// Receiver clock per system, metres.
-    pub clocks: BTreeMap<Constellation, f64>,
-    /// Position covariance in ECEF, m².
-    pub cov: Matrix3<f64>,
-    /// Satellites used.
-    pub nsat: usize,
-    /// Dilutions of precision.
-    pub dop: Dop,
-    /// Root mean square of the post-fit residuals, metres.
-    pub rms: f64,
-    /// Satellites used.
-    pub used: Vec<Sv>,
-    /// Satellites not used, and why.
-    pub rejected: Vec<(Sv, Rejection)>,
-}
-
-impl SppSolution {
-    /// Covariance in the local ENU frame of the solution.
-    pub fn cov_enu(&self) -> Matrix3<f64> {
-        let r = enu_rotation(&self.pos.to_geodetic());
-        r * self.cov * r.transpose()
-    }
-}
-
-/// Upper 0.1 % point of the chi-square distribution (Wilson–Hilferty).
-pub fn chi2_999(dof: usize) -> f64 {
-    let k = dof.max(1) as f64;
-    let z = 3.090_232;
-    k * (1.0 - 2.0 / (9.0 * k) + z * (2.0 / (9.0 * k)).sqrt()).powi(3)
-}
-
-/// A satellite's first-frequency code with the satellite at its transmission time.
-struct Meas {
-    sv: Sv,
-    /// Pseudorange, metres.
-    pr: f64,
-    /// Carrier frequency of the code, Hz.
-    freq: f64,
-    /// Satellite position at transmission, ECEF (before the Earth-rotation correction).
-    sat: Ecef,
-    /// Satellite clock minus group delay, seconds.
-    sat_clock: f64,
-}
+use types::Meas;
 
 /// Solve one epoch. `prior` speeds convergence (previous solution or header position).
 pub fn solve_epoch(

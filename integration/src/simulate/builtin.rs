@@ -1,7 +1,7 @@
 //! The built-in flight scenarios: `demo`, `block20`, `long` — the `demo` scenario as TOML,
 //! the others derived from it with more and longer strips. Leaves: a [`Scenario`].
 
-use super::Scenario;
+use super::scenario::Scenario;
 
 const DEMO: &str = r#"
 name = "demo"

@@ -5,12 +5,13 @@
 //! Enters: a [`CloseRangeSpec`] and a folder. Leaves: `project.toml`, `images.csv` (with
 //! compass azimuth, elevation, roll), `image_observations.csv`, `ground_points.csv` and
 //! `antennas.csv` in the folder, and the [`CloseRangeTruth`]. Uses the compass rotation of
-//! [`crate::adjust::build`] and the table writers of [`super::block`]. Frame: ENU at the site,
-//! the target to the north; angles in the files are degrees.
+//! [`crate::adjust::build`] and the ground-point writer shared with [`super::block`]. Frame:
+//! ENU at the site, the target to the north; angles in the files are degrees.
 
-use super::block::{geodetic, write_ground_points, Point};
+use super::error::SimError;
+use super::ground_points::{geodetic, write_ground_points, Point};
+use super::io::write;
 use super::rng::Rng;
-use super::{write, SimError};
 use crate::adjust::build::compass_rotation;
 use crate::exposure::export::{antenna_table, AntennaRow};
 use gnss::frame::Geodetic;

@@ -10,7 +10,7 @@
 //! `gnss::orbit`, `gnss::model` and `gnss::frame`.
 
 use super::rng::Rng;
-use super::ErrorModel;
+use super::scenario::ErrorModel;
 use gnss::frame::{az_el, rotate_to_reception, Ecef};
 use gnss::model::{klobuchar_gps, troposphere};
 use gnss::orbit::{Ephemerides, C};

@@ -9,6 +9,10 @@
 //! Also here: simulated adjustment projects with truth ([`block`], [`closerange`]), which
 //! write `ppkat adjust` inputs instead of GNSS files.
 //!
+//! Shared by the parts, each importing none of its users: `error` ([`SimError`]), `io` (the
+//! file writer), `scenario` (the schema, [`ErrorModel`] among it), `site` (the ENU frame) and
+//! `ground_points`. This module only runs a scenario from them.
+//!
 //! Frames and time: positions are built in the east-north-up frame at the site and written in
 //! ECEF or geodetic coordinates; true times are GPST, receiver time tags are true time plus the
 //! receiver clock offset.
@@ -19,41 +23,28 @@ pub mod block;
 pub mod camera;
 pub mod closerange;
 pub mod constellation;
+mod error;
 pub mod flight;
 pub mod gnss_obs;
+mod ground_points;
+mod io;
 pub mod rng;
 mod scenario;
+mod site;
 mod truth;
+pub use error::SimError;
 pub use scenario::{BaseSpec, CameraToml, ErrorModel, FlightSpec, GroundSpec, Scenario, Site};
 
 use camera::{CameraSpec, Exposure, GroundPoint, ImageObs};
 use flight::Flight;
-use gnss::frame::{Ecef, Enu, Geodetic};
+use gnss::frame::Ecef;
 use gnss::orbit::Ephemerides;
 use gnss::rinex::nav::{Klobuchar, NavFile};
 use hifitime::{Duration, Epoch};
-use nalgebra::Vector3;
+use io::write;
 use rng::Rng;
+use site::SiteFrame;
 use std::path::{Path, PathBuf};
-
-/// Errors of the simulator: a scenario key and what is wrong with it, or an I/O failure.
-#[derive(Debug, thiserror::Error)]
-pub enum SimError {
-    /// The scenario is not valid TOML or does not fit the schema.
-    #[error("scenario: {0}")]
-    Parse(String),
-    /// A scenario value is out of range.
-    #[error("scenario key `{key}`: {what}")]
-    Key {
-        /// The key, e.g. `flight.speed`.
-        key: &'static str,
-        /// What is wrong with its value.
-        what: String,
-    },
-    /// Writing or reading back a file failed.
-    #[error(transparent)]
-    Gnss(#[from] gnss::Error),
-}
 
 /// What a simulation wrote.
 #[derive(Clone, Debug)]
@@ -114,35 +105,6 @@ impl std::fmt::Display for SimReport {
             "  {} exposures, {} ground points, {} image observations",
             self.exposures, self.points, self.image_obs
         )
-    }
-}
-
-/// Write a simulated file atomically, creating its folder.
-fn write(dir: &Path, name: &str, text: &str) -> Result<PathBuf, SimError> {
-    std::fs::create_dir_all(dir).map_err(gnss::Error::io(dir))?;
-    let p = dir.join(name);
-    gnss::solution::write_atomic(&p, |w| w.write_all(text.as_bytes()))?;
-    Ok(p)
-}
-
-/// The site's east-north-up frame: its geodetic origin (on the terrain) and the conversion
-/// of ENU vectors (metres) to ECEF.
-struct SiteFrame {
-    geo: Geodetic,
-    ecef: Ecef,
-}
-
-impl SiteFrame {
-    fn of(s: &Scenario) -> SiteFrame {
-        let geo = Geodetic::from_degrees(s.site.lat_deg, s.site.lon_deg, s.site.ground_height);
-        SiteFrame {
-            geo,
-            ecef: geo.to_ecef(),
-        }
-    }
-
-    fn to_ecef(&self, v: &Vector3<f64>) -> Ecef {
-        Enu(*v).to_ecef(&self.ecef)
     }
 }
 

@@ -9,8 +9,8 @@
 //! speeds m/s, times seconds.
 
 use super::camera::CameraSpec;
+use super::error::SimError;
 use super::flight::FlightPlan;
-use super::SimError;
 use hifitime::Epoch;
 use nalgebra::Vector3;
 use serde::Deserialize;

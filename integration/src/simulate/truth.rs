@@ -6,8 +6,11 @@
 //! the site's ENU frame; angles degrees.
 
 use super::camera::{Exposure, GroundPoint, ImageObs, PointKind};
+use super::error::SimError;
 use super::flight::Flight;
-use super::{write, Scenario, SimError, SiteFrame};
+use super::io::write;
+use super::scenario::Scenario;
+use super::site::SiteFrame;
 use hifitime::{Duration, Epoch};
 use std::fmt::Write as _;
 use std::path::Path;

@@ -1,13 +1,15 @@
-//! The files of a simulated aerial block: the image list, the measurements, the ground
-//! points (also written for the close-range pair), the antenna table with its `.pos`
-//! trajectory, and `project.toml`. Coordinates go out geodetic (degrees, ellipsoidal metres),
+//! The files of a simulated aerial block: the image list, the measurements, the antenna table
+//! with its `.pos` trajectory, and `project.toml` (the ground points are written by
+//! [`crate::simulate::ground_points`], shared with the close-range pair). Coordinates go out geodetic (degrees, ellipsoidal metres),
 //! times as GPS week and seconds of week, covariances in ENU (m²).
 
-use super::{BlockSpec, Image, Measurement, Point, T_FIRST};
+use super::spec::{BlockSpec, Image, Measurement, T_FIRST};
 use crate::exposure::export::{antenna_table, AntennaRow};
+use crate::simulate::error::SimError;
+use crate::simulate::ground_points::{geodetic, Point};
+use crate::simulate::io::write;
 use crate::simulate::rng::Rng;
-use crate::simulate::{write, SimError};
-use gnss::frame::{enu_rotation, Enu, Geodetic};
+use gnss::frame::{enu_rotation, Geodetic};
 use nalgebra::{Matrix3, Vector3};
 use photo::camera::Camera;
 use std::fmt::Write as _;
@@ -45,48 +47,6 @@ pub(super) fn measurements_table(
         );
     }
     s
-}
-
-/// Geodetic coordinates of a point of the ENU frame at `origin`.
-pub(in crate::simulate) fn geodetic(origin: &Geodetic, v: &Vector3<f64>) -> Geodetic {
-    Enu(*v).to_ecef(&origin.to_ecef()).to_geodetic()
-}
-
-/// Write `ground_points.csv` (point, kind, lat, lon in degrees, h and sigmas in metres) for
-/// the control and check points given (ENU at `origin`). Control points are observed with
-/// noise of σ = (σ_xy, σ_xy, σ_z) = `sigma` per ENU axis drawn from `rng`; the first one also
-/// carries the `wrong` shift (E, N, U, metres) when given — its id is returned.
-pub(in crate::simulate) fn write_ground_points<'a>(
-    dir: &Path,
-    points: impl IntoIterator<Item = &'a Point>,
-    sigma: (f64, f64),
-    wrong: Option<[f64; 3]>,
-    origin: &Geodetic,
-    rng: &mut Rng,
-) -> Result<Option<String>, SimError> {
-    let (sx, sz) = sigma;
-    let mut s = String::from("point,kind,lat,lon,h,sigma_xy,sigma_z\n");
-    let mut wrong_id = None;
-    for (id, kind, x) in points {
-        let mut v = *x;
-        if *kind == "gcp" {
-            v += Vector3::new(sx * rng.normal(), sx * rng.normal(), sz * rng.normal());
-            if let (Some(d), None) = (wrong, &wrong_id) {
-                v += Vector3::from(d);
-                wrong_id = Some(id.clone());
-            }
-        }
-        let g = geodetic(origin, &v);
-        let _ = writeln!(
-            s,
-            "{id},{kind},{:.10},{:.10},{:.4},{sx},{sz}",
-            g.lat.to_degrees(),
-            g.lon.to_degrees(),
-            g.h
-        );
-    }
-    write(dir, "ground_points.csv", &s)?;
-    Ok(wrong_id)
 }
 
 /// The GNSS antenna covariance in the site's ENU frame (m²) from the spec's σ and

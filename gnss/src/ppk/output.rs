@@ -1,0 +1,88 @@
+//! What a pass and a run hand out: the solution of one epoch of one pass, the counters of a
+//! pass, and the result of a whole run.
+//!
+//! What enters: nothing (plain data, ECEF metres, GPST). What leaves: [`EpochSol`] and
+//! [`PassStats`], filled by the filter and combined by [`super::combine`], and [`PpkResult`],
+//! assembled by [`super::process`]; this module uses none of them.
+
+use super::measure::GateReason;
+use super::slip::SlipCause;
+use crate::frame::Ecef;
+use crate::solution::Quality;
+use crate::trajectory::Trajectory;
+use hifitime::Epoch;
+use nalgebra::Matrix3;
+use std::collections::BTreeMap;
+
+/// Result of one epoch of one pass.
+#[derive(Clone, Debug)]
+pub struct EpochSol {
+    /// Receiver time tag of the rover epoch (GPST).
+    pub time: Epoch,
+    /// Rover antenna position, ECEF.
+    pub pos: Ecef,
+    /// Its covariance, ECEF, m².
+    pub cov: Matrix3<f64>,
+    /// Fixed or float.
+    pub quality: Quality,
+    /// Satellites used in the double differences.
+    pub nsat: usize,
+    /// Ratio test value (of the fix, or the best tried when float).
+    pub ratio: f64,
+    /// Rover minus base time, seconds.
+    pub age: f64,
+    /// Number of double-difference ambiguities fixed.
+    pub nfix: usize,
+    /// Ambiguity segment of this epoch within its pass (see [`crate::trajectory`]).
+    pub segment: u32,
+}
+
+/// Counters of a pass.
+#[derive(Clone, Debug, Default)]
+pub struct PassStats {
+    /// Ambiguity resets per cause.
+    pub slips: BTreeMap<SlipCause, usize>,
+    /// Ambiguities reset because their post-fit residual was too large.
+    pub outlier_resets: usize,
+    /// Measurement rows removed by the innovation gate, per reason (counted at each of the
+    /// two linearisations of an epoch).
+    pub rejected: BTreeMap<GateReason, usize>,
+    /// Satellite-epochs below the elevation mask.
+    pub below_mask: usize,
+    /// Satellite-epochs without an orbit.
+    pub no_orbit: usize,
+}
+
+impl PassStats {
+    /// Rows removed by the innovation gate, all reasons.
+    pub fn rejected_innovations(&self) -> usize {
+        self.rejected.values().sum()
+    }
+}
+
+/// Output of a carrier-phase run.
+#[derive(Clone, Debug)]
+pub struct PpkResult {
+    /// The rover trajectory (of the chosen filter mode): marker positions at the true
+    /// reception times, with the filter's ambiguity segments.
+    pub trajectory: Trajectory,
+    /// Counters of the forward pass, when it ran.
+    pub forward: Option<PassStats>,
+    /// Counters of the backward pass, when it ran.
+    pub backward: Option<PassStats>,
+    /// Rover epochs without a solution and why.
+    pub unsolved: Vec<(Epoch, String)>,
+    /// Rover epochs read.
+    pub rover_epochs: usize,
+    /// Base marker position used, ECEF.
+    pub base_marker: Ecef,
+    /// What the run noticed (base position from the header, antennas not calibrated).
+    pub warnings: Vec<String>,
+}
+
+impl PpkResult {
+    /// Number of fixed epochs.
+    pub fn fixed(&self) -> usize {
+        self.trajectory.fixed()
+    }
+}

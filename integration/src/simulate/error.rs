@@ -1,0 +1,24 @@
+//! The error of the simulator: a scenario key and what is wrong with it, or a failure to
+//! write or read back a file.
+//!
+//! What enters: the messages of the validation and `gnss` errors. What leaves: [`SimError`],
+//! returned by every part of the simulator; this module uses none of them.
+
+/// Errors of the simulator: a scenario key and what is wrong with it, or an I/O failure.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// The scenario is not valid TOML or does not fit the schema.
+    #[error("scenario: {0}")]
+    Parse(String),
+    /// A scenario value is out of range.
+    #[error("scenario key `{key}`: {what}")]
+    Key {
+        /// The key, e.g. `flight.speed`.
+        key: &'static str,
+        /// What is wrong with its value.
+        what: String,
+    },
+    /// Writing or reading back a file failed.
+    #[error(transparent)]
+    Gnss(#[from] gnss::Error),
+}
