@@ -1,6 +1,6 @@
 //! The scenario of a simulated flight: its TOML schema (every key checked, unknown keys
 //! refused), the defaults of the optional keys and the validation of every value with its key
-//! named. Enters: TOML text (or a built-in, see [`super::builtin`]). Leaves: a checked
+//! named. Enters: TOML text (or a built-in, see [`super::builtin`](mod@super::builtin)). Leaves: a checked
 //! [`Scenario`], its start epoch (GPST), the flight plan ([`FlightPlan`]) and the camera
 //! ([`CameraSpec`]) the simulator runs on.
 //!
