@@ -158,46 +158,6 @@ impl Model {
         }
         Ok(c)
     }
-
-    /// The cost at `values` (no Jacobians), summed in runs of factors, then the runs in order.
-    pub(crate) fn cost_at(&self, st: &Structure, values: &[Value]) -> Result<Cost, SolveError> {
-        let parts: Vec<Result<Cost, usize>> = st
-            .active
-            .par_chunks(MIN_LEN)
-            .enumerate()
-            .map(|(c, fs)| {
-                let mut sum = Cost::default();
-                for (i, &f) in fs.iter().enumerate() {
-                    let k = c * MIN_LEN + i;
-                    let e = &self.entries[f];
-                    let mut buf = [0.0; 16];
-                    let mut big = Vec::new();
-                    let m = e.factor.dim();
-                    let r: &mut [f64] = if m <= 16 {
-                        &mut buf[..m]
-                    } else {
-                        big.resize(m, 0.0);
-                        &mut big
-                    };
-                    let scale = self.group_scale[e.group.0];
-                    if !evaluate(e, scale, values, st.slots.get(k), r, None) {
-                        return Err(f);
-                    }
-                    let s2: f64 = r.iter().map(|x| x * x).sum();
-                    sum.cost += e.loss.cost(s2);
-                    sum.squares += s2;
-                }
-                Ok(sum)
-            })
-            .collect();
-        let mut c = Cost::default();
-        for p in parts {
-            let p = p.map_err(|f| SolveError::Evaluation(FactorId(f)))?;
-            c.cost += p.cost;
-            c.squares += p.squares;
-        }
-        Ok(c)
-    }
 }
 
 /// out (p×q) += w·Aᵀ·B for A (m×p) and B (m×q), all column-major. Common block sizes

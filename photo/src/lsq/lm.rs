@@ -57,15 +57,12 @@ impl Problem {
             ..Summary::default()
         };
         let mut red = Reduced::default();
-        let mut cand = Vec::new();
+        // The candidate is linearised at once: an accepted step (most of them) then needs no
+        // second evaluation of its factors.
+        let (mut cand, mut cand_lin) = (Vec::new(), Linearisation::default());
         let (mut radius, mut nu) = (self.options.initial_radius, 2.0);
-        let mut fresh = true;
         while s.iterations < self.options.max_iterations {
             s.iterations += 1;
-            if !fresh {
-                cost = self.model.linearise(&st, &self.model.values, &mut lins)?;
-                fresh = true;
-            }
             let step = Model::reduce(&st, &lins, 1.0 / radius, true, &mut red)
                 .then(|| linear.solve_reduced(&st, &red))
                 .flatten()
@@ -78,11 +75,8 @@ impl Problem {
                 continue;
             };
             self.model.apply_into(&st, &step, &mut cand);
-            let new = self
-                .model
-                .cost_at(&st, &cand)
-                .map(|c| c.cost)
-                .unwrap_or(f64::INFINITY);
+            let new_cost = self.model.linearise(&st, &cand, &mut cand_lin);
+            let new = new_cost.as_ref().map_or(f64::INFINITY, |c| c.cost);
             let model = Model::model_decrease(&st, &lins, &step);
             let rho = if model > 0.0 {
                 (cost.cost - new) / model
@@ -90,10 +84,11 @@ impl Problem {
                 -1.0
             };
             let change = (cost.cost - new) / cost.cost.max(f64::MIN_POSITIVE);
-            if new.is_finite() && rho > 1e-3 && change >= 1e-14 {
+            if let (Ok(c), true) = (new_cost, new.is_finite() && rho > 1e-3 && change >= 1e-14) {
                 std::mem::swap(&mut self.model.values, &mut cand);
-                (fresh, s.successful) = (false, s.successful + 1);
-                cost.cost = new;
+                std::mem::swap(&mut lins, &mut cand_lin);
+                s.successful += 1;
+                cost = c;
                 radius /= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
                 nu = 2.0;
                 if change < self.options.function_tolerance {
@@ -109,9 +104,6 @@ impl Problem {
                     break;
                 }
             }
-        }
-        if !fresh {
-            cost = self.model.linearise(&st, &self.model.values, &mut lins)?;
         }
         let m = st.nres;
         if m < st.n {
