@@ -14,15 +14,31 @@ use faer::sparse::{SparseColMat, Triplet};
 /// A symbolic sparse factorisation and the structure hash it was computed for.
 pub(crate) type SymbolicCache = (u64, SymbolicLlt<usize>);
 
-/// The reduced system's solves with the solver's settings and its symbolic factorisation.
+/// The reduced system's solves with the solver's settings, its symbolic factorisation and
+/// the dense matrix reused from step to step.
 pub(crate) struct Linear<'a> {
     /// Dense limit and threads.
-    pub options: &'a Options,
+    options: &'a Options,
     /// The symbolic factorisation kept between steps.
-    pub symbolic: &'a std::sync::Mutex<Option<SymbolicCache>>,
+    symbolic: &'a std::sync::Mutex<Option<SymbolicCache>>,
+    /// The dense reduced matrix, factorised in place: one allocation for all steps instead of
+    /// two per step (a fresh matrix and the factor's copy of it).
+    dense: std::cell::RefCell<faer::Mat<f64>>,
 }
 
-impl Linear<'_> {
+impl<'a> Linear<'a> {
+    /// The solves for `options`, keeping the symbolic factorisation in `symbolic`.
+    pub(crate) fn new(
+        options: &'a Options,
+        symbolic: &'a std::sync::Mutex<Option<SymbolicCache>>,
+    ) -> Linear<'a> {
+        Linear {
+            options,
+            symbolic,
+            dense: std::cell::RefCell::new(faer::Mat::new()),
+        }
+    }
+
     /// Set faer's parallelism from the options (process-wide: set before each factorisation).
     pub(crate) fn set_parallelism(&self) {
         let n = self
@@ -44,8 +60,7 @@ impl Linear<'_> {
         let nr = st.nr;
         let mut rhs = faer::Mat::<f64>::from_fn(nr, 1, |i, _| -red.g[i]);
         if nr <= self.options.dense_limit {
-            let llt = dense(st, red).llt(faer::Side::Lower).ok()?;
-            llt.solve_in_place(rhs.as_mut());
+            self.dense_solve(st, red, rhs.as_mut())?;
         } else {
             let m = SparseColMat::<usize, f64>::try_new_from_triplets(nr, nr, &triplets(st, red))
                 .ok()?;
@@ -62,6 +77,44 @@ impl Linear<'_> {
             llt.solve_in_place(rhs.as_mut());
         }
         Some((0..nr).map(|i| rhs[(i, 0)]).collect())
+    }
+
+    /// Factorise the lower triangle of S in the reused matrix and solve for `rhs` in place:
+    /// the same faer calls, in the same order, as `Mat::llt` and `Llt::solve_in_place`.
+    fn dense_solve(&self, st: &Structure, red: &Reduced, rhs: faer::MatMut<'_, f64>) -> Option<()> {
+        use faer::dyn_stack::{MemBuffer, MemStack};
+        use faer::linalg::cholesky::llt;
+        let mut m = self.dense.borrow_mut();
+        if m.nrows() != st.nr {
+            *m = faer::Mat::zeros(st.nr, st.nr);
+        } else {
+            // The last factor is still there, fill-in included: S's empty blocks must be zero.
+            m.as_mut().fill(0.0);
+        }
+        for_each_block(st, red, |r0, c0, dr, dc, b| {
+            for j in 0..dc {
+                for i in 0..dr {
+                    if r0 + i >= c0 + j {
+                        m[(r0 + i, c0 + j)] = b[j * dr + i];
+                    }
+                }
+            }
+        });
+        let par = faer::get_global_parallelism();
+        let need = llt::factor::cholesky_in_place_scratch::<f64>(st.nr, par, Default::default());
+        let mut mem = MemBuffer::new(need);
+        let stack = MemStack::new(&mut mem);
+        llt::factor::cholesky_in_place(
+            m.as_mut(),
+            Default::default(),
+            par,
+            stack,
+            Default::default(),
+        )
+        .ok()?;
+        let stack = MemStack::new(&mut mem);
+        llt::solve::solve_in_place_with_conj(m.as_ref(), faer::Conj::No, rhs, par, stack);
+        Some(())
     }
 
     /// Dense Cholesky of the reduced matrix. Returns the first column whose pivot is not

@@ -48,10 +48,7 @@ impl Problem {
         if self.options.unique {
             self.model.check_determined(&st, &lins)?;
         }
-        let linear = Linear {
-            options: &self.options,
-            symbolic: &self.caches.symbolic,
-        };
+        let linear = Linear::new(&self.options, &self.caches.symbolic);
         let mut s = Summary {
             initial_cost: cost.cost,
             ..Summary::default()

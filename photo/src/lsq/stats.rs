@@ -42,10 +42,7 @@ impl Problem {
             *cache = None;
         }
         let t = std::time::Instant::now();
-        let linear = Linear {
-            options: &self.options,
-            symbolic: &self.caches.symbolic,
-        };
+        let linear = Linear::new(&self.options, &self.caches.symbolic);
         let c = Arc::new(self.model.cofactors(self.structure(), &linear)?);
         self.time("cofactors", t);
         if let Ok(mut cache) = self.caches.cofactors.lock() {
