@@ -20,8 +20,11 @@
 //! - every ambiguity state was reset since (all-ambiguity reset).
 //!
 //! The combined (forward + backward) trajectory puts a boundary between two consecutive
-//! output epochs wherever either pass has one between them (a pass's segment id differs, or
-//! the pass solved one epoch and not the other), and wherever the combined Q changes.
+//! output epochs wherever the combined Q changes; between two fixed epochs, unless a pass is
+//! fixed at both within one of its segments and no pass fixed at both breaks between them
+//! (a pass still float at the start of the other's fixed span adds nothing to the fix);
+//! between two float epochs, wherever either pass has one (its segment id differs, or it
+//! solved one epoch and not the other).
 //!
 //! **Derived from Q** ([`SegmentSource::DerivedFromQuality`]: a trajectory read from a `.pos`
 //! file, ours or RTKLIB's, which does not carry them): a new segment whenever Q enters or

@@ -312,6 +312,25 @@ impl fmt::Display for PpkReport {
             self.seconds,
             self.out.display()
         )?;
+        let m = &r.models;
+        let estimated: Vec<&str> = [
+            (m.iono, "slant ionosphere per satellite"),
+            (m.tropo, "rover zenith wet delay"),
+        ]
+        .iter()
+        .filter(|(on, _)| *on)
+        .map(|(_, what)| *what)
+        .collect();
+        writeln!(
+            f,
+            "  longest baseline {:.1} km; estimated: {}",
+            m.longest_baseline / 1000.0,
+            if estimated.is_empty() {
+                "no atmospheric delays (a-priori models only)".to_string()
+            } else {
+                estimated.join(", ")
+            }
+        )?;
         let mut reasons: std::collections::BTreeMap<&str, (usize, Epoch)> = Default::default();
         for (t, why) in &r.unsolved {
             reasons.entry(why.as_str()).or_insert((0, *t)).0 += 1;

@@ -5,7 +5,7 @@ use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use integration::gnss::frame::{Ecef, Geodetic};
 use integration::gnss::model::antex::Antex;
-use integration::gnss::ppk::{ArMode, BasePosition, FilterMode, PpkOptions};
+use integration::gnss::ppk::{ArMode, BasePosition, Estimate, FilterMode, PpkOptions};
 use integration::pipeline;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -15,10 +15,15 @@ use std::sync::Arc;
 ///
 /// Reads the rover's and the base's RINEX observation files and one or more navigation
 /// files, forms double differences of carrier phase and code between rover and base, runs a
-/// Kalman filter forward and/or backward in time, resolves the integer ambiguities (LAMBDA
-/// with a ratio test) and writes an RTKLIB-compatible `.pos` file in GPS time: Q = 1 fixed,
-/// Q = 2 float, with the filter's sigmas, the age of the base epoch and the ratio. Prints
-/// what was solved and fixed, and why epochs were not.
+/// Kalman filter forward and/or backward in time, resolves the integer ambiguities (LAMBDA,
+/// partial resolution by success rate, ratio test) and writes an RTKLIB-compatible `.pos`
+/// file in GPS time: Q = 1 fixed, Q = 2 float, with the filter's sigmas, the age of the base
+/// epoch and the ratio. Prints what was solved and fixed, and why epochs were not.
+///
+/// Beyond 10 km of baseline the ionosphere (a slant delay per satellite) and the rover's
+/// zenith wet delay are estimated, and the combined solution is the two-filter smoother's:
+/// every epoch sees the whole arc of each ambiguity, and a fix must agree with what the data
+/// before and after it fix alone.
 ///
 /// The base position comes from --base-pos or --base-llh; without either, the approximate
 /// position in the base file's header is used, with a warning (its error goes straight into
@@ -51,11 +56,19 @@ pub struct Args {
     /// Which filter passes run.
     #[arg(long, value_enum, default_value = "combined")]
     filter: FilterArg,
+    /// Estimate a slant ionospheric delay per satellite (needed beyond about 10 km).
+    #[arg(long, value_enum, default_value = "auto")]
+    iono: EstimateArg,
+    /// Estimate the rover's zenith wet delay on top of the a-priori troposphere (needed
+    /// beyond about 10 km or with large height differences).
+    #[arg(long, value_enum, default_value = "auto")]
+    tropo: EstimateArg,
     /// Integer ambiguity resolution.
     #[arg(long, value_enum, default_value = "fix-and-hold")]
     ar: ArArg,
-    /// Elevation mask, degrees (0 to 90), for the satellites used and the ambiguities fixed.
-    #[arg(long, value_name = "DEG", default_value_t = 15.0)]
+    /// Elevation mask, degrees (0 to 90), for the satellites used and the ambiguities fixed
+    /// (low satellites are down-weighted by 1/sin(elevation), not dropped).
+    #[arg(long, value_name = "DEG", default_value_t = 10.0)]
     elev_mask: f64,
     /// Receiver antenna calibrations (ANTEX) for the antenna types in the file headers
     /// (default: no phase-centre corrections).
@@ -80,8 +93,30 @@ enum FilterArg {
     Forward,
     /// Backward in time only
     Backward,
-    /// Forward and backward, combined epoch by epoch
+    /// Forward and backward: on long baselines the two-filter smoother, else the two passes
+    /// combined epoch by epoch
     Combined,
+}
+
+/// Whether an atmospheric delay is estimated.
+#[derive(Clone, Copy, ValueEnum)]
+enum EstimateArg {
+    /// When some rover epoch is more than 10 km from the base
+    Auto,
+    /// Never (a-priori models only)
+    Off,
+    /// Always
+    On,
+}
+
+impl From<EstimateArg> for Estimate {
+    fn from(a: EstimateArg) -> Estimate {
+        match a {
+            EstimateArg::Auto => Estimate::Auto,
+            EstimateArg::Off => Estimate::Off,
+            EstimateArg::On => Estimate::On,
+        }
+    }
 }
 
 /// Integer ambiguity resolution mode.
@@ -118,6 +153,8 @@ pub fn run(args: Args) -> Result<()> {
             ArArg::FixAndHold => ArMode::FixAndHold,
             ArArg::Off => ArMode::Off,
         },
+        iono: args.iono.into(),
+        tropo: args.tropo.into(),
         antex: match args.antex {
             Some(p) => Some(Arc::new(Antex::read(&p)?)),
             None => None,

@@ -7,18 +7,25 @@
 //!   those locked for `mature_lock` epochs (a freshly reset pivot would make every DD of its
 //!   group uncertain). The DD operator D maps the state to the DD ambiguities: +1 on the
 //!   satellite's SD state, −1 on the pivot's.
-//! - LAMBDA on a = D·x, Q_a = D·P·Dᵀ with the ratio test; when the full set fails on
-//!   dual-frequency data, the wide lane (slot 0 − slot 1) is fixed first on a copy of the
-//!   state; then partial fixing drops the newest, then the lowest satellite.
-//! - Fixed position: x_pos − Q_pos,a·Q_a⁻¹·(a − ǎ), covariance P_pos − Q_pos,a·Q_a⁻¹·Q_a,pos.
-//! - Fix-and-hold: the float state is constrained to D·x = ǎ with variance `hold_variance`.
+//! - Partial resolution: a = D·x, Q_a = D·P·Dᵀ are decorrelated (LAMBDA, ẑ = Zᵀ·a); the
+//!   subset S of the most precise decorrelated ambiguities whose bootstrapped success rate
+//!   reaches `min_success_rate` is searched (integer least squares) and must pass the ratio
+//!   test, else S loses its least precise member and is tried again. On long baselines the
+//!   wide lanes enter S long before the narrow lanes; on short ones S is the whole set.
+//! - The fixed subset as constraints on the state: C = Z_Sᵀ·D, C·x = ž_S. Fixed position:
+//!   x_pos − P_pos·Cᵀ·Q⁻¹·(C·x − ž), covariance P_pos − P_pos·Cᵀ·Q⁻¹·C·P_pos (Q = C·P·Cᵀ),
+//!   plus (1 − P_s)·δ·δᵀ where δ is the position shift to the second-best candidate: the σ
+//!   of a fix whose validation is weak includes the chance that it is wrong. A fix counts
+//!   (Q = 1) only when that position σ is at most `max_partial_fix_sigma`: a wide-lane-only
+//!   fix improves the float solution but is no fixed solution.
+//! - Fix-and-hold: the float state is constrained to C·x = ž with variance `hold_variance`.
 //!
 //! What enters: the filter state (read only), the options and the epoch's pairs. What leaves:
 //! a [`Fix`] (or none) and the best ratio tried, from [`resolve`]; [`hold`] constrains the
 //! state. The filter calls both; this module does not know the filter.
 
 use super::dd::DdGroup;
-use super::lambda::lambda;
+use super::lambda::{decorrelate, Decorrelated, IntegerCandidates};
 use super::options::PpkOptions;
 use super::pair::{has_phase, Pair};
 use super::state::{AmbKey, State, StateKey};
@@ -53,18 +60,51 @@ impl Candidate {
 pub(super) struct Fix {
     /// Rover position conditioned on the integers, ECEF metres.
     pub(super) position: Vector3<f64>,
-    /// Its covariance, m².
+    /// Its covariance, m² (including the wrong-fix term).
     pub(super) covariance: Matrix3<f64>,
-    /// Ratio test value (capped at 999.9).
+    /// Ratio test value of the accepted subset (capped at 999.9).
     pub(super) ratio: f64,
-    /// Number of DD ambiguities fixed.
+    /// Number of decorrelated ambiguities fixed.
     pub(super) n_fixed: usize,
-    /// DD operator (one row per fixed DD, over the whole state vector).
-    pub(super) dd_operator: DMatrix<f64>,
-    /// The integers, one per row of `dd_operator`.
+    /// Constraint rows C over the whole state vector, one per fixed decorrelated ambiguity.
+    pub(super) constraints: DMatrix<f64>,
+    /// The integers ž, one per row of `constraints`.
     pub(super) integers: DVector<f64>,
-    /// The groups the rows come from, in row order (one row per non-pivot member).
+    /// The DD groups, in DD row order (one row per non-pivot member).
     pub(super) groups: Vec<DdGroup<Candidate>>,
+    /// Each DD ambiguity's integer when the fix determines it (conditioned σ below 0.02
+    /// cycle), in DD row order.
+    pub(super) dd_integers: Vec<Option<i64>>,
+    /// The integers determine the position (at least three satellites fixed on every slot,
+    /// `min_fix_ambiguities` DD integers in all: a wide-lane-only fix is not) and do so
+    /// precisely (3D σ at most `max_fixed_sigma`: a fix in a weak geometry is no better than
+    /// a float solution and is not reported as one).
+    pub(super) complete: bool,
+}
+
+/// Whether the DD integers a fix determines (`dd_integers`, in the rows of `groups`) fix
+/// the position: at least three satellites (with their pivots, four) have the integers of
+/// every slot they were candidates on, and `min_total` DD integers are fixed in all. A
+/// satellite with the L1 integer alone fixes nothing when the ionosphere is estimated.
+fn determines_position(
+    groups: &[DdGroup<Candidate>],
+    dd_integers: &[Option<i64>],
+    min_total: usize,
+) -> bool {
+    // Per satellite: (DDs it is in, DDs of it fixed).
+    let mut per_sat: BTreeMap<Sv, (usize, usize)> = BTreeMap::new();
+    let mut row = 0;
+    for g in groups {
+        for c in &g.others {
+            let e = per_sat.entry(c.sv()).or_default();
+            e.0 += 1;
+            e.1 += usize::from(dd_integers[row].is_some());
+            row += 1;
+        }
+    }
+    let complete = per_sat.values().filter(|(n, k)| n == k).count();
+    let total: usize = per_sat.values().map(|(_, k)| k).sum();
+    complete >= 3 && total >= min_total
 }
 
 /// Double-difference groups per system and slot over the candidates not excluded.
@@ -153,147 +193,122 @@ fn position_range(st: &State) -> Range<usize> {
         .expect("the position block exists")
 }
 
-/// LAMBDA on the groups' DDs; the fix when the ratio test passes. Records the best ratio
-/// seen in `best_ratio`.
-fn try_fix(
-    st: &State,
-    o: &PpkOptions,
-    best_ratio: &mut Option<f64>,
-    x: &DVector<f64>,
-    p: &DMatrix<f64>,
-    groups: Vec<DdGroup<Candidate>>,
-) -> Option<Fix> {
-    let d = dd_operator(&groups, x.len());
-    let m = d.nrows();
-    let a = &d * x;
-    let q = &d * p * d.transpose();
-    let q = (&q + q.transpose()) * 0.5;
-    let c = lambda(a.as_slice(), q.as_slice(), 2)?;
-    let ratio = c.ratio().min(999.9);
-    *best_ratio = Some(best_ratio.map_or(ratio, |r: f64| r.max(ratio)));
-    if ratio < o.ratio_threshold {
-        return None;
+/// The float DD ambiguities of the groups and their covariance.
+struct FloatDd {
+    /// DD operator (DD rows × state).
+    d: DMatrix<f64>,
+    /// Float DD ambiguities, cycles.
+    a: DVector<f64>,
+    /// Their covariance, cycles².
+    q: DMatrix<f64>,
+}
+
+impl FloatDd {
+    fn of(st: &State, groups: &[DdGroup<Candidate>]) -> FloatDd {
+        let d = dd_operator(groups, st.x.len());
+        let a = &d * &st.x;
+        let q = &d * &st.p * d.transpose();
+        let q = (&q + q.transpose()) * 0.5;
+        FloatDd { d, a, q }
     }
-    let fix = DVector::from_vec(c.fixes[0].clone());
+}
+
+/// The position conditioned on a set of integers.
+struct FixedSolution {
+    position: Vector3<f64>,
+    /// Includes the chance of a wrong fix.
+    covariance: Matrix3<f64>,
+    /// Rows: the fixed combinations of the state.
+    constraints: DMatrix<f64>,
+    /// Each DD ambiguity's integer when the fix determines it.
+    dd_integers: Vec<Option<i64>>,
+}
+
+/// The fixed solution for the best integers of `cands` (with the runner-up weighted by the
+/// chance of a wrong fix) of the last `k` decorrelated ambiguities; None when the
+/// constrained system is singular.
+fn fixed_solution(
+    st: &State,
+    fl: &FloatDd,
+    dec: &Decorrelated,
+    k: usize,
+    cands: &IntegerCandidates,
+) -> Option<FixedSolution> {
+    let n = dec.n;
+    let zs = DMatrix::from_fn(n, k, |i, j| dec.z_column(n - k + j)[i]);
+    let c = zs.transpose() * &fl.d; // k × m
+    let pc = &st.p * c.transpose(); // m × k
+    let q = &c * &pc;
+    let ch = ((&q + q.transpose()) * 0.5).cholesky()?;
+    let best = DVector::from_column_slice(&cands.fixes[0]);
+    let shift = ch.solve(&(&c * &st.x - &best));
     let pos = position_range(st);
-    let (p0, n) = (pos.start, pos.len());
-    let qxa = p.rows(p0, n) * d.transpose();
-    let ch = q.cholesky()?;
-    let x_fixed = x.rows(p0, n) - &qxa * ch.solve(&(&a - &fix));
-    let cov = p.view((p0, p0), (n, n)) - &qxa * ch.solve(&qxa.transpose());
-    Some(Fix {
-        position: Vector3::new(x_fixed[0], x_fixed[1], x_fixed[2]),
+    let p_pos = pc.rows(pos.start, pos.len());
+    let x = st.x.rows(pos.start, pos.len()) - p_pos * &shift;
+    let mut cov = st.p.view((pos.start, pos.start), (3, 3)) - p_pos * ch.solve(&p_pos.transpose());
+    if let Some(second) = cands.fixes.get(1) {
+        let delta = p_pos * ch.solve(&(DVector::from_column_slice(second) - &best));
+        cov += &delta * delta.transpose() * (1.0 - dec.success_rate(k));
+    }
+    // The DD ambiguities conditioned on the fix: those it determines become integers.
+    let qac = &fl.d * &pc; // DD × k
+    let a_fixed = &fl.a - &qac * &shift;
+    let q_fixed = &fl.q - &qac * ch.solve(&qac.transpose());
+    let dd_integers = (0..fl.a.len())
+        .map(|i| (q_fixed[(i, i)].max(0.0).sqrt() < 0.02).then(|| a_fixed[i].round() as i64))
+        .collect();
+    Some(FixedSolution {
+        position: Vector3::new(x[0], x[1], x[2]),
         covariance: Matrix3::from_fn(|i, j| cov[(i, j)]),
-        ratio,
-        n_fixed: m,
-        dd_operator: d,
-        integers: fix,
-        groups,
+        constraints: c,
+        dd_integers,
     })
 }
 
-/// Wide-lane (slot 0 − slot 1) double differences fixed on a copy of the state.
-fn widelane(
-    st: &State,
-    o: &PpkOptions,
-    cands: &[Candidate],
-) -> Option<(DVector<f64>, DMatrix<f64>)> {
-    let n = st.x.len();
-    let mut rows: Vec<[(usize, f64); 4]> = Vec::new();
-    for sys in Constellation::ALL {
-        // Satellites of this system with both slot-0 and slot-1 candidates.
-        let both: Vec<(Candidate, Candidate)> = cands
-            .iter()
-            .filter(|c| c.amb.sv.sys == sys && c.amb.slot == 0)
-            .filter_map(|c1| {
-                cands
-                    .iter()
-                    .find(|c2| c2.amb.sv == c1.amb.sv && c2.amb.slot == 1)
-                    .map(|c2| (*c1, *c2))
-            })
-            .collect();
-        let Some(g) = DdGroup::form(0, both, |(c1, _)| c1.elevation) else {
-            continue;
-        };
-        let (r1, r2) = g.pivot;
-        for (s1, s2) in &g.others {
-            rows.push([
-                (s1.state, 1.0),
-                (s2.state, -1.0),
-                (r1.state, -1.0),
-                (r2.state, 1.0),
-            ]);
-        }
-    }
-    if rows.len() < o.min_fix_ambiguities {
-        return None;
-    }
-    let mut d = DMatrix::zeros(rows.len(), n);
-    for (i, row) in rows.iter().enumerate() {
-        for (k, v) in row {
-            d[(i, *k)] = *v;
-        }
-    }
-    let (x, p) = (&st.x, &st.p);
-    let a = &d * x;
-    let q = &d * p * d.transpose();
-    let q = (&q + q.transpose()) * 0.5;
-    let c = lambda(a.as_slice(), q.as_slice(), 2)?;
-    if c.ratio() < o.ratio_threshold {
-        return None;
-    }
-    let (mut x, mut p) = (x.clone(), p.clone());
-    let z = DVector::from_vec(c.fixes[0].clone());
-    constrain(&mut x, &mut p, &d, &z, o.hold_variance).then_some((x, p))
-}
-
-/// Resolve the ambiguities of this epoch on the filter state `st`: full set, wide lane
-/// first, then partial sets. `best_ratio` is set to the best ratio tried (None when no
-/// set was tried).
+/// Resolve the ambiguities of this epoch on the filter state `st` by partial resolution of
+/// the most precise decorrelated ambiguities. `best_ratio` is set to the best ratio tried
+/// (None when no subset was tried).
 pub(super) fn resolve(
     st: &State,
     o: &PpkOptions,
     pairs: &[Pair],
     best_ratio: &mut Option<f64>,
 ) -> Option<Fix> {
-    let cands = candidates(st, o, pairs);
-    let (mut x, mut p) = (st.x.clone(), st.p.clone());
-    let mut excluded: Vec<Sv> = Vec::new();
-    let mut widelane_tried = o.nf < 2;
     *best_ratio = None;
-    let mut attempt = 0;
-    while attempt <= o.max_partial_drops {
-        let groups = dd_groups(&cands, &excluded, o.mature_lock);
-        let n_dd: usize = groups.iter().map(|g| g.others.len()).sum();
-        if n_dd < o.min_fix_ambiguities {
-            return None;
+    let cands = candidates(st, o, pairs);
+    let groups = dd_groups(&cands, &[], o.mature_lock);
+    let fl = FloatDd::of(st, &groups);
+    if fl.a.len() < o.min_fix_ambiguities {
+        return None;
+    }
+    let dec = decorrelate(fl.a.as_slice(), fl.q.as_slice())?;
+    let mut k = dec.most_fixable(o.min_success_rate);
+    while k >= o.min_fix_ambiguities {
+        let c = dec.search_last(k, 2)?;
+        let ratio = c.ratio().min(999.9);
+        *best_ratio = Some(best_ratio.map_or(ratio, |r: f64| r.max(ratio)));
+        if ratio >= o.ratio_threshold {
+            let FixedSolution {
+                position,
+                covariance,
+                constraints,
+                dd_integers,
+            } = fixed_solution(st, &fl, &dec, k, &c)?;
+            let complete = determines_position(&groups, &dd_integers, o.min_fix_ambiguities)
+                && covariance.trace().sqrt() <= o.max_fixed_sigma;
+            return Some(Fix {
+                complete,
+                position,
+                covariance,
+                ratio,
+                n_fixed: k,
+                constraints,
+                integers: DVector::from_column_slice(&c.fixes[0]),
+                groups,
+                dd_integers,
+            });
         }
-        if let Some(f) = try_fix(st, o, best_ratio, &x, &p, groups) {
-            // A partial fix that leaves the position at several centimetres is no fix:
-            // the solution stays float rather than claim what it does not have.
-            if !excluded.is_empty() && f.covariance.trace().sqrt() > o.max_partial_fix_sigma {
-                return None;
-            }
-            return Some(f);
-        }
-        if !widelane_tried {
-            widelane_tried = true;
-            if let Some((xw, pw)) = widelane(st, o, &cands) {
-                (x, p) = (xw, pw);
-                continue;
-            }
-        }
-        // Partial fixing: drop the newest, then the lowest satellite.
-        let worst = cands
-            .iter()
-            .filter(|c| !excluded.contains(&c.sv()))
-            .min_by(|a, b| {
-                let ka = (a.lock >= o.mature_lock, a.elevation);
-                let kb = (b.lock >= o.mature_lock, b.elevation);
-                ka.partial_cmp(&kb).unwrap_or(std::cmp::Ordering::Equal)
-            })?;
-        excluded.push(worst.sv());
-        attempt += 1;
+        k -= 1;
     }
     None
 }
@@ -301,5 +316,5 @@ pub(super) fn resolve(
 /// Fix-and-hold: constrain the float ambiguities of `st` to the fixed integers with
 /// variance `var` (cycles²).
 pub(super) fn hold(st: &mut State, fix: &Fix, var: f64) {
-    constrain(&mut st.x, &mut st.p, &fix.dd_operator, &fix.integers, var);
+    constrain(&mut st.x, &mut st.p, &fix.constraints, &fix.integers, var);
 }

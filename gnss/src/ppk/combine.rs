@@ -22,6 +22,27 @@ fn mahalanobis2(d: &nalgebra::Vector3<f64>, cov: &Matrix3<f64>) -> f64 {
         .unwrap_or(f64::INFINITY)
 }
 
+/// A smoothed solution checked against the backward pass's own solution of the epoch: a fix
+/// more than 4σ (3D) from it is demoted to the smoothed float solution.
+pub fn checked(s: &EpochSol, b: Option<&EpochSol>) -> EpochSol {
+    let (Some(b), Some((pos, cov))) = (b, s.float) else {
+        return s.clone();
+    };
+    if s.quality != Quality::Fixed
+        || mahalanobis2(&(s.pos.0 - b.pos.0), &(s.cov + b.cov)) < 16.0 * 3.0
+    {
+        return s.clone();
+    }
+    EpochSol {
+        pos,
+        cov,
+        quality: Quality::Float,
+        nfix: 0,
+        float: None,
+        ..s.clone()
+    }
+}
+
 /// Combine the two passes' solutions of one epoch.
 pub fn combine(f: Option<&EpochSol>, b: Option<&EpochSol>) -> Option<EpochSol> {
     let (f, b) = match (f, b) {

@@ -2,7 +2,9 @@
 //!
 //! State ([`super::state`]): rover position (ECEF, m) plus one single-difference float
 //! ambiguity (cycles) per satellite and frequency slot [+ one SD slant ionosphere per
-//! satellite, m, in the ionosphere-weighted model]. Double differences are formed in the
+//! satellite, m, in the ionosphere-weighted model] [+ the rover's zenith wet delay, m].
+//! Which optional models run was settled by [`super::process`] (`Estimate::On`/`Off` only
+//! reach the filter). Double differences are formed in the
 //! measurement model ([`super::measure`]) against a pivot per system and slot, so a pivot
 //! change needs no state surgery. Integer resolution ([`super::ar`]) by LAMBDA with partial
 //! fixing and fix-and-hold.
@@ -14,7 +16,7 @@
 //!    model); ambiguities keep their values;
 //! 4. ambiguity bookkeeping: resets for slips, gaps, post-fit outliers of the previous epoch
 //!    (all in instantaneous mode), process noise on the others;
-//! 5. new states from phase minus code (and zero ionosphere);
+//! 5. new states from phase minus code (and zero ionosphere, zero zenith wet delay);
 //! 6. measurement update: residuals formed at the state, the innovation gate, an iterated
 //!    update (two linearisations about the prior);
 //! 7. post-fit check: phase residuals above `max_phase_residual` reset their ambiguity at the
@@ -23,25 +25,31 @@
 //!    the epoch's ambiguity segment ([`super::segment`]).
 
 use super::ar;
-use super::geometry::{tropo, SatView};
+use super::geometry::{day_of_year, tropo, wet_mapping, SatView};
 use super::measure::{self, ObsKind};
-use super::obs::{SatMeas, NF};
-use super::options::{ArMode, PpkOptions};
+use super::obs::SatMeas;
+use super::options::{ArMode, Estimate, PpkOptions};
 use super::output::{EpochSol, PassStats};
 use super::pair::{observes, Pair};
 use super::segment::{FixedIntegers, SegmentTracker};
-use super::slip::{SlipCause, SlipDetector};
+use super::slip::{SlipCause, Slips};
+use super::smooth::{self, Prior};
 use super::state::{AmbKey, State, StateKey};
 use crate::frame::{Ecef, Geodetic};
 use crate::model::antex::AntennaPcv;
 use crate::orbit::Orbits;
 use crate::solution::Quality;
-use crate::sv::Sv;
 use hifitime::Epoch;
-use std::collections::BTreeMap;
 
-/// Slips of one receiver's satellites at one epoch, per slot.
-type Slips = BTreeMap<Sv, [Option<SlipCause>; NF]>;
+/// The arc breaks one step applies (see [`super::slip::arc_breaks`]): the rover's since the
+/// previous step of the pass, and the base's since the base epoch of the previous step.
+#[derive(Clone, Debug, Default)]
+pub struct StepSlips {
+    /// Rover breaks.
+    pub rover: Slips,
+    /// Base breaks.
+    pub base: Slips,
+}
 
 /// Sigma of the predicted position (the code solution), metres.
 const POSITION_SIGMA: f64 = 30.0;
@@ -53,11 +61,6 @@ pub struct Filter<'a> {
     base: Ecef,
     base_geo: Geodetic,
     state: State,
-    rover_slip: SlipDetector,
-    base_slip: SlipDetector,
-    last_base_time: Option<Epoch>,
-    /// Slips of the latest base epoch, applied once (to the first rover epoch using it).
-    base_slips: Slips,
     /// Ambiguities whose post-fit residual betrayed a slip: reset at the next epoch.
     pending_reset: Vec<AmbKey>,
     last_time: Option<Epoch>,
@@ -66,6 +69,10 @@ pub struct Filter<'a> {
     rover_ant: Option<AntennaPcv>,
     base_ant: Option<AntennaPcv>,
     segments: SegmentTracker,
+    /// Keep the state before the measurements of each step.
+    record: bool,
+    /// That state, of the last step.
+    recorded: Option<Prior>,
 }
 
 /// Ionospheric constraint of the epoch (ionosphere-weighted model), from the baseline length.
@@ -88,13 +95,13 @@ impl IonoConstraint {
 
 impl<'a> Filter<'a> {
     /// A filter for rover data against a base antenna at `base` (antenna reference point,
-    /// ECEF); `backward` for a pass that runs back in time; `segment_gap`: the step between
-    /// solved epochs (s) beyond which a new ambiguity segment starts.
+    /// ECEF) (the direction of the pass is only in the order of its steps and the arc breaks
+    /// given to them); `segment_gap`: the step between solved epochs (s) beyond which a new
+    /// ambiguity segment starts.
     pub fn new(
         opts: &'a PpkOptions,
         orbits: &'a Orbits,
         base: Ecef,
-        backward: bool,
         antennas: (Option<AntennaPcv>, Option<AntennaPcv>),
         segment_gap: f64,
     ) -> Self {
@@ -104,21 +111,24 @@ impl<'a> Filter<'a> {
             base,
             base_geo: base.to_geodetic(),
             state: State::new(1e4),
-            rover_slip: SlipDetector::new(opts.max_gap, backward),
-            base_slip: SlipDetector::new(opts.max_gap.max(3.0 * opts.max_age), backward),
-            last_base_time: None,
-            base_slips: BTreeMap::new(),
             pending_reset: Vec::new(),
             last_time: None,
             stats: PassStats::default(),
             rover_ant: antennas.0,
             base_ant: antennas.1,
             segments: SegmentTracker::new(segment_gap),
+            record: false,
+            recorded: None,
         }
     }
 
     /// Process one rover epoch against a base epoch. `start` is a position to linearise about
-    /// (the single-point solution). None when no double difference could be formed.
+    /// (the single-point solution); `slips` the arc breaks to apply. With `prior` (the
+    /// backward pass's estimate at this epoch, before its measurements), the solution is the
+    /// two-filter smoother's and is resolved without holding. None when no double
+    /// difference could be formed. The state before the measurements is kept for
+    /// [`Self::take_prior`].
+    #[allow(clippy::too_many_arguments)]
     pub fn step(
         &mut self,
         t: Epoch,
@@ -126,18 +136,33 @@ impl<'a> Filter<'a> {
         tb: Epoch,
         base: &[SatMeas],
         start: Ecef,
+        slips: &StepSlips,
+        prior: Option<&Prior>,
     ) -> Option<EpochSol> {
         let dt = self.elapsed(t);
-        let rover_slips = self.detect_slips(t, rover, tb, base);
         let pairs = self.form_pairs(t, rover, tb, base, &start);
         self.predict(&start);
         let iono = IonoConstraint::at(&start, &self.base, self.opts);
-        self.update_ambiguity_bookkeeping(t, dt, &rover_slips, iono.process_noise);
+        self.update_ambiguity_bookkeeping(t, dt, slips, iono.process_noise);
         self.add_new_states(t, &pairs, iono.initial_sigma);
+        if self.record {
+            self.recorded = Some(Prior::of(&self.state));
+        }
         let used_sats = self.measurement_update(&pairs)?;
         self.post_fit_check(&pairs);
         self.count_locks(t, &pairs);
-        Some(self.solve(t, tb, used_sats, &pairs))
+        let smoothed = prior.and_then(|p| smooth::fuse(&self.state, p)).zip(prior);
+        Some(self.solve(t, tb, used_sats, &pairs, smoothed))
+    }
+
+    /// Keep the state before each epoch's measurements (see [`Self::take_prior`]).
+    pub fn record_priors(&mut self) {
+        self.record = true;
+    }
+
+    /// The state of the last step before its measurements (when recording).
+    pub fn take_prior(&mut self) -> Option<Prior> {
+        self.recorded.take()
     }
 
     /// Seconds since the previous epoch of the pass (0 at the first).
@@ -148,22 +173,6 @@ impl<'a> Filter<'a> {
             .unwrap_or(0.0);
         self.last_time = Some(t);
         dt
-    }
-
-    /// Slip detection on both receivers. Returns the rover's slips; the base's are kept for
-    /// the bookkeeping and only checked when the base epoch changes (a 1 Hz base serves many
-    /// 10 Hz epochs).
-    fn detect_slips(&mut self, t: Epoch, rover: &[SatMeas], tb: Epoch, base: &[SatMeas]) -> Slips {
-        if self.last_base_time != Some(tb) {
-            self.last_base_time = Some(tb);
-            let s = self.base_slip.check_epoch(tb, base);
-            self.base_slips = base.iter().map(|m| m.sv).zip(s).collect();
-        }
-        rover
-            .iter()
-            .map(|m| m.sv)
-            .zip(self.rover_slip.check_epoch(t, rover))
-            .collect()
     }
 
     /// Satellites seen by both receivers with an orbit, above the mask (rover elevation: an
@@ -178,6 +187,10 @@ impl<'a> Filter<'a> {
     ) -> Vec<Pair> {
         let mut pairs: Vec<Pair> = Vec::new();
         let start_geo = start.to_geodetic();
+        let doy = day_of_year(t);
+        let age_sigma = self.opts.age_error_rate
+            * (t - tb).to_seconds().abs()
+            * (1.0 + (start.0 - self.base.0).norm() / 10_000.0);
         for r in rover {
             let Some(b) = base.iter().find(|b| b.sv == r.sv) else {
                 continue;
@@ -202,8 +215,11 @@ impl<'a> Filter<'a> {
                 vr,
                 vb,
                 rho_b,
-                tropo_b: tropo(&self.base_geo, el_b),
+                tropo_b: tropo(&self.base_geo, el_b, doy),
                 el,
+                map_wet: wet_mapping(&start_geo, el, doy),
+                doy,
+                age_var: age_sigma * age_sigma,
                 ant: std::array::from_fn(|f| {
                     let band = super::obs::slot_band(r.sv.sys, f);
                     let c = |a: &Option<AntennaPcv>, az, el| {
@@ -226,13 +242,7 @@ impl<'a> Filter<'a> {
     /// Reset the per-satellite states touched by a slip (either receiver), a gap longer than
     /// `max_gap`, a post-fit outlier of the previous epoch, or every epoch in instantaneous
     /// mode; add process noise to the others.
-    fn update_ambiguity_bookkeeping(
-        &mut self,
-        t: Epoch,
-        dt: f64,
-        rover_slips: &Slips,
-        iono_q: f64,
-    ) {
+    fn update_ambiguity_bookkeeping(&mut self, t: Epoch, dt: f64, slips: &StepSlips, iono_q: f64) {
         let o = self.opts;
         let slip_of = |slips: &Slips, key: StateKey| match key {
             StateKey::Ambiguity(a) => slips.get(&a.sv).and_then(|s| s[a.slot]),
@@ -241,8 +251,12 @@ impl<'a> Filter<'a> {
         let mut reset = Vec::new();
         let mut noise = Vec::new();
         for (_, s) in self.state.sats() {
-            let rs = slip_of(rover_slips, s.key);
-            let bs = slip_of(&self.base_slips, s.key);
+            if s.key == StateKey::Tropo {
+                noise.push((s.key, o.tropo_process_noise.powi(2) * dt));
+                continue;
+            }
+            let rs = slip_of(&slips.rover, s.key);
+            let bs = slip_of(&slips.base, s.key);
             let gap = (t - s.track.last).to_seconds().abs() > o.max_gap;
             let pending =
                 matches!(s.key, StateKey::Ambiguity(a) if self.pending_reset.contains(&a));
@@ -275,8 +289,6 @@ impl<'a> Filter<'a> {
         }
         self.state.remove(&reset);
         self.pending_reset.clear();
-        // Base slips apply once, to the first rover epoch that uses the new base epoch.
-        self.base_slips.clear();
     }
 
     /// New SD ambiguity states from phase minus code for every slot observed on both
@@ -303,7 +315,11 @@ impl<'a> Filter<'a> {
                 self.state.add(key, t, n0, o.amb_init_sigma.powi(2));
             }
         }
-        if o.estimate_iono {
+        if o.tropo == Estimate::On && !self.state.has(StateKey::Tropo) {
+            self.state
+                .add(StateKey::Tropo, t, 0.0, o.tropo_sigma.powi(2));
+        }
+        if o.iono == Estimate::On {
             for pr in pairs {
                 let key = StateKey::Iono(pr.r.sv);
                 if observes(pr, key) && !self.state.has(key) {
@@ -373,34 +389,69 @@ impl<'a> Filter<'a> {
         }
     }
 
-    /// The float solution, replaced by the fixed one when the ambiguities resolve (and then
-    /// held in fix-and-hold mode), with its ambiguity segment.
-    fn solve(&mut self, t: Epoch, tb: Epoch, used_sats: usize, pairs: &[Pair]) -> EpochSol {
+    /// Whether the data before and after this epoch, each alone, agree with a smoothed fix:
+    /// neither the forward state nor the backward `prior` resolves any ambiguity to
+    /// another integer than `fix` (they may resolve fewer). Independent halves agreeing is
+    /// what makes a fix of long-baseline data trustworthy: a model error that biases the
+    /// smoothed float rarely biases both halves to the same wrong integer.
+    fn halves_agree(&self, fix: &ar::Fix, prior: &Prior, pairs: &[Pair]) -> bool {
+        let mine = FixedIntegers::by_satellite(fix);
+        let mut unused = None;
+        [Some(&self.state), None]
+            .into_iter()
+            .map(|s| match s {
+                Some(s) => ar::resolve(s, self.opts, pairs, &mut unused),
+                None => ar::resolve(&prior.to_state(), self.opts, pairs, &mut unused),
+            })
+            .all(|half| half.is_none_or(|h| !FixedIntegers::by_satellite(&h).conflicts(&mine)))
+    }
+
+    /// The float solution (the smoothed one when given), replaced by the fixed one when the
+    /// ambiguities resolve (and then held in fix-and-hold mode, never on a smoothed state),
+    /// with its ambiguity segment.
+    fn solve(
+        &mut self,
+        t: Epoch,
+        tb: Epoch,
+        used_sats: usize,
+        pairs: &[Pair],
+        smoothed: Option<(super::state::State, &Prior)>,
+    ) -> EpochSol {
         let o = self.opts;
+        let st = smoothed.as_ref().map_or(&self.state, |s| &s.0);
         let mut sol = EpochSol {
             time: t,
-            pos: Ecef(self.state.position()),
-            cov: self.state.position_cov(),
+            pos: Ecef(st.position()),
+            cov: st.position_cov(),
             quality: Quality::Float,
             nsat: used_sats,
             ratio: 0.0,
             age: (t - tb).to_seconds(),
             nfix: 0,
             segment: 0,
+            float: None,
         };
-        let mut fixed = None;
         if o.ar == ArMode::Off {
-            sol.segment = self.segments.next(t, fixed);
+            sol.segment = self.segments.next(t, None);
             return sol;
         }
         let mut best_ratio = None;
-        if let Some(fix) = ar::resolve(&self.state, o, pairs, &mut best_ratio) {
+        let mut fix = ar::resolve(st, o, pairs, &mut best_ratio).filter(|f| f.complete);
+        if let (Some(f), Some((_, prior))) = (&fix, &smoothed) {
+            if !self.halves_agree(f, prior, pairs) {
+                self.stats.smoothed_fixes_rejected += 1;
+                fix = None;
+            }
+        }
+        let mut fixed = None;
+        if let Some(fix) = fix {
+            sol.float = Some((sol.pos, sol.cov));
             sol.pos = Ecef(fix.position);
             sol.cov = fix.covariance;
             sol.quality = Quality::Fixed;
             sol.ratio = fix.ratio;
             sol.nfix = fix.n_fixed;
-            if o.ar == ArMode::FixAndHold {
+            if o.ar == ArMode::FixAndHold && smoothed.is_none() {
                 ar::hold(&mut self.state, &fix, o.hold_variance);
             }
             fixed = Some(FixedIntegers::of(&fix));

@@ -4,7 +4,7 @@
 
 use super::obs::SatMeas;
 use crate::frame::{az_el, rotate_to_reception, Ecef, Geodetic};
-use crate::model::troposphere;
+use crate::model::{niell, zenith_delays};
 use crate::orbit::{Orbits, C};
 use hifitime::{Duration, Epoch};
 use nalgebra::Vector3;
@@ -50,7 +50,27 @@ impl SatView {
     }
 }
 
-/// Slant troposphere at a receiver for an elevation.
-pub fn tropo(g: &Geodetic, el: f64) -> f64 {
-    troposphere(g, el)
+/// Slant troposphere (m) at a receiver for an elevation on day of year `doy`: Saastamoinen
+/// zenith delays of a standard atmosphere, each with its Niell mapping function; 0 outside
+/// −500 m … 20 km of height or below the horizon.
+pub fn tropo(g: &Geodetic, el: f64, doy: f64) -> f64 {
+    if g.h < -500.0 || g.h > 2.0e4 || el <= 0.0 {
+        return 0.0;
+    }
+    let (zhd, zwd) = zenith_delays(g);
+    let (mh, mw) = niell(g, el, doy);
+    zhd * mh + zwd * mw
+}
+
+/// Niell wet mapping function (the partial derivative of a slant delay by the zenith wet
+/// delay) at a receiver.
+pub fn wet_mapping(g: &Geodetic, el: f64, doy: f64) -> f64 {
+    niell(g, el, doy).1
+}
+
+/// Day of year (1 on 1 January, fractional) of an epoch, for the mapping functions.
+pub fn day_of_year(t: Epoch) -> f64 {
+    let (y, _, _, _, _, _, _) = t.to_gregorian_utc();
+    let start = Epoch::from_gregorian_utc_at_midnight(y, 1, 1);
+    1.0 + (t - start).to_unit(hifitime::Unit::Day)
 }

@@ -11,9 +11,11 @@
 //! - Design row h = ∂(modelled)/∂x over the whole state vector: −(e_s − e_pivot) on the
 //!   position block (e = unit vector receiver → satellite, ECEF), ±λ on the two SD ambiguity
 //!   states of a phase row, ±μ (ionospheric scale of the slot, negative for phase) on the SD
-//!   ionosphere states when the model has them.
+//!   ionosphere states when the model has them, m_w(el_s) − m_w(el_pivot) (Niell wet mapping at
+//!   the rover) on the zenith wet delay state when it has that.
 //! - Covariance: SD variance 2·σ²(el) (σ² = a² + (b/sin el)², code scaled by the code/phase
-//!   ratio²); DDs of one group share their pivot's SD variance.
+//!   ratio²) plus the base age's (see `PpkOptions::age_error_rate`); DDs of one group share
+//!   their pivot's SD variance.
 //! - Row order: system (`Constellation::ALL`), slot, phase before code, then the pairs' order.
 
 use super::dd::DdGroup;
@@ -106,11 +108,7 @@ fn undifferenced(pairs: &[Pair], rx: &Vector3<f64>) -> Vec<Pre> {
         .iter()
         .map(|p| {
             let (rho_r, e) = p.vr.range(rx);
-            let tr = if rg.h > -500.0 && rg.h < 2.0e4 {
-                tropo(&rg, p.el)
-            } else {
-                0.0
-            };
+            let tr = tropo(&rg, p.el, p.doy);
             Pre {
                 e,
                 sd_model: (rho_r - p.rho_b) - C * (p.vr.clock - p.vb.clock) + (tr - p.tropo_b),
@@ -139,6 +137,7 @@ pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residu
                     }))
                 };
                 let iono = |i: usize| state.offset(StateKey::Iono(pairs[i].r.sv));
+                let ztd = state.offset(StateKey::Tropo);
                 // Members with the needed data (and an ambiguity state for phase).
                 let members: Vec<usize> = (0..pairs.len())
                     .filter(|&i| {
@@ -167,7 +166,7 @@ pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residu
                 } else {
                     o.code_phase_ratio.powi(2)
                 };
-                let sd_var = |i: usize| 2.0 * fac * var_phase(pairs[i].el, o);
+                let sd_var = |i: usize| 2.0 * fac * var_phase(pairs[i].el, o) + pairs[i].age_var;
                 // Ionosphere scale of this slot relative to the first (delays code, advances phase).
                 let mu = |i: usize| {
                     (pairs[i].r.freq[0] / pairs[i].r.freq[f]).powi(2)
@@ -182,6 +181,9 @@ pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residu
                     if let Some(k) = iono(i) {
                         m += mu(i) * x[k];
                     }
+                    if let Some(k) = ztd {
+                        m += pairs[i].map_wet * x[k];
+                    }
                     m
                 };
                 let refi = group.pivot;
@@ -195,6 +197,9 @@ pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residu
                     if let (Some(ki), Some(kr)) = (iono(i), iono(refi)) {
                         hr[ki] = mu(i);
                         hr[kr] = -mu(refi);
+                    }
+                    if let Some(k) = ztd {
+                        hr[k] = pairs[i].map_wet - pairs[refi].map_wet;
                     }
                     if phase {
                         if let (Some(ki), Some(kr)) = (amb(i), amb(refi)) {

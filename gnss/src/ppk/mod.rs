@@ -23,11 +23,12 @@ mod output;
 mod pair;
 mod segment;
 pub mod slip;
+mod smooth;
 mod state;
 
 pub use measure::GateReason;
-pub use options::{ArMode, BasePosition, FilterMode, PpkOptions};
-pub use output::{EpochSol, PassStats, PpkResult};
+pub use options::{ArMode, BasePosition, Estimate, FilterMode, PpkOptions};
+pub use output::{EpochSol, Models, PassStats, PpkResult};
 
 use crate::error::{Error, Result};
 use crate::frame::{enu_rotation, Ecef};
@@ -46,6 +47,17 @@ fn arp_offset(h: &ObsHeader, at: &Ecef) -> Vector3<f64> {
     let d = h.antenna_delta;
     let r = enu_rotation(&at.to_geodetic());
     r.transpose() * Vector3::new(d.east, d.north, d.up)
+}
+
+/// A covariance (ECEF) of `sigma` horizontal and vertical in the local frame at `at`.
+fn systematic(at: &Ecef, sigma: (f64, f64)) -> nalgebra::Matrix3<f64> {
+    let r = enu_rotation(&at.to_geodetic());
+    let d = nalgebra::Matrix3::from_diagonal(&Vector3::new(
+        sigma.0 * sigma.0,
+        sigma.0 * sigma.0,
+        sigma.1 * sigma.1,
+    ));
+    r.transpose() * d * r
 }
 
 /// Median spacing of epochs, seconds.
@@ -126,6 +138,30 @@ fn antenna_calibrations(
     (pick(rover, "rover"), pick(base, "base"))
 }
 
+/// The sigma (horizontal, vertical) of the phase-centre error between rover and base
+/// antennas: zero for one antenna type at both ends or both calibrated, else
+/// `uncalibrated_antenna_sigma` (with a warning naming the two types).
+fn antenna_model_error(
+    opts: &PpkOptions,
+    rover: &ObsFile,
+    base: &ObsFile,
+    calibrated: &(Option<AntennaPcv>, Option<AntennaPcv>),
+    warnings: &mut Vec<String>,
+) -> (f64, f64) {
+    let norm = |s: &str| s.split_whitespace().collect::<Vec<_>>().join(" ");
+    let (r, b) = (norm(&rover.header.antenna), norm(&base.header.antenna));
+    if r == b || (calibrated.0.is_some() && calibrated.1.is_some()) {
+        return (0.0, 0.0);
+    }
+    let s = opts.uncalibrated_antenna_sigma;
+    warnings.push(format!(
+        "rover antenna '{r}' and base antenna '{b}' differ and are not both calibrated: their phase centres may put positions centimetres off (sigmas include {:.0} mm horizontal, {:.0} mm vertical); give --antex",
+        s.0 * 1000.0,
+        s.1 * 1000.0
+    ));
+    s
+}
+
 /// The base epoch nearest each rover epoch, within `max_age` seconds.
 fn match_base_epochs(rover: &ObsFile, base: &ObsFile, max_age: f64) -> Vec<Option<usize>> {
     let bt: Vec<Epoch> = base.epochs.iter().map(|e| e.time).collect();
@@ -176,6 +212,30 @@ fn start_values(
     starts
 }
 
+/// The longest distance of a rover start position from the base antenna, metres.
+fn longest_baseline(starts: &[std::result::Result<(Ecef, f64), String>], base: &Ecef) -> f64 {
+    starts
+        .iter()
+        .filter_map(|s| s.as_ref().ok())
+        .map(|(p, _)| (p.0 - base.0).norm())
+        .fold(0.0, f64::max)
+}
+
+/// Settle the `Auto` atmospheric models for a run whose longest baseline is `longest`
+/// metres; what is estimated.
+fn choose_models(opts: &mut PpkOptions, longest: f64) -> Models {
+    let iono = opts.iono.resolve(longest, opts.long_baseline);
+    let tropo = opts.tropo.resolve(longest, opts.long_baseline);
+    let on = |b: bool| if b { Estimate::On } else { Estimate::Off };
+    opts.iono = on(iono);
+    opts.tropo = on(tropo);
+    Models {
+        longest_baseline: longest,
+        iono,
+        tropo,
+    }
+}
+
 /// Everything a pass reads, per rover epoch.
 struct PassInputs<'a> {
     rover: &'a ObsFile,
@@ -186,23 +246,66 @@ struct PassInputs<'a> {
     matched: Vec<Option<usize>>,
     /// Start position and clock offset of each rover epoch.
     starts: Vec<std::result::Result<(Ecef, f64), String>>,
+    /// Arc breaks of the rover's phase, per rover epoch.
+    rover_breaks: Vec<slip::Slips>,
+    /// Arc breaks of the base's phase, per base epoch.
+    base_breaks: Vec<slip::Slips>,
 }
 
-/// One pass of the filter over every rover epoch (forward or backward in time): its
-/// solution per epoch (None when unsolved) and its counters.
+/// The union of the breaks at `range` of a table.
+fn breaks_in(table: &[slip::Slips], range: std::ops::Range<usize>) -> slip::Slips {
+    let mut out = slip::Slips::new();
+    for b in &table[range] {
+        for (sv, causes) in b {
+            let e = out.entry(*sv).or_insert([None; obs::NF]);
+            for (a, c) in e.iter_mut().zip(causes) {
+                *a = a.or(*c);
+            }
+        }
+    }
+    out
+}
+
+/// The breaks a step from epoch `prev` to epoch `now` crosses (indices of one receiver's
+/// epochs; a break at k lies between k and the epoch before it): (prev, now] forward,
+/// (now, prev] backward, none at the first step.
+fn crossed(table: &[slip::Slips], prev: Option<usize>, now: usize) -> slip::Slips {
+    match prev {
+        Some(p) if p < now => breaks_in(table, p + 1..now + 1),
+        Some(p) if p > now => breaks_in(table, now + 1..p + 1),
+        _ => slip::Slips::new(),
+    }
+}
+
+/// What a pass hands back: its solution per epoch (None when unsolved), its counters and,
+/// when it recorded them, its states before each epoch's measurements.
+struct PassOutput {
+    sols: Vec<Option<EpochSol>>,
+    stats: PassStats,
+    priors: Vec<Option<smooth::Prior>>,
+}
+
+/// One pass of the filter over every rover epoch (forward or backward in time). With
+/// `priors` (the backward pass's, by rover epoch) each solution is the smoother's.
 fn run_pass(
     inputs: &PassInputs,
     mut f: filter::Filter,
     backward: bool,
+    priors: Option<&[Option<smooth::Prior>]>,
     progress: &(dyn Fn(usize) + Sync),
-) -> (Vec<Option<EpochSol>>, PassStats) {
+) -> PassOutput {
     let n = inputs.rover.epochs.len();
-    let mut out: Vec<Option<EpochSol>> = vec![None; n];
+    let mut out = PassOutput {
+        sols: vec![None; n],
+        stats: PassStats::default(),
+        priors: Vec::new(),
+    };
     let order: Box<dyn Iterator<Item = usize>> = if backward {
         Box::new((0..n).rev())
     } else {
         Box::new(0..n)
     };
+    let (mut prev_i, mut prev_j) = (None, None);
     for (count, i) in order.enumerate() {
         if count % 500 == 0 {
             progress(500.min(n - count));
@@ -210,39 +313,65 @@ fn run_pass(
         let (Some(j), Ok((start, _))) = (inputs.matched[i], &inputs.starts[i]) else {
             continue;
         };
-        out[i] = f.step(
+        let slips = filter::StepSlips {
+            rover: crossed(&inputs.rover_breaks, prev_i, i),
+            base: crossed(&inputs.base_breaks, prev_j, j),
+        };
+        (prev_i, prev_j) = (Some(i), Some(j));
+        out.sols[i] = f.step(
             inputs.rover.epochs[i].time,
             &inputs.rover_meas[i],
             inputs.base.epochs[j].time,
             &inputs.base_meas[j],
             *start,
+            &slips,
+            priors.and_then(|p| p[i].as_ref()),
         );
+        if let Some(p) = f.take_prior() {
+            out.priors.resize_with(n, || None);
+            out.priors[i] = Some(p);
+        }
     }
-    (out, f.stats)
+    out.stats = f.stats;
+    out
 }
 
-/// A pass's solutions and counters.
-type Pass = (Vec<Option<EpochSol>>, PassStats);
-
-/// The output solution of each epoch (the one pass, or both combined) with its ambiguity
-/// segment (the union of the passes' boundaries plus Q changes).
-fn merge_passes(fw: Option<&Pass>, bw: Option<&Pass>) -> Vec<Option<(EpochSol, u32)>> {
+/// The output solution of each epoch with its ambiguity segment (see
+/// [`segment::output_segments`]): the one pass; with both, the forward pass's when it carries
+/// the smoother's solutions (`smoothed`; a fix that the backward pass's float solution puts
+/// beyond 4σ is demoted to the smoothed float), else the two combined.
+fn merge_passes(
+    fw: Option<&PassOutput>,
+    bw: Option<&PassOutput>,
+    smoothed: bool,
+) -> Vec<Option<(EpochSol, u32)>> {
     let merged: Vec<Option<EpochSol>> = match (fw, bw) {
-        (Some((f, _)), Some((b, _))) => f
+        (Some(f), Some(b)) if smoothed => f
+            .sols
             .iter()
-            .zip(b)
+            .zip(&b.sols)
+            .map(|(a, b)| a.as_ref().map(|a| combine::checked(a, b.as_ref())))
+            .collect(),
+        (Some(f), Some(b)) => f
+            .sols
+            .iter()
+            .zip(&b.sols)
             .map(|(a, b)| combine::combine(a.as_ref(), b.as_ref()))
             .collect(),
-        (Some((f, _)), None) => f.clone(),
-        (None, Some((b, _))) => b.clone(),
+        (Some(f), None) => f.sols.clone(),
+        (None, Some(b)) => b.sols.clone(),
         (None, None) => Vec::new(),
     };
-    let segments_of = |(sols, _): &Pass| -> Vec<Option<u32>> {
-        sols.iter().map(|s| s.as_ref().map(|s| s.segment)).collect()
+    let segments_of = |p: &PassOutput| -> Vec<Option<(u32, Quality)>> {
+        p.sols
+            .iter()
+            .map(|s| s.as_ref().map(|s| (s.segment, s.quality)))
+            .collect()
     };
-    let pass_segments: Vec<Vec<Option<u32>>> =
+    let pass_segments: Vec<Vec<Option<(u32, Quality)>>> =
         [fw, bw].into_iter().flatten().map(segments_of).collect();
-    let passes: Vec<&[Option<u32>]> = pass_segments.iter().map(|p| p.as_slice()).collect();
+    let passes: Vec<&[Option<(u32, Quality)>]> =
+        pass_segments.iter().map(|p| p.as_slice()).collect();
     let quality: Vec<Option<Quality>> = merged
         .iter()
         .map(|s| s.as_ref().map(|s| s.quality))
@@ -253,6 +382,19 @@ fn merge_passes(fw: Option<&Pass>, bw: Option<&Pass>) -> Vec<Option<(EpochSol, u
         .zip(segments)
         .map(|(s, id)| s.map(|s| (s, id.unwrap_or(0))))
         .collect()
+}
+
+/// Memory the backward pass's recorded states may take for the two-filter smoother; beyond
+/// it the passes are combined epoch by epoch instead.
+const SMOOTHER_BUDGET: usize = 1 << 30;
+
+/// Memory the smoother would need: every rover epoch's state (position excluded) with its
+/// covariance, at the largest state the data allow.
+fn smoother_bytes(inputs: &PassInputs, opts: &PpkOptions) -> usize {
+    let sats = inputs.rover_meas.iter().map(Vec::len).max().unwrap_or(0);
+    let per_sat = opts.nf + usize::from(opts.iono == Estimate::On);
+    let n = 1 + sats * per_sat;
+    inputs.rover_meas.len() * (n * n + 2 * n) * 8
 }
 
 /// Run the carrier-phase engine: forward, backward or both passes of the filter over the
@@ -272,6 +414,7 @@ pub fn process(
     let base_marker = base_marker(base, base_pos, &mut warnings)?;
     let base_arp = Ecef(base_marker.0 + arp_offset(&base.header, &base_marker));
     let antennas = antenna_calibrations(opts, rover, base, &mut warnings);
+    let antenna_sigma = antenna_model_error(opts, rover, base, &antennas, &mut warnings);
     let mut opts = opts.clone();
     if opts.max_gap <= 0.0 {
         opts.max_gap = (5.0 * interval(rover)).max(5.0);
@@ -300,29 +443,66 @@ pub fn process(
         base_meas: measurements(base),
         matched,
         starts: start_values(rover, orbits, &opts),
+        rover_breaks: Vec::new(),
+        base_breaks: Vec::new(),
     };
+    let mut inputs = inputs;
+    let times = |f: &ObsFile| -> Vec<Epoch> { f.epochs.iter().map(|e| e.time).collect() };
+    let (rb, bb) = rayon::join(
+        || slip::arc_breaks(&times(rover), &inputs.rover_meas, opts.max_gap),
+        || {
+            let gap = opts.max_gap.max(3.0 * opts.max_age);
+            slip::arc_breaks(&times(base), &inputs.base_meas, gap)
+        },
+    );
+    (inputs.rover_breaks, inputs.base_breaks) = (rb, bb);
+    let longest = longest_baseline(&inputs.starts, &base_arp);
+    let models = choose_models(&mut opts, longest);
     // A step longer than 2.5 nominal intervals between solved epochs starts a new segment.
     let segment_gap = 2.5 * interval(rover);
-    let run = |backward: bool| -> Pass {
-        let f = filter::Filter::new(
-            &opts,
-            orbits,
-            base_arp,
-            backward,
-            antennas.clone(),
-            segment_gap,
-        );
-        run_pass(&inputs, f, backward, progress)
+    let run = |backward: bool, o: &PpkOptions, priors: Option<&[Option<smooth::Prior>]>| {
+        let mut f = filter::Filter::new(o, orbits, base_arp, antennas.clone(), segment_gap);
+        if backward && priors.is_none() && o.ar == ArMode::Off {
+            f.record_priors();
+        }
+        run_pass(&inputs, f, backward, priors, progress)
     };
+    let mut smoothed = false;
     let (fw, bw) = match opts.filter {
-        FilterMode::Forward => (Some(run(false)), None),
-        FilterMode::Backward => (None, Some(run(true))),
+        FilterMode::Forward => (Some(run(false, &opts, None)), None),
+        FilterMode::Backward => (None, Some(run(true, &opts, None))),
+        FilterMode::Combined
+            if models.iono && smoother_bytes(&inputs, &opts) <= SMOOTHER_BUDGET =>
+        {
+            // The backward pass stays float: its estimates enter the smoother, and a held
+            // integer there would be counted as data.
+            let float = PpkOptions {
+                ar: ArMode::Off,
+                ..opts.clone()
+            };
+            let b = run(true, &float, None);
+            let smoothing = PpkOptions {
+                ratio_threshold: opts.smoothed_ratio_threshold,
+                ..opts.clone()
+            };
+            let f = run(false, &smoothing, Some(&b.priors));
+            smoothed = true;
+            (Some(f), Some(b))
+        }
+        FilterMode::Combined if models.iono => {
+            warnings.push(format!(
+                "the two-filter smoother would need {:.1} GiB: the forward and backward passes are combined epoch by epoch instead",
+                smoother_bytes(&inputs, &opts) as f64 / (1u64 << 30) as f64
+            ));
+            let (a, b) = rayon::join(|| run(false, &opts, None), || run(true, &opts, None));
+            (Some(a), Some(b))
+        }
         FilterMode::Combined => {
-            let (a, b) = rayon::join(|| run(false), || run(true));
+            let (a, b) = rayon::join(|| run(false, &opts, None), || run(true, &opts, None));
             (Some(a), Some(b))
         }
     };
-    let merged = merge_passes(fw.as_ref(), bw.as_ref());
+    let merged = merge_passes(fw.as_ref(), bw.as_ref(), smoothed);
     let mut epochs = Vec::with_capacity(rover.epochs.len());
     let mut unsolved = Vec::new();
     for (i, s) in merged.into_iter().enumerate() {
@@ -340,7 +520,7 @@ pub fn process(
                 epochs.push(TrajectoryEpoch {
                     time,
                     pos,
-                    cov: s.cov,
+                    cov: s.cov + systematic(&pos, antenna_sigma),
                     vel: None,
                     quality: s.quality,
                     nsat: s.nsat,
@@ -363,11 +543,12 @@ pub fn process(
     }
     Ok(PpkResult {
         trajectory: Trajectory::new(epochs, SegmentSource::Filter),
-        forward: fw.map(|x| x.1),
-        backward: bw.map(|x| x.1),
+        forward: fw.map(|x| x.stats),
+        backward: bw.map(|x| x.stats),
         unsolved,
         rover_epochs: rover.epochs.len(),
         base_marker,
+        models,
         warnings,
     })
 }

@@ -33,6 +33,29 @@ pub enum FilterMode {
     Combined,
 }
 
+/// Whether an atmospheric delay is estimated by the filter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Estimate {
+    /// When the baseline is long: some rover epoch lies beyond
+    /// [`PpkOptions::long_baseline`] from the base.
+    Auto,
+    /// Never: the a-priori model only.
+    Off,
+    /// Always.
+    On,
+}
+
+impl Estimate {
+    /// Whether the delay is estimated for a run whose longest baseline is `baseline` metres.
+    pub fn resolve(self, baseline: f64, long_baseline: f64) -> bool {
+        match self {
+            Estimate::Auto => baseline > long_baseline,
+            Estimate::Off => false,
+            Estimate::On => true,
+        }
+    }
+}
+
 /// Options of the carrier-phase engine.
 #[derive(Clone, Debug)]
 pub struct PpkOptions {
@@ -48,6 +71,9 @@ pub struct PpkOptions {
     pub filter: FilterMode,
     /// Ratio-test threshold (second best / best squared distance).
     pub ratio_threshold: f64,
+    /// Ratio-test threshold of the two-filter smoother's fixes, which must also agree with
+    /// what the data before and after the epoch fix alone.
+    pub smoothed_ratio_threshold: f64,
     /// Largest base-rover time difference, seconds.
     pub max_age: f64,
     /// Gap after which an ambiguity is reset, seconds (0: five rover intervals, at least 5 s).
@@ -56,6 +82,11 @@ pub struct PpkOptions {
     pub phase_sigma: (f64, f64),
     /// Code sigma over phase sigma.
     pub code_phase_ratio: f64,
+    /// Growth of the single-difference sigma with the age of the base epoch, m/s per
+    /// (1 + baseline/10 km): a rover epoch matched to a base epoch 30 s away on a 115 km
+    /// baseline weighs as if its sigma were 0.37 m (the base's atmosphere of another moment);
+    /// 0.5 s of a 1 Hz base on 5 km adds 0.8 mm.
+    pub age_error_rate: f64,
     /// Ambiguity random walk, cycles/√s.
     pub amb_process_noise: f64,
     /// Initial ambiguity sigma, cycles.
@@ -70,20 +101,37 @@ pub struct PpkOptions {
     pub mature_lock: usize,
     /// Elevation mask of the ambiguities fixed, radians.
     pub ar_elev_mask: f64,
-    /// Satellites partial fixing may drop, at most.
-    pub max_partial_drops: usize,
-    /// A partial fix whose 3D position sigma exceeds this (m) is not accepted.
-    pub max_partial_fix_sigma: f64,
+    /// Bootstrapped success rate the fixed subset of ambiguities must reach.
+    pub min_success_rate: f64,
+    /// A fix whose 3D position sigma exceeds this (m) is reported as float: in a weak
+    /// geometry (five satellites, long baseline) the integers may be right and the position
+    /// still decimetres off.
+    pub max_fixed_sigma: f64,
     /// Fewest double-difference ambiguities for a fix.
     pub min_fix_ambiguities: usize,
     /// Variance of the fix-and-hold constraint, cycles².
     pub hold_variance: f64,
-    /// Estimate a single-difference slant ionosphere per satellite (ionosphere-weighted model).
-    pub estimate_iono: bool,
-    /// Prior sigma of that delay per km of baseline, metres.
+    /// Estimate a single-difference slant ionospheric delay per satellite (the
+    /// ionosphere-weighted model: its prior and random walk grow with the baseline).
+    pub iono: Estimate,
+    /// Prior sigma of that delay per km of baseline, metres (at least 2 mm).
     pub iono_sigma_per_km: f64,
     /// Its random walk per km of baseline, m/√s.
     pub iono_process_noise_per_km: f64,
+    /// Estimate the rover's zenith wet delay on top of the a-priori model (one state, a random
+    /// walk, mapped with Niell's wet function).
+    pub tropo: Estimate,
+    /// Prior sigma of that zenith delay, metres.
+    pub tropo_sigma: f64,
+    /// Its random walk, m/√s.
+    pub tropo_process_noise: f64,
+    /// Baseline length beyond which [`Estimate::Auto`] models are estimated, metres.
+    pub long_baseline: f64,
+    /// Sigma (horizontal, vertical; metres) of the phase-centre error between two antennas of
+    /// different types when they are not both calibrated (`antex`): their offsets and
+    /// variations differ by centimetres, which no double difference removes. Added in
+    /// quadrature to every epoch's covariance in that case.
+    pub uncalibrated_antenna_sigma: (f64, f64),
     /// Receiver antenna calibrations (ANTEX); the header antenna types are looked up in it.
     pub antex: Option<std::sync::Arc<Antex>>,
 }
@@ -91,30 +139,37 @@ pub struct PpkOptions {
 impl Default for PpkOptions {
     fn default() -> Self {
         PpkOptions {
-            elev_mask: 15f64.to_radians(),
+            elev_mask: 10f64.to_radians(),
             systems: Constellation::CDMA.to_vec(),
             nf: 2,
             ar: ArMode::FixAndHold,
             filter: FilterMode::Combined,
             ratio_threshold: 3.0,
+            smoothed_ratio_threshold: 2.0,
             max_age: 30.0,
             max_gap: 0.0,
             phase_sigma: (0.003, 0.003),
             code_phase_ratio: 100.0,
+            age_error_rate: 0.001,
             amb_process_noise: 1e-4,
             amb_init_sigma: 30.0,
             max_innovation: 30.0,
             max_phase_residual: 0.1,
             min_lock: 1,
             mature_lock: 5,
-            ar_elev_mask: 15f64.to_radians(),
-            max_partial_drops: 6,
-            max_partial_fix_sigma: 0.03,
+            ar_elev_mask: 10f64.to_radians(),
+            min_success_rate: 0.999,
+            max_fixed_sigma: 0.08,
             min_fix_ambiguities: 4,
             hold_variance: 0.001,
-            estimate_iono: false,
-            iono_sigma_per_km: 0.001,
+            iono: Estimate::Auto,
+            iono_sigma_per_km: 0.004,
             iono_process_noise_per_km: 1e-4,
+            tropo: Estimate::Auto,
+            tropo_sigma: 0.15,
+            tropo_process_noise: 3e-5,
+            long_baseline: 10_000.0,
+            uncalibrated_antenna_sigma: (0.01, 0.02),
             antex: None,
         }
     }

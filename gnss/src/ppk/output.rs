@@ -35,6 +35,8 @@ pub struct EpochSol {
     pub nfix: usize,
     /// Ambiguity segment of this epoch within its pass (see [`crate::trajectory`]).
     pub segment: u32,
+    /// The float solution (position, covariance) of a fixed epoch, for a demotion.
+    pub float: Option<(Ecef, Matrix3<f64>)>,
 }
 
 /// Counters of a pass.
@@ -51,6 +53,9 @@ pub struct PassStats {
     pub below_mask: usize,
     /// Satellite-epochs without an orbit.
     pub no_orbit: usize,
+    /// Smoothed fixes rejected because the data before or after the epoch alone fixed an
+    /// ambiguity to another integer.
+    pub smoothed_fixes_rejected: usize,
 }
 
 impl PassStats {
@@ -58,6 +63,18 @@ impl PassStats {
     pub fn rejected_innovations(&self) -> usize {
         self.rejected.values().sum()
     }
+}
+
+/// The atmospheric delays a run estimated (beyond the a-priori models), settled from the
+/// options and the longest baseline.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Models {
+    /// Longest distance of a rover start position (single-point) from the base, metres.
+    pub longest_baseline: f64,
+    /// A single-difference slant ionospheric delay per satellite was estimated.
+    pub iono: bool,
+    /// The rover's zenith wet delay was estimated.
+    pub tropo: bool,
 }
 
 /// Output of a carrier-phase run.
@@ -76,6 +93,8 @@ pub struct PpkResult {
     pub rover_epochs: usize,
     /// Base marker position used, ECEF.
     pub base_marker: Ecef,
+    /// The atmospheric models the filter estimated, and why.
+    pub models: Models,
     /// What the run noticed (base position from the header, antennas not calibrated).
     pub warnings: Vec<String>,
 }

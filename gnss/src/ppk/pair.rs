@@ -25,6 +25,13 @@ pub(super) struct Pair {
     pub(super) tropo_b: f64,
     /// Rover elevation, radians.
     pub(super) el: f64,
+    /// Niell wet mapping function at the rover elevation.
+    pub(super) map_wet: f64,
+    /// Day of year of the epoch (for the hydrostatic mapping function).
+    pub(super) doy: f64,
+    /// Variance added to each single difference for the base epoch's age (the base sees
+    /// the ionosphere and troposphere of another moment), m².
+    pub(super) age_var: f64,
     /// Antenna phase-centre correction per slot, rover minus base, metres.
     pub(super) ant: [f64; NF],
 }
@@ -38,7 +45,7 @@ pub(super) fn has_phase(p: &Pair, slot: usize) -> bool {
 /// ambiguity, any phase for the ionosphere.
 pub(super) fn observes(p: &Pair, key: StateKey) -> bool {
     match key {
-        StateKey::Position => true,
+        StateKey::Position | StateKey::Tropo => true,
         StateKey::Ambiguity(a) => p.r.sv == a.sv && has_phase(p, a.slot),
         StateKey::Iono(sv) => p.r.sv == sv && (0..NF).any(|k| has_phase(p, k)),
     }

@@ -8,29 +8,51 @@
 //! (one pass, or both combined) in time order: a boundary wherever a pass has one between
 //! consecutive output epochs, or the output Q changes.
 
-use super::ar::Fix;
+use super::ar::{Candidate, Fix};
 use crate::solution::Quality;
 use crate::sv::Constellation;
+use crate::sv::Sv;
 use hifitime::Epoch;
 use std::collections::BTreeMap;
 
 /// The integers of a fix, per system and slot: for each ambiguity arc (state), its DD
-/// integer against the group's pivot (0 for the pivot itself).
+/// integer against the group's pivot (0 for the pivot itself). The ambiguities are named by
+/// `K`: their arc within a pass (`u64`, across epochs) or their satellite (within one epoch,
+/// across passes and smoother).
 #[derive(Clone, Debug, Default, PartialEq)]
-pub(super) struct FixedIntegers(BTreeMap<(Constellation, usize), BTreeMap<u64, i64>>);
+pub(super) struct FixedIntegers<K: Ord = u64>(BTreeMap<(Constellation, usize), BTreeMap<K, i64>>);
 
-impl FixedIntegers {
-    /// The integers of a fix.
+impl FixedIntegers<u64> {
+    /// The integers of a fix, by arc.
     pub(super) fn of(fix: &Fix) -> Self {
+        Self::named(fix, |c| c.arc)
+    }
+}
+
+impl FixedIntegers<Sv> {
+    /// The integers of a fix, by satellite.
+    pub(super) fn by_satellite(fix: &Fix) -> Self {
+        Self::named(fix, |c| c.amb.sv)
+    }
+}
+
+impl<K: Ord + Copy> FixedIntegers<K> {
+    /// The integers of a fix, each ambiguity named by `name`.
+    fn named(fix: &Fix, name: impl Fn(&Candidate) -> K) -> Self {
         let mut out = BTreeMap::new();
         let mut row = 0;
         for g in &fix.groups {
-            let ints: &mut BTreeMap<u64, i64> =
-                out.entry((g.pivot.amb.sv.sys, g.slot)).or_default();
-            ints.insert(g.pivot.arc, 0);
+            let ints: &mut BTreeMap<K, i64> = out.entry((g.pivot.amb.sv.sys, g.slot)).or_default();
+            let mut any = false;
             for c in &g.others {
-                ints.insert(c.arc, fix.integers[row].round() as i64);
+                if let Some(n) = fix.dd_integers[row] {
+                    ints.insert(name(c), n);
+                    any = true;
+                }
                 row += 1;
+            }
+            if any {
+                ints.insert(name(&g.pivot), 0);
             }
         }
         FixedIntegers(out)
@@ -99,12 +121,15 @@ impl SegmentTracker {
     }
 }
 
-/// Segment ids of the output epochs: `passes[k][i]` is pass k's segment at epoch i (None when
-/// it did not solve it), `quality[i]` the output Q (None: no output). Ids start at 0 and grow
-/// in time order at each boundary between consecutive output epochs: a pass's id differs (or
-/// it solved one of the two and not the other), or Q changes.
+/// Segment ids of the output epochs: `passes[k][i]` is pass k's segment and Q at epoch i
+/// (None when it did not solve it), `quality[i]` the output Q (None: no output). Ids start at
+/// 0 and grow in time order at each boundary between consecutive output epochs: Q changes;
+/// between fixed outputs, unless some pass is fixed at both within one segment and none is
+/// fixed at both across a boundary (one pass still float at an end of the other's fixed span
+/// adds nothing to the fixed output there); between float outputs, wherever a pass's id
+/// differs (or it solved one of the two and not the other).
 pub(super) fn output_segments(
-    passes: &[&[Option<u32>]],
+    passes: &[&[Option<(u32, Quality)>]],
     quality: &[Option<Quality>],
 ) -> Vec<Option<u32>> {
     let mut out = vec![None; quality.len()];
@@ -115,7 +140,23 @@ pub(super) fn output_segments(
             continue;
         }
         if let Some(a) = prev {
-            if quality[a] != *q || passes.iter().any(|p| p[a] != p[i]) {
+            let boundary = if quality[a] != *q {
+                true
+            } else if *q == Some(Quality::Fixed) {
+                let fixed_both: Vec<bool> = passes
+                    .iter()
+                    .filter_map(|p| match (p[a], p[i]) {
+                        (Some((x, Quality::Fixed)), Some((y, Quality::Fixed))) => Some(x == y),
+                        _ => None,
+                    })
+                    .collect();
+                fixed_both.is_empty() || fixed_both.contains(&false)
+            } else {
+                passes
+                    .iter()
+                    .any(|p| p[a].map(|s| s.0) != p[i].map(|s| s.0))
+            };
+            if boundary {
                 id += 1;
             }
         }
@@ -188,19 +229,69 @@ mod tests {
         assert_eq!(ids, vec![0, 1, 1, 2, 2, 3, 4, 5, 5]);
     }
 
-    /// Combined ids: the union of both passes' boundaries plus Q changes, renumbered in time
-    /// order over the output epochs.
+    /// Combined ids: between fixed outputs a boundary only where no pass carries the fix
+    /// across or a pass fixed at both breaks; between float outputs the union of the passes'
+    /// boundaries; Q changes; renumbered in time order over the output epochs.
     #[test]
-    fn output_ids_are_the_union_of_boundaries() {
+    fn output_ids_follow_the_passes_that_carry_the_output() {
         use Quality::{Fixed as X, Float as F};
-        let fw = [Some(0), Some(0), None, Some(1), Some(1), Some(1), Some(1)];
-        // Backward ids grow backwards in time.
-        let bw = [Some(2), Some(2), None, Some(2), Some(2), Some(1), Some(1)];
-        let q = [Some(X), Some(X), None, Some(X), Some(X), Some(X), Some(F)];
+        let p = |v: &[Option<(u32, Quality)>]| v.to_vec();
+        let fw = p(&[
+            Some((0, F)),
+            Some((1, X)),
+            Some((1, X)),
+            None,
+            Some((2, X)),
+            Some((2, X)),
+            Some((2, X)),
+            Some((2, X)),
+            Some((3, F)),
+            Some((3, F)),
+        ]);
+        // Backward ids grow backwards in time; it is float at the last epochs.
+        let bw = p(&[
+            Some((4, X)),
+            Some((4, X)),
+            Some((4, X)),
+            None,
+            Some((4, X)),
+            Some((3, X)),
+            Some((2, F)),
+            Some((1, F)),
+            Some((0, F)),
+            Some((0, F)),
+        ]);
+        let q = [
+            Some(X),
+            Some(X),
+            Some(X),
+            None,
+            Some(X),
+            Some(X),
+            Some(X),
+            Some(X),
+            Some(F),
+            Some(F),
+        ];
         let ids = output_segments(&[&fw, &bw], &q);
+        // 0–1: only the backward pass is fixed at both, no break; 2–4: the forward pass
+        // breaks (gap); 4–5: the backward pass breaks while the forward holds: a break;
+        // 5–6, 6–7: the forward pass alone carries the fix; 7–8: Q changes; 8–9: float, the
+        // same ids in both passes.
         assert_eq!(
             ids,
-            vec![Some(0), Some(0), None, Some(1), Some(1), Some(2), Some(3)]
+            vec![
+                Some(0),
+                Some(0),
+                Some(0),
+                None,
+                Some(1),
+                Some(2),
+                Some(2),
+                Some(2),
+                Some(3),
+                Some(3)
+            ]
         );
     }
 }

@@ -1,11 +1,59 @@
 //! Cycle-slip detection for one receiver: loss-of-lock indicators, geometry-free phase jumps,
-//! Melbourne–Wübbena wide-lane jumps and data gaps. A slip resets only what it touches.
+//! Melbourne–Wübbena wide-lane jumps, Doppler against phase, and data gaps. A slip resets only
+//! what it touches.
+//!
+//! The geometry-free test predicts the combination from the two previous epochs (a linear
+//! extrapolation removes the ionosphere's rate, which at 30 s intervals moves the combination
+//! by decimetres) and allows `gf_threshold + gf_rate·Δt`; with one previous epoch only, the
+//! plain change is tested against `gf_threshold + gf_rate_first·Δt`. At 1 s both are about the
+//! fixed 5 cm; at 30 s they are 8 cm and 20 cm.
 
 use super::obs::{SatMeas, NF};
 use crate::orbit::C;
 use crate::sv::Sv;
 use hifitime::Epoch;
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
+
+/// The slips of one epoch: per satellite and frequency slot, why its phase does not continue
+/// from the satellite's previous epoch (None: it does).
+pub type Slips = BTreeMap<Sv, [Option<SlipCause>; NF]>;
+
+/// Arc breaks of one receiver's phase, in forward time: element `i` holds the satellites and
+/// slots whose phase at epoch `i` does not continue from their previous epoch. The detector
+/// runs forward and backward and the union is kept, so that both passes of the filter cut the
+/// same arcs (the two-filter smoother combines their estimates of one arc; a slip seen in one
+/// direction only would otherwise join estimates of two different ambiguities).
+pub fn arc_breaks(times: &[Epoch], meas: &[Vec<SatMeas>], max_gap: f64) -> Vec<Slips> {
+    let mut out: Vec<Slips> = vec![Slips::new(); times.len()];
+    let mut merge = |i: usize, sv: Sv, causes: [Option<SlipCause>; NF]| {
+        if causes.iter().any(Option::is_some) {
+            let e = out[i].entry(sv).or_insert([None; NF]);
+            for (a, b) in e.iter_mut().zip(causes) {
+                *a = a.or(b);
+            }
+        }
+    };
+    let mut forward = SlipDetector::new(max_gap, false);
+    for (i, (t, m)) in times.iter().zip(meas).enumerate() {
+        for (sat, causes) in m.iter().zip(forward.check_epoch(*t, m)) {
+            merge(i, sat.sv, causes);
+        }
+    }
+    // Backward, a slip found at epoch i lies between i and the satellite's next epoch (in
+    // forward time), where it is recorded.
+    let mut backward = SlipDetector::new(max_gap, true);
+    let mut next: HashMap<Sv, usize> = HashMap::new();
+    for i in (0..times.len()).rev() {
+        let m = &meas[i];
+        for (sat, causes) in m.iter().zip(backward.check_epoch(times[i], m)) {
+            if let Some(&j) = next.get(&sat.sv) {
+                merge(j, sat.sv, causes);
+            }
+            next.insert(sat.sv, i);
+        }
+    }
+    out
+}
 
 /// Why an ambiguity was reset.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -28,6 +76,8 @@ struct Hist {
     l: [f64; NF],
     d: [f64; NF],
     gf: f64,
+    /// The geometry-free combination one epoch earlier, when it followed without a gap.
+    gf_before: Option<(Epoch, f64)>,
     mw_mean: f64,
     mw_n: usize,
     lli: [u8; NF],
@@ -39,6 +89,11 @@ pub struct SlipDetector {
     hist: HashMap<Sv, Hist>,
     /// Geometry-free jump threshold, metres.
     pub gf_threshold: f64,
+    /// Growth of that threshold with the interval when the combination is extrapolated from
+    /// two epochs, m/s.
+    pub gf_rate: f64,
+    /// Growth of that threshold with the interval when only one epoch precedes, m/s.
+    pub gf_rate_first: f64,
     /// Melbourne–Wübbena jump threshold, wide-lane cycles.
     pub mw_threshold: f64,
     /// Longest tolerated gap, seconds.
@@ -55,6 +110,8 @@ impl SlipDetector {
         SlipDetector {
             hist: HashMap::new(),
             gf_threshold: 0.05,
+            gf_rate: 0.001,
+            gf_rate_first: 0.005,
             mw_threshold: 4.0,
             max_gap,
             doppler_threshold: 3.0,
@@ -120,6 +177,25 @@ impl SlipDetector {
         out
     }
 
+    /// Whether the geometry-free combination `gf` at `t` jumped against the history `h`.
+    fn gf_jump(&self, t: Epoch, gf: f64, h: &Hist) -> bool {
+        if !(gf.is_finite() && h.gf.is_finite()) {
+            return false;
+        }
+        let dt = (t - h.t).to_seconds();
+        let (predicted, allowed) = match h.gf_before {
+            Some((t0, g0)) if (h.t - t0).to_seconds() != 0.0 => {
+                let rate = (h.gf - g0) / (h.t - t0).to_seconds();
+                (
+                    h.gf + rate * dt,
+                    self.gf_threshold + self.gf_rate * dt.abs(),
+                )
+            }
+            _ => (h.gf, self.gf_threshold + self.gf_rate_first * dt.abs()),
+        };
+        (gf - predicted).abs() > allowed
+    }
+
     /// Slips per frequency slot of `m` at `t` (None = no slip), and update the history.
     pub fn check(&mut self, t: Epoch, m: &SatMeas) -> [Option<SlipCause>; NF] {
         let mut out = [None; NF];
@@ -150,7 +226,7 @@ impl SlipDetector {
                             *o = Some(SlipCause::LossOfLock);
                         }
                     }
-                    if gf.is_finite() && h.gf.is_finite() && (gf - h.gf).abs() > self.gf_threshold {
+                    if self.gf_jump(t, gf, h) {
                         out[0] = out[0].or(Some(SlipCause::GeometryFree));
                         out[1] = out[1].or(Some(SlipCause::GeometryFree));
                     }
@@ -167,10 +243,14 @@ impl SlipDetector {
             l: m.l,
             d: m.d,
             gf,
+            gf_before: None,
             mw_mean: 0.0,
             mw_n: 0,
             lli: m.lli,
         });
+        let follows = (t - h.t).to_seconds().abs() <= self.max_gap && t != h.t;
+        h.gf_before =
+            (follows && h.gf.is_finite() && out.iter().all(Option::is_none)).then_some((h.t, h.gf));
         h.t = t;
         h.l = m.l;
         h.d = m.d;
@@ -193,6 +273,46 @@ mod tests {
     use super::*;
     use crate::sv::{Constellation, Sv};
     use hifitime::Duration;
+
+    /// A slip is recorded at the epoch after it, whichever direction found it; a loss-of-lock
+    /// flag too.
+    #[test]
+    fn arc_breaks_are_the_union_of_both_directions() {
+        let t0 = crate::time::gpst(2024, 1, 1, 0, 0, 0, 0);
+        let times: Vec<Epoch> = (0..6)
+            .map(|k| t0 + Duration::from_seconds(k as f64))
+            .collect();
+        let meas: Vec<Vec<SatMeas>> = (0..6)
+            .map(|k| {
+                let mut s = sat(1, k as f64, 300.0, 0.0);
+                if k >= 3 {
+                    s.l[0] += 7.0;
+                }
+                let mut other = sat(2, k as f64, -200.0, 0.0);
+                if k == 5 {
+                    other.lli[0] = 1;
+                }
+                vec![
+                    s,
+                    other,
+                    sat(3, k as f64, 50.0, 0.0),
+                    sat(4, k as f64, -500.0, 0.0),
+                ]
+            })
+            .collect();
+        let b = arc_breaks(&times, &meas, 10.0);
+        let g = |prn| Sv::new(Constellation::Gps, prn);
+        assert_eq!(
+            b[3].get(&g(1)).map(|c| c[0]),
+            Some(Some(SlipCause::Doppler))
+        );
+        assert_eq!(
+            b[5].get(&g(2)).map(|c| c[0]),
+            Some(Some(SlipCause::LossOfLock))
+        );
+        let others: usize = b.iter().map(|e| e.len()).sum();
+        assert_eq!(others, 2, "{b:?}");
+    }
 
     fn sat(prn: u8, t: f64, rate: f64, clock_m: f64) -> SatMeas {
         let f = 1575.42e6;

@@ -8,7 +8,9 @@
 //!         StateKey::Ambiguity(AmbKey { sv, slot })  single-difference (rover − base) carrier
 //!                                                   ambiguity, cycles of that slot
 //!         StateKey::Iono(sv)                        single-difference slant ionospheric delay
-//!                                                   on slot 0, metres (optional model) ]
+//!                                                   on slot 0, metres (optional model)
+//!         StateKey::Tropo                           rover zenith wet delay residual, metres
+//!                                                   (optional model; one state, never reset) ]
 //! ```
 //! The satellite part is built from the satellites in view: a state is added when its
 //! satellite is first seen (or seen again after a reset) and removed when it is reset, and the
@@ -45,6 +47,8 @@ pub(super) enum StateKey {
     Ambiguity(AmbKey),
     /// Single-difference slant ionospheric delay on slot 0, metres.
     Iono(Sv),
+    /// Rover zenith wet delay on top of the a-priori model (relative to the base's), metres.
+    Tropo,
 }
 
 /// Bookkeeping of a per-satellite state.
@@ -61,7 +65,8 @@ pub(super) struct Track {
 /// One per-satellite state: what it is and its bookkeeping.
 #[derive(Clone, Debug)]
 pub(super) struct SatState {
-    /// What the state is (never [`StateKey::Position`]).
+    /// What the state is (never [`StateKey::Position`]; [`StateKey::Tropo`] is listed here
+    /// too, though it belongs to no satellite).
     pub(super) key: StateKey,
     /// Its bookkeeping.
     pub(super) track: Track,
@@ -213,6 +218,33 @@ impl State {
             },
         });
         self.next_arc += 1;
+    }
+
+    /// A state of the given per-satellite states with values `x` and covariance `p` (in
+    /// their order) and an unknown position (zero, variance `position_var` per axis,
+    /// uncorrelated).
+    pub(super) fn from_sats(
+        sats: &[SatState],
+        x: &DVector<f64>,
+        p: &DMatrix<f64>,
+        position_var: f64,
+    ) -> State {
+        let n = KINEMATIC + sats.len();
+        let mut out = State {
+            x: DVector::zeros(n),
+            p: DMatrix::identity(n, n) * position_var,
+            index: StateIndex {
+                sats: sats.to_vec(),
+                offsets: BTreeMap::new(),
+            },
+            next_arc: 0,
+        };
+        out.x.rows_mut(KINEMATIC, sats.len()).copy_from(x);
+        out.p
+            .view_mut((KINEMATIC, KINEMATIC), (sats.len(), sats.len()))
+            .copy_from(p);
+        out.index.rebuild_offsets();
+        out
     }
 
     /// Remove per-satellite states; the others keep their order.
