@@ -8,7 +8,7 @@
 //! nothing itself.
 
 use gnss::error::{Error, Result};
-use gnss::orbit::{Ephemerides, Orbits, Sp3};
+use gnss::orbit::{Ephemerides, Orbits, PreciseOrbits, Sp3};
 use gnss::rinex::nav::NavFile;
 use gnss::rinex::ObsFile;
 use gnss::solution::{write_pos, PosFormat, PosRecord, Quality};
@@ -74,7 +74,7 @@ pub fn load_orbits(nav: &[PathBuf], sp3: Option<&Path>) -> Result<(Orbits, Vec<S
         warnings.push("no Klobuchar ionosphere parameters in the navigation files: ionosphere not modelled, code weights lowered".into());
     }
     let precise = match sp3 {
-        Some(p) => Some(Sp3::read(p)?),
+        Some(p) => Some(PreciseOrbits::new(&[Sp3::read(p)?], &[])?),
         None => None,
     };
     Ok((
@@ -99,7 +99,7 @@ pub fn check_overlap(obs: &ObsFile, orbits: &Orbits, nav: &[PathBuf]) -> Result<
         return Ok(());
     };
     let (lo, hi) = match (&orbits.precise, orbits.broadcast.span()) {
-        (Some(s), _) => s.span().unwrap_or((a.time, b.time)),
+        (Some(s), _) => s.span(),
         (None, Some(span)) => span,
         (None, None) => {
             return Err(Error::NoData(
