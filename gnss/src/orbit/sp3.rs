@@ -70,6 +70,8 @@ impl Sp3 {
         };
         let mut header_interval = None;
         let mut scale = TimeScale::GPST;
+        // The first `%c` line names the time system (SP3-d headers grow with the satellites).
+        let mut time_system_read = false;
         loop {
             let ln = src.line_no + 1;
             let Some(line) = src.next_line()? else { break };
@@ -77,7 +79,8 @@ impl Sp3 {
                 Some(b'#') if line.starts_with(b"##") => {
                     header_interval = parse_real(cols(line, 24, 38)).ok().flatten();
                 }
-                Some(b'%') if line.starts_with(b"%c") && ln < 16 && sp3.epochs.is_empty() => {
+                Some(b'%') if line.starts_with(b"%c") && !time_system_read => {
+                    time_system_read = true;
                     scale = time_scale(cols(line, 9, 12)).unwrap_or(scale);
                 }
                 Some(b'*') => {
@@ -176,6 +179,55 @@ pub(crate) fn nominal_step(steps: &[f64]) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A small SP3 text: `plus` extra `+` header lines before the `%c` line (as in SP3-d
+    /// files of many satellites), time system `ts`, two epochs of PRN 1 written `id`.
+    fn text(plus: usize, ts: &str, id: &str) -> String {
+        let mut t = String::from("#dP2020  6 25  0  0  0.00000000       2 ORBIT IGS14 FIT  TEST\n");
+        t += "## 2111 345600.00000000   900.00000000 59025 0.0000000000000\n";
+        for _ in 0..plus {
+            t += "+        G01  0  0  0  0  0  0  0  0  0  0  0  0  0  0  0  0\n";
+        }
+        t += &format!("%c M  cc {ts} ccc cccc cccc cccc cccc ccccc ccccc ccccc ccccc\n");
+        for m in [0, 15] {
+            t += &format!("*  2020  6 25  0 {m:2}  0.00000000\n");
+            t += &format!("P{id}  15202.734861   1913.732043 -21514.720553 999999.999999\n");
+        }
+        t + "EOF\n"
+    }
+
+    fn read_text(name: &str, t: &str) -> Result<Sp3> {
+        let d = std::env::temp_dir().join(format!("ppkat-sp3-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let p = d.join(name);
+        std::fs::write(&p, t).unwrap();
+        Sp3::read(&p)
+    }
+
+    #[test]
+    fn time_system_ids_and_absent_clocks() {
+        let sv = Sv::new(crate::sv::Constellation::Gps, 1);
+        for (plus, id) in [(0, "G01"), (20, "  1")] {
+            let f = read_text("utc.sp3", &text(plus, "UTC", id)).unwrap();
+            // 00:00 UTC in 2020 is 00:00:18 GPST.
+            assert_eq!(f.epochs[0], crate::time::gpst(2020, 6, 25, 0, 0, 18, 0));
+            assert_eq!(
+                (f.version, f.frame.as_str(), f.interval),
+                ('d', "IGS14", 900.0)
+            );
+            let (p, c) = f.sats[&sv][1];
+            assert_eq!(p.x, 15202.734861 * 1e3);
+            assert!(c.is_nan(), "999999.999999 is an absent clock");
+        }
+        let bad = text(0, "GPS", "G01").replace("-21514.720553", "-21514.7205x3");
+        let e = read_text("bad.sp3", &bad).unwrap_err().to_string();
+        assert!(
+            e.contains("bad.sp3:5:") && e.contains("unreadable SP3 position"),
+            "{e}"
+        );
+        let e = read_text("not.sp3", "hello\n").unwrap_err().to_string();
+        assert!(e.contains("not an SP3 file"), "{e}");
+    }
 
     #[test]
     fn nominal_step_is_the_most_common() {
