@@ -162,3 +162,50 @@ pub fn check_glonass_channels(
     }
     Ok(Some(what))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gnss::orbit::Ephemerides;
+
+    /// A RINEX 3 file with GPS G05 and GLONASS R05, R07, whose header gives R07's channel only.
+    fn obs_file() -> ObsFile {
+        let h = |text: &str, label: &str| format!("{text:<60}{label}\n");
+        let mut t = h(
+            "     3.04           OBSERVATION DATA    M",
+            "RINEX VERSION / TYPE",
+        );
+        t += &h("G    2 C1C L1C", "SYS / # / OBS TYPES");
+        t += &h("R    2 C1C L1C", "SYS / # / OBS TYPES");
+        t += &h("  1 R07  3", "GLONASS SLOT / FRQ #");
+        t += &h(
+            "  2024     3    10    12     0    0.0000000     GPS",
+            "TIME OF FIRST OBS",
+        );
+        t += &h("", "END OF HEADER");
+        t += "> 2024 03 10 12 00 00.0000000  0  3\n";
+        t += "G05  21000000.123 7 110356789.123 7\n";
+        t += "R05  21000000.123 7 110356789.123 7\n";
+        t += "R07  21000000.123 7 110356789.123 7\n";
+        let d = std::env::temp_dir().join(format!("ppkat-orbits-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let p = d.join("glonass.rnx");
+        std::fs::write(&p, t).unwrap();
+        ObsFile::read(&p).unwrap()
+    }
+
+    #[test]
+    fn glonass_without_channels_is_named() {
+        let obs = obs_file();
+        let orbits = Orbits::broadcast(Ephemerides::default());
+        use Constellation::{Glonass, Gps};
+        assert_eq!(check_glonass_channels(&obs, &orbits, &[Gps]).unwrap(), None);
+        let w = check_glonass_channels(&obs, &orbits, &[Gps, Glonass])
+            .unwrap()
+            .unwrap();
+        assert!(w.contains("GLONASS R05 without a frequency channel"), "{w}");
+        assert!(w.contains("--nav") && !w.contains("R07"), "{w}");
+        let e = check_glonass_channels(&obs, &orbits, &[Glonass]).unwrap_err();
+        assert!(e.to_string().contains("glonass.rnx"), "{e}");
+    }
+}
