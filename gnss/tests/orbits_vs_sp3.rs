@@ -4,7 +4,7 @@
 
 mod common;
 
-use gnss::orbit::{Ephemerides, Sp3};
+use gnss::orbit::{Ephemerides, PreciseOrbits, Sp3};
 use gnss::rinex::nav::NavFile;
 use gnss::sv::Constellation;
 use std::collections::BTreeMap;
@@ -16,15 +16,16 @@ fn broadcast_orbits_match_precise_orbits() {
     };
     let nav = NavFile::read(&dir.join("ESBC00DNK_R_20201770000_01D_MN.rnx.gz")).unwrap();
     let sp3 = Sp3::read(&dir.join("GRG0MGXFIN_20201770000_01D_15M_ORB.SP3.gz")).unwrap();
+    let sp3 = PreciseOrbits::new(&[sp3], &[]).unwrap();
     let eph = Ephemerides::from_nav(&[nav]);
     let mut errs: BTreeMap<Constellation, Vec<f64>> = BTreeMap::new();
     let mut radial: BTreeMap<Constellation, Vec<f64>> = BTreeMap::new();
     let mut worst: BTreeMap<Constellation, (f64, String)> = BTreeMap::new();
-    let (t0, t1) = sp3.span().unwrap();
-    for &sv in sp3.sats.keys() {
+    let (t0, t1) = sp3.span();
+    for &sv in sp3.satellites() {
         let mut t = t0 + hifitime::Duration::from_seconds(2.5 * 3600.0);
         while t < t1 - hifitime::Duration::from_seconds(2.5 * 3600.0) {
-            if let (Some(e), Some(p)) = (eph.select(sv, t), sp3.compute(sv, t)) {
+            if let (Some(e), Some(p)) = (eph.select(sv, t), sp3.compute(sv, t).ok()) {
                 let b = e.compute(t);
                 let d = (b.pos.0 - p.pos.0).norm();
                 errs.entry(sv.sys).or_default().push(d);

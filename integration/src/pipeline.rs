@@ -7,26 +7,28 @@
 //! prints. Uses `gnss` (RINEX, orbits, SPP, PPK, `.pos`) and [`crate::exposure`]; prints
 //! nothing itself.
 
+use crate::orbits::check_glonass_channels;
+pub use crate::orbits::{check_overlap, load_orbits};
 use gnss::error::{Error, Result};
-use gnss::orbit::{Ephemerides, Orbits, Sp3};
-use gnss::rinex::nav::NavFile;
 use gnss::rinex::ObsFile;
 use gnss::solution::{write_pos, PosFormat, PosRecord, Quality};
 use gnss::spp::{SppOptions, SppRun};
 use gnss::time::format_ymdhms;
 use hifitime::Epoch;
 use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Inputs of a single-point run.
 #[derive(Clone, Debug)]
 pub struct SppJob {
     /// Observation file.
     pub obs: PathBuf,
-    /// Navigation files.
+    /// Navigation files (optional with SP3 files).
     pub nav: Vec<PathBuf>,
-    /// Precise orbits, when given.
-    pub sp3: Option<PathBuf>,
+    /// Precise orbits (SP3; any number, merged), used instead of the broadcast ones when given.
+    pub sp3: Vec<PathBuf>,
+    /// RINEX clock files (any number, merged), used instead of the SP3 clocks when given.
+    pub clk: Vec<PathBuf>,
     /// Processing options.
     pub options: SppOptions,
     /// Coordinates of the `.pos` written.
@@ -50,42 +52,6 @@ pub struct SppReport {
     pub out: PathBuf,
 }
 
-/// Read navigation files (and SP3) into an orbit source.
-pub fn load_orbits(nav: &[PathBuf], sp3: Option<&Path>) -> Result<(Orbits, Vec<String>)> {
-    let mut navs = Vec::with_capacity(nav.len());
-    for p in nav {
-        navs.push(NavFile::read(p)?);
-    }
-    let eph = Ephemerides::from_nav(&navs);
-    let mut warnings: Vec<String> = eph.stats.skipped.clone();
-    if eph.stats.unhealthy > 0 {
-        warnings.push(format!(
-            "{} ephemerides flagged unhealthy were not used",
-            eph.stats.unhealthy
-        ));
-    }
-    if eph.stats.unused > 0 {
-        warnings.push(format!(
-            "{} navigation records of unused message types (SBAS, CNAV …) ignored",
-            eph.stats.unused
-        ));
-    }
-    if eph.gps_iono.is_none() {
-        warnings.push("no Klobuchar ionosphere parameters in the navigation files: ionosphere not modelled, code weights lowered".into());
-    }
-    let precise = match sp3 {
-        Some(p) => Some(Sp3::read(p)?),
-        None => None,
-    };
-    Ok((
-        Orbits {
-            broadcast: eph,
-            precise,
-        },
-        warnings,
-    ))
-}
-
 /// What reading an observation file noticed, each as `path:line: what`.
 fn file_warnings(f: &ObsFile) -> impl Iterator<Item = String> + '_ {
     f.warnings
@@ -93,41 +59,12 @@ fn file_warnings(f: &ObsFile) -> impl Iterator<Item = String> + '_ {
         .map(|w| format!("{}:{}: {}", f.path.display(), w.line, w.what))
 }
 
-/// Check that observations and orbits overlap in time; error naming both files if not.
-pub fn check_overlap(obs: &ObsFile, orbits: &Orbits, nav: &[PathBuf]) -> Result<()> {
-    let (Some(a), Some(b)) = (obs.epochs.first(), obs.epochs.last()) else {
-        return Ok(());
-    };
-    let (lo, hi) = match (&orbits.precise, orbits.broadcast.span()) {
-        (Some(s), _) => s.span().unwrap_or((a.time, b.time)),
-        (None, Some(span)) => span,
-        (None, None) => {
-            return Err(Error::NoData(
-                "the navigation files hold no usable ephemeris".into(),
-            ))
-        }
-    };
-    let margin = hifitime::Duration::from_seconds(4.0 * 3600.0);
-    if b.time < lo - margin || a.time > hi + margin {
-        let names: Vec<String> = nav.iter().map(|p| p.display().to_string()).collect();
-        return Err(Error::NoData(format!(
-            "{}: observations ({} – {}) do not overlap the orbits of {} ({} – {}); give navigation data for the observation days",
-            obs.path.display(),
-            format_ymdhms(a.time),
-            format_ymdhms(b.time),
-            names.join(", "),
-            format_ymdhms(lo),
-            format_ymdhms(hi)
-        )));
-    }
-    Ok(())
-}
-
 /// Run single-point positioning over a file and write the `.pos` output.
 pub fn spp(job: &SppJob) -> Result<SppReport> {
     let obs = ObsFile::read(&job.obs)?;
-    let (orbits, mut warnings) = load_orbits(&job.nav, job.sp3.as_deref())?;
+    let (orbits, mut warnings) = load_orbits(&job.nav, &job.sp3, &job.clk)?;
     check_overlap(&obs, &orbits, &job.nav)?;
+    warnings.extend(check_glonass_channels(&obs, &orbits, &job.options.systems)?);
     warnings.extend(file_warnings(&obs));
     let run = gnss::spp::run(&obs.epochs, &obs.header, &orbits, &job.options);
     let records: Vec<PosRecord> = run
@@ -159,7 +96,7 @@ pub fn spp(job: &SppJob) -> Result<SppReport> {
         ),
     ];
     let mut header = header;
-    for n in &job.nav {
+    for n in job.nav.iter().chain(&job.sp3).chain(&job.clk).rev() {
         header.insert(2, format!("inp file  : {}", n.display()));
     }
     write_pos(&job.out, &header, &records, job.format)?;
@@ -216,8 +153,12 @@ pub struct PpkJob {
     pub rover: PathBuf,
     /// Base observation file.
     pub base: PathBuf,
-    /// Navigation files.
+    /// Navigation files (optional with SP3 files).
     pub nav: Vec<PathBuf>,
+    /// Precise orbits (SP3; any number, merged), used instead of the broadcast ones when given.
+    pub sp3: Vec<PathBuf>,
+    /// RINEX clock files (any number, merged), used instead of the SP3 clocks when given.
+    pub clk: Vec<PathBuf>,
     /// Where the base antenna is.
     pub base_position: gnss::ppk::BasePosition,
     /// Processing options.
@@ -248,8 +189,13 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
     let base = ObsFile::read(&job.base)?;
     gnss::ppk::require_phase(&rover, "rover")?;
     gnss::ppk::require_phase(&base, "base")?;
-    let (orbits, mut warnings) = load_orbits(&job.nav, None)?;
+    let (orbits, mut warnings) = load_orbits(&job.nav, &job.sp3, &job.clk)?;
     check_overlap(&rover, &orbits, &job.nav)?;
+    warnings.extend(check_glonass_channels(
+        &rover,
+        &orbits,
+        &job.options.systems,
+    )?);
     warnings.extend(file_warnings(&rover).chain(file_warnings(&base)));
     let result = gnss::ppk::process(
         &rover,

@@ -13,12 +13,13 @@ use std::sync::Arc;
 /// Carrier-phase kinematic positioning of a rover against a base (double differences,
 /// integer ambiguities), written as an RTKLIB-compatible .pos file.
 ///
-/// Reads the rover's and the base's RINEX observation files and one or more navigation
-/// files, forms double differences of carrier phase and code between rover and base, runs a
-/// Kalman filter forward and/or backward in time, resolves the integer ambiguities (LAMBDA,
-/// partial resolution by success rate, ratio test) and writes an RTKLIB-compatible `.pos`
-/// file in GPS time: Q = 1 fixed, Q = 2 float, with the filter's sigmas, the age of the base
-/// epoch and the ratio. Prints what was solved and fixed, and why epochs were not.
+/// Reads the rover's and the base's RINEX observation files and the orbits (navigation
+/// files, or SP3 precise orbits with clocks from the SP3 or RINEX clock files), forms double
+/// differences of carrier phase and code between rover and base, runs a Kalman filter
+/// forward and/or backward in time, resolves the integer ambiguities (LAMBDA, partial
+/// resolution by success rate, ratio test) and writes an RTKLIB-compatible `.pos` file in
+/// GPS time: Q = 1 fixed, Q = 2 float, with the filter's sigmas, the age of the base epoch
+/// and the ratio. Prints what was solved and fixed, and why epochs were not.
 ///
 /// Beyond 10 km of baseline the ionosphere (a slant delay per satellite) and the rover's
 /// zenith wet delay are estimated, and the combined solution is the two-filter smoother's:
@@ -29,7 +30,12 @@ use std::sync::Arc;
 /// position in the base file's header is used, with a warning (its error goes straight into
 /// every rover position). Give negative coordinates with '=', e.g.
 /// --base-pos=-3978241.958,3382840.234,3649900.853.
+///
+/// With --sp3 the satellite positions come from the precise orbits (satellite centre of mass;
+/// no satellite antenna offset is applied: in double differences the difference to the
+/// broadcast antenna phase centre largely cancels).
 #[derive(clap::Args)]
+#[command(group(clap::ArgGroup::new("orbits").required(true).multiple(true).args(["nav", "sp3"])))]
 pub struct Args {
     /// RINEX observation file of the moving receiver.
     #[arg(long, value_name = "FILE")]
@@ -38,9 +44,23 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     base: PathBuf,
     /// Navigation file (RINEX 2/3/4 broadcast ephemerides); give the flag once per file
-    /// (e.g. one per constellation).
-    #[arg(long, value_name = "FILE", required = true)]
+    /// (e.g. one per constellation). Required unless --sp3 is given; with --sp3 it still
+    /// gives the GLONASS frequency channels when the observation headers lack them.
+    #[arg(long, value_name = "FILE")]
     nav: Vec<PathBuf>,
+    /// Precise orbits and clocks (SP3-a/b/c/d, plain or gzip), used instead of the broadcast
+    /// ones; give the flag once per file: the previous, current and next day's files cover
+    /// the day's edges (they are merged; an epoch in several files is taken from the file
+    /// holding it most centrally). Positions are interpolated (degree 10), clocks linearly;
+    /// a satellite outside the files or in a gap of their records is not used.
+    #[arg(long, value_name = "FILE")]
+    sp3: Vec<PathBuf>,
+    /// RINEX clock file (2.x/3.x, plain or gzip) whose satellite clocks (AS records) are used
+    /// instead of the SP3 clocks; give the flag once per file. Needs --sp3. Clocks are
+    /// interpolated linearly between records, never across a gap of more than 2 record
+    /// intervals: a satellite without a clock then is not used (counted as without orbit).
+    #[arg(long, value_name = "FILE", requires = "sp3")]
+    clk: Vec<PathBuf>,
     /// Base marker position, ECEF metres: X,Y,Z (default: the base file's header position).
     #[arg(
         long,
@@ -165,6 +185,8 @@ pub fn run(args: Args) -> Result<()> {
         rover: args.rover,
         base: args.base,
         nav: args.nav,
+        sp3: args.sp3,
+        clk: args.clk,
         base_position,
         options,
         format: args.format.into(),

@@ -8,23 +8,40 @@ use std::path::PathBuf;
 
 /// Single-point positioning of every epoch, written as an RTKLIB-compatible .pos file.
 ///
-/// Reads one RINEX observation file and one or more navigation files (broadcast ephemerides;
-/// optionally SP3 precise orbits and clocks instead), solves a code-only position and receiver
-/// clock per epoch (with fault detection and exclusion), and writes an RTKLIB-compatible `.pos`
-/// file in GPS time with quality Q = 5. Prints the number of epochs read and solved, and why
-/// unsolved epochs failed.
+/// Reads one RINEX observation file and the orbits: navigation files (broadcast ephemerides),
+/// or SP3 precise orbits (with clocks from the SP3 files or from RINEX clock files), or both;
+/// solves a code-only position and receiver clock per epoch (with fault detection and
+/// exclusion), and writes an RTKLIB-compatible `.pos` file in GPS time with quality Q = 5.
+/// Prints the number of epochs read and solved, why unsolved epochs failed and why satellites
+/// were rejected.
+///
+/// Without a navigation file there are no Klobuchar ionosphere parameters: the ionosphere is
+/// then not modelled (code weights are lowered, and a warning says so), no broadcast group
+/// delay is applied, and GLONASS satellites need the observation header's frequency channels.
 #[derive(clap::Args)]
+#[command(group(clap::ArgGroup::new("orbits").required(true).multiple(true).args(["nav", "sp3"])))]
 pub struct Args {
     /// RINEX observation file of the receiver to position.
     #[arg(long, value_name = "FILE")]
     obs: PathBuf,
     /// Navigation file (RINEX 2/3/4 broadcast ephemerides); give the flag once per file
-    /// (e.g. one per constellation).
-    #[arg(long, value_name = "FILE", required = true)]
-    nav: Vec<PathBuf>,
-    /// Precise orbits and clocks (SP3-c/d) used instead of the broadcast ones.
+    /// (e.g. one per constellation). Required unless --sp3 is given; with --sp3 it still
+    /// gives the ionosphere parameters, group delays and GLONASS frequency channels.
     #[arg(long, value_name = "FILE")]
-    sp3: Option<PathBuf>,
+    nav: Vec<PathBuf>,
+    /// Precise orbits and clocks (SP3-a/b/c/d, plain or gzip), used instead of the broadcast
+    /// ones; give the flag once per file: the previous, current and next day's files cover
+    /// the day's edges (they are merged; an epoch in several files is taken from the file
+    /// holding it most centrally). Positions are interpolated (degree 10), clocks linearly;
+    /// a satellite outside the files or in a gap of their records is not used.
+    #[arg(long, value_name = "FILE")]
+    sp3: Vec<PathBuf>,
+    /// RINEX clock file (2.x/3.x, plain or gzip) whose satellite clocks (AS records) are used
+    /// instead of the SP3 clocks; give the flag once per file. Needs --sp3. Clocks are
+    /// interpolated linearly between records, never across a gap of more than 2 record
+    /// intervals: a satellite without a clock then is not used (counted in the report).
+    #[arg(long, value_name = "FILE", requires = "sp3")]
+    clk: Vec<PathBuf>,
     /// Elevation mask, degrees (0 to 90): satellites lower than this are not used.
     #[arg(long, value_name = "DEG", default_value_t = 15.0)]
     elev_mask: f64,
@@ -47,6 +64,7 @@ pub fn run(args: Args) -> Result<()> {
         obs: args.obs,
         nav: args.nav,
         sp3: args.sp3,
+        clk: args.clk,
         options: SppOptions {
             elev_mask: elev_mask(args.elev_mask)?,
             systems,

@@ -60,6 +60,18 @@ fn every_argument_of_every_subcommand_is_described() {
     ] {
         assert!(t.contains(needle), "no '{needle}' in\n{t}");
     }
+    // Precise orbits and clocks, repeatable, for both positioning commands.
+    for cmd in ["spp", "ppk"] {
+        let t = succeeds(&ppkat(&[cmd, "--help"]));
+        for needle in [
+            "--sp3 <FILE>\n          Precise orbits and clocks (SP3-a/b/c/d",
+            "--clk <FILE>\n          RINEX clock file",
+            "Required unless --sp3 is given",
+            "give the flag once per file",
+        ] {
+            assert!(t.contains(needle), "ppkat {cmd}: no '{needle}' in\n{t}");
+        }
+    }
 }
 
 #[test]

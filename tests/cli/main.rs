@@ -11,6 +11,7 @@ mod exposures;
 mod gnss;
 mod help;
 mod info;
+mod precise;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

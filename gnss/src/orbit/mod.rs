@@ -1,13 +1,19 @@
 //! Satellite orbits and clocks: our own broadcast-ephemeris computation on records read from
 //! RINEX navigation files (Keplerian systems and GLONASS), an ephemeris index with correct
-//! selection, and SP3 precise orbits as an alternative source.
+//! selection, and precise orbits as an alternative source: any number of SP3 files (the
+//! previous, current and next day cover a day's edges) merged per satellite, with clocks from
+//! the SP3 files or from RINEX clock files (see [`precise`]).
 
+pub mod clk;
 pub mod glonass;
 pub mod kepler;
+pub mod precise;
 pub mod sp3;
 
+pub use clk::ClockFile;
 pub use glonass::GlonassEph;
 pub use kepler::{GalMessage, KeplerEph, SatPosClock, C};
+pub use precise::{ClockSource, MergeReport, PreciseOrbits, Unavailable};
 pub use sp3::Sp3;
 
 use crate::rinex::nav::{Klobuchar, NavFile, NavKind};
@@ -196,10 +202,13 @@ impl Ephemerides {
 /// Where satellite positions and clocks come from.
 #[derive(Clone, Debug)]
 pub struct Orbits {
-    /// Broadcast ephemerides (their group delays apply to precise orbits too).
+    /// Broadcast ephemerides (their group delays apply to precise orbits too; they may be
+    /// empty when precise orbits are given).
     pub broadcast: Ephemerides,
-    /// Precise orbits and clocks (SP3), used instead of the broadcast ones when given.
-    pub precise: Option<Sp3>,
+    /// Precise orbits and clocks, used instead of the broadcast ones when given: a satellite
+    /// without a precise position or clock at a time is not used then, even if it has a
+    /// broadcast ephemeris.
+    pub precise: Option<PreciseOrbits>,
 }
 
 /// A satellite at its transmission time, ready for a range model.
@@ -222,19 +231,21 @@ impl Orbits {
 
     /// Position and clock of `sv` at GPST transmission time `t`, with the group delay of `band`.
     pub fn sat(&self, sv: Sv, t: Epoch, band: u8) -> Option<SatInfo> {
+        self.sat_or_why(sv, t, band).ok()
+    }
+
+    /// As [`Orbits::sat`], or why the satellite cannot be used at `t`. With precise orbits the
+    /// broadcast group delay of `band` is applied when a navigation file gives it (0 otherwise).
+    pub fn sat_or_why(&self, sv: Sv, t: Epoch, band: u8) -> Result<SatInfo, Unavailable> {
         let eph = self.broadcast.select(sv, t);
-        if let Some(sp3) = &self.precise {
-            let pv = sp3.compute(sv, t)?;
-            if pv.clock.is_nan() {
-                return None;
-            }
-            return Some(SatInfo {
-                pv,
+        if let Some(p) = &self.precise {
+            return Ok(SatInfo {
+                pv: p.compute(sv, t)?,
                 group_delay: eph.map(|e| e.group_delay(band)).unwrap_or(0.0),
             });
         }
-        let eph = eph?;
-        Some(SatInfo {
+        let eph = eph.ok_or(Unavailable::NoOrbit)?;
+        Ok(SatInfo {
             pv: eph.compute(t),
             group_delay: eph.group_delay(band),
         })

@@ -361,7 +361,7 @@ pub(crate) struct EpochHead {
 }
 
 /// Calendar fields to a GPST epoch; `None` for impossible dates.
-fn make_epoch(
+pub(crate) fn make_epoch(
     y: i64,
     mo: i64,
     d: i64,

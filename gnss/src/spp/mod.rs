@@ -14,7 +14,7 @@ mod types;
 pub use types::{chi2_999, Dop, Rejection, SppFailure, SppOptions, SppSolution};
 
 use crate::frame::Ecef;
-use crate::orbit::{Orbits, C};
+use crate::orbit::{Orbits, Unavailable, C};
 use crate::rinex::{ObsEpoch, ObsHeader, SatObs};
 use crate::signal::{find_code, frequency, primary_codes};
 use crate::sv::Sv;
@@ -119,9 +119,13 @@ fn measurement(
         .or_else(|| orbits.broadcast.glonass_channel(s.sv.prn));
     let freq = frequency(sys, band, chan).ok_or(Rejection::NoCode)?;
     let t0 = t - Duration::from_seconds(pr / C);
-    let first = orbits.sat(s.sv, t0, band).ok_or(Rejection::NoEphemeris)?;
+    let why = |u: Unavailable| match u {
+        Unavailable::NoOrbit => Rejection::NoEphemeris,
+        Unavailable::NoClock => Rejection::NoClock,
+    };
+    let first = orbits.sat_or_why(s.sv, t0, band).map_err(why)?;
     let ttx = t0 - Duration::from_seconds(first.pv.clock - first.group_delay);
-    let si = orbits.sat(s.sv, ttx, band).ok_or(Rejection::NoEphemeris)?;
+    let si = orbits.sat_or_why(s.sv, ttx, band).map_err(why)?;
     Ok(Meas {
         sv: s.sv,
         pr,

@@ -55,8 +55,10 @@ pub enum Rejection {
     SystemNotSelected,
     /// No usable code observation.
     NoCode,
-    /// No valid healthy ephemeris.
+    /// No valid healthy ephemeris (or, with precise orbits, no precise position).
     NoEphemeris,
+    /// A precise position but no precise clock (outside the clock records or in a gap).
+    NoClock,
     /// Below the elevation mask.
     BelowMask,
     /// Excluded by fault detection.
@@ -68,7 +70,8 @@ impl std::fmt::Display for Rejection {
         f.write_str(match self {
             Rejection::SystemNotSelected => "system not selected",
             Rejection::NoCode => "no usable code observation",
-            Rejection::NoEphemeris => "no valid healthy ephemeris",
+            Rejection::NoEphemeris => "no valid healthy ephemeris or precise orbit",
+            Rejection::NoClock => "no precise clock (outside the clock records or in a gap)",
             Rejection::BelowMask => "below elevation mask",
             Rejection::Faulty => "excluded by fault detection",
         })

@@ -1,0 +1,170 @@
+//! `ppkat spp` and `ppkat ppk` on precise orbits: ONSA's day with the IGS final orbits of
+//! three days and no navigation file; clock files that do not fit; bad usage.
+
+use super::*;
+
+const ONSA_OBS: &str = "gnss/onsa-2005-224/onsa2240.05o";
+const ONSA_SP3: [&str; 3] = [
+    "gnss/onsa-2005-224/igs13354.sp3",
+    "gnss/onsa-2005-224/igs13355.sp3",
+    "gnss/onsa-2005-224/igs13356.sp3",
+];
+/// ONSA's marker (ITRF2014 at the observation epoch), ECEF metres.
+const ONSA_TRUTH: [f64; 3] = [3370658.5313, 711877.1456, 5349786.9559];
+
+/// The ONSA observation file and its three SP3 files, or `None` (skipped).
+fn onsa() -> Option<[PathBuf; 4]> {
+    shared_all([ONSA_OBS, ONSA_SP3[0], ONSA_SP3[1], ONSA_SP3[2]])
+}
+
+/// `--sp3 FILE` for each of the three SP3 files.
+fn sp3_flags(f: &[PathBuf; 4]) -> Vec<&str> {
+    f[1..].iter().flat_map(|s| ["--sp3", p(s)]).collect()
+}
+
+/// ECEF positions of a `.pos` written with `--format xyz`, with their time columns.
+fn xyz_rows(path: &Path) -> Vec<(String, [f64; 3])> {
+    pos_rows(path)
+        .into_iter()
+        .map(|r| {
+            let x = [2, 3, 4].map(|k| r[k].parse::<f64>().unwrap());
+            (format!("{} {}", r[0], r[1]), x)
+        })
+        .collect()
+}
+
+#[test]
+fn spp_on_three_sp3_files_without_navigation() {
+    let Some(f) = onsa() else {
+        return;
+    };
+    let out = tmp("onsa-spp.pos");
+    let mut args = vec!["spp", "--obs", p(&f[0]), "--format", "xyz", "-o", p(&out)];
+    args.extend(sp3_flags(&f));
+    let t = succeeds(&ppkat(&args));
+    assert!(
+        t.contains("no navigation file: no Klobuchar ionosphere parameters"),
+        "{t}"
+    );
+    let rows = xyz_rows(&out);
+    // The day's last epochs need the next day's file (and the first ones the previous day's).
+    assert_eq!(rows[0].0, "2005/08/12 00:00:00.000000");
+    assert_eq!(rows[rows.len() - 1].0, "2005/08/12 23:59:30.000000");
+    assert!(rows.len() >= 2800, "{} epochs solved: {t}", rows.len());
+    let n = rows.len() as f64;
+    let mean: [f64; 3] = [0, 1, 2].map(|k| rows.iter().map(|r| r.1[k]).sum::<f64>() / n);
+    let d = |x: &[f64; 3]| {
+        ((x[0] - ONSA_TRUTH[0]).powi(2)
+            + (x[1] - ONSA_TRUTH[1]).powi(2)
+            + (x[2] - ONSA_TRUTH[2]).powi(2))
+        .sqrt()
+    };
+    let mut errs: Vec<f64> = rows.iter().map(|r| d(&r.1)).collect();
+    errs.sort_by(f64::total_cmp);
+    let median = errs[errs.len() / 2];
+    eprintln!(
+        "ONSA single point on IGS finals, no ionosphere model: {} epochs, mean position {:.2} m from the marker, per-epoch 3D median {:.2} m, 95 % {:.2} m",
+        rows.len(),
+        d(&mean),
+        median,
+        errs[errs.len() * 95 / 100]
+    );
+    assert!(d(&mean) < 5.0, "mean position {:.2} m off", d(&mean));
+    assert!(median < 6.0, "median 3D error {median:.2} m");
+}
+
+#[test]
+fn ppk_on_sp3_without_navigation() {
+    let Some(f) = onsa() else {
+        return;
+    };
+    // A zero baseline (the station against itself): every solution is the base position
+    // (to 3 mm at the epochs of poorest geometry, where the filter's position prior shows).
+    let out = tmp("onsa-zero.pos");
+    let base = "--base-pos=3370658.5313,711877.1456,5349786.9559";
+    let mut args = vec![
+        "ppk",
+        "--rover",
+        p(&f[0]),
+        "--base",
+        p(&f[0]),
+        base,
+        "--format",
+        "xyz",
+        "-o",
+    ];
+    args.push(p(&out));
+    args.extend(sp3_flags(&f));
+    let t = succeeds(&ppkat(&args));
+    let rows = xyz_rows(&out);
+    assert!(rows.len() >= 2800, "{t}");
+    for (time, x) in &rows {
+        for k in 0..3 {
+            assert!((x[k] - ONSA_TRUTH[k]).abs() < 5e-3, "{time}: {x:?}");
+        }
+    }
+}
+
+#[test]
+fn clock_files_that_do_not_fit() {
+    let Some(f) = onsa() else {
+        return;
+    };
+    let out = tmp("onsa-clk.pos");
+    // A clock file of another day.
+    let clk = fixture("clock_v200.clk");
+    let mut args = vec!["spp", "--obs", p(&f[0]), "-o", p(&out), "--clk", p(&clk)];
+    args.extend(sp3_flags(&f));
+    fails_with(
+        &ppkat(&args),
+        &[
+            "onsa2240.05o",
+            "do not overlap the clocks",
+            "clock_v200.clk",
+        ],
+    );
+    assert!(!out.exists(), "no output on failure");
+    // A broken clock file: the message names the file and the line.
+    let text = std::fs::read_to_string(&clk).unwrap();
+    let broken = tmp("broken.clk");
+    std::fs::write(
+        &broken,
+        text.replacen("1.000300000000E-04", "1.0003OOOOOOOE-04", 1),
+    )
+    .unwrap();
+    let mut args = vec!["spp", "--obs", p(&f[0]), "-o", p(&out), "--clk", p(&broken)];
+    args.extend(sp3_flags(&f));
+    fails_with(&ppkat(&args), &["broken.clk:20:", "clock bias"]);
+}
+
+#[test]
+fn orbit_flags_that_do_not_go_together() {
+    let obs = fixture("events_v304.rnx");
+    let clk = fixture("clock_v200.clk");
+    let out = tmp("usage.pos");
+    for args in [
+        // No orbits at all.
+        &["spp", "--obs", p(&obs), "-o", p(&out)][..],
+        // Clock files without SP3.
+        &[
+            "spp",
+            "--obs",
+            p(&obs),
+            "--nav",
+            "x.nav",
+            "--clk",
+            p(&clk),
+            "-o",
+            p(&out),
+        ],
+        &["ppk", "--rover", p(&obs), "--base", p(&obs), "-o", p(&out)],
+        &[
+            "ppk", "--rover", "r", "--base", "b", "--nav", "n", "--clk", "c", "-o", "o",
+        ],
+    ] {
+        let o = ppkat(args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", text(&o));
+    }
+    let t = text(&ppkat(&["spp", "--obs", p(&obs), "-o", p(&out)]));
+    assert!(t.contains("--nav") && t.contains("--sp3"), "{t}");
+}
