@@ -95,9 +95,14 @@ fn geonet_static_rover_processed_kinematically() {
     };
     let base = Ecef::new(-3978241.958, 3382840.234, 3649900.853);
     let truth = Ecef::new(-3976219.1869, 3382371.6036, 3652511.1410);
-    for mode in [FilterMode::Combined, FilterMode::Forward] {
+    for (mode, nf) in [
+        (FilterMode::Combined, 2),
+        (FilterMode::Forward, 2),
+        (FilterMode::Combined, 1),
+    ] {
         let opts = PpkOptions {
             filter: mode,
+            nf,
             ..PpkOptions::default()
         };
         let r = run(
@@ -110,7 +115,7 @@ fn geonet_static_rover_processed_kinematically() {
         );
         let s = stats(&r, |_| Some(truth));
         eprintln!(
-            "GEONET {mode:?}: {} solved of {}, fixed {:.1} %, H RMS {:.2} cm, V RMS {:.2} cm, worst fixed {:.2} cm; fw {:?}",
+            "GEONET {mode:?} L1..L{nf}: {} solved of {}, fixed {:.1} %, H RMS {:.2} cm, V RMS {:.2} cm, worst fixed {:.2} cm; fw {:?}",
             r.trajectory.epochs.len(),
             r.rover_epochs,
             s.fixed_pct,
@@ -137,6 +142,17 @@ fn geonet_static_rover_processed_kinematically() {
             }
         }
         match mode {
+            FilterMode::Combined if nf == 1 => {
+                // L1 alone fixes every epoch of this 3 km baseline (H 0.55 cm, V 0.98 cm).
+                assert_eq!(s.fixed_pct, 100.0);
+                assert!(
+                    s.h_rms <= 0.008 && s.v_rms <= 0.015,
+                    "{} {}",
+                    s.h_rms,
+                    s.v_rms
+                );
+                assert!((0.2..=2.0).contains(&s.nees_fixed), "NEES {}", s.nees_fixed);
+            }
             FilterMode::Combined => {
                 assert!(segments.iter().all(|&s| s == 0), "{segments:?}");
                 assert_eq!(s.fixed_pct, 100.0);
@@ -261,8 +277,10 @@ fn bell_ebre_115_km_baseline() {
     };
     let ebre = Ecef::new(4833520.18645, 41537.04548, 4147461.51147);
     let bell = Ecef::new(4775849.42797, 116814.30786, 4213018.93112);
+    // The truth is the marker; BELL's antenna reference point is 5.4 cm above it.
     let opts = PpkOptions {
         systems: vec![gnss::sv::Constellation::Gps],
+        refer: ppk::Reference::Marker,
         ..PpkOptions::default()
     };
     let r = run(
@@ -310,5 +328,103 @@ fn bell_ebre_115_km_baseline() {
         (0.3..=3.0).contains(&s.nees_float),
         "NEES float {}",
         s.nees_float
+    );
+
+    // L1 only: at 115 km no integer is safe; the float stays honest (measured 0 % fixed,
+    // 3D RMS 0.21 m, NEES 0.58).
+    let l1 = PpkOptions { nf: 1, ..opts };
+    let r1 = run(
+        &dir,
+        "bell0300.02o",
+        "ebre0300.02o",
+        &["brdc0300.02n"],
+        ebre,
+        &l1,
+    );
+    let s1 = stats(&r1, |_| Some(bell));
+    eprintln!(
+        "BELL-EBRE L1: fixed {:.2} %, 3D RMS {:.2} cm, worst fixed {:.2} cm, NEES float {:.3}",
+        s1.fixed_pct,
+        s1.d3_rms * 100.0,
+        s1.max_fixed_err * 100.0,
+        s1.nees_float
+    );
+    assert!(
+        s1.max_fixed_err <= 0.15,
+        "worst L1 fix {}",
+        s1.max_fixed_err
+    );
+    assert!(s1.d3_rms <= 0.4, "L1 3D RMS {}", s1.d3_rms);
+    assert!(
+        (0.3..=3.0).contains(&s1.nees_float),
+        "L1 NEES {}",
+        s1.nees_float
+    );
+}
+
+/// BELL–EBRE as a static survey over 24 h: one position within 3 cm of the truth (measured
+/// 7.8 mm), fixed, with σ that cover the error; the ARP lies 5.4 cm above the marker.
+#[test]
+fn bell_ebre_static_24_h() {
+    let Some(dir) = common::data("gnss/bell-ebre-2002-030") else {
+        return;
+    };
+    let ebre = Ecef::new(4833520.18645, 41537.04548, 4147461.51147);
+    let bell = Ecef::new(4775849.42797, 116814.30786, 4213018.93112);
+    let mut opts = PpkOptions {
+        systems: vec![gnss::sv::Constellation::Gps],
+        motion: ppk::Motion::Static,
+        refer: ppk::Reference::Marker,
+        ..PpkOptions::default()
+    };
+    let files = ("bell0300.02o", "ebre0300.02o", ["brdc0300.02n"]);
+    let r = run(&dir, files.0, files.1, &files.2, ebre, &opts);
+    let st = r.static_solution.clone().expect("a static solution");
+    let e = st.pos.enu_from(&bell).0;
+    let r_enu = gnss::frame::enu_rotation(&bell.to_geodetic());
+    let c = r_enu * st.cov * r_enu.transpose();
+    let sd = nalgebra::Vector3::from_fn(|i, _| c[(i, i)].sqrt());
+    eprintln!(
+        "BELL static: ENU error {:.1} {:.1} {:.1} mm (3D {:.1}), σ {:.1} {:.1} {:.1} mm, {:?}, {} of {} epochs fixed, phase RMS {:.1} mm",
+        e.x * 1e3,
+        e.y * 1e3,
+        e.z * 1e3,
+        e.norm() * 1e3,
+        sd.x * 1e3,
+        sd.y * 1e3,
+        sd.z * 1e3,
+        st.quality,
+        st.fixed_epochs,
+        st.epochs,
+        st.residuals.0.rms() * 1e3
+    );
+    assert!(e.norm() <= 0.03, "3D error {}", e.norm());
+    assert!(
+        e.norm() <= 0.015,
+        "regression: measured 7.8 mm, now {}",
+        e.norm()
+    );
+    assert_eq!(st.quality, Quality::Fixed);
+    assert_eq!(st.epochs, 2880);
+    assert!(st.fixed_epochs >= 2600, "fixed epochs {}", st.fixed_epochs);
+    for i in 0..3 {
+        assert!(
+            e[i].abs() <= 3.0 * sd[i],
+            "axis {i}: {} vs σ {}",
+            e[i],
+            sd[i]
+        );
+        assert!(sd[i] <= 0.03, "σ {i} {}", sd[i]);
+    }
+    assert!(st.residuals.0.rms() < 0.015 && st.residuals.0.count > 30_000);
+    // The last line of the accumulating trajectory is the static solution.
+    assert_eq!(r.trajectory.epochs.last().map(|e| e.pos), Some(st.pos));
+    // The ARP: 5.4 cm up.
+    opts.refer = ppk::Reference::Arp;
+    let a = run(&dir, files.0, files.1, &files.2, ebre, &opts);
+    let up = a.static_solution.unwrap().pos.enu_from(&st.pos).0;
+    assert!(
+        (up.z - 0.054).abs() < 1e-4 && up.xy().norm() < 1e-4,
+        "{up:?}"
     );
 }

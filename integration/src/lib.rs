@@ -12,12 +12,13 @@
 //!   photogrammetry software, photo matching and geotags, the lever arm from tape measurements.
 //! - [`adjust`]: the joint GNSS-supported adjustment of a project (images, measurements,
 //!   ground points, antenna table) with statistics and reports.
+//! - [`survey`]: the summary of a static run (`OUT.pos.json` and report lines).
 //! - [`simulate`]: a flight simulator (scenario → RINEX, navigation and truth files) and
 //!   simulated adjustment projects with truth (aerial block, close-range pair).
 //! - [`demo`]: the whole chain on a simulated flight, compared with the truth.
 //! - [`bench`](mod@bench): throughput and peak memory of ingest and adjustment.
 //!
-//! Dependency direction: `pipeline` and `demo` use `exposure`; `pipeline` uses `orbits`; `demo` and `bench` use
+//! Dependency direction: `pipeline` and `demo` use `exposure`; `pipeline` uses `orbits` and `survey`; `demo` and `bench` use
 //! `simulate` and `adjust`; `simulate` writes the files `adjust` reads. Times are GPST, angles
 //! radians unless a file says degrees, lengths metres.
 
@@ -28,6 +29,7 @@ pub mod exposure;
 pub mod orbits;
 pub mod pipeline;
 pub mod simulate;
+pub mod survey;
 
 pub use gnss;
 pub use photo;

@@ -176,10 +176,21 @@ pub struct PpkReport {
     pub result: gnss::ppk::PpkResult,
     /// The `.pos` written.
     pub out: PathBuf,
+    /// The static summary written beside it (`OUT.pos.json`; static runs only).
+    pub summary: Option<PathBuf>,
+    /// The point of the rover the positions describe.
+    pub refer: gnss::ppk::Reference,
     /// Problems with the inputs and the run.
     pub warnings: Vec<String>,
     /// Wall time, seconds.
     pub seconds: f64,
+}
+
+/// `OUT.pos` → `OUT.pos.json`.
+fn summary_path(out: &std::path::Path) -> PathBuf {
+    let mut name = out.as_os_str().to_owned();
+    name.push(".json");
+    PathBuf::from(name)
 }
 
 /// Run PPK and write the `.pos` output. `progress(n)` is called as epochs are processed.
@@ -208,16 +219,35 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
     warnings.extend(result.warnings.iter().cloned());
     let o = &job.options;
     let b = result.base_marker;
+    let motion = match o.motion {
+        gnss::ppk::Motion::Kinematic => "kinematic",
+        gnss::ppk::Motion::Static => "static",
+    };
+    let d = rover.header.antenna_delta;
+    let point = match o.refer {
+        gnss::ppk::Reference::Arp => "rover antenna reference point (ARP)",
+        gnss::ppk::Reference::Marker => "rover marker (ARP minus the antenna delta)",
+    };
     let header = vec![
         format!(
-            "program   : ppkat {} (carrier-phase kinematic)",
+            "program   : ppkat {} (carrier-phase {motion})",
             env!("CARGO_PKG_VERSION")
         ),
         format!("inp file  : {}", job.rover.display()),
         format!("inp file  : {}", job.base.display()),
         format!(
-            "pos mode  : kinematic, filter {:?}, ambiguities {:?}, ratio {:.1}",
-            o.filter, o.ar, o.ratio_threshold
+            "pos mode  : {motion}, filter {:?}, ambiguities {:?}, ratio {:.1}",
+            if o.motion == gnss::ppk::Motion::Static {
+                gnss::ppk::FilterMode::Forward
+            } else {
+                o.filter
+            },
+            o.ar,
+            o.ratio_threshold
+        ),
+        format!(
+            "positions : {point}; rover ANTENNA: DELTA H/E/N {:.4} {:.4} {:.4} m",
+            d.up, d.east, d.north
         ),
         format!("elev mask : {:.1} deg", o.elev_mask.to_degrees()),
         format!(
@@ -236,8 +266,17 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
         ),
     ];
     result.trajectory.write_pos(&job.out, &header, job.format)?;
+    let mut summary = None;
+    if let Some(st) = &result.static_solution {
+        let path = summary_path(&job.out);
+        let text = crate::survey::json(st, o.refer, &result.base_marker);
+        gnss::solution::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
+        summary = Some(path);
+    }
     Ok(PpkReport {
         result,
+        summary,
+        refer: o.refer,
         out: job.out.clone(),
         warnings,
         seconds: t0.elapsed().as_secs_f64(),
@@ -307,6 +346,14 @@ impl fmt::Display for PpkReport {
                 s.below_mask,
                 s.no_orbit
             )?;
+        }
+        if let Some(st) = &r.static_solution {
+            for l in crate::survey::lines(st, self.refer) {
+                writeln!(f, "  {l}")?;
+            }
+            if let Some(p) = &self.summary {
+                writeln!(f, "  summary → {}", p.display())?;
+            }
         }
         for w in self.warnings.iter().take(20) {
             writeln!(f, "  warning: {w}")?;

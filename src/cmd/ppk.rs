@@ -5,7 +5,9 @@ use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use integration::gnss::frame::{Ecef, Geodetic};
 use integration::gnss::model::antex::Antex;
-use integration::gnss::ppk::{ArMode, BasePosition, Estimate, FilterMode, PpkOptions};
+use integration::gnss::ppk::{
+    ArMode, BasePosition, Estimate, FilterMode, Motion, PpkOptions, Reference,
+};
 use integration::pipeline;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -83,6 +85,22 @@ pub struct Args {
     /// beyond about 10 km or with large height differences).
     #[arg(long, value_enum, default_value = "auto")]
     tropo: EstimateArg,
+    /// How the rover moves. `static` estimates one position over the whole span (for a
+    /// temporary base from a CORS station): the filter runs forward, each .pos line is the
+    /// solution accumulated so far (the last line is the final one), and OUT.pos.json holds
+    /// the final position with its σ, epochs, fix state and residual summary.
+    #[arg(long, value_enum, default_value = "kinematic")]
+    mode: MotionArg,
+    /// The point of the rover the positions describe: the antenna reference point, or the
+    /// marker below it (ARP minus the rover header's ANTENNA: DELTA H/E/N). Stated in the
+    /// .pos header.
+    #[arg(long, value_enum, default_value = "arp")]
+    refer: ReferArg,
+    /// Carrier frequencies used per system: 1 (L1/E1/B1 only), 2 (plus L2/E5b/B2…) or 3.
+    /// Single-frequency data fix only when the success rate and ratio are safe: prefer float
+    /// to a wrong integer.
+    #[arg(long, value_name = "N", default_value_t = 2, value_parser = clap::value_parser!(u8).range(1..=3))]
+    frequencies: u8,
     /// Integer ambiguity resolution.
     #[arg(long, value_enum, default_value = "fix-and-hold")]
     ar: ArArg,
@@ -116,6 +134,24 @@ enum FilterArg {
     /// Forward and backward: on long baselines the two-filter smoother, else the two passes
     /// combined epoch by epoch
     Combined,
+}
+
+/// How the rover moves.
+#[derive(Clone, Copy, ValueEnum)]
+enum MotionArg {
+    /// A position per epoch (no dynamics model)
+    Kinematic,
+    /// One position over the whole span
+    Static,
+}
+
+/// The point of the rover the positions describe.
+#[derive(Clone, Copy, ValueEnum)]
+enum ReferArg {
+    /// Antenna reference point
+    Arp,
+    /// Marker (ARP minus ANTENNA: DELTA H/E/N)
+    Marker,
 }
 
 /// Whether an atmospheric delay is estimated.
@@ -162,6 +198,15 @@ pub fn run(args: Args) -> Result<()> {
         elev_mask,
         ar_elev_mask: elev_mask,
         systems,
+        motion: match args.mode {
+            MotionArg::Kinematic => Motion::Kinematic,
+            MotionArg::Static => Motion::Static,
+        },
+        refer: match args.refer {
+            ReferArg::Arp => Reference::Arp,
+            ReferArg::Marker => Reference::Marker,
+        },
+        nf: usize::from(args.frequencies),
         filter: match args.filter {
             FilterArg::Forward => FilterMode::Forward,
             FilterArg::Backward => FilterMode::Backward,

@@ -99,6 +99,50 @@ fn ppk_geonet_writes_fixed_solutions_with_quality_columns() {
     }
 }
 
+/// `--mode static`: one position accumulated over the hour, the last .pos line being the
+/// final one, and OUT.pos.json with its σ, epochs, fix state and residuals.
+#[test]
+fn ppk_static_writes_the_accumulated_position_and_a_summary() {
+    let Some([rover, base, nav]) = geonet() else {
+        return;
+    };
+    let out = tmp("geonet-static.pos");
+    let args = [GEONET_BASE_POS, "--mode", "static", "--format", "xyz"];
+    let t = succeeds(&ppk(&rover, &base, &[&nav], &out, &args));
+    assert!(
+        t.contains("static arp: X") && t.contains("fixed (ratio"),
+        "{t}"
+    );
+    let pos = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        pos.contains("% pos mode  : static, filter Forward"),
+        "{pos}"
+    );
+    assert!(pos.contains("% positions : rover antenna reference point (ARP)"));
+    let json = std::fs::read_to_string(out.with_extension("pos.json")).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let xyz: Vec<f64> = (0..3)
+        .map(|i| v["position"]["ecef_m"][i].as_f64().unwrap())
+        .collect();
+    // The truth of the GEONET rover (its ARP is its marker): within 1 cm (measured 2.7 mm).
+    let truth = [-3976219.1869, 3382371.6036, 3652511.1410];
+    let err = (0..3)
+        .map(|i| (xyz[i] - truth[i]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    assert!(err < 0.01, "static error {err}");
+    assert_eq!(v["quality"], "fixed");
+    assert_eq!(v["epochs"], 120);
+    assert_eq!(v["refers_to"], "arp");
+    let se = v["sigma_m"]["east"].as_f64().unwrap();
+    assert!((0.002..0.01).contains(&se), "σ east {se}");
+    assert!(v["residuals"]["phase"]["rms_m"].as_f64().unwrap() < 0.01);
+    // The last .pos line is the summary's position.
+    let last = pos_rows(&out).pop().unwrap();
+    let x: f64 = last[2].parse().unwrap();
+    assert!((x - xyz[0]).abs() < 1e-3, "{x} vs {}", xyz[0]);
+}
+
 #[test]
 fn ppk_without_common_epochs() {
     let Some([rover, base, nav]) = shared_all([

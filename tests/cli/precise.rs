@@ -89,6 +89,9 @@ fn ppk_on_sp3_without_navigation() {
         "--base",
         p(&f[0]),
         base,
+        // The truth is the marker; ONSA's ARP is 0.995 m above it.
+        "--refer",
+        "marker",
         "--format",
         "xyz",
         "-o",

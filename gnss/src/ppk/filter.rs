@@ -28,7 +28,7 @@ use super::ar;
 use super::geometry::{day_of_year, tropo, wet_mapping, SatView};
 use super::measure::{self, ObsKind};
 use super::obs::SatMeas;
-use super::options::{ArMode, Estimate, PpkOptions};
+use super::options::{ArMode, Estimate, Motion, PpkOptions};
 use super::output::{EpochSol, PassStats};
 use super::pair::{observes, Pair};
 use super::segment::{FixedIntegers, SegmentTracker};
@@ -73,6 +73,8 @@ pub struct Filter<'a> {
     record: bool,
     /// That state, of the last step.
     recorded: Option<Prior>,
+    /// The position state holds an estimate (static runs keep it from epoch to epoch).
+    position_started: bool,
 }
 
 /// Ionospheric constraint of the epoch (ionosphere-weighted model), from the baseline length.
@@ -119,6 +121,7 @@ impl<'a> Filter<'a> {
             segments: SegmentTracker::new(segment_gap),
             record: false,
             recorded: None,
+            position_started: false,
         }
     }
 
@@ -233,10 +236,15 @@ impl<'a> Filter<'a> {
         pairs
     }
 
-    /// Prediction: the position from the start value with a wide variance (no dynamics
-    /// model); the other states carry over.
+    /// Prediction: kinematic, the position from the start value with a wide variance (no
+    /// dynamics model); static, the position carries over once started; the other states
+    /// carry over.
     fn predict(&mut self, start: &Ecef) {
+        if self.opts.motion == Motion::Static && self.position_started {
+            return;
+        }
         self.state.reset_position(&start.0, POSITION_SIGMA.powi(2));
+        self.position_started = true;
     }
 
     /// Reset the per-satellite states touched by a slip (either receiver), a gap longer than
@@ -369,6 +377,13 @@ impl<'a> Filter<'a> {
         let o = self.opts;
         let res = measure::residuals(pairs, &self.state, o);
         for row in &res.rows {
+            // Rows beyond the innovation gate did not enter the solution.
+            if row.innovation.abs() <= o.max_innovation {
+                match row.kind {
+                    ObsKind::Phase => self.stats.phase_residuals.add(row.innovation),
+                    ObsKind::Code => self.stats.code_residuals.add(row.innovation),
+                }
+            }
             if row.kind == ObsKind::Phase && row.innovation.abs() > o.max_phase_residual {
                 self.pending_reset.push(AmbKey {
                     sv: row.sv,

@@ -1,14 +1,18 @@
-//! Carrier-phase kinematic positioning of a rover against a base of known position: forward,
-//! backward and combined passes of a double-difference Kalman filter with integer ambiguity
-//! resolution, returning a [`Trajectory`] whose ambiguity segments the filter assigns.
+//! Carrier-phase positioning of a rover against a base of known position, kinematic (a
+//! position per epoch) or static (one position over the span): forward, backward and
+//! combined passes of a double-difference Kalman filter with integer ambiguity resolution,
+//! returning a [`Trajectory`] whose ambiguity segments the filter assigns. On long baselines
+//! the ionosphere and the rover's zenith wet delay are estimated and the combined solution
+//! is the two-filter smoother's.
 //!
 //! Modules, each using only the ones before it: `options` (the settings), [`obs`], [`slip`],
 //! `geometry`, `state` (typed state layout), `dd` (DD groups and their pivot), [`lambda`],
 //! `pair` (a satellite seen by both receivers), `measure` (pure DD residuals, innovation
-//! gate), `ar` (LAMBDA, partial fixing, fix-and-hold: functions on the state), `segment`
-//! (ambiguity segments), `output` (what a pass and a run hand out), `filter` (one pass, epoch
-//! by epoch: owns the state, calls `measure` and `ar`), [`combine`] (forward/backward). This
-//! module prepares the inputs and runs the passes.
+//! gate), `ar` (partial fixing by success rate, ratio test, fix-and-hold: functions on the
+//! state), `segment` (ambiguity segments), `output` (what a pass and a run hand out),
+//! `smooth` (the backward prior fused into the forward state), `filter` (one pass, epoch by
+//! epoch: owns the state, calls `measure`, `smooth` and `ar`), [`combine`] (forward/backward).
+//! This module prepares the inputs, chooses the models and runs the passes.
 
 mod ar;
 pub mod combine;
@@ -27,8 +31,8 @@ mod smooth;
 mod state;
 
 pub use measure::GateReason;
-pub use options::{ArMode, BasePosition, Estimate, FilterMode, PpkOptions};
-pub use output::{EpochSol, Models, PassStats, PpkResult};
+pub use options::{ArMode, BasePosition, Estimate, FilterMode, Motion, PpkOptions, Reference};
+pub use output::{EpochSol, Models, PassStats, PpkResult, Spread, StaticSolution};
 
 use crate::error::{Error, Result};
 use crate::frame::{enu_rotation, Ecef};
@@ -47,6 +51,17 @@ fn arp_offset(h: &ObsHeader, at: &Ecef) -> Vector3<f64> {
     let d = h.antenna_delta;
     let r = enu_rotation(&at.to_geodetic());
     r.transpose() * Vector3::new(d.east, d.north, d.up)
+}
+
+/// The covariance (ECEF) of a static run's time-correlated errors at `at` (see
+/// [`PpkOptions::static_sigma`]); zero for kinematic runs.
+fn static_cov(at: &Ecef, base: &Ecef, o: &PpkOptions) -> nalgebra::Matrix3<f64> {
+    if o.motion != Motion::Static {
+        return nalgebra::Matrix3::zeros();
+    }
+    let km = (at.0 - base.0).norm() / 1000.0;
+    let (h, v) = (o.static_sigma, o.static_sigma_per_km);
+    systematic(at, (h.0 + v.0 * km, h.1 + v.1 * km))
 }
 
 /// A covariance (ECEF) of `sigma` horizontal and vertical in the local frame at `at`.
@@ -398,8 +413,9 @@ fn smoother_bytes(inputs: &PassInputs, opts: &PpkOptions) -> usize {
 }
 
 /// Run the carrier-phase engine: forward, backward or both passes of the filter over the
-/// rover epochs matched to base epochs, combined; the trajectory of the rover marker at the
-/// true reception times, with the filter's ambiguity segments.
+/// rover epochs matched to base epochs, combined (static runs: forward only, one position);
+/// the trajectory of the rover's ARP or marker (`opts.refer`) at the true reception times,
+/// with the filter's ambiguity segments.
 pub fn process(
     rover: &ObsFile,
     base: &ObsFile,
@@ -416,6 +432,10 @@ pub fn process(
     let antennas = antenna_calibrations(opts, rover, base, &mut warnings);
     let antenna_sigma = antenna_model_error(opts, rover, base, &antennas, &mut warnings);
     let mut opts = opts.clone();
+    if opts.motion == Motion::Static {
+        // One position accumulated over the span: the last epoch has seen all the data.
+        opts.filter = FilterMode::Forward;
+    }
     if opts.max_gap <= 0.0 {
         opts.max_gap = (5.0 * interval(rover)).max(5.0);
     }
@@ -509,7 +529,10 @@ pub fn process(
         match s {
             Some((s, segment)) => {
                 // Rover marker = antenna reference point − header offset.
-                let pos = Ecef(s.pos.0 - arp_offset(&rover.header, &s.pos));
+                let pos = match opts.refer {
+                    Reference::Arp => s.pos,
+                    Reference::Marker => Ecef(s.pos.0 - arp_offset(&rover.header, &s.pos)),
+                };
                 // The position belongs to the true reception time: the receiver's time tag
                 // minus its clock offset (as RTKLIB reports it). A moving rover at 60 m/s
                 // moves 6 cm in a millisecond of clock offset.
@@ -520,7 +543,9 @@ pub fn process(
                 epochs.push(TrajectoryEpoch {
                     time,
                     pos,
-                    cov: s.cov + systematic(&pos, antenna_sigma),
+                    cov: s.cov
+                        + systematic(&pos, antenna_sigma)
+                        + static_cov(&pos, &base_arp, &opts),
                     vel: None,
                     quality: s.quality,
                     nsat: s.nsat,
@@ -541,7 +566,12 @@ pub fn process(
             }
         }
     }
+    let static_solution = match (opts.motion, &fw) {
+        (Motion::Static, Some(fw)) => StaticSolution::of(&epochs, &fw.stats),
+        _ => None,
+    };
     Ok(PpkResult {
+        static_solution,
         trajectory: Trajectory::new(epochs, SegmentSource::Filter),
         forward: fw.map(|x| x.stats),
         backward: bw.map(|x| x.stats),

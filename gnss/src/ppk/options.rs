@@ -33,6 +33,25 @@ pub enum FilterMode {
     Combined,
 }
 
+/// How the rover moves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Motion {
+    /// Every epoch is an independent position (no dynamics model).
+    Kinematic,
+    /// One position over the whole span: the filter runs forward and accumulates it; each
+    /// epoch's output is the solution so far.
+    Static,
+}
+
+/// The point of the rover that the output positions describe.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reference {
+    /// The antenna reference point (ARP): the marker plus the header's `ANTENNA: DELTA H/E/N`.
+    Arp,
+    /// The marker: the ARP minus the header's `ANTENNA: DELTA H/E/N`.
+    Marker,
+}
+
 /// Whether an atmospheric delay is estimated by the filter.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Estimate {
@@ -59,6 +78,10 @@ impl Estimate {
 /// Options of the carrier-phase engine.
 #[derive(Clone, Debug)]
 pub struct PpkOptions {
+    /// Kinematic or static rover.
+    pub motion: Motion,
+    /// The point of the rover the output positions describe.
+    pub refer: Reference,
     /// Elevation mask, radians.
     pub elev_mask: f64,
     /// Systems used.
@@ -132,6 +155,15 @@ pub struct PpkOptions {
     /// variations differ by centimetres, which no double difference removes. Added in
     /// quadrature to every epoch's covariance in that case.
     pub uncalibrated_antenna_sigma: (f64, f64),
+    /// Sigma (horizontal, vertical; metres) of the time-correlated errors (multipath,
+    /// troposphere and orbit residuals, antenna variations) that a static solution keeps
+    /// however long the span: the filter treats epochs as independent and its own σ shrinks
+    /// without bound. Added in quadrature to a static run's covariance, together with
+    /// `static_sigma_per_km` × baseline.
+    pub static_sigma: (f64, f64),
+    /// Growth of `static_sigma` with the baseline length (horizontal, vertical), metres per
+    /// kilometre (0.00004 = 0.04 ppm).
+    pub static_sigma_per_km: (f64, f64),
     /// Receiver antenna calibrations (ANTEX); the header antenna types are looked up in it.
     pub antex: Option<std::sync::Arc<Antex>>,
 }
@@ -139,6 +171,8 @@ pub struct PpkOptions {
 impl Default for PpkOptions {
     fn default() -> Self {
         PpkOptions {
+            motion: Motion::Kinematic,
+            refer: Reference::Arp,
             elev_mask: 10f64.to_radians(),
             systems: Constellation::CDMA.to_vec(),
             nf: 2,
@@ -170,6 +204,8 @@ impl Default for PpkOptions {
             tropo_process_noise: 3e-5,
             long_baseline: 10_000.0,
             uncalibrated_antenna_sigma: (0.01, 0.02),
+            static_sigma: (0.003, 0.006),
+            static_sigma_per_km: (0.00004, 0.0001),
             antex: None,
         }
     }

@@ -9,7 +9,7 @@ use super::measure::GateReason;
 use super::slip::SlipCause;
 use crate::frame::Ecef;
 use crate::solution::Quality;
-use crate::trajectory::Trajectory;
+use crate::trajectory::{Trajectory, TrajectoryEpoch};
 use hifitime::Epoch;
 use nalgebra::Matrix3;
 use std::collections::BTreeMap;
@@ -39,6 +39,27 @@ pub struct EpochSol {
     pub float: Option<(Ecef, Matrix3<f64>)>,
 }
 
+impl StaticSolution {
+    /// The last epoch of a static run's output `epochs` with the counts of `stats` (its one
+    /// pass); None when nothing was solved.
+    pub fn of(epochs: &[TrajectoryEpoch], stats: &PassStats) -> Option<Self> {
+        let (first, last) = (epochs.first()?, epochs.last()?);
+        Some(StaticSolution {
+            pos: last.pos,
+            cov: last.cov,
+            quality: last.quality,
+            ratio: last.ratio,
+            span: (first.time, last.time),
+            epochs: epochs.len(),
+            fixed_epochs: epochs
+                .iter()
+                .filter(|e| e.quality == Quality::Fixed)
+                .count(),
+            residuals: (stats.phase_residuals, stats.code_residuals),
+        })
+    }
+}
+
 /// Counters of a pass.
 #[derive(Clone, Debug, Default)]
 pub struct PassStats {
@@ -56,6 +77,57 @@ pub struct PassStats {
     /// Smoothed fixes rejected because the data before or after the epoch alone fixed an
     /// ambiguity to another integer.
     pub smoothed_fixes_rejected: usize,
+    /// Post-fit double-difference phase residuals of the float solution, metres.
+    pub phase_residuals: Spread,
+    /// Post-fit double-difference code residuals of the float solution, metres.
+    pub code_residuals: Spread,
+}
+
+/// Size of a set of residuals: count, root mean square and largest magnitude.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Spread {
+    /// Number of residuals.
+    pub count: usize,
+    /// Sum of their squares.
+    pub sum_sq: f64,
+    /// Largest magnitude.
+    pub max_abs: f64,
+}
+
+impl Spread {
+    /// Add one residual.
+    pub fn add(&mut self, v: f64) {
+        self.count += 1;
+        self.sum_sq += v * v;
+        self.max_abs = self.max_abs.max(v.abs());
+    }
+
+    /// Root mean square (0 when empty).
+    pub fn rms(&self) -> f64 {
+        (self.sum_sq / self.count.max(1) as f64).sqrt()
+    }
+}
+
+/// The one position of a static run (`Motion::Static`): the last epoch's accumulated
+/// solution with what it rests on.
+#[derive(Clone, Debug)]
+pub struct StaticSolution {
+    /// The rover position (marker or ARP, as the options refer), ECEF.
+    pub pos: Ecef,
+    /// Its covariance, ECEF, m².
+    pub cov: Matrix3<f64>,
+    /// Fixed when the last epoch's ambiguities were fixed, else float.
+    pub quality: Quality,
+    /// Ratio test value at the last epoch.
+    pub ratio: f64,
+    /// First and last solved epoch (GPST).
+    pub span: (Epoch, Epoch),
+    /// Epochs that entered the solution.
+    pub epochs: usize,
+    /// Of them, epochs whose accumulated solution was fixed.
+    pub fixed_epochs: usize,
+    /// Post-fit residuals over the span: phase and code.
+    pub residuals: (Spread, Spread),
 }
 
 impl PassStats {
@@ -80,8 +152,8 @@ pub struct Models {
 /// Output of a carrier-phase run.
 #[derive(Clone, Debug)]
 pub struct PpkResult {
-    /// The rover trajectory (of the chosen filter mode): marker positions at the true
-    /// reception times, with the filter's ambiguity segments.
+    /// The rover trajectory (of the chosen filter mode): ARP or marker positions (as the
+    /// options refer) at the true reception times, with the filter's ambiguity segments.
     pub trajectory: Trajectory,
     /// Counters of the forward pass, when it ran.
     pub forward: Option<PassStats>,
@@ -97,6 +169,8 @@ pub struct PpkResult {
     pub models: Models,
     /// What the run noticed (base position from the header, antennas not calibrated).
     pub warnings: Vec<String>,
+    /// The static solution (static runs only).
+    pub static_solution: Option<StaticSolution>,
 }
 
 impl PpkResult {
