@@ -1,9 +1,10 @@
 //! Benchmarks run by `ppkat bench`: throughput and peak memory of the stages. Enters: an
 //! observation file ([`ingest`]: plain, gzip or Hatanaka; parsed by `gnss::rinex`) or a block
-//! size ([`adjust`]: simulated by [`crate::simulate::block`], adjusted by [`crate::adjust`]).
-//! Leaves: an [`IngestBench`] or [`AdjustBench`] with wall times (s) and the peak resident
-//! memory of the process (Linux `VmHWM`, KiB); nothing is kept but a temporary file (removed)
-//! and the benchmark block's folder.
+//! size ([`adjust`]: simulated by [`crate::simulate::block`], adjusted by [`crate::adjust`]),
+//! or a finished `ppk` run ([`PpkBench::of`]). Leaves: an [`IngestBench`], [`PpkBench`] or
+//! [`AdjustBench`] with wall times (s) and the peak resident memory of the process (Linux
+//! `VmHWM`, KiB); nothing is kept but a temporary file (removed), the benchmark block's
+//! folder and the `ppk` run's outputs.
 
 use gnss::error::Result;
 use gnss::rinex::{ObsReader, Record};
@@ -136,6 +137,50 @@ impl std::fmt::Display for AdjustBench {
             )?;
         }
         writeln!(f, "peak RSS {}", mib(self.peak_rss_kib))
+    }
+}
+
+/// Result of a carrier-phase benchmark: the engine's time per rover epoch.
+#[derive(Clone, Debug)]
+pub struct PpkBench {
+    /// Rover epochs.
+    pub rover_epochs: usize,
+    /// Passes of the filter over them (1 or 2).
+    pub passes: usize,
+    /// Reading and checking the inputs, seconds.
+    pub read_s: f64,
+    /// The carrier-phase engine, seconds.
+    pub process_s: f64,
+    /// Peak resident set size of the process, KiB (None where unknown).
+    pub peak_rss_kib: Option<u64>,
+}
+
+impl PpkBench {
+    /// The figures of a finished `ppk` run.
+    pub fn of(r: &crate::pipeline::PpkReport) -> Self {
+        PpkBench {
+            rover_epochs: r.result.rover_epochs,
+            passes: usize::from(r.result.forward.is_some())
+                + usize::from(r.result.backward.is_some()),
+            read_s: r.read_seconds,
+            process_s: r.process_seconds,
+            peak_rss_kib: peak_rss_kib(),
+        }
+    }
+}
+
+impl std::fmt::Display for PpkBench {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "bench ppk: {} rover epochs, {} pass(es): inputs read in {:.3} s, engine {:.3} s = {:.3} ms per rover epoch",
+            self.rover_epochs,
+            self.passes,
+            self.read_s,
+            self.process_s,
+            1000.0 * self.process_s / self.rover_epochs.max(1) as f64
+        )?;
+        writeln!(f, "peak RSS: {}", mib(self.peak_rss_kib))
     }
 }
 

@@ -184,6 +184,10 @@ pub struct PpkReport {
     pub warnings: Vec<String>,
     /// Wall time, seconds.
     pub seconds: f64,
+    /// Of it, reading and checking the inputs, seconds.
+    pub read_seconds: f64,
+    /// Of it, the carrier-phase engine, seconds.
+    pub process_seconds: f64,
 }
 
 /// `OUT.pos` → `OUT.pos.json`.
@@ -208,6 +212,8 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
         &job.options.systems,
     )?);
     warnings.extend(file_warnings(&rover).chain(file_warnings(&base)));
+    let read_seconds = t0.elapsed().as_secs_f64();
+    let t1 = std::time::Instant::now();
     let result = gnss::ppk::process(
         &rover,
         &base,
@@ -216,6 +222,7 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
         &job.options,
         progress,
     )?;
+    let process_seconds = t1.elapsed().as_secs_f64();
     warnings.extend(result.warnings.iter().cloned());
     let o = &job.options;
     let b = result.base_marker;
@@ -277,6 +284,8 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
         result,
         summary,
         refer: o.refer,
+        read_seconds,
+        process_seconds,
         out: job.out.clone(),
         warnings,
         seconds: t0.elapsed().as_secs_f64(),

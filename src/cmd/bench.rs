@@ -6,11 +6,14 @@ use integration::adjust::RunOptions;
 use integration::bench;
 use std::path::PathBuf;
 
-/// Benchmarks: observation parsing speed, and the joint adjustment's wall time and memory.
+/// Benchmarks: observation parsing speed, carrier-phase processing time per epoch, and the
+/// joint adjustment's wall time and memory.
 ///
 /// `ppkat bench ingest FILE` streams an observation file through the parser and prints MB/s
-/// of RINEX text and the peak memory. `ppkat bench adjust` simulates a block of photos and
-/// prints its joint adjustment's wall time and peak memory.
+/// of RINEX text and the peak memory. `ppkat bench ppk …` runs `ppkat ppk` with the same
+/// flags and prints the engine's milliseconds per rover epoch and the peak memory.
+/// `ppkat bench adjust` simulates a block of photos and prints its joint adjustment's wall
+/// time and peak memory.
 #[derive(clap::Args)]
 pub struct Args {
     #[command(subcommand)]
@@ -20,6 +23,7 @@ pub struct Args {
 #[derive(Subcommand)]
 enum BenchCmd {
     Ingest(IngestArgs),
+    Ppk(Box<PpkArgs>),
     Adjust(AdjustArgs),
 }
 
@@ -34,6 +38,17 @@ struct IngestArgs {
     /// RINEX observation file to parse (plain, Hatanaka or gzip).
     #[arg(value_name = "FILE")]
     file: PathBuf,
+}
+
+/// Run `ppkat ppk` with the same flags and report the engine's time per rover epoch.
+///
+/// Runs the carrier-phase job exactly as `ppkat ppk` (writing its outputs), prints its
+/// report, then the time spent reading the inputs, the engine's time and milliseconds per
+/// rover epoch, the number of filter passes and the peak resident memory (Linux).
+#[derive(clap::Args)]
+struct PpkArgs {
+    #[command(flatten)]
+    ppk: super::ppk::Args,
 }
 
 /// Simulate a block of STRIPS × PER_STRIP photos and time its joint adjustment.
@@ -59,6 +74,10 @@ struct AdjustArgs {
 pub fn run(args: Args, threads: Option<usize>) -> Result<()> {
     match args.what {
         BenchCmd::Ingest(a) => print!("{}", bench::ingest(&a.file)?),
+        BenchCmd::Ppk(a) => {
+            let r = super::ppk::run_job(a.ppk)?;
+            print!("{r}{}", bench::PpkBench::of(&r));
+        }
         BenchCmd::Adjust(a) => print!(
             "{}",
             bench::adjust(a.strips, a.per_strip, &a.out, &RunOptions { threads })?

@@ -191,6 +191,13 @@ enum ArArg {
 /// Convert the arguments into a [`pipeline::PpkJob`], run it with a progress spinner and
 /// print its report.
 pub fn run(args: Args) -> Result<()> {
+    let report = run_job(args)?;
+    print!("{report}");
+    Ok(())
+}
+
+/// Run the job the arguments describe with a progress spinner; its report.
+pub fn run_job(args: Args) -> Result<pipeline::PpkReport> {
     let base_position = base_position(args.base_pos.as_deref(), args.base_llh.as_deref())?;
     let systems = systems(&args.systems)?;
     let elev_mask = elev_mask(args.elev_mask)?;
@@ -246,8 +253,7 @@ pub fn run(args: Args) -> Result<()> {
     );
     let report = pipeline::ppk(&job, &|n| bar.inc(n as u64));
     bar.finish_and_clear();
-    print!("{}", report.context("carrier-phase positioning failed")?);
-    Ok(())
+    report.context("carrier-phase positioning failed")
 }
 
 /// `--base-pos X,Y,Z` (ECEF metres) or `--base-llh LAT,LON,H`, else the header's position.

@@ -143,6 +143,24 @@ fn ppk_static_writes_the_accumulated_position_and_a_summary() {
     assert!((x - xyz[0]).abs() < 1e-3, "{x} vs {}", xyz[0]);
 }
 
+/// `bench ppk` runs the job and reports the engine's time per epoch.
+#[test]
+fn bench_ppk_reports_milliseconds_per_epoch() {
+    let Some([rover, base, nav]) = geonet() else {
+        return;
+    };
+    let out = tmp("geonet-bench.pos");
+    let mut args = vec!["bench", "ppk", "--rover", p(&rover), "--base", p(&base)];
+    args.extend(["--nav", p(&nav), GEONET_BASE_POS, "-o", p(&out)]);
+    let t = succeeds(&ppkat(&args));
+    assert!(t.contains("120 fixed"), "{t}");
+    assert!(
+        t.contains("bench ppk: 120 rover epochs, 2 pass(es)") && t.contains("ms per rover epoch"),
+        "{t}"
+    );
+    assert_eq!(pos_rows(&out).len(), 120);
+}
+
 #[test]
 fn ppk_without_common_epochs() {
     let Some([rover, base, nav]) = shared_all([

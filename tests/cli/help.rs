@@ -3,7 +3,7 @@
 use super::*;
 
 /// Every subcommand, as its words on the command line.
-const SUBCOMMANDS: [&[&str]; 12] = [
+const SUBCOMMANDS: [&[&str]; 13] = [
     &["info"],
     &["spp"],
     &["ppk"],
@@ -15,6 +15,7 @@ const SUBCOMMANDS: [&[&str]; 12] = [
     &["demo"],
     &["bench"],
     &["bench", "ingest"],
+    &["bench", "ppk"],
     &["bench", "adjust"],
 ];
 
