@@ -2,11 +2,13 @@
 //! Melbourne–Wübbena wide-lane jumps, Doppler against phase, and data gaps. A slip resets only
 //! what it touches.
 //!
-//! The geometry-free test predicts the combination from the two previous epochs (a linear
-//! extrapolation removes the ionosphere's rate, which at 30 s intervals moves the combination
-//! by decimetres) and allows `gf_threshold + gf_rate·Δt`; with one previous epoch only, the
-//! plain change is tested against `gf_threshold + gf_rate_first·Δt`. At 1 s both are about the
-//! fixed 5 cm; at 30 s they are 8 cm and 20 cm.
+//! The geometry-free test at intervals of `gf_extrapolate_after` (5 s) or more predicts the
+//! combination from the two previous epochs (a linear extrapolation removes the ionosphere's
+//! rate, which at 30 s intervals moves the combination by decimetres) and allows
+//! `gf_threshold + gf_rate·Δt`; at shorter intervals, or with one previous epoch only, the
+//! plain change is tested against `gf_threshold + gf_rate_first·Δt` (a rate from two epochs
+//! 0.1 s apart is mostly noise: extrapolating with it raised false slips at 10 Hz). At 1 s
+//! the threshold is about 5 cm; at 30 s 8 cm (extrapolated) or 20 cm (plain).
 
 use super::obs::{SatMeas, NF};
 use crate::orbit::C;
@@ -92,8 +94,10 @@ pub struct SlipDetector {
     /// Growth of that threshold with the interval when the combination is extrapolated from
     /// two epochs, m/s.
     pub gf_rate: f64,
-    /// Growth of that threshold with the interval when only one epoch precedes, m/s.
+    /// Growth of that threshold with the interval when the plain change is tested, m/s.
     pub gf_rate_first: f64,
+    /// Shortest interval at which the combination is extrapolated, seconds.
+    pub gf_extrapolate_after: f64,
     /// Melbourne–Wübbena jump threshold, wide-lane cycles.
     pub mw_threshold: f64,
     /// Longest tolerated gap, seconds.
@@ -112,6 +116,7 @@ impl SlipDetector {
             gf_threshold: 0.05,
             gf_rate: 0.001,
             gf_rate_first: 0.005,
+            gf_extrapolate_after: 5.0,
             mw_threshold: 4.0,
             max_gap,
             doppler_threshold: 3.0,
@@ -184,7 +189,9 @@ impl SlipDetector {
         }
         let dt = (t - h.t).to_seconds();
         let (predicted, allowed) = match h.gf_before {
-            Some((t0, g0)) if (h.t - t0).to_seconds() != 0.0 => {
+            Some((t0, g0))
+                if dt.abs() >= self.gf_extrapolate_after && (h.t - t0).to_seconds() != 0.0 =>
+            {
                 let rate = (h.gf - g0) / (h.t - t0).to_seconds();
                 (
                     h.gf + rate * dt,
