@@ -469,10 +469,10 @@ pub fn process(
     let mut inputs = inputs;
     let times = |f: &ObsFile| -> Vec<Epoch> { f.epochs.iter().map(|e| e.time).collect() };
     let (rb, bb) = rayon::join(
-        || slip::arc_breaks(&times(rover), &inputs.rover_meas, opts.max_gap),
+        || slip::arc_breaks(&times(rover), &inputs.rover_meas, opts.max_gap, true),
         || {
             let gap = opts.max_gap.max(3.0 * opts.max_age);
-            slip::arc_breaks(&times(base), &inputs.base_meas, gap)
+            slip::arc_breaks(&times(base), &inputs.base_meas, gap, true)
         },
     );
     (inputs.rover_breaks, inputs.base_breaks) = (rb, bb);
