@@ -8,6 +8,7 @@
 //! leaves: the pairing, with what it skipped, and warning sentences; nothing here changes a
 //! measurement.
 
+use super::slip::DopplerRatio;
 use crate::time::format_ymdhms;
 use hifitime::Epoch;
 
@@ -71,6 +72,29 @@ pub fn skipped_base_warning(p: &BasePairing, systems: &str) -> Option<String> {
     ))
 }
 
+/// The range of [`DopplerRatio::median`] within which a receiver's Doppler feeds the slip
+/// test.
+pub const DOPPLER_RATIO_RANGE: std::ops::RangeInclusive<f64> = 0.9..=1.1;
+
+/// Whether a receiver's Doppler may feed the slip test (no measured ratio: it has none to
+/// feed), and the warning when not.
+pub fn doppler_verdict(
+    ratio: Option<DopplerRatio>,
+    role: &str,
+    file: &str,
+) -> (bool, Option<String>) {
+    match ratio {
+        Some(r) if !DOPPLER_RATIO_RANGE.contains(&r.median) => (
+            false,
+            Some(format!(
+                "{role} {file}: integrated Doppler over phase change is {:.3} (median of {} samples; expected 1): Doppler ignored for slip detection",
+                r.median, r.samples
+            )),
+        ),
+        _ => (true, None),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -109,5 +133,24 @@ mod tests {
         assert_eq!(all.matched[1], Some(1));
         assert_eq!(all.skipped, 0);
         assert_eq!(skipped_base_warning(&all, "GPS"), None);
+    }
+
+    #[test]
+    fn doppler_outside_the_range_is_ignored_with_a_warning() {
+        let r = |median| {
+            Some(DopplerRatio {
+                median,
+                samples: 300,
+            })
+        };
+        assert_eq!(doppler_verdict(r(1.002), "base", "b.obs"), (true, None));
+        assert_eq!(doppler_verdict(None, "base", "b.obs"), (true, None));
+        let (use_it, w) = doppler_verdict(r(-0.998), "base", "b.obs");
+        assert!(!use_it);
+        assert_eq!(
+            w.unwrap(),
+            "base b.obs: integrated Doppler over phase change is -0.998 (median of 300 samples; expected 1): Doppler ignored for slip detection"
+        );
+        assert!(!doppler_verdict(r(0.19), "rover", "r.obs").0);
     }
 }

@@ -85,9 +85,17 @@ pub(super) fn prepare<'a>(
     }
     warnings.extend(checks::skipped_base_warning(&pairing, &systems.join(" ")));
     let base_gap = opts.max_gap.max(3.0 * opts.max_age);
+    let mut doppler = |f: &ObsFile, t: &[Epoch], m: &[Vec<SatMeas>], gap: f64, role: &str| {
+        let ratio = slip::doppler_phase_ratio(t, m, gap);
+        let (ok, w) = checks::doppler_verdict(ratio, role, &f.path.display().to_string());
+        warnings.extend(w);
+        ok
+    };
+    let rover_doppler = doppler(rover, &rover_times, &rover_meas, opts.max_gap, "rover");
+    let base_doppler = doppler(base, &base_times, &base_meas, base_gap, "base");
     let (rover_breaks, base_breaks) = rayon::join(
-        || slip::arc_breaks(&rover_times, &rover_meas, opts.max_gap, true),
-        || slip::arc_breaks(&base_times, &base_meas, base_gap, true),
+        || slip::arc_breaks(&rover_times, &rover_meas, opts.max_gap, rover_doppler),
+        || slip::arc_breaks(&base_times, &base_meas, base_gap, base_doppler),
     );
     Ok(PassInputs {
         rover,
