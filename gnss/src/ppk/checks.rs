@@ -8,6 +8,7 @@
 //! leaves: the pairing, with what it skipped, and warning sentences; nothing here changes a
 //! measurement.
 
+use super::obs::SatMeas;
 use super::slip::DopplerRatio;
 use crate::time::format_ymdhms;
 use hifitime::Epoch;
@@ -95,6 +96,78 @@ pub fn doppler_verdict(
     }
 }
 
+/// Longest baseline (metres) the atmospheric models are meant for.
+pub const MAX_MODELLED_BASELINE: f64 = 500_000.0;
+
+/// The warning of a run whose longest baseline (metres) is beyond [`MAX_MODELLED_BASELINE`].
+pub fn baseline_warning(longest: f64) -> Option<String> {
+    (longest > MAX_MODELLED_BASELINE).then(|| {
+        format!(
+            "the longest baseline is {:.0} km: the atmospheric models are not meant for baselines beyond {:.0} km; expect float solutions and wrong fixes",
+            longest / 1000.0,
+            MAX_MODELLED_BASELINE / 1000.0
+        )
+    })
+}
+
+/// Whether each rover epoch has nothing to difference against: no base epoch, or no
+/// satellite with phase at both receivers.
+pub fn without_common(
+    rover_meas: &[Vec<SatMeas>],
+    base_meas: &[Vec<SatMeas>],
+    matched: &[Option<usize>],
+) -> Vec<bool> {
+    rover_meas
+        .iter()
+        .zip(matched)
+        .map(|(r, m)| match m {
+            Some(j) => !r.iter().any(|s| base_meas[*j].iter().any(|b| b.sv == s.sv)),
+            None => true,
+        })
+        .collect()
+}
+
+/// A stretch of rover epochs a warning is owed for: longer than this (seconds) …
+pub const LONELY_SPAN: f64 = 60.0;
+/// … and of more epochs than this.
+pub const LONELY_EPOCHS: usize = 3;
+
+/// The runs of consecutive flagged epochs longer than [`LONELY_SPAN`] (first to last time)
+/// and of more than [`LONELY_EPOCHS`] epochs: (first time, last time, epochs).
+pub fn lonely_stretches(times: &[Epoch], flagged: &[bool]) -> Vec<(Epoch, Epoch, usize)> {
+    let mut out = Vec::new();
+    let mut start: Option<usize> = None;
+    for i in 0..=times.len().min(flagged.len()) {
+        let on = i < times.len() && flagged[i];
+        match (on, start) {
+            (true, None) => start = Some(i),
+            (false, Some(s)) => {
+                let n = i - s;
+                if n > LONELY_EPOCHS && (times[i - 1] - times[s]).to_seconds() > LONELY_SPAN {
+                    out.push((times[s], times[i - 1], n));
+                }
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// The warning of each stretch of rover epochs with nothing to difference against.
+pub fn lonely_warnings(stretches: &[(Epoch, Epoch, usize)]) -> Vec<String> {
+    stretches
+        .iter()
+        .map(|(a, b, n)| {
+            format!(
+                "{n} rover epochs from {} to {} GPST have no satellite in common with a base epoch (or no base epoch within the age limit): no carrier-phase solution there",
+                format_ymdhms(*a),
+                format_ymdhms(*b)
+            )
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -152,5 +225,42 @@ mod tests {
             "base b.obs: integrated Doppler over phase change is -0.998 (median of 300 samples; expected 1): Doppler ignored for slip detection"
         );
         assert!(!doppler_verdict(r(0.19), "rover", "r.obs").0);
+    }
+
+    #[test]
+    fn baselines_beyond_500_km_are_warned_about() {
+        assert_eq!(baseline_warning(115_284.0), None);
+        assert_eq!(baseline_warning(500_000.0), None);
+        let w = baseline_warning(812_400.0).unwrap();
+        assert!(w.starts_with("the longest baseline is 812 km"), "{w}");
+    }
+
+    /// Runs of 4 epochs over more than 60 s are reported; 3 epochs or 60 s are not; a run at
+    /// the end counts.
+    #[test]
+    fn stretches_without_common_satellites() {
+        let times: Vec<Epoch> = (0..20).map(|k| at(30.0 * k as f64)).collect();
+        let mut flagged = vec![false; 20];
+        for k in [1, 2, 3, 5, 6, 7, 8, 16, 17, 18, 19] {
+            flagged[k] = true;
+        }
+        let s = lonely_stretches(&times, &flagged);
+        assert_eq!(
+            s,
+            vec![(at(150.0), at(240.0), 4), (at(480.0), at(570.0), 4)]
+        );
+        let w = lonely_warnings(&s);
+        assert!(
+            w[0].starts_with(
+                "4 rover epochs from 2024/01/01 00:02:30.000 to 2024/01/01 00:04:00.000 GPST"
+            ),
+            "{}",
+            w[0]
+        );
+        // Four epochs at 1 s: 3 s long.
+        let fast: Vec<Epoch> = (0..6).map(|k| at(k as f64)).collect();
+        assert!(lonely_stretches(&fast, &[true; 6]).is_empty());
+        // Two epochs 100 s apart are not more than three epochs.
+        assert!(lonely_stretches(&[at(0.0), at(100.0)], &[true, true]).is_empty());
     }
 }

@@ -97,6 +97,9 @@ pub(super) fn prepare<'a>(
         || slip::arc_breaks(&rover_times, &rover_meas, opts.max_gap, rover_doppler),
         || slip::arc_breaks(&base_times, &base_meas, base_gap, base_doppler),
     );
+    let lonely = checks::without_common(&rover_meas, &base_meas, &pairing.matched);
+    let stretches = checks::lonely_stretches(&rover_times, &lonely);
+    warnings.extend(checks::lonely_warnings(&stretches));
     Ok(PassInputs {
         rover,
         base,

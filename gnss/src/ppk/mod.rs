@@ -428,6 +428,7 @@ pub fn process(
     let inputs = inputs::prepare(rover, base, orbits, &opts, &mut warnings)?;
     let longest = inputs::longest_baseline(&inputs.starts, &base_arp);
     let models = choose_models(&mut opts, longest);
+    warnings.extend(checks::baseline_warning(longest));
     // A step longer than 2.5 nominal intervals between solved epochs starts a new segment.
     let segment_gap = 2.5 * interval(rover);
     let run = |backward: bool, o: &PpkOptions, priors: Option<&[Option<smooth::Prior>]>| {
