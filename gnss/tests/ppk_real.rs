@@ -3,9 +3,7 @@
 mod common;
 
 use gnss::frame::Ecef;
-use gnss::orbit::{Ephemerides, Orbits};
-use gnss::ppk::{self, BasePosition, FilterMode, PpkOptions, PpkResult};
-use gnss::rinex::nav::NavFile;
+use gnss::ppk::{self, FilterMode, PpkOptions, PpkResult};
 use gnss::rinex::ObsFile;
 use gnss::solution::Quality;
 use gnss::trajectory::SegmentSource;
@@ -72,20 +70,9 @@ fn run(
 ) -> PpkResult {
     let r = ObsFile::read(&dir.join(rover)).unwrap();
     let b = ObsFile::read(&dir.join(base)).unwrap();
-    let n: Vec<NavFile> = navs
-        .iter()
-        .map(|f| NavFile::read(&dir.join(f)).unwrap())
-        .collect();
-    let orbits = Orbits::broadcast(Ephemerides::from_nav(&n));
-    ppk::process(
-        &r,
-        &b,
-        BasePosition::Given(base_pos),
-        &orbits,
-        opts,
-        &|_| {},
-    )
-    .unwrap()
+    let out = common::ppk_on(dir, &r, &b, navs, base_pos, opts);
+    common::assert_inputs_clean(&out);
+    out
 }
 
 #[test]

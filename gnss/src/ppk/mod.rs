@@ -6,19 +6,23 @@
 //! is the two-filter smoother's.
 //!
 //! Modules, each using only the ones before it: `options` (the settings), [`obs`], [`slip`],
-//! `geometry`, `state` (typed state layout), `dd` (DD groups and their pivot), [`lambda`],
-//! `pair` (a satellite seen by both receivers), `measure` (pure DD residuals, innovation
-//! gate), `ar` (partial fixing by success rate, ratio test, fix-and-hold: functions on the
-//! state), `segment` (ambiguity segments), `output` (what a pass and a run hand out),
-//! `smooth` (the backward prior fused into the forward state), `filter` (one pass, epoch by
-//! epoch: owns the state, calls `measure`, `smooth` and `ar`), [`combine`] (forward/backward).
-//! This module prepares the inputs, chooses the models and runs the passes.
+//! `checks` (base pairing, the Doppler verdict, warnings of bad inputs), `inputs` (what
+//! every pass reads, prepared once), `geometry`, `state` (typed state layout), `dd` (DD
+//! groups and their pivot), [`lambda`], `pair` (a satellite seen by both receivers),
+//! `measure` (pure DD residuals, innovation gate), `ar` (partial fixing by success rate,
+//! ratio test, fix-and-hold: functions on the state), `segment` (ambiguity segments),
+//! `output` (what a pass and a run hand out), `smooth` (the backward prior fused into the
+//! forward state), `filter` (one pass, epoch by epoch: owns the state, calls `measure`,
+//! `smooth` and `ar`), [`combine`] (forward/backward). This module checks the files,
+//! chooses the models, runs the passes and assembles the result.
 
 mod ar;
+mod checks;
 pub mod combine;
 mod dd;
 mod filter;
 mod geometry;
+mod inputs;
 pub mod lambda;
 mod measure;
 pub mod obs;
@@ -40,11 +44,10 @@ use crate::model::antex::AntennaPcv;
 use crate::orbit::Orbits;
 use crate::rinex::{ObsFile, ObsHeader};
 use crate::solution::Quality;
-use crate::spp::{self, SppOptions};
 use crate::trajectory::{SegmentSource, Trajectory, TrajectoryEpoch};
 use hifitime::Epoch;
+use inputs::PassInputs;
 use nalgebra::Vector3;
-use obs::{extract, SatMeas, SignalPlan};
 
 /// ENU antenna offset (header H/E/N) as an ECEF vector at `at`.
 fn arp_offset(h: &ObsHeader, at: &Ecef) -> Vector3<f64> {
@@ -177,65 +180,6 @@ fn antenna_model_error(
     s
 }
 
-/// The base epoch nearest each rover epoch, within `max_age` seconds.
-fn match_base_epochs(rover: &ObsFile, base: &ObsFile, max_age: f64) -> Vec<Option<usize>> {
-    let bt: Vec<Epoch> = base.epochs.iter().map(|e| e.time).collect();
-    rover
-        .epochs
-        .iter()
-        .map(|e| {
-            let i = bt.partition_point(|t| *t <= e.time);
-            [i.checked_sub(1), (i < bt.len()).then_some(i)]
-                .into_iter()
-                .flatten()
-                .min_by(|&a, &b| {
-                    let da = (bt[a] - e.time).to_seconds().abs();
-                    let db = (bt[b] - e.time).to_seconds().abs();
-                    da.partial_cmp(&db).unwrap_or(std::cmp::Ordering::Equal)
-                })
-                .filter(|&j| (bt[j] - e.time).to_seconds().abs() <= max_age)
-        })
-        .collect()
-}
-
-/// Start position and receiver clock offset (s) of each rover epoch from its code
-/// solution, or why there is none. As in RTKLIB, an epoch whose code solution fails (too few
-/// satellites, GDOP > 30, inconsistent) gets no carrier-phase solution either: its geometry
-/// cannot be trusted.
-fn start_values(
-    rover: &ObsFile,
-    orbits: &Orbits,
-    opts: &PpkOptions,
-) -> Vec<std::result::Result<(Ecef, f64), String>> {
-    let sopts = SppOptions {
-        elev_mask: opts.elev_mask,
-        systems: opts.systems.clone(),
-        ..SppOptions::default()
-    };
-    let mut starts = Vec::with_capacity(rover.epochs.len());
-    let mut prior = rover.header.approx_position;
-    for e in &rover.epochs {
-        match spp::solve_epoch(e, &rover.header, orbits, &sopts, prior) {
-            Ok(s) => {
-                prior = Some(s.pos);
-                let clock = s.clocks.values().next().copied().unwrap_or(0.0) / crate::orbit::C;
-                starts.push(Ok((s.pos, clock)));
-            }
-            Err((why, _)) => starts.push(Err(why.kind().to_string())),
-        }
-    }
-    starts
-}
-
-/// The longest distance of a rover start position from the base antenna, metres.
-fn longest_baseline(starts: &[std::result::Result<(Ecef, f64), String>], base: &Ecef) -> f64 {
-    starts
-        .iter()
-        .filter_map(|s| s.as_ref().ok())
-        .map(|(p, _)| (p.0 - base.0).norm())
-        .fold(0.0, f64::max)
-}
-
 /// Settle the `Auto` atmospheric models for a run whose longest baseline is `longest`
 /// metres; what is estimated.
 fn choose_models(opts: &mut PpkOptions, longest: f64) -> Models {
@@ -249,22 +193,6 @@ fn choose_models(opts: &mut PpkOptions, longest: f64) -> Models {
         iono,
         tropo,
     }
-}
-
-/// Everything a pass reads, per rover epoch.
-struct PassInputs<'a> {
-    rover: &'a ObsFile,
-    base: &'a ObsFile,
-    rover_meas: Vec<Vec<SatMeas>>,
-    base_meas: Vec<Vec<SatMeas>>,
-    /// Base epoch of each rover epoch.
-    matched: Vec<Option<usize>>,
-    /// Start position and clock offset of each rover epoch.
-    starts: Vec<std::result::Result<(Ecef, f64), String>>,
-    /// Arc breaks of the rover's phase, per rover epoch.
-    rover_breaks: Vec<slip::Slips>,
-    /// Arc breaks of the base's phase, per base epoch.
-    base_breaks: Vec<slip::Slips>,
 }
 
 /// The union of the breaks at `range` of a table.
@@ -412,6 +340,64 @@ fn smoother_bytes(inputs: &PassInputs, opts: &PpkOptions) -> usize {
     inputs.rover_meas.len() * (n * n + 2 * n) * 8
 }
 
+/// The trajectory epochs of the merged solutions (the rover's ARP or marker, `opts.refer`,
+/// at the true reception times, with the antenna and static sigmas added) and the rover
+/// epochs without a solution with why.
+fn output_epochs(
+    merged: Vec<Option<(EpochSol, u32)>>,
+    inputs: &PassInputs,
+    opts: &PpkOptions,
+    antenna_sigma: (f64, f64),
+    base_arp: &Ecef,
+) -> (Vec<TrajectoryEpoch>, Vec<(Epoch, String)>) {
+    let rover = inputs.rover;
+    let mut epochs = Vec::with_capacity(rover.epochs.len());
+    let mut unsolved = Vec::new();
+    for (i, s) in merged.into_iter().enumerate() {
+        match s {
+            Some((s, segment)) => {
+                // Rover marker = antenna reference point − header offset.
+                let pos = match opts.refer {
+                    Reference::Arp => s.pos,
+                    Reference::Marker => Ecef(s.pos.0 - arp_offset(&rover.header, &s.pos)),
+                };
+                // The position belongs to the true reception time: the receiver's time tag
+                // minus its clock offset (as RTKLIB reports it). A moving rover at 60 m/s
+                // moves 6 cm in a millisecond of clock offset.
+                let mut time = s.time;
+                if let Ok((_, clock)) = &inputs.starts[i] {
+                    time -= hifitime::Duration::from_seconds(*clock);
+                }
+                epochs.push(TrajectoryEpoch {
+                    time,
+                    pos,
+                    cov: s.cov + systematic(&pos, antenna_sigma) + static_cov(&pos, base_arp, opts),
+                    vel: None,
+                    quality: s.quality,
+                    nsat: s.nsat,
+                    ratio: s.ratio,
+                    age: s.age,
+                    segment,
+                });
+            }
+            None => {
+                let why = if inputs.matched[i].is_none() {
+                    format!(
+                        "no base epoch within {} s with phase of the processed systems",
+                        opts.max_age
+                    )
+                } else if let Err(why) = &inputs.starts[i] {
+                    format!("no single-point solution: {why}")
+                } else {
+                    "fewer than two satellites common to rover and base above the mask".to_string()
+                };
+                unsolved.push((rover.epochs[i].time, why));
+            }
+        }
+    }
+    (epochs, unsolved)
+}
+
 /// Run the carrier-phase engine: forward, backward or both passes of the filter over the
 /// rover epochs matched to base epochs, combined (static runs: forward only, one position);
 /// the trajectory of the rover's ARP or marker (`opts.refer`) at the true reception times,
@@ -439,45 +425,10 @@ pub fn process(
     if opts.max_gap <= 0.0 {
         opts.max_gap = (5.0 * interval(rover)).max(5.0);
     }
-    let matched = match_base_epochs(rover, base, opts.max_age);
-    if matched.iter().all(|m| m.is_none()) {
-        return Err(Error::NoData(format!(
-            "{} and {}: no rover epoch has a base epoch within {} s: the files do not cover a common time",
-            rover.path.display(),
-            base.path.display(),
-            opts.max_age
-        )));
-    }
-    let eph = &orbits.broadcast;
-    let measurements = |f: &ObsFile| -> Vec<Vec<SatMeas>> {
-        let plan = SignalPlan::new(&f.header);
-        f.epochs
-            .iter()
-            .map(|e| extract(e, &f.header, &plan, &opts.systems, opts.nf, eph))
-            .collect()
-    };
-    let inputs = PassInputs {
-        rover,
-        base,
-        rover_meas: measurements(rover),
-        base_meas: measurements(base),
-        matched,
-        starts: start_values(rover, orbits, &opts),
-        rover_breaks: Vec::new(),
-        base_breaks: Vec::new(),
-    };
-    let mut inputs = inputs;
-    let times = |f: &ObsFile| -> Vec<Epoch> { f.epochs.iter().map(|e| e.time).collect() };
-    let (rb, bb) = rayon::join(
-        || slip::arc_breaks(&times(rover), &inputs.rover_meas, opts.max_gap),
-        || {
-            let gap = opts.max_gap.max(3.0 * opts.max_age);
-            slip::arc_breaks(&times(base), &inputs.base_meas, gap)
-        },
-    );
-    (inputs.rover_breaks, inputs.base_breaks) = (rb, bb);
-    let longest = longest_baseline(&inputs.starts, &base_arp);
+    let inputs = inputs::prepare(rover, base, orbits, &opts, &mut warnings)?;
+    let longest = inputs::longest_baseline(&inputs.starts, &base_arp);
     let models = choose_models(&mut opts, longest);
+    warnings.extend(checks::baseline_warning(longest));
     // A step longer than 2.5 nominal intervals between solved epochs starts a new segment.
     let segment_gap = 2.5 * interval(rover);
     let run = |backward: bool, o: &PpkOptions, priors: Option<&[Option<smooth::Prior>]>| {
@@ -523,49 +474,7 @@ pub fn process(
         }
     };
     let merged = merge_passes(fw.as_ref(), bw.as_ref(), smoothed);
-    let mut epochs = Vec::with_capacity(rover.epochs.len());
-    let mut unsolved = Vec::new();
-    for (i, s) in merged.into_iter().enumerate() {
-        match s {
-            Some((s, segment)) => {
-                // Rover marker = antenna reference point − header offset.
-                let pos = match opts.refer {
-                    Reference::Arp => s.pos,
-                    Reference::Marker => Ecef(s.pos.0 - arp_offset(&rover.header, &s.pos)),
-                };
-                // The position belongs to the true reception time: the receiver's time tag
-                // minus its clock offset (as RTKLIB reports it). A moving rover at 60 m/s
-                // moves 6 cm in a millisecond of clock offset.
-                let mut time = s.time;
-                if let Ok((_, clock)) = &inputs.starts[i] {
-                    time -= hifitime::Duration::from_seconds(*clock);
-                }
-                epochs.push(TrajectoryEpoch {
-                    time,
-                    pos,
-                    cov: s.cov
-                        + systematic(&pos, antenna_sigma)
-                        + static_cov(&pos, &base_arp, &opts),
-                    vel: None,
-                    quality: s.quality,
-                    nsat: s.nsat,
-                    ratio: s.ratio,
-                    age: s.age,
-                    segment,
-                });
-            }
-            None => {
-                let why = if inputs.matched[i].is_none() {
-                    format!("no base epoch within {} s", opts.max_age)
-                } else if let Err(why) = &inputs.starts[i] {
-                    format!("no single-point solution: {why}")
-                } else {
-                    "fewer than two satellites common to rover and base above the mask".to_string()
-                };
-                unsolved.push((rover.epochs[i].time, why));
-            }
-        }
-    }
+    let (epochs, unsolved) = output_epochs(merged, &inputs, &opts, antenna_sigma, &base_arp);
     let static_solution = match (opts.motion, &fw) {
         (Motion::Static, Some(fw)) => StaticSolution::of(&epochs, &fw.stats),
         _ => None,

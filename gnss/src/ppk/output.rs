@@ -167,7 +167,10 @@ pub struct PpkResult {
     pub base_marker: Ecef,
     /// The atmospheric models the filter estimated, and why.
     pub models: Models,
-    /// What the run noticed (base position from the header, antennas not calibrated).
+    /// What the run noticed: base position from the header, antennas not calibrated, base
+    /// epochs skipped for holding no phase of the processed systems, a receiver's Doppler
+    /// ignored for slip detection, a baseline beyond the models, rover epochs with nothing
+    /// to difference against.
     pub warnings: Vec<String>,
     /// The static solution (static runs only).
     pub static_solution: Option<StaticSolution>,

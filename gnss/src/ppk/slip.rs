@@ -24,8 +24,15 @@ pub type Slips = BTreeMap<Sv, [Option<SlipCause>; NF]>;
 /// slots whose phase at epoch `i` does not continue from their previous epoch. The detector
 /// runs forward and backward and the union is kept, so that both passes of the filter cut the
 /// same arcs (the two-filter smoother combines their estimates of one arc; a slip seen in one
-/// direction only would otherwise join estimates of two different ambiguities).
-pub fn arc_breaks(times: &[Epoch], meas: &[Vec<SatMeas>], max_gap: f64) -> Vec<Slips> {
+/// direction only would otherwise join estimates of two different ambiguities). Without
+/// `doppler` the Doppler test is left out (a receiver whose Doppler does not follow its phase,
+/// see [`doppler_phase_ratio`]).
+pub fn arc_breaks(
+    times: &[Epoch],
+    meas: &[Vec<SatMeas>],
+    max_gap: f64,
+    doppler: bool,
+) -> Vec<Slips> {
     let mut out: Vec<Slips> = vec![Slips::new(); times.len()];
     let mut merge = |i: usize, sv: Sv, causes: [Option<SlipCause>; NF]| {
         if causes.iter().any(Option::is_some) {
@@ -36,6 +43,7 @@ pub fn arc_breaks(times: &[Epoch], meas: &[Vec<SatMeas>], max_gap: f64) -> Vec<S
         }
     };
     let mut forward = SlipDetector::new(max_gap, false);
+    forward.doppler = doppler;
     for (i, (t, m)) in times.iter().zip(meas).enumerate() {
         for (sat, causes) in m.iter().zip(forward.check_epoch(*t, m)) {
             merge(i, sat.sv, causes);
@@ -44,6 +52,7 @@ pub fn arc_breaks(times: &[Epoch], meas: &[Vec<SatMeas>], max_gap: f64) -> Vec<S
     // Backward, a slip found at epoch i lies between i and the satellite's next epoch (in
     // forward time), where it is recorded.
     let mut backward = SlipDetector::new(max_gap, true);
+    backward.doppler = doppler;
     let mut next: HashMap<Sv, usize> = HashMap::new();
     for i in (0..times.len()).rev() {
         let m = &meas[i];
@@ -106,6 +115,8 @@ pub struct SlipDetector {
     pub doppler_threshold: f64,
     /// A pass running backward in time.
     pub backward: bool,
+    /// Whether the Doppler test runs.
+    pub doppler: bool,
 }
 
 impl SlipDetector {
@@ -121,6 +132,7 @@ impl SlipDetector {
             max_gap,
             doppler_threshold: 3.0,
             backward,
+            doppler: true,
         }
     }
 
@@ -135,7 +147,7 @@ impl SlipDetector {
         let mut allowance: Vec<[f64; NF]> = vec![[0.0; NF]; sats.len()];
         let mut dt_all = f64::NAN;
         for (k, m) in sats.iter().enumerate() {
-            let Some(h) = self.hist.get(&m.sv) else {
+            let Some(h) = self.hist.get(&m.sv).filter(|_| self.doppler) else {
                 continue;
             };
             let dt = (t - h.t).to_seconds();
@@ -275,6 +287,63 @@ impl SlipDetector {
     }
 }
 
+/// How a receiver's Doppler follows its phase: see [`doppler_phase_ratio`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DopplerRatio {
+    /// Median of the integrated Doppler over the phase change; 1 when the Doppler follows the
+    /// convention of the Doppler test, −1 when its sign is reversed.
+    pub median: f64,
+    /// Samples (satellite, slot, pair of consecutive epochs) behind the median.
+    pub samples: usize,
+}
+
+/// Fewest samples [`doppler_phase_ratio`] judges from.
+const MIN_DOPPLER_SAMPLES: usize = 20;
+
+/// Smallest phase change (cycles) a sample of [`doppler_phase_ratio`] may have: the ratio of
+/// a slowly moving satellite is mostly noise and clock drift.
+const MIN_PHASE_CHANGE: f64 = 10.0;
+
+/// The receiver's integrated Doppler against its phase change, `−½(D₀ + D₁)·Δt / Δφ` (the
+/// prediction of the Doppler test, Hz·s over cycles), over every satellite and slot seen at
+/// two consecutive epochs `0 < Δt ≤ max_gap` apart with phase and Doppler at both, no
+/// loss-of-lock flag at the second and `|Δφ| ≥ 10` cycles; the median, which a receiver clock
+/// jump in a few epochs does not move. None with fewer than 20 samples (no Doppler).
+pub fn doppler_phase_ratio(
+    times: &[Epoch],
+    meas: &[Vec<SatMeas>],
+    max_gap: f64,
+) -> Option<DopplerRatio> {
+    let mut ratios = Vec::new();
+    for i in 1..times.len().min(meas.len()) {
+        let dt = (times[i] - times[i - 1]).to_seconds();
+        if !(dt > 0.0 && dt <= max_gap) {
+            continue;
+        }
+        for m in &meas[i] {
+            let Some(h) = meas[i - 1].iter().find(|h| h.sv == m.sv) else {
+                continue;
+            };
+            for f in 0..NF {
+                let dl = m.l[f] - h.l[f];
+                let predicted = -0.5 * (m.d[f] + h.d[f]) * dt;
+                if m.lli[f] & 1 == 0 && predicted.is_finite() && dl.abs() >= MIN_PHASE_CHANGE {
+                    ratios.push(predicted / dl);
+                }
+            }
+        }
+    }
+    if ratios.len() < MIN_DOPPLER_SAMPLES {
+        return None;
+    }
+    let mid = ratios.len() / 2;
+    let (_, median, _) = ratios.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
+    Some(DopplerRatio {
+        median: *median,
+        samples: ratios.len(),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -307,7 +376,7 @@ mod tests {
                 ]
             })
             .collect();
-        let b = arc_breaks(&times, &meas, 10.0);
+        let b = arc_breaks(&times, &meas, 10.0, true);
         let g = |prn| Sv::new(Constellation::Gps, prn);
         assert_eq!(
             b[3].get(&g(1)).map(|c| c[0]),
@@ -358,5 +427,47 @@ mod tests {
                 assert_eq!(o[0], want, "epoch {k} satellite {i}");
             }
         }
+    }
+
+    /// Doppler with the test's sign gives a ratio of 1 (a clock jump in one epoch does not
+    /// move the median), reversed −1; without Doppler there is no verdict, and a receiver
+    /// whose Doppler is left out of the test gets no Doppler slips.
+    #[test]
+    fn doppler_ratio_measures_sign_and_scale() {
+        let t0 = crate::time::gpst(2024, 1, 1, 0, 0, 0, 0);
+        let times: Vec<Epoch> = (0..10)
+            .map(|k| t0 + Duration::from_seconds(k as f64))
+            .collect();
+        let rates = [-600.0, -150.0, 80.0, 420.0, 700.0];
+        let epochs = |flip: f64, doppler: bool| -> Vec<Vec<SatMeas>> {
+            (0..10)
+                .map(|k| {
+                    let clock = if k >= 5 { 299_792.458 } else { 0.0 };
+                    rates
+                        .iter()
+                        .enumerate()
+                        .map(|(i, r)| {
+                            let mut s = sat(i as u8 + 1, k as f64, *r, clock);
+                            s.d[0] = if doppler { flip * s.d[0] } else { f64::NAN };
+                            s
+                        })
+                        .collect()
+                })
+                .collect()
+        };
+        let right = doppler_phase_ratio(&times, &epochs(1.0, true), 10.0).unwrap();
+        assert_eq!(right.samples, 45);
+        assert!((right.median - 1.0).abs() < 1e-9, "{right:?}");
+        let reversed = doppler_phase_ratio(&times, &epochs(-1.0, true), 10.0).unwrap();
+        assert!((reversed.median + 1.0).abs() < 1e-9, "{reversed:?}");
+        assert_eq!(doppler_phase_ratio(&times, &epochs(1.0, false), 10.0), None);
+        let with = arc_breaks(&times, &epochs(-1.0, true), 10.0, true);
+        assert!(with.iter().map(|e| e.len()).sum::<usize>() > 0);
+        let without = arc_breaks(&times, &epochs(-1.0, true), 10.0, false);
+        assert_eq!(
+            without.iter().map(|e| e.len()).sum::<usize>(),
+            0,
+            "{without:?}"
+        );
     }
 }

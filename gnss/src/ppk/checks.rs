@@ -1,0 +1,266 @@
+//! Input habits of the carrier-phase engine: which base epoch each rover epoch is paired
+//! with, whether a receiver's Doppler may feed the slip test, and the warnings a run owes its
+//! user when its inputs are beyond what it models (a very long baseline, rover epochs with
+//! nothing to difference against).
+//!
+//! What enters: epoch times (GPST), the per-epoch measurements of [`super::obs`], the ratio
+//! measured by [`super::slip::doppler_phase_ratio`], the longest baseline (metres). What
+//! leaves: the pairing, with what it skipped, and warning sentences; nothing here changes a
+//! measurement.
+
+use super::obs::SatMeas;
+use super::slip::DopplerRatio;
+use crate::time::format_ymdhms;
+use hifitime::Epoch;
+
+/// The base epoch of each rover epoch, and the base epochs the pairing could not use.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BasePairing {
+    /// Base epoch (index) of each rover epoch, None when none usable lies within `max_age`.
+    pub matched: Vec<Option<usize>>,
+    /// Base epochs skipped: they hold no phase of the processed systems.
+    pub skipped: usize,
+    /// First and last time of those epochs.
+    pub skipped_span: Option<(Epoch, Epoch)>,
+}
+
+/// The usable base epoch (`usable[j]`) nearest each rover time, within `max_age` seconds;
+/// the unusable ones are skipped and counted. `base` is in time order.
+pub fn pair_base_epochs(
+    rover: &[Epoch],
+    base: &[Epoch],
+    usable: &[bool],
+    max_age: f64,
+) -> BasePairing {
+    let ok: Vec<usize> = (0..base.len()).filter(|&j| usable[j]).collect();
+    let bt: Vec<Epoch> = ok.iter().map(|&j| base[j]).collect();
+    let matched = rover
+        .iter()
+        .map(|&t| {
+            let i = bt.partition_point(|b| *b <= t);
+            [i.checked_sub(1), (i < bt.len()).then_some(i)]
+                .into_iter()
+                .flatten()
+                .min_by(|&a, &b| {
+                    let da = (bt[a] - t).to_seconds().abs();
+                    let db = (bt[b] - t).to_seconds().abs();
+                    da.total_cmp(&db)
+                })
+                .filter(|&k| (bt[k] - t).to_seconds().abs() <= max_age)
+                .map(|k| ok[k])
+        })
+        .collect();
+    let mut unusable = (0..base.len()).filter(|&j| !usable[j]).map(|j| base[j]);
+    let first = unusable.next();
+    let (skipped, last) = unusable.fold((usize::from(first.is_some()), first), |(n, _), t| {
+        (n + 1, Some(t))
+    });
+    BasePairing {
+        matched,
+        skipped,
+        skipped_span: first.zip(last),
+    }
+}
+
+/// The warning of a pairing that skipped base epochs, naming the processed `systems`.
+pub fn skipped_base_warning(p: &BasePairing, systems: &str) -> Option<String> {
+    let (a, b) = p.skipped_span?;
+    Some(format!(
+        "{} base epochs between {} and {} GPST hold no carrier phase of the processed systems ({systems}): rover epochs were paired with the nearest base epoch that does",
+        p.skipped,
+        format_ymdhms(a),
+        format_ymdhms(b)
+    ))
+}
+
+/// The range of [`DopplerRatio::median`] within which a receiver's Doppler feeds the slip
+/// test.
+pub const DOPPLER_RATIO_RANGE: std::ops::RangeInclusive<f64> = 0.9..=1.1;
+
+/// Whether a receiver's Doppler may feed the slip test (no measured ratio: it has none to
+/// feed), and the warning when not.
+pub fn doppler_verdict(
+    ratio: Option<DopplerRatio>,
+    role: &str,
+    file: &str,
+) -> (bool, Option<String>) {
+    match ratio {
+        Some(r) if !DOPPLER_RATIO_RANGE.contains(&r.median) => (
+            false,
+            Some(format!(
+                "{role} {file}: integrated Doppler over phase change is {:.3} (median of {} samples; expected 1): Doppler ignored for slip detection",
+                r.median, r.samples
+            )),
+        ),
+        _ => (true, None),
+    }
+}
+
+/// Longest baseline (metres) the atmospheric models are meant for.
+pub const MAX_MODELLED_BASELINE: f64 = 500_000.0;
+
+/// The warning of a run whose longest baseline (metres) is beyond [`MAX_MODELLED_BASELINE`].
+pub fn baseline_warning(longest: f64) -> Option<String> {
+    (longest > MAX_MODELLED_BASELINE).then(|| {
+        format!(
+            "the longest baseline is {:.0} km: the atmospheric models are not meant for baselines beyond {:.0} km; expect float solutions and wrong fixes",
+            longest / 1000.0,
+            MAX_MODELLED_BASELINE / 1000.0
+        )
+    })
+}
+
+/// Whether each rover epoch has nothing to difference against: no base epoch, or no
+/// satellite with phase at both receivers.
+pub fn without_common(
+    rover_meas: &[Vec<SatMeas>],
+    base_meas: &[Vec<SatMeas>],
+    matched: &[Option<usize>],
+) -> Vec<bool> {
+    rover_meas
+        .iter()
+        .zip(matched)
+        .map(|(r, m)| match m {
+            Some(j) => !r.iter().any(|s| base_meas[*j].iter().any(|b| b.sv == s.sv)),
+            None => true,
+        })
+        .collect()
+}
+
+/// A stretch of rover epochs a warning is owed for: longer than this (seconds) …
+pub const LONELY_SPAN: f64 = 60.0;
+/// … and of more epochs than this.
+pub const LONELY_EPOCHS: usize = 3;
+
+/// The runs of consecutive flagged epochs longer than [`LONELY_SPAN`] (first to last time)
+/// and of more than [`LONELY_EPOCHS`] epochs: (first time, last time, epochs).
+pub fn lonely_stretches(times: &[Epoch], flagged: &[bool]) -> Vec<(Epoch, Epoch, usize)> {
+    let mut out = Vec::new();
+    let mut start: Option<usize> = None;
+    for i in 0..=times.len().min(flagged.len()) {
+        let on = i < times.len() && flagged[i];
+        match (on, start) {
+            (true, None) => start = Some(i),
+            (false, Some(s)) => {
+                let n = i - s;
+                if n > LONELY_EPOCHS && (times[i - 1] - times[s]).to_seconds() > LONELY_SPAN {
+                    out.push((times[s], times[i - 1], n));
+                }
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// The warning of each stretch of rover epochs with nothing to difference against.
+pub fn lonely_warnings(stretches: &[(Epoch, Epoch, usize)]) -> Vec<String> {
+    stretches
+        .iter()
+        .map(|(a, b, n)| {
+            format!(
+                "{n} rover epochs from {} to {} GPST have no satellite in common with a base epoch (or no base epoch within the age limit): no carrier-phase solution there",
+                format_ymdhms(*a),
+                format_ymdhms(*b)
+            )
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use hifitime::Duration;
+
+    fn at(s: f64) -> Epoch {
+        crate::time::gpst(2024, 1, 1, 0, 0, 0, 0) + Duration::from_seconds(s)
+    }
+
+    /// A base of 1 s epochs whose odd epochs hold only another system: each rover epoch goes
+    /// to the nearest even one, the odd ones are counted with their span.
+    #[test]
+    fn pairing_skips_base_epochs_without_processed_phase() {
+        let base: Vec<Epoch> = (0..10).map(|k| at(k as f64)).collect();
+        let usable: Vec<bool> = (0..10).map(|k| k % 2 == 0).collect();
+        let rover: Vec<Epoch> = [0.0, 1.0, 2.9, 7.2, 9.0, 12.0, 20.0]
+            .iter()
+            .map(|&s| at(s))
+            .collect();
+        let p = pair_base_epochs(&rover, &base, &usable, 2.5);
+        // 1.0 is as near 0 as 2: the earlier wins; 7.2 and 9.0 go to 8; 12.0 is 4 s from 8.
+        assert_eq!(
+            p.matched,
+            vec![Some(0), Some(0), Some(2), Some(8), Some(8), None, None]
+        );
+        assert_eq!(p.skipped, 5);
+        assert_eq!(p.skipped_span, Some((at(1.0), at(9.0))));
+        let w = skipped_base_warning(&p, "GPS").unwrap();
+        assert!(
+            w.starts_with(
+                "5 base epochs between 2024/01/01 00:00:01.000 and 2024/01/01 00:00:09.000 GPST"
+            ),
+            "{w}"
+        );
+        let all = pair_base_epochs(&rover, &base, &[true; 10], 2.5);
+        assert_eq!(all.matched[1], Some(1));
+        assert_eq!(all.skipped, 0);
+        assert_eq!(skipped_base_warning(&all, "GPS"), None);
+    }
+
+    #[test]
+    fn doppler_outside_the_range_is_ignored_with_a_warning() {
+        let r = |median| {
+            Some(DopplerRatio {
+                median,
+                samples: 300,
+            })
+        };
+        assert_eq!(doppler_verdict(r(1.002), "base", "b.obs"), (true, None));
+        assert_eq!(doppler_verdict(None, "base", "b.obs"), (true, None));
+        let (use_it, w) = doppler_verdict(r(-0.998), "base", "b.obs");
+        assert!(!use_it);
+        assert_eq!(
+            w.unwrap(),
+            "base b.obs: integrated Doppler over phase change is -0.998 (median of 300 samples; expected 1): Doppler ignored for slip detection"
+        );
+        assert!(!doppler_verdict(r(0.19), "rover", "r.obs").0);
+    }
+
+    #[test]
+    fn baselines_beyond_500_km_are_warned_about() {
+        assert_eq!(baseline_warning(115_284.0), None);
+        assert_eq!(baseline_warning(500_000.0), None);
+        let w = baseline_warning(812_400.0).unwrap();
+        assert!(w.starts_with("the longest baseline is 812 km"), "{w}");
+    }
+
+    /// Runs of 4 epochs over more than 60 s are reported; 3 epochs or 60 s are not; a run at
+    /// the end counts.
+    #[test]
+    fn stretches_without_common_satellites() {
+        let times: Vec<Epoch> = (0..20).map(|k| at(30.0 * k as f64)).collect();
+        let mut flagged = vec![false; 20];
+        for k in [1, 2, 3, 5, 6, 7, 8, 16, 17, 18, 19] {
+            flagged[k] = true;
+        }
+        let s = lonely_stretches(&times, &flagged);
+        assert_eq!(
+            s,
+            vec![(at(150.0), at(240.0), 4), (at(480.0), at(570.0), 4)]
+        );
+        let w = lonely_warnings(&s);
+        assert!(
+            w[0].starts_with(
+                "4 rover epochs from 2024/01/01 00:02:30.000 to 2024/01/01 00:04:00.000 GPST"
+            ),
+            "{}",
+            w[0]
+        );
+        // Four epochs at 1 s: 3 s long.
+        let fast: Vec<Epoch> = (0..6).map(|k| at(k as f64)).collect();
+        assert!(lonely_stretches(&fast, &[true; 6]).is_empty());
+        // Two epochs 100 s apart are not more than three epochs.
+        assert!(lonely_stretches(&[at(0.0), at(100.0)], &[true, true]).is_empty());
+    }
+}

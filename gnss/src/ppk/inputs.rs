@@ -1,0 +1,154 @@
+//! The inputs of the passes, prepared once per run: each receiver's measurements of the
+//! processed systems, the base epoch of each rover epoch, the rover's start values from its
+//! code solutions, and each receiver's arc breaks; with the warnings the input checks
+//! ([`super::checks`]) owe.
+//!
+//! What enters: the two observation files, the orbits and the options. What leaves:
+//! [`PassInputs`], which every pass reads and none changes; errors when no rover epoch pairs
+//! with a base epoch.
+
+use super::obs::{extract, SatMeas, SignalPlan};
+use super::{checks, slip, PpkOptions};
+use crate::error::{Error, Result};
+use crate::frame::Ecef;
+use crate::orbit::Orbits;
+use crate::rinex::ObsFile;
+use crate::spp::{self, SppOptions};
+use hifitime::Epoch;
+
+/// Everything a pass reads, per rover epoch.
+pub(super) struct PassInputs<'a> {
+    pub(super) rover: &'a ObsFile,
+    pub(super) base: &'a ObsFile,
+    pub(super) rover_meas: Vec<Vec<SatMeas>>,
+    pub(super) base_meas: Vec<Vec<SatMeas>>,
+    /// Base epoch of each rover epoch.
+    pub(super) matched: Vec<Option<usize>>,
+    /// Start position and clock offset of each rover epoch.
+    pub(super) starts: Vec<std::result::Result<(Ecef, f64), String>>,
+    /// Arc breaks of the rover's phase, per rover epoch.
+    pub(super) rover_breaks: Vec<slip::Slips>,
+    /// Arc breaks of the base's phase, per base epoch.
+    pub(super) base_breaks: Vec<slip::Slips>,
+}
+
+/// The measurements of the processed systems of one file, per epoch.
+fn measurements(f: &ObsFile, orbits: &Orbits, opts: &PpkOptions) -> Vec<Vec<SatMeas>> {
+    let plan = SignalPlan::new(&f.header);
+    f.epochs
+        .iter()
+        .map(|e| {
+            extract(
+                e,
+                &f.header,
+                &plan,
+                &opts.systems,
+                opts.nf,
+                &orbits.broadcast,
+            )
+        })
+        .collect()
+}
+
+/// Everything a pass reads: measurements, base pairing (base epochs without phase of the
+/// processed systems skipped), start values and arc breaks (each receiver's Doppler in the
+/// slip test only when it follows its phase); what was skipped, ignored or left without a
+/// base goes to `warnings`. An error when no rover epoch pairs with a base epoch.
+pub(super) fn prepare<'a>(
+    rover: &'a ObsFile,
+    base: &'a ObsFile,
+    orbits: &Orbits,
+    opts: &PpkOptions,
+    warnings: &mut Vec<String>,
+) -> Result<PassInputs<'a>> {
+    let times = |f: &ObsFile| -> Vec<Epoch> { f.epochs.iter().map(|e| e.time).collect() };
+    let (rover_times, base_times) = (times(rover), times(base));
+    let (rover_meas, base_meas) = rayon::join(
+        || measurements(rover, orbits, opts),
+        || measurements(base, orbits, opts),
+    );
+    let usable: Vec<bool> = base_meas.iter().map(|m| !m.is_empty()).collect();
+    let pairing = checks::pair_base_epochs(&rover_times, &base_times, &usable, opts.max_age);
+    let systems: Vec<String> = opts
+        .systems
+        .iter()
+        .map(|s| s.letter().to_string())
+        .collect();
+    if pairing.matched.iter().all(|m| m.is_none()) {
+        return Err(Error::NoData(format!(
+            "{} and {}: no rover epoch has a base epoch within {} s holding phase of the processed systems ({}): the files do not cover a common time",
+            rover.path.display(),
+            base.path.display(),
+            opts.max_age,
+            systems.join(" ")
+        )));
+    }
+    warnings.extend(checks::skipped_base_warning(&pairing, &systems.join(" ")));
+    let base_gap = opts.max_gap.max(3.0 * opts.max_age);
+    let mut doppler = |f: &ObsFile, t: &[Epoch], m: &[Vec<SatMeas>], gap: f64, role: &str| {
+        let ratio = slip::doppler_phase_ratio(t, m, gap);
+        let (ok, w) = checks::doppler_verdict(ratio, role, &f.path.display().to_string());
+        warnings.extend(w);
+        ok
+    };
+    let rover_doppler = doppler(rover, &rover_times, &rover_meas, opts.max_gap, "rover");
+    let base_doppler = doppler(base, &base_times, &base_meas, base_gap, "base");
+    let (rover_breaks, base_breaks) = rayon::join(
+        || slip::arc_breaks(&rover_times, &rover_meas, opts.max_gap, rover_doppler),
+        || slip::arc_breaks(&base_times, &base_meas, base_gap, base_doppler),
+    );
+    let lonely = checks::without_common(&rover_meas, &base_meas, &pairing.matched);
+    let stretches = checks::lonely_stretches(&rover_times, &lonely);
+    warnings.extend(checks::lonely_warnings(&stretches));
+    Ok(PassInputs {
+        rover,
+        base,
+        rover_meas,
+        base_meas,
+        matched: pairing.matched,
+        starts: start_values(rover, orbits, opts),
+        rover_breaks,
+        base_breaks,
+    })
+}
+
+/// Start position and receiver clock offset (s) of each rover epoch from its code
+/// solution, or why there is none. As in RTKLIB, an epoch whose code solution fails (too few
+/// satellites, GDOP > 30, inconsistent) gets no carrier-phase solution either: its geometry
+/// cannot be trusted.
+fn start_values(
+    rover: &ObsFile,
+    orbits: &Orbits,
+    opts: &PpkOptions,
+) -> Vec<std::result::Result<(Ecef, f64), String>> {
+    let sopts = SppOptions {
+        elev_mask: opts.elev_mask,
+        systems: opts.systems.clone(),
+        ..SppOptions::default()
+    };
+    let mut starts = Vec::with_capacity(rover.epochs.len());
+    let mut prior = rover.header.approx_position;
+    for e in &rover.epochs {
+        match spp::solve_epoch(e, &rover.header, orbits, &sopts, prior) {
+            Ok(s) => {
+                prior = Some(s.pos);
+                let clock = s.clocks.values().next().copied().unwrap_or(0.0) / crate::orbit::C;
+                starts.push(Ok((s.pos, clock)));
+            }
+            Err((why, _)) => starts.push(Err(why.kind().to_string())),
+        }
+    }
+    starts
+}
+
+/// The longest distance of a rover start position from the base antenna, metres.
+pub(super) fn longest_baseline(
+    starts: &[std::result::Result<(Ecef, f64), String>],
+    base: &Ecef,
+) -> f64 {
+    starts
+        .iter()
+        .filter_map(|s| s.as_ref().ok())
+        .map(|(p, _)| (p.0 - base.0).norm())
+        .fold(0.0, f64::max)
+}
