@@ -250,3 +250,40 @@ fn bad_inputs_are_warned_about() {
         long[0]
     );
 }
+
+/// A real single-frequency u-blox log (GPS L1 C/A + Galileo E1, cold start) against itself:
+/// a zero baseline. The cold start's wild code solutions (tens of km off, where the log has
+/// no phase) must not switch on the long-baseline models, and every fixed epoch is the base.
+#[test]
+fn ublox_l1_zero_baseline_from_a_cold_start() {
+    let Some(dir) = common::data("gnss/ubx-navsol-2025") else {
+        return;
+    };
+    let obs = ObsFile::read(&dir.join("16dBatt_no_interference_coldstart.obs.gz")).unwrap();
+    let base = Ecef::new(4313748.470, 452890.220, 4661040.216);
+    let r = common::ppk_on(
+        &dir,
+        &obs,
+        &obs,
+        &["16dBatt_no_interference_coldstart.nav.gz"],
+        base,
+        &PpkOptions::default(),
+    );
+    eprintln!(
+        "u-blox zero baseline: {} of {} solved, {} fixed, models {:?}",
+        r.trajectory.epochs.len(),
+        r.rover_epochs,
+        r.fixed(),
+        r.models
+    );
+    assert!(!r.models.iono && !r.models.tropo, "{:?}", r.models);
+    assert!(r.models.longest_baseline < 10_000.0);
+    assert!(
+        r.trajectory.epochs.len() >= 1100,
+        "{}",
+        r.trajectory.epochs.len()
+    );
+    for e in &r.trajectory.epochs {
+        assert!((e.pos.0 - base.0).norm() < 0.005, "{:?}", e.time);
+    }
+}

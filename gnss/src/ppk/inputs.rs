@@ -141,14 +141,51 @@ fn start_values(
     starts
 }
 
-/// The longest distance of a rover start position from the base antenna, metres.
+/// The longest distance of a rover start position from the base antenna, metres, over the
+/// start positions that a neighbouring epoch confirms (within 100 m plus 100 m/s of their
+/// time difference): a wild code solution alone must not switch the long-baseline models on.
 pub(super) fn longest_baseline(
     starts: &[std::result::Result<(Ecef, f64), String>],
+    times: &[Epoch],
     base: &Ecef,
 ) -> f64 {
-    starts
+    let ok: Vec<(Epoch, &Ecef)> = starts
         .iter()
-        .filter_map(|s| s.as_ref().ok())
-        .map(|(p, _)| (p.0 - base.0).norm())
+        .zip(times)
+        .filter_map(|(s, t)| s.as_ref().ok().map(|(p, _)| (*t, p)))
+        .collect();
+    let agree = |a: &(Epoch, &Ecef), b: &(Epoch, &Ecef)| {
+        (a.1 .0 - b.1 .0).norm() <= 100.0 + 100.0 * (a.0 - b.0).to_seconds().abs()
+    };
+    (0..ok.len())
+        .filter(|&i| {
+            (i > 0 && agree(&ok[i], &ok[i - 1])) || (i + 1 < ok.len() && agree(&ok[i], &ok[i + 1]))
+        })
+        .map(|i| (ok[i].1 .0 - base.0).norm())
         .fold(0.0, f64::max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A wild start between two sane ones is not the longest baseline; a confirmed one is.
+    #[test]
+    fn a_lone_wild_start_does_not_make_the_baseline_long() {
+        let t0 = crate::time::from_week_tow(2300, 0.0);
+        let t = |s: f64| t0 + hifitime::Duration::from_seconds(s);
+        let base = Ecef::new(4_000_000.0, 500_000.0, 4_900_000.0);
+        let at = |dx: f64| Ok((Ecef::new(base.0.x + dx, base.0.y, base.0.z), 0.0));
+        let starts = vec![
+            at(1000.0),
+            at(69_000.0),
+            at(1001.0),
+            Err("no".to_string()),
+            at(1002.0),
+        ];
+        let times = [t(0.0), t(1.0), t(2.0), t(3.0), t(4.0)];
+        assert!((longest_baseline(&starts, &times, &base) - 1002.0).abs() < 1e-6);
+        let starts = vec![at(1000.0), at(69_000.0), at(69_050.0)];
+        assert!((longest_baseline(&starts, &times[..3], &base) - 69_050.0).abs() < 1e-6);
+    }
 }

@@ -426,7 +426,16 @@ pub fn process(
         opts.max_gap = (5.0 * interval(rover)).max(5.0);
     }
     let inputs = inputs::prepare(rover, base, orbits, &opts, &mut warnings)?;
-    let longest = inputs::longest_baseline(&inputs.starts, &base_arp);
+    // Only epochs paired with a base epoch count: a cold start's wild code solutions where
+    // the base has no phase would otherwise switch the long-baseline models on.
+    let starts: Vec<_> = (inputs.starts.iter().zip(&inputs.matched))
+        .map(|(s, m)| match (s, m) {
+            (Ok(s), Some(_)) => Ok(*s),
+            _ => Err(String::new()),
+        })
+        .collect();
+    let times: Vec<Epoch> = rover.epochs.iter().map(|e| e.time).collect();
+    let longest = inputs::longest_baseline(&starts, &times, &base_arp);
     let models = choose_models(&mut opts, longest);
     warnings.extend(checks::baseline_warning(longest));
     // A step longer than 2.5 nominal intervals between solved epochs starts a new segment.
