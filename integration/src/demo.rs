@@ -177,6 +177,9 @@ pub struct DemoReport {
     pub adjust: Option<crate::adjust::results::Results>,
     /// Why the adjustment could not run.
     pub adjust_error: Option<String>,
+    /// The adjusted projection centres against truth: mean east/north/up error and 3D RMS,
+    /// metres.
+    pub adjusted_centres: Option<([f64; 3], f64)>,
     /// Wall time of the whole demo, seconds.
     pub seconds: f64,
 }
@@ -227,6 +230,13 @@ impl fmt::Display for DemoReport {
                     c.theoretical_rms[1],
                     c.theoretical_rms[2]
                 )?;
+                if let Some((m, rms3)) = self.adjusted_centres {
+                    writeln!(
+                        f,
+                        "adjusted centres: mean error E/N/U {:.4} {:.4} {:.4} m, 3D RMS {:.4} m vs truth",
+                        m[0], m[1], m[2], rms3
+                    )?;
+                }
                 for l in &r.lever_arms {
                     writeln!(
                         f,
@@ -283,14 +293,17 @@ pub fn run(out: &Path, run: &crate::adjust::RunOptions) -> Result<DemoReport, Ch
         PosFormat::Llh,
     )?;
     let ex = exposures(out, &scenario, rover, &res.trajectory)?;
-    let ce = centre_errors(out, &ex.stations)?;
+    let truth_c = truth_centres(out)?;
+    let ce = centre_errors(&truth_c, &ex.stations);
     write_adjust_project(out, &scenario, &ex.stations)?;
     let (adjust, adjust_error) =
         match crate::adjust::run(&out.join("project.toml"), &out.join("adjust"), run) {
             Ok(r) => (Some(r), None),
             Err(e) => (None, Some(e.to_string())),
         };
+    let adjusted_centres = adjust.as_ref().and_then(|r| adjusted_errors(r, &truth_c));
     Ok(DemoReport {
+        adjusted_centres,
         adjust,
         adjust_error,
         stations: ex.stations.len(),
@@ -388,36 +401,67 @@ fn write_stations(
     )?)
 }
 
-/// 3D errors (m) of the projection centres against the truth exposure within 10 ms.
-fn centre_errors(out: &Path, stations: &[CameraStation]) -> Result<Vec<f64>, ChainError> {
-    let truth_centres: Vec<(f64, Vector3<f64>)> = truth_text(out, "truth_exposures.csv")?
+/// The simulator's true projection centres: exposure id, GPST seconds, ECEF.
+fn truth_centres(out: &Path) -> Result<Vec<(String, f64, Vector3<f64>)>, ChainError> {
+    Ok(truth_text(out, "truth_exposures.csv")?
         .lines()
         .filter(|l| l.chars().next().is_some_and(|c| c.is_ascii_digit()))
         .filter_map(|l| {
+            let id = l.split(',').next()?.to_string();
             let f: Vec<f64> = l
                 .split(',')
                 .map(|x| x.parse().ok())
                 .collect::<Option<_>>()?;
             Some((
+                id,
                 f[2] * gnss::time::WEEK_SECONDS + f[3],
                 Vector3::new(f[4], f[5], f[6]),
             ))
         })
-        .collect();
+        .collect())
+}
+
+/// 3D errors (m) of the projection centres against the truth exposure within 10 ms.
+fn centre_errors(truth: &[(String, f64, Vector3<f64>)], stations: &[CameraStation]) -> Vec<f64> {
     let mut ce = Vec::new();
     for st in stations {
         let t = st.time.to_gpst_seconds();
-        if let Some((_, c)) = truth_centres.iter().find(|(tt, _)| (tt - t).abs() < 0.01) {
+        if let Some((_, _, c)) = truth.iter().find(|(_, tt, _)| (tt - t).abs() < 0.01) {
             ce.push((st.centre.0 - c).norm());
         }
     }
-    Ok(ce)
+    ce
+}
+
+/// Mean east/north/up error and 3D RMS (m) of the adjusted projection centres against the
+/// truth (matched by image id = exposure id); None without a match.
+fn adjusted_errors(
+    r: &crate::adjust::results::Results,
+    truth: &[(String, f64, Vector3<f64>)],
+) -> Option<([f64; 3], f64)> {
+    let mut sum = Vector3::zeros();
+    let mut sq = Vec::new();
+    for im in &r.images {
+        let Some((_, _, t)) = truth.iter().find(|(id, _, _)| *id == im.id) else {
+            continue;
+        };
+        let p = &im.position;
+        let adj = gnss::frame::Geodetic::from_degrees(p.lat, p.lon, p.h).to_ecef();
+        let e = adj.enu_from(&Ecef(*t)).0;
+        sum += e;
+        sq.push(e.norm());
+    }
+    let n = sq.len();
+    (n > 0).then(|| {
+        let m = sum / n as f64;
+        ([m.x, m.y, m.z], rms(&sq))
+    })
 }
 
 /// The joint adjustment's inputs in `out`: the antenna table of the exposures stage, the
 /// images with their strips (photographs in which nothing was measured, over the turns'
-/// edges, stay out) and `project.toml` (the scenario's camera and lever arm, drift per
-/// ambiguity segment); the image measurements and ground points are the simulator's.
+/// edges, stay out) and `project.toml` (the scenario's camera and lever arm with the 5 mm σ
+/// of a tape measurement (`ppkat leverarm`), drift only for float segments (`auto`)); the image measurements and ground points are the simulator's.
 fn write_adjust_project(
     out: &Path,
     scenario: &simulate::Scenario,
@@ -439,7 +483,7 @@ fn write_adjust_project(
     let c = &scenario.camera;
     let l = c.lever_arm;
     let project = format!(
-        "name = \"ppkat demo flight\"\noutput = \"utm\"\n\n[[camera]]\nid = \"demo\"\nfocal_mm = {}\npixel_um = {}\nwidth_px = {}\nheight_px = {}\n\n[images]\nlist = \"images.csv\"\nmeasurements = \"image_observations.csv\"\n\n[ground]\nfile = \"ground_points.csv\"\n\n[gnss]\nantennas = \"antennas.csv\"\nlever_arm = [{}, {}, {}]\nlever_arm_sigma = [0.02, 0.02, 0.02]\ndrift = \"segment\"\ndrift_model = \"offset\"\n",
+        "name = \"ppkat demo flight\"\noutput = \"utm\"\n\n[[camera]]\nid = \"demo\"\nfocal_mm = {}\npixel_um = {}\nwidth_px = {}\nheight_px = {}\n\n[images]\nlist = \"images.csv\"\nmeasurements = \"image_observations.csv\"\n\n[ground]\nfile = \"ground_points.csv\"\n\n[gnss]\nantennas = \"antennas.csv\"\nlever_arm = [{}, {}, {}]\nlever_arm_sigma = [0.005, 0.005, 0.005]\ndrift = \"auto\"\n",
         c.focal_mm, c.pixel_um, c.width_px, c.height_px, l[0], l[1], l[2]
     );
     gnss::solution::write_atomic(&out.join("project.toml"), |w| {

@@ -8,7 +8,7 @@ use super::factors::{DriftModel, GnssCentre};
 use super::frame::LocalFrame;
 use super::project::{DriftGroup, PointKind, Project};
 use super::start::{intersect_point, Rays};
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Vector3};
 use photo::camera::Pose;
 use photo::factors::{Distance, ImagePoint, Prior};
 use photo::lsq::{
@@ -44,6 +44,8 @@ pub struct DriftBlock {
     pub model: DriftModel,
     /// Reference time t0, GPST seconds.
     pub t0: f64,
+    /// σ per axis of the prior holding it at zero (auto drifts); None: free.
+    pub prior_sigma: Option<[f64; 3]>,
 }
 
 /// Blocks and factors; returns the problem, the point names by `PointId`, the points left
@@ -225,37 +227,54 @@ fn gnss_factors(
     }
     // Drift groups.
     let key = |i: usize, k: usize| -> Option<String> {
+        let a = &p.antennas[k];
         match gs.drift {
             DriftGroup::None => None,
+            DriftGroup::Auto if a.quality == 1 => None,
+            DriftGroup::Auto => Some(format!("float segment {}", a.segment)),
             DriftGroup::Block => Some("block".into()),
             DriftGroup::Strip => Some(format!("strip {}", p.images[i].strip)),
-            DriftGroup::Segment => Some(format!("segment {}", p.antennas[k].segment)),
+            DriftGroup::Segment => Some(format!("segment {}", a.segment)),
         }
     };
-    let mut groups: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    // Per group: times and the sum of the antennas' ENU variances.
+    let mut groups: BTreeMap<String, (Vec<f64>, Vector3<f64>)> = BTreeMap::new();
     for (i, a) in antenna_of.iter().enumerate() {
         if let Some(k) = a {
             if let Some(name) = key(i, *k) {
-                groups
-                    .entry(name)
-                    .or_default()
-                    .push(p.antennas[*k].time.to_gpst_seconds());
+                let g = groups.entry(name).or_default();
+                g.0.push(p.antennas[*k].time.to_gpst_seconds());
+                g.1 += p.antennas[*k].cov_enu.diagonal();
             }
         }
     }
+    let model = match gs.drift {
+        DriftGroup::Auto => DriftModel::Offset,
+        _ => gs.drift_model,
+    };
     let mut drifts: Vec<DriftBlock> = Vec::new();
-    for (name, times) in &groups {
-        let t0 = match gs.drift_model {
+    for (name, (times, var_sum)) in &groups {
+        let t0 = match model {
             DriftModel::Rate => times.iter().cloned().fold(f64::INFINITY, f64::min),
             _ => times.iter().sum::<f64>() / times.len() as f64,
         };
-        let v = Value::Vector(DVector::zeros(gs.drift_model.dim()));
-        pr.add_block(Key::Drift(DriftId::from(drifts.len())), v)
+        let id = Key::Drift(DriftId::from(drifts.len()));
+        pr.add_block(id, Value::Vector(DVector::zeros(model.dim())))
             .map_err(built)?;
+        let prior_sigma = (gs.drift == DriftGroup::Auto).then(|| {
+            let rms = var_sum.map(|v| (v / times.len() as f64).max(1e-12).sqrt());
+            [rms.x, rms.y, rms.z]
+        });
+        if let Some(sig) = prior_sigma {
+            let f = Prior::new(id, DVector::zeros(3));
+            pr.add_factor(f, Noise::sigmas(&sig), loss, GROUP_PRIOR)
+                .map_err(built)?;
+        }
         drifts.push(DriftBlock {
             name: name.clone(),
-            model: gs.drift_model,
+            model,
             t0,
+            prior_sigma,
         });
     }
     for (i, a) in antenna_of.iter().enumerate() {

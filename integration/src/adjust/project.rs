@@ -155,10 +155,10 @@ pub struct GnssSection {
     /// Estimate the lever arm (default); `false`: hold it fixed.
     #[serde(default = "yes")]
     pub estimate_lever_arm: bool,
-    /// none, block, strip or segment.
+    /// auto (default), none, block, strip or segment.
     #[serde(default)]
     pub drift: DriftGroup,
-    /// offset, linear or rate.
+    /// offset, linear or rate (of block, strip and segment drifts; auto drifts are offsets).
     #[serde(default = "default_drift_model")]
     pub drift_model: DriftModel,
 }
@@ -184,18 +184,25 @@ fn default_drift_model() -> DriftModel {
     DriftModel::Linear
 }
 
-/// Which antenna positions share a drift.
+/// Which antenna positions share a drift. A drift is the GNSS antenna position minus the
+/// adjusted one (X_S + R·lever arm), in the adjustment frame (east, north, up at the block
+/// centre).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum DriftGroup {
-    /// No drift.
+    /// Only where the GNSS needs it: none for antennas of fixed (Q = 1) trajectory
+    /// segments; an offset per float or single-point segment, held by a prior whose σ per
+    /// axis is the segment's own RMS trajectory σ (the common-mode error a float ambiguity
+    /// leaves). Keeps the GNSS datum where the trajectory is fixed.
     #[default]
+    Auto,
+    /// No drift.
     None,
     /// One drift for the whole block.
     Block,
     /// One per strip.
     Strip,
-    /// One per ambiguity segment of the trajectory.
+    /// One free drift per ambiguity segment of the trajectory.
     Segment,
 }
 

@@ -209,6 +209,9 @@ fn html_parameters(s: &mut String, r: &Results) {
             est_rows(s, e, "m (f, x0, y0), distortion units");
         }
         let _ = writeln!(s, "</table>");
+        if !r.drifts.is_empty() {
+            let _ = writeln!(s, "<p>Drift = GNSS antenna position − adjusted antenna position (X<sub>S</sub> + R·lever arm), east/north/up of the adjustment frame: a + b·(t − t<sub>0</sub>).</p>");
+        }
     }
 }
 
