@@ -55,7 +55,7 @@ pub(super) fn problem(
     p: &Project,
     frame: &LocalFrame,
     rays: &Rays,
-    start: &[Pose],
+    start: &[Option<Pose>],
     antenna_of: &[Option<usize>],
 ) -> Result<(Problem, Vec<String>, Vec<(String, String)>, Vec<DriftBlock>), AdjustError> {
     let opts = &p.file.adjustment;
@@ -69,20 +69,26 @@ pub(super) fn problem(
         ..Options::default()
     });
     let built = |e: photo::lsq::BuildError| err(e.to_string());
+    // Images left out (no points, no start) have no block; their measurements no factor.
     for (i, s) in start.iter().enumerate() {
-        pr.add_block(Key::Pose(ImageId::from(i)), Value::Pose(*s))
-            .map_err(built)?;
+        if let Some(s) = s {
+            pr.add_block(Key::Pose(ImageId::from(i)), Value::Pose(*s))
+                .map_err(built)?;
+        }
     }
     let point_names: Vec<String> = rays.keys().map(|s| s.to_string()).collect();
     let mut single_ray = Vec::new();
     for (k, (id, ks)) in rays.iter().enumerate() {
         let ground = p.ground.iter().find(|g| g.id == *id);
         let control = ground.is_some_and(|g| g.kind == PointKind::Control);
-        let images: std::collections::BTreeSet<usize> =
-            ks.iter().map(|k| p.measurements[*k].image).collect();
+        let images: std::collections::BTreeSet<usize> = ks
+            .iter()
+            .map(|k| p.measurements[*k].image)
+            .filter(|&i| start[i].is_some())
+            .collect();
         let x = match ground {
             Some(g) if control => Some(frame.to_local(&g.pos)),
-            _ if images.len() >= 2 => intersect_point(p, ks, |i| Some(&start[i])),
+            _ if images.len() >= 2 => intersect_point(p, ks, |i| start[i].as_ref()),
             _ => None,
         };
         match x {
@@ -128,7 +134,7 @@ fn image_factors(
         let Some(&pt) = index.get(m.point.as_str()) else {
             continue;
         };
-        if !pr.contains(Key::Point(pt)) {
+        if !pr.contains(Key::Point(pt)) || !pr.contains(Key::Pose(ImageId::from(m.image))) {
             continue;
         }
         let c = p.images[m.image].camera;
@@ -203,12 +209,9 @@ fn gnss_factors(
     };
     let built = |e: photo::lsq::BuildError| err(e.to_string());
     for (c, _) in p.cameras.iter().enumerate() {
-        if !p
-            .images
-            .iter()
-            .enumerate()
-            .any(|(i, im)| im.camera == c && antenna_of[i].is_some())
-        {
+        if !p.images.iter().enumerate().any(|(i, im)| {
+            im.camera == c && antenna_of[i].is_some() && pr.contains(Key::Pose(ImageId::from(i)))
+        }) {
             continue;
         }
         let key = Key::LeverArm(CameraId::from(c));
@@ -239,8 +242,9 @@ fn gnss_factors(
     };
     // Per group: times and the sum of the antennas' ENU variances.
     let mut groups: BTreeMap<String, (Vec<f64>, Vector3<f64>)> = BTreeMap::new();
+    let posed = |i: usize| pr.contains(Key::Pose(ImageId::from(i)));
     for (i, a) in antenna_of.iter().enumerate() {
-        if let Some(k) = a {
+        if let (Some(k), true) = (a, posed(i)) {
             if let Some(name) = key(i, *k) {
                 let g = groups.entry(name).or_default();
                 g.0.push(p.antennas[*k].time.to_gpst_seconds());
@@ -281,7 +285,7 @@ fn gnss_factors(
         let Some(k) = *a else { continue };
         let ant = &p.antennas[k];
         let cam = CameraId::from(p.images[i].camera);
-        if !pr.contains(Key::LeverArm(cam)) {
+        if !pr.contains(Key::LeverArm(cam)) || !pr.contains(Key::Pose(ImageId::from(i))) {
             continue;
         }
         let drift = key(i, k)

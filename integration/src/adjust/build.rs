@@ -33,49 +33,56 @@ pub struct Built {
     pub drifts: Vec<DriftBlock>,
     /// Points measured in a single image (not determinable): id and its image.
     pub single_ray: Vec<(String, String)>,
+    /// Images and points left out of the adjustment: what ("image X", "point Y") and why.
+    pub left_out: Vec<(String, String)>,
     /// Antenna records whose image is not in the list.
     pub unused_antennas: Vec<String>,
 }
 
 /// Check the inputs, choose the frame and the start values, assemble the problem.
 pub fn build(p: &Project) -> Result<Built, AdjustError> {
-    let rays = measured(p)?;
+    let (rays, empty) = measured(p)?;
     let (antenna_of, unused_antennas) = antennas_by_image(p)?;
     check_datum(p, &antenna_of)?;
     let frame = frame_of(p, antenna_of.iter().any(Option::is_some));
-    let start = orientations(p, &frame, &rays, &antenna_of)?;
-    let (pr, point_names, single_ray, drifts) = problem(p, &frame, &rays, &start, &antenna_of)?;
+    let skip: Vec<bool> = (0..p.images.len()).map(|i| empty.contains(&i)).collect();
+    let mut left_out: Vec<(String, String)> = empty
+        .iter()
+        .map(|&i| {
+            (
+                format!("image {}", p.images[i].id),
+                "no measured points".to_string(),
+            )
+        })
+        .collect();
+    let (start, lost) = orientations(p, &frame, &rays, &antenna_of, &skip)?;
+    left_out.extend(
+        lost.into_iter()
+            .map(|(id, why)| (format!("image {id}"), why)),
+    );
+    let (mut pr, point_names, single_ray, drifts) = problem(p, &frame, &rays, &start, &antenna_of)?;
+    super::leave_out::undetermined(p, &point_names, &mut pr, &mut left_out)?;
     Ok(Built {
         frame,
         problem: pr,
         point_names,
         drifts,
         single_ray,
+        left_out,
         unused_antennas,
     })
 }
 
-/// The measurements of each point; refused when an image or a ground point has none.
-fn measured(p: &Project) -> Result<Rays<'_>, AdjustError> {
+/// The measurements of each point, and the images without any (to be left out); refused
+/// when a ground point has none.
+fn measured(p: &Project) -> Result<(Rays<'_>, Vec<usize>), AdjustError> {
     let mut rays: Rays = BTreeMap::new();
     let mut per_image = vec![0usize; p.images.len()];
     for (k, m) in p.measurements.iter().enumerate() {
         rays.entry(m.point.as_str()).or_default().push(k);
         per_image[m.image] += 1;
     }
-    let empty: Vec<&str> = p
-        .images
-        .iter()
-        .zip(&per_image)
-        .filter(|(_, n)| **n == 0)
-        .map(|(im, _)| im.id.as_str())
-        .collect();
-    if !empty.is_empty() {
-        return Err(err(format!(
-            "image(s) {} have no measured points: measure tie points in them or remove them from the image list",
-            empty.join(", ")
-        )));
-    }
+    let empty: Vec<usize> = (0..p.images.len()).filter(|&i| per_image[i] == 0).collect();
     let unmeasured: Vec<&str> = p
         .ground
         .iter()
@@ -96,7 +103,7 @@ fn measured(p: &Project) -> Result<Rays<'_>, AdjustError> {
             )));
         }
     }
-    Ok(rays)
+    Ok((rays, empty))
 }
 
 /// The antenna record of each image (with GNSS), and the antenna records naming no image;

@@ -20,6 +20,7 @@ pub mod error;
 pub mod factors;
 mod frame;
 pub mod input;
+mod leave_out;
 pub mod project;
 mod quality;
 pub mod report;

@@ -325,12 +325,17 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
     })
 }
 
-/// Every image's orientation with σ, its measurement count and RMS residual (`per_image`:
+/// Every adjusted image's orientation with σ, its measurement count and RMS residual (`per_image`:
 /// measurements and sum of squared pixel residuals).
 fn image_results(p: &Project, ctx: &Context, per_image: &[(usize, f64)]) -> Vec<ImageResult> {
     p.images
         .iter()
         .enumerate()
+        // Images left out (no block, or fixed with their factors removed) are not results.
+        .filter(|(i, _)| {
+            let key = Key::Pose(ImageId::from(*i));
+            ctx.pr.contains(key) && !ctx.pr.is_fixed(key)
+        })
         .map(|(i, im)| {
             let key = Key::Pose(ImageId::from(i));
             let pose =
@@ -386,6 +391,10 @@ fn point_results(
         let Some(x) = ctx.pr.value(key).and_then(Value::as_point) else {
             continue;
         };
+        if ctx.pr.is_fixed(key) {
+            // Left out as undetermined (named in the warnings).
+            continue;
+        }
         let (g, position) = ctx.project(&x);
         let ground = p.ground.iter().find(|g| &g.id == id);
         let kind = ground.map(|g| g.kind).unwrap_or(PointKind::Tie);
@@ -481,7 +490,8 @@ fn interiors(p: &Project, ctx: &Context) -> Vec<Estimated> {
         .collect()
 }
 
-/// The project's warnings, points left out for a single ray, antennas of unknown images.
+/// The project's warnings, points left out for a single ray, images and points left out as
+/// undetermined, antennas of unknown images.
 fn warnings(p: &Project, b: &super::build::Built) -> Vec<String> {
     let mut warnings = p.warnings.clone();
     if !b.single_ray.is_empty() {
@@ -497,6 +507,9 @@ fn warnings(p: &Project, b: &super::build::Built) -> Vec<String> {
             list.join(", "),
             if b.single_ray.len() > 10 { ", …" } else { "" }
         ));
+    }
+    for (what, why) in &b.left_out {
+        warnings.push(format!("{what} is left out of the adjustment: {why}"));
     }
     if !b.unused_antennas.is_empty() {
         warnings.push(format!(

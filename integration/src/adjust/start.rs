@@ -3,7 +3,8 @@
 //! range); nadir along the strip direction of the neighbouring antennas; a resection on ≥ 4
 //! control points; a resection on tie points intersected from the images that have a start.
 //! What enters: the project, the frame, the measurements by point and the antenna of each
-//! image. What leaves: a pose per image, or an error naming the images without one.
+//! image. What leaves: a pose per image that can have one and the images left without
+//! (named, with the reason); an error only when no image has a start.
 
 use super::error::{problem_err as err, AdjustError};
 use super::frame::LocalFrame;
@@ -14,6 +15,9 @@ use photo::intersection::{intersect, Ray};
 use photo::lever::LeverArm;
 use photo::resection::{resect, resect_angles, Control};
 use std::collections::BTreeMap;
+
+/// Something left out of the adjustment (e.g. `image 17`) and why.
+pub(super) type LeftOut = (String, String);
 
 /// Measurements by point id (indices into the project's measurements), in id order.
 pub(super) type Rays<'a> = BTreeMap<&'a str, Vec<usize>>;
@@ -75,13 +79,16 @@ fn controls_in(
         .collect()
 }
 
-/// The start orientation of every image.
+/// The start orientation of every image that can have one (`skip[i]`: image i is already
+/// left out), and the images left without one (id, reason); refused only when no image has a
+/// start.
 pub(super) fn orientations(
     p: &Project,
     frame: &LocalFrame,
     rays: &Rays,
     antenna_of: &[Option<usize>],
-) -> Result<Vec<Pose>, AdjustError> {
+    skip: &[bool],
+) -> Result<(Vec<Option<Pose>>, Vec<LeftOut>), AdjustError> {
     let lever0 = p
         .file
         .gnss
@@ -89,26 +96,37 @@ pub(super) fn orientations(
         .map(|g| g.lever_arm())
         .unwrap_or_default();
     let mut start: Vec<Option<Pose>> = (0..p.images.len())
-        .map(|i| start_pose(p, frame, antenna_of, &lever0, i))
+        .map(|i| {
+            if skip[i] {
+                None
+            } else {
+                start_pose(p, frame, antenna_of, &lever0, i)
+            }
+        })
         .collect();
-    if start.iter().any(|s| s.is_none()) {
-        resect_on_ties(p, rays, &mut start);
+    if start.iter().zip(skip).any(|(s, &k)| s.is_none() && !k) {
+        resect_on_ties(p, rays, &mut start, skip);
     }
-    // Images without any start: refuse with the ids.
-    let lost: Vec<&str> = p
+    let lost: Vec<LeftOut> = p
         .images
         .iter()
         .zip(&start)
-        .filter(|(_, s)| s.is_none())
-        .map(|(im, _)| im.id.as_str())
+        .zip(skip)
+        .filter(|((_, s), &k)| s.is_none() && !k)
+        .map(|((im, _), _)| {
+            (
+                im.id.clone(),
+                "no start orientation: no GNSS antenna position with attitude or strip, no compass angles, and fewer than 4 control or tie points seen by other images".to_string(),
+            )
+        })
         .collect();
-    if !lost.is_empty() {
+    if start.iter().all(Option::is_none) {
         return Err(err(format!(
-            "no start orientation for image(s) {}: give a GNSS antenna position (with attitude or within a strip), compass angles, or at least 4 control or tie points in each that other images also see",
-            lost.join(", ")
+            "no image has a start orientation (first: {}): give GNSS antenna positions (with attitude or within strips), compass angles, or at least 4 control points in some images",
+            lost.first().map_or("none", |l| l.0.as_str())
         )));
     }
-    Ok(start.into_iter().flatten().collect())
+    Ok((start, lost))
 }
 
 /// The camera rotation of image `i` from the antenna table's attitude, compass angles, or the
@@ -186,20 +204,27 @@ fn start_pose(
 }
 
 /// Images still without a start (no GNSS, no control): resect them on tie points intersected
-/// from the images that have one.
-fn resect_on_ties(p: &Project, rays: &Rays, start: &mut [Option<Pose>]) {
-    let known: BTreeMap<&str, Vector3<f64>> = rays
-        .iter()
-        .filter_map(|(id, ks)| intersect_point(p, ks, |i| start[i].as_ref()).map(|x| (*id, x)))
-        .collect();
-    for (i, st) in start.iter_mut().enumerate() {
-        if st.is_some() {
-            continue;
+/// from the images that have one, growing the block until no image gains a start.
+fn resect_on_ties(p: &Project, rays: &Rays, start: &mut [Option<Pose>], skip: &[bool]) {
+    loop {
+        let known: BTreeMap<&str, Vector3<f64>> = rays
+            .iter()
+            .filter_map(|(id, ks)| intersect_point(p, ks, |i| start[i].as_ref()).map(|x| (*id, x)))
+            .collect();
+        let mut gained = false;
+        for (i, st) in start.iter_mut().enumerate() {
+            if st.is_some() || skip[i] {
+                continue;
+            }
+            let pts = controls_in(p, i, |id| known.get(id).copied());
+            if pts.len() >= 4 {
+                let cam = &p.cameras[p.images[i].camera].camera;
+                *st = resect(cam, &pts).ok().map(|x| x.pose);
+                gained |= st.is_some();
+            }
         }
-        let pts = controls_in(p, i, |id| known.get(id).copied());
-        if pts.len() >= 4 {
-            let cam = &p.cameras[p.images[i].camera].camera;
-            *st = resect(cam, &pts).ok().map(|x| x.pose);
+        if !gained {
+            return;
         }
     }
 }

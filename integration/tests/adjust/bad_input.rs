@@ -14,11 +14,6 @@ fn bad_input_gives_clear_errors() {
     });
     let e = fails(&d);
     assert!(e.contains("strip 2 (14 images) without any GNSS"), "{e}");
-    // An image with no points.
-    let d = project_dir("bad-image");
-    edit(&d, "images.csv", |t| format!("{t}999,cam,1\n"));
-    let e = fails(&d);
-    assert!(e.contains("image(s) 999 have no measured points"), "{e}");
     // Control ids that are not in the measurements.
     let d = project_dir("bad-gcp");
     edit(&d, "ground_points.csv", |t| t.replacen("G2,", "G2x,", 1));
@@ -71,14 +66,49 @@ fn bad_input_gives_clear_errors() {
     });
     let e = fails(&d);
     assert!(e.contains("drift_modle"), "{e}");
-    for n in [
-        "bad-strip",
-        "bad-image",
-        "bad-gcp",
-        "bad-datum",
-        "bad-meas",
-        "bad-key",
-    ] {
+    for n in ["bad-strip", "bad-gcp", "bad-datum", "bad-meas", "bad-key"] {
         let _ = std::fs::remove_dir_all(tmp(n));
     }
+}
+
+/// Images and points the observations do not determine are named with the reason and left
+/// out; the rest is adjusted: an image without points, an image with one point (2 image
+/// rows + 3 GNSS rows for six elements), and with it the points only it saw a second time.
+#[test]
+fn undetermined_images_are_named_and_left_out() {
+    let d = project_dir("left-out");
+    edit(&d, "images.csv", |t| {
+        format!("{t}999,cam,1,2314,503700.0\n")
+    });
+    edit(&d, "image_observations.csv", |t| {
+        let mut kept_103 = 0;
+        t.lines()
+            .filter(|l| {
+                if !l.starts_with("103,") {
+                    return true;
+                }
+                kept_103 += 1;
+                kept_103 == 1
+            })
+            .map(|l| format!("{l}\n"))
+            .collect()
+    });
+    let r = adjust::run(&d.join("project.toml"), &d.join("out"), &Default::default())
+        .expect("the rest adjusts");
+    let said = |needle: &str| r.warnings.iter().any(|w| w.contains(needle));
+    assert!(
+        said("image 999 is left out of the adjustment: no measured points"),
+        "{:?}",
+        r.warnings
+    );
+    assert!(
+        said("image 103 is left out of the adjustment: too few observations"),
+        "{:?}",
+        r.warnings
+    );
+    assert_eq!(r.images.len(), 28, "29 simulated images, 103 and 999 out");
+    assert!(r.images.iter().all(|i| i.id != "103" && i.id != "999"));
+    assert!(r.sigma0 > 0.8 && r.sigma0 < 1.2, "σ0 {}", r.sigma0);
+    assert!(r.checks.rms.iter().all(|&x| x < 0.3), "{:?}", r.checks.rms);
+    let _ = std::fs::remove_dir_all(&d);
 }

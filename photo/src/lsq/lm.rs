@@ -166,19 +166,44 @@ impl Problem {
     }
 }
 
+impl Problem {
+    /// Every free block that its own observations do not determine, at the current values
+    /// (see [`Model::undetermined_blocks`]); the caller may leave them out and solve the rest.
+    pub fn undetermined(&mut self) -> Result<Vec<super::key::Key>, SolveError> {
+        let st = self.structure();
+        let mut lins = Linearisation::default();
+        self.model.linearise(&st, &self.model.values, &mut lins)?;
+        Ok(self
+            .model
+            .undetermined_blocks(&st, &lins)
+            .into_iter()
+            .map(|b| self.model.keys[b])
+            .collect())
+    }
+}
+
+/// Whether a diagonal block of the normals is regular, independently of the units of its
+/// parameters (radians and metres, pixels and metres): the block is scaled by its diagonal
+/// (Jacobi, D^-1/2·M·D^-1/2, a correlation-like matrix of eigenvalues in [0, dim]) before its
+/// eigenvalues are compared. A parameter with no weight at all is undetermined.
+fn regular(m: DMatrix<f64>) -> bool {
+    let d: Vec<f64> = m.diagonal().iter().copied().collect();
+    if d.iter().any(|&x| !(x.is_finite() && x > 0.0)) {
+        return false;
+    }
+    let s = DMatrix::from_fn(m.nrows(), m.ncols(), |i, j| {
+        m[(i, j)] / (d[i] * d[j]).sqrt()
+    });
+    let e = s.symmetric_eigenvalues();
+    e.min() > 1e-10 * e.max().max(1.0)
+}
+
 impl Model {
-    /// Every free block must be determined by its own observations (a point seen by one ray,
-    /// a camera without points are not): its diagonal block of the normals must be regular.
-    pub(crate) fn check_determined(
-        &self,
-        st: &Structure,
-        lin: &Linearisation,
-    ) -> Result<(), SolveError> {
-        let regular = |m: DMatrix<f64>| {
-            let e = m.symmetric_eigenvalues();
-            let (lo, hi) = (e.min(), e.max());
-            hi > 0.0 && lo > 1e-10 * hi
-        };
+    /// The free blocks not determined by their own observations (a point seen by one ray, a
+    /// camera without points): their diagonal block of the normals is singular after
+    /// scaling (see [`regular`]), as block indices.
+    pub(crate) fn undetermined_blocks(&self, st: &Structure, lin: &Linearisation) -> Vec<usize> {
+        let mut out = Vec::new();
         let mut cm: Vec<DMatrix<f64>> = st.cdim.iter().map(|&d| DMatrix::zeros(d, d)).collect();
         for g in &st.grads {
             let j = &lin.j[g.ja..g.ja + g.m * g.da];
@@ -186,7 +211,7 @@ impl Model {
         }
         for (c, m) in cm.into_iter().enumerate() {
             if !regular(m) {
-                return Err(SolveError::Undetermined(self.keys[st.cblocks[c]]));
+                out.push(st.cblocks[c]);
             }
         }
         for eb in &st.eblocks {
@@ -196,9 +221,47 @@ impl Model {
                 super::lin::add_atb(1.0, j, j, t.m, m.as_mut_slice(), eb.dim);
             }
             if !regular(m) {
-                return Err(SolveError::Undetermined(self.keys[eb.block]));
+                out.push(eb.block);
             }
         }
-        Ok(())
+        out
+    }
+
+    /// Every free block must be determined by its own observations: the first that is not
+    /// is the error.
+    pub(crate) fn check_determined(
+        &self,
+        st: &Structure,
+        lin: &Linearisation,
+    ) -> Result<(), SolveError> {
+        match self.undetermined_blocks(st, lin).first() {
+            Some(&b) => Err(SolveError::Undetermined(self.keys[b])),
+            None => Ok(()),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::regular;
+    use nalgebra::DMatrix;
+
+    /// Units do not decide: a pose whose angles weigh 10¹² (image rays) and whose centre
+    /// weighs 0.04 (GNSS at 5 m) is determined; a rank-deficient block is not, whatever its
+    /// scale; a parameter without weight is not.
+    #[test]
+    fn regularity_ignores_units() {
+        let m = DMatrix::from_row_slice(2, 2, &[1e12, 1e4, 1e4, 0.04]);
+        assert!(regular(m.clone()));
+        // The unscaled test (λmin > 1e-10 λmax) would have refused it.
+        let e = m.symmetric_eigenvalues();
+        assert!(e.min() < 1e-10 * e.max());
+        let sing = DMatrix::from_row_slice(2, 2, &[1e12, 1e6 * 2e-1, 1e6 * 2e-1, 0.04]);
+        assert!(!regular(sing));
+        assert!(!regular(DMatrix::from_row_slice(
+            2,
+            2,
+            &[1.0, 0.0, 0.0, 0.0]
+        )));
     }
 }
