@@ -157,6 +157,9 @@ pub struct Results {
     pub groups: Vec<GroupQuality>,
     /// What data snooping removed.
     pub removed: Vec<Removed>,
+    /// What data snooping found suspect but kept, because removing it would have left a
+    /// parameter undetermined (|w| when found).
+    pub kept_suspects: Vec<Removed>,
     /// The check-point table.
     pub checks: CheckTable,
     /// Image residuals.
@@ -293,6 +296,11 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
     let res = super::residuals::collect(p, s, &rel);
     let (points, checks) = point_results(p, b, &ctx);
     let g = &b.frame.geodetic;
+    let kept: Vec<Removed> = pr
+        .kept_suspects()
+        .iter()
+        .map(|&(k, w)| super::quality::removed_observation(p, b, k, w))
+        .collect();
     Ok(Results {
         name: p.file.name.clone(),
         mode: p.file.mode,
@@ -315,12 +323,21 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
             .iter()
             .map(|&(k, w)| super::quality::removed_observation(p, b, k, w))
             .collect(),
+        kept_suspects: kept.clone(),
         checks,
         image_residuals: res.image,
         control_residuals: res.control,
         gnss_residuals: res.gnss,
         distance_residuals: res.distance,
-        warnings: warnings(p, b),
+        warnings: warnings(p, b)
+            .into_iter()
+            .chain(kept.iter().map(|k| {
+                format!(
+                    "{} {} ({}): |w| {:.1} is above the critical {:.2}, but it is kept: removing it would leave a parameter undetermined — check it",
+                    k.kind, k.what, k.source, k.w, s.critical
+                )
+            }))
+            .collect(),
         timings: pr.take_timings(),
     })
 }

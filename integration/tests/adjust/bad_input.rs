@@ -112,3 +112,56 @@ fn undetermined_images_are_named_and_left_out() {
     assert!(r.checks.rms.iter().all(|&x| x < 0.3), "{:?}", r.checks.rms);
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Data snooping never aborts: an image held by two points and its GNSS centre has a single
+/// redundant component; a blunder there cannot be removed without leaving the image
+/// undetermined, so it is kept, flagged and reported, and the adjustment finishes.
+#[test]
+fn snooping_keeps_what_it_cannot_remove() {
+    let d = project_dir("snoop-keep");
+    edit(&d, "image_observations.csv", |t| {
+        let mut kept_103 = 0;
+        t.lines()
+            .filter_map(|l| {
+                if !l.starts_with("103,") {
+                    return Some(format!("{l}\n"));
+                }
+                kept_103 += 1;
+                match kept_103 {
+                    // A 40 px blunder in x on the first point.
+                    1 => {
+                        let f: Vec<&str> = l.split(',').collect();
+                        let x: f64 = f[2].parse().unwrap();
+                        Some(format!(
+                            "{},{},{:.3},{},{}\n",
+                            f[0],
+                            f[1],
+                            x + 40.0,
+                            f[3],
+                            f[4]
+                        ))
+                    }
+                    2 => Some(format!("{l}\n")),
+                    _ => None,
+                }
+            })
+            .collect()
+    });
+    let r = adjust::run(&d.join("project.toml"), &d.join("out"), &Default::default())
+        .expect("snooping must not abort");
+    assert!(r.images.iter().any(|i| i.id == "103"), "103 stays adjusted");
+    assert!(!r.kept_suspects.is_empty(), "the blunder is flagged");
+    assert!(
+        r.kept_suspects.iter().all(|k| k.what.contains("103")),
+        "{:?}",
+        r.kept_suspects
+    );
+    assert!(
+        r.warnings
+            .iter()
+            .any(|w| w.contains("is kept: removing it would leave a parameter undetermined")),
+        "{:?}",
+        r.warnings
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -33,6 +33,9 @@ pub(crate) struct Model {
     pub entries: Vec<Entry>,
     /// Variance factor (σ² multiplier) per group.
     pub group_scale: Vec<f64>,
+    /// Factors data snooping would have removed but kept, because removing them would leave
+    /// a block undetermined, with their |w|.
+    pub kept: Vec<(super::factor::FactorId, f64)>,
 }
 
 impl Model {

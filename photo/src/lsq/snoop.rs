@@ -12,7 +12,9 @@ impl Problem {
     /// Data snooping: adjust, remove the factor with the largest |w| above `critical`, repeat.
     /// Returns the last adjustment and the removed factors in removal order with their |w|; a
     /// block of an eliminated kind that a removal leaves undetermined (no more residual rows
-    /// than unknowns) is fixed out, its remaining factors following with w = 0.
+    /// than unknowns) is fixed out, its remaining factors following with w = 0. A factor whose
+    /// removal would leave any other block undetermined is kept (never an abort): it is
+    /// listed by [`Self::kept_suspects`] and the next largest |w| is tested.
     pub fn data_snooping(
         &mut self,
         critical: f64,
@@ -21,19 +23,36 @@ impl Problem {
         loop {
             let summary = self.solve()?;
             let rel = self.reliability()?;
+            let kept: Vec<FactorId> = self.model.kept.iter().map(|k| k.0).collect();
             let worst = rel
                 .iter()
+                .filter(|r| !kept.contains(&r.factor))
                 .map(|r| (r.factor, r.normalised.amax()))
                 .max_by(|a, b| a.1.total_cmp(&b.1));
             match worst {
                 Some((k, w)) if w > critical => {
+                    let mark = removed.len();
+                    let fixed_before = self.model.fixed.clone();
                     self.model.entries[k.0].removed = true;
                     removed.push((k, w));
                     self.drop_undetermined(k, &mut removed);
+                    if !self.undetermined()?.is_empty() {
+                        for (f, _) in removed.drain(mark..) {
+                            self.model.entries[f.0].removed = false;
+                        }
+                        self.model.fixed = fixed_before;
+                        self.model.kept.push((k, w));
+                    }
                 }
                 _ => return Ok((summary, removed)),
             }
         }
+    }
+
+    /// Factors data snooping found suspect (|w| above the critical value) but kept, because
+    /// removing them would have left a block undetermined, with their |w|.
+    pub fn kept_suspects(&self) -> &[(FactorId, f64)] {
+        &self.model.kept
     }
 
     /// After removing factor `k`: a block of an eliminated kind it touched that is left with
