@@ -134,6 +134,8 @@ pub struct Prior {
     keys: [Key; 1],
     /// The observed value.
     pub value: DVector<f64>,
+    /// The components observed, in residual order (empty: all).
+    axes: Vec<usize>,
     /// Where the observation came from, empty when not known.
     pub source: String,
 }
@@ -144,7 +146,24 @@ impl Prior {
         Prior {
             keys: [key],
             value,
+            axes: Vec::new(),
             source: String::new(),
+        }
+    }
+
+    /// Observing only the components `axes` of the block (e.g. [0, 1]: a planimetric
+    /// control point, [2]: a height); the residual has one row per axis, in that order.
+    pub fn on_axes(mut self, axes: &[usize]) -> Self {
+        self.axes = axes.to_vec();
+        self
+    }
+
+    /// The components observed, in residual order.
+    pub fn axes(&self) -> Vec<usize> {
+        if self.axes.is_empty() {
+            (0..self.value.len()).collect()
+        } else {
+            self.axes.clone()
         }
     }
 
@@ -173,7 +192,11 @@ impl Factor for Prior {
         &self.keys
     }
     fn dim(&self) -> usize {
-        self.value.len()
+        if self.axes.is_empty() {
+            self.value.len()
+        } else {
+            self.axes.len()
+        }
     }
     fn evaluate(
         &self,
@@ -184,11 +207,23 @@ impl Factor for Prior {
         let Some(v) = x.vector(0).filter(|v| v.len() == self.value.len()) else {
             return false;
         };
-        for (i, ri) in r.iter_mut().enumerate() {
-            *ri = v[i] - self.value[i];
+        if self.axes.is_empty() {
+            for (i, ri) in r.iter_mut().enumerate() {
+                *ri = v[i] - self.value[i];
+            }
+            if let Some(m) = &mut j[0] {
+                m.fill_with_identity();
+            }
+            return true;
+        }
+        for (i, &a) in self.axes.iter().enumerate() {
+            r[i] = v[a] - self.value[a];
         }
         if let Some(m) = &mut j[0] {
-            m.fill_with_identity();
+            m.fill(0.0);
+            for (i, &a) in self.axes.iter().enumerate() {
+                m[(i, a)] = 1.0;
+            }
         }
         true
     }

@@ -80,6 +80,10 @@ pub(super) fn problem(
     let mut single_ray = Vec::new();
     for (k, (id, ks)) in rays.iter().enumerate() {
         let ground = p.ground.iter().find(|g| g.id == *id);
+        if ground.is_some_and(|g| g.kind == PointKind::Check) {
+            // Check points stay independent: intersected after the adjustment.
+            continue;
+        }
         let control = ground.is_some_and(|g| g.kind == PointKind::Control);
         let images: std::collections::BTreeSet<usize> = ks
             .iter()
@@ -168,8 +172,12 @@ fn control_factors(
         if !pr.contains(Key::Point(pt)) {
             continue;
         }
-        let f = Prior::point(pt, frame.to_local(&g.pos)).with_source(g.source.clone());
-        pr.add_factor(f, Noise::sigmas(&g.sigma), loss, GROUP_CONTROL)?;
+        let axes = g.axes.indices();
+        let f = Prior::point(pt, frame.to_local(&g.pos))
+            .on_axes(axes)
+            .with_source(g.source.clone());
+        let sigma: Vec<f64> = axes.iter().map(|&a| g.sigma[a]).collect();
+        pr.add_factor(f, Noise::sigmas(&sigma), loss, GROUP_CONTROL)?;
     }
     Ok(())
 }

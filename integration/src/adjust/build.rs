@@ -96,6 +96,17 @@ fn measured(p: &Project) -> Result<(Rays<'_>, Vec<usize>), AdjustError> {
         )));
     }
     for d in &p.distances {
+        let check = |id: &String| {
+            p.ground
+                .iter()
+                .any(|g| g.id == *id && g.kind == PointKind::Check)
+        };
+        if let Some(id) = d.points.iter().find(|id| check(id)) {
+            return Err(err(format!(
+                "{}: the distance names check point {id}, and check points stay out of the adjustment: list it as a tie point, or drop the distance",
+                d.source
+            )));
+        }
         if let Some(id) = d.points.iter().find(|id| !rays.contains_key(id.as_str())) {
             return Err(err(format!(
                 "{}: the distance names point {id}, which no image measures: check the id",

@@ -66,7 +66,8 @@ pub struct Measurement {
 pub enum PointKind {
     /// Control: its coordinates are observations of the adjustment.
     Control,
-    /// Check: adjusted as a tie point and compared with its coordinates afterwards.
+    /// Check: never in the adjustment; intersected from the adjusted orientations afterwards
+    /// and compared with its coordinates.
     Check,
     /// Tie: no known coordinates.
     Tie,
@@ -83,8 +84,34 @@ pub struct GroundPoint {
     pub pos: Ecef,
     /// σ east, north, up, metres.
     pub sigma: [f64; 3],
+    /// The axes a control point fixes: east, north, up.
+    pub axes: ControlAxes,
     /// Where it came from (file:line).
     pub source: String,
+}
+
+/// Which coordinates of a control point are observations.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ControlAxes {
+    /// East, north and up (`gcp`).
+    #[default]
+    All,
+    /// East and north only (`gcp-xy`, planimetric).
+    Horizontal,
+    /// Up only (`gcp-z`, a height).
+    Height,
+}
+
+impl ControlAxes {
+    /// The observed components (0 east, 1 north, 2 up).
+    pub fn indices(self) -> &'static [usize] {
+        match self {
+            ControlAxes::All => &[0, 1, 2],
+            ControlAxes::Horizontal => &[0, 1],
+            ControlAxes::Height => &[2],
+        }
+    }
 }
 
 /// A GNSS antenna position at an exposure.

@@ -16,6 +16,7 @@
 
 mod assemble;
 pub mod build;
+mod checks;
 pub mod error;
 pub mod factors;
 mod frame;

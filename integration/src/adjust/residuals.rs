@@ -34,7 +34,7 @@ pub struct ImageResidual {
 pub struct ControlResidual {
     /// The point.
     pub id: String,
-    /// Adjusted − given, local E, N, U (m).
+    /// Adjusted − given, local E, N, U (m); NaN on an axis the point does not fix.
     pub v: [f64; 3],
     /// Redundancy numbers per axis.
     pub r: [f64; 3],
@@ -130,21 +130,25 @@ pub fn collect(p: &Project, s: &Solved, rel: &[Reliability]) -> Residuals {
                 r: [rx, ry],
                 w: [wx, wy],
             });
-        } else if let Some(Key::Point(id)) = pr.factor_as::<Prior>(k).map(Prior::key) {
+        } else if let Some((Key::Point(id), axes)) =
+            pr.factor_as::<Prior>(k).map(|f| (f.key(), f.axes()))
+        {
             let scale = pr.group_sigma(pr.group(k)) * s0;
             let noise = pr.noise(k);
+            // Axes a planimetric or height control point does not observe stay NaN.
             let mut c = ControlResidual {
                 id: point(id),
-                v: [r[0], r[1], r[2]],
+                v: [f64::NAN; 3],
                 r: [0.0; 3],
                 w: [0.0; 3],
                 mdb: [None; 3],
             };
-            for a in 0..3 {
-                let (ra, wa) = rw(k, a);
+            for (row, &a) in axes.iter().enumerate() {
+                let (ra, wa) = rw(k, row);
+                c.v[a] = r[row];
                 c.r[a] = ra;
                 c.w[a] = wa;
-                c.mdb[a] = (ra > 1e-3).then(|| DELTA0 * noise.sigma(a) * scale / ra.sqrt());
+                c.mdb[a] = (ra > 1e-3).then(|| DELTA0 * noise.sigma(row) * scale / ra.sqrt());
             }
             res.control.push(c);
         } else if let Some(f) = pr.factor_as::<Distance>(k) {

@@ -294,7 +294,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         covs,
     };
     let res = super::residuals::collect(p, s, &rel);
-    let (points, checks) = point_results(p, b, &ctx);
+    let (points, checks, not_compared) = point_results(p, b, &ctx, s.stats.sigma0);
     let g = &b.frame.geodetic;
     let kept: Vec<Removed> = pr
         .kept_suspects()
@@ -331,6 +331,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         distance_residuals: res.distance,
         warnings: warnings(p, b)
             .into_iter()
+            .chain(not_compared)
             .chain(kept.iter().map(|k| {
                 format!(
                     "{} {} ({}): |w| {:.1} is above the critical {:.2}, but it is kept: removing it would leave a parameter undetermined — check it",
@@ -396,7 +397,8 @@ fn point_results(
     p: &Project,
     b: &super::build::Built,
     ctx: &Context,
-) -> (Vec<PointResult>, CheckTable) {
+    sigma0: f64,
+) -> (Vec<PointResult>, CheckTable, Vec<String>) {
     let mut rays = std::collections::BTreeMap::<&str, usize>::new();
     for m in &p.measurements {
         *rays.entry(m.point.as_str()).or_default() += 1;
@@ -412,22 +414,10 @@ fn point_results(
             // Left out as undetermined (named in the warnings).
             continue;
         }
-        let (g, position) = ctx.project(&x);
+        let (_, position) = ctx.project(&x);
         let ground = p.ground.iter().find(|g| &g.id == id);
         let kind = ground.map(|g| g.kind).unwrap_or(PointKind::Tie);
         let sigma = ctx.cov_of(key).map(|c| sig3(c, 0)).unwrap_or_default();
-        if let (Some(gp), PointKind::Check) = (ground, kind) {
-            let d = x - ctx.frame.to_local(&gp.pos);
-            let kg = gp.pos.to_geodetic();
-            checks.points.push(CheckPoint {
-                id: id.clone(),
-                d: [d.x, d.y, d.z],
-                sigma,
-                dlat_arcsec: (g.lat - kg.lat).to_degrees() * 3600.0,
-                dlon_arcsec: (g.lon - kg.lon).to_degrees() * 3600.0,
-                dh: g.h - kg.h,
-            });
-        }
         points.push(PointResult {
             id: id.clone(),
             kind,
@@ -436,8 +426,35 @@ fn point_results(
             rays: rays.get(id.as_str()).copied().unwrap_or(0),
         });
     }
+    // Check points: intersected from the adjusted orientations, never adjusted.
+    let (intersected, not_compared) = super::checks::intersect_checks(p, b, sigma0);
+    for c in intersected {
+        let Some(gp) = p.ground.iter().find(|g| g.id == c.id) else {
+            continue;
+        };
+        let (g, position) = ctx.project(&c.x);
+        let d = c.x - ctx.frame.to_local(&gp.pos);
+        let kg = gp.pos.to_geodetic();
+        // The difference's σ: the intersected point's and the known coordinates' own.
+        let sd = [0, 1, 2].map(|a| (c.cov[(a, a)] + gp.sigma[a].powi(2)).max(0.0).sqrt());
+        checks.points.push(CheckPoint {
+            id: c.id.clone(),
+            d: [d.x, d.y, d.z],
+            sigma: sd,
+            dlat_arcsec: (g.lat - kg.lat).to_degrees() * 3600.0,
+            dlon_arcsec: (g.lon - kg.lon).to_degrees() * 3600.0,
+            dh: g.h - kg.h,
+        });
+        points.push(PointResult {
+            id: c.id,
+            kind: PointKind::Check,
+            position,
+            sigma: [0, 1, 2].map(|a| c.cov[(a, a)].max(0.0).sqrt()),
+            rays: c.rays,
+        });
+    }
     checks.summarise();
-    (points, checks)
+    (points, checks, not_compared)
 }
 
 impl CheckTable {

@@ -8,6 +8,7 @@
 
 use super::error::{problem_err as err, AdjustError};
 use super::frame::LocalFrame;
+use super::input::ControlAxes;
 use super::project::{Mode, PointKind, Project};
 use nalgebra::{Matrix3, Vector2, Vector3};
 use photo::camera::Pose;
@@ -176,7 +177,7 @@ fn start_pose(
     let control_of = |id: &str| {
         p.ground
             .iter()
-            .find(|g| g.id == id && g.kind == PointKind::Control)
+            .find(|g| g.id == id && g.kind == PointKind::Control && g.axes == ControlAxes::All)
     };
     let controls = controls_in(p, i, |id| control_of(id).map(|g| frame.to_local(&g.pos)));
     match (antenna, start_rotation(p, frame, antenna_of, i)) {

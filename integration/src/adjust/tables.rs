@@ -4,7 +4,8 @@
 
 use super::error::AdjustError;
 use super::input::{
-    perr, Antenna, CameraDef, GroundPoint, ImageDef, MeasuredDistance, Measurement, PointKind,
+    perr, Antenna, CameraDef, ControlAxes, GroundPoint, ImageDef, MeasuredDistance, Measurement,
+    PointKind,
 };
 use crate::exposure::export::Projection;
 use gnss::frame::{Ecef, Geodetic};
@@ -400,13 +401,19 @@ pub(super) fn read_ground(
     let mut out = Vec::new();
     for (line, row) in &t.rows {
         let id = t.text(row, cp);
-        let kind = match t.text(row, ck).to_ascii_lowercase().as_str() {
-            "gcp" | "control" if as_check.contains(&id) => PointKind::Check,
-            "gcp" | "control" => PointKind::Control,
-            "check" => PointKind::Check,
+        let kind_text = t.text(row, ck).to_ascii_lowercase().replace('_', "-");
+        let (kind, axes) = match kind_text.as_str() {
+            "gcp" | "control" | "gcp-xy" | "gcp-z" if as_check.contains(&id) => {
+                (PointKind::Check, ControlAxes::All)
+            }
+            "gcp" | "control" | "gcp-xyz" => (PointKind::Control, ControlAxes::All),
+            "gcp-xy" => (PointKind::Control, ControlAxes::Horizontal),
+            "gcp-z" | "gcp-h" => (PointKind::Control, ControlAxes::Height),
+            "check" => (PointKind::Check, ControlAxes::All),
             "tie" => continue,
             k => {
-                let what = format!("point {id}: kind `{k}`: use gcp, check or tie");
+                let what =
+                    format!("point {id}: kind `{k}`: use gcp, gcp-xy (planimetric), gcp-z (height), check or tie");
                 return Err(bad(*line, what));
             }
         };
@@ -426,6 +433,7 @@ pub(super) fn read_ground(
             kind,
             pos,
             sigma,
+            axes,
             source: format!("{}:{line}", path.display()),
         });
     }

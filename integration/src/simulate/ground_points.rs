@@ -22,9 +22,10 @@ pub(super) fn geodetic(origin: &Geodetic, v: &Vector3<f64>) -> Geodetic {
 }
 
 /// Write `ground_points.csv` (point, kind, lat, lon in degrees, h and sigmas in metres) for
-/// the control and check points given (ENU at `origin`). Control points are observed with
-/// noise of σ = (σ_xy, σ_xy, σ_z) = `sigma` per ENU axis drawn from `rng`; the first one also
-/// carries the `wrong` shift (E, N, U, metres) when given — its id is returned.
+/// the control and check points given (ENU at `origin`). Control and check points are
+/// observed with noise of σ = (σ_xy, σ_xy, σ_z) = `sigma` per ENU axis drawn from `rng`; the
+/// first control point also carries the `wrong` shift (E, N, U, metres) when given — its id
+/// is returned.
 pub(super) fn write_ground_points<'a>(
     dir: &Path,
     points: impl IntoIterator<Item = &'a Point>,
@@ -38,8 +39,11 @@ pub(super) fn write_ground_points<'a>(
     let mut wrong_id = None;
     for (id, kind, x) in points {
         let mut v = *x;
-        if *kind == "gcp" {
+        // Surveyed coordinates carry their σ: control and check points alike.
+        if *kind == "gcp" || *kind == "check" {
             v += Vector3::new(sx * rng.normal(), sx * rng.normal(), sz * rng.normal());
+        }
+        if *kind == "gcp" {
             if let (Some(d), None) = (wrong, &wrong_id) {
                 v += Vector3::from(d);
                 wrong_id = Some(id.clone());

@@ -105,10 +105,11 @@ fn ground_points(s: &Scenario, site: &SiteFrame, points: &[GroundPoint]) -> Stri
     let mut gp = format!("# ground points; local ENU at lat {} lon {} h {} (metres) and geodetic; sigmas of control in metres\npoint,kind,east,north,up,lat_deg,lon_deg,h,sigma_xy,sigma_z\n", s.site.lat_deg, s.site.lon_deg, s.site.ground_height);
     for p in points {
         let g = site.to_ecef(&p.enu).to_geodetic();
-        let (sxy, sz) = if p.kind == PointKind::Tie {
-            (0.0, 0.0)
-        } else {
+        // Control carries a σ; check and tie points are exact (σ 0).
+        let (sxy, sz) = if p.kind == PointKind::Gcp {
             (0.02, 0.03)
+        } else {
+            (0.0, 0.0)
         };
         let _ = writeln!(
             gp,

@@ -86,6 +86,14 @@ impl Cofactors {
         h
     }
 
+    /// The cofactor block between two kept (not eliminated) blocks `a` and `b`.
+    pub(crate) fn cross(&self, a: usize, b: usize, da: usize, db: usize) -> Option<DMatrix<f64>> {
+        let st = &self.st;
+        let (ca, cb) = (st.c_of(a)?, st.c_of(b)?);
+        let (ra, rb) = (st.coff[ca], st.coff[cb]);
+        Some(DMatrix::from_fn(da, db, |i, j| self.qcc[(ra + i, rb + j)]))
+    }
+
     /// The cofactor block of a block.
     pub(crate) fn block(&self, b: usize, dim: usize) -> Option<DMatrix<f64>> {
         let st = &self.st;

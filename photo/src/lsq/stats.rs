@@ -75,6 +75,42 @@ impl Problem {
             .collect()
     }
 
+    /// The joint covariance (σ0² applied) of several kept blocks (not of an eliminated kind,
+    /// e.g. poses), cross terms included, in the order of `keys`; None when one is fixed,
+    /// unknown or eliminated.
+    pub fn joint_covariance(
+        &self,
+        keys: &[Key],
+        sigma0: f64,
+    ) -> Result<Option<DMatrix<f64>>, SolveError> {
+        let q = self.cofactors()?;
+        let mut blocks = Vec::with_capacity(keys.len());
+        for k in keys {
+            let Some(&b) = self.model.index.get(k) else {
+                return Ok(None);
+            };
+            if self.model.fixed[b] {
+                return Ok(None);
+            }
+            blocks.push((b, self.model.values[b].dim()));
+        }
+        let n: usize = blocks.iter().map(|b| b.1).sum();
+        let mut out = DMatrix::zeros(n, n);
+        let mut ra = 0;
+        for &(a, da) in &blocks {
+            let mut rb = 0;
+            for &(b, db) in &blocks {
+                let Some(m) = q.cross(a, b, da, db) else {
+                    return Ok(None);
+                };
+                out.view_mut((ra, rb), (da, db)).copy_from(&m);
+                rb += db;
+            }
+            ra += da;
+        }
+        Ok(Some(out * (sigma0 * sigma0)))
+    }
+
     /// Per active factor: redundancy numbers and normalised residuals of its components.
     pub fn reliability(&self) -> Result<Vec<Reliability>, SolveError> {
         let q = self.cofactors()?;
