@@ -20,6 +20,8 @@ pub mod error;
 pub mod factors;
 mod frame;
 pub mod input;
+pub mod latency;
+mod parameters;
 pub mod project;
 mod quality;
 pub mod report;

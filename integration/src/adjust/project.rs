@@ -8,6 +8,7 @@
 use super::error::AdjustError;
 use super::factors::DriftModel;
 use super::input::perr;
+pub use super::latency::LatencyGroup;
 pub use super::input::{
     Antenna, CameraDef, GroundPoint, ImageDef, MeasuredDistance, Measurement, PointKind,
 };
@@ -161,6 +162,16 @@ pub struct GnssSection {
     /// offset, linear or rate.
     #[serde(default = "default_drift_model")]
     pub drift_model: DriftModel,
+    /// GNSS latency δ (exposure time → GNSS time): none (default), block or flight; see
+    /// [`super::latency`].
+    #[serde(default)]
+    pub latency: LatencyGroup,
+    /// Prior σ of the latency, seconds; absent: free.
+    #[serde(default)]
+    pub latency_sigma: Option<f64>,
+    /// Start value of the latency, and the prior's mean with `latency_sigma` (s, default 0).
+    #[serde(default)]
+    pub latency_start: f64,
 }
 
 impl GnssSection {
