@@ -8,10 +8,10 @@
 use super::error::AdjustError;
 use super::factors::DriftModel;
 use super::input::perr;
-pub use super::latency::LatencyGroup;
 pub use super::input::{
     Antenna, CameraDef, GroundPoint, ImageDef, MeasuredDistance, Measurement, PointKind,
 };
+pub use super::latency::LatencyGroup;
 use super::tables::{
     antennas_from_trajectory, read_antennas, read_distances, read_ground, read_images,
     read_measurements, read_patb, read_trajectory,
