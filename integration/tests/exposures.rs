@@ -327,6 +327,7 @@ fn photos_are_matched_and_geotagged_copies_written() {
             id: format!("{}", k + 1),
             time: t0 + hifitime::Duration::from_seconds(3.0 * k as f64),
             antenna: c,
+            velocity: nalgebra::Vector3::new(0.0, 33.0, 0.0),
             centre: c,
             cov: Matrix3::identity() * 1e-4,
             quality: Quality::Fixed,

@@ -9,11 +9,12 @@ use std::path::PathBuf;
 ///
 /// Reads the project file and the tables it names (cameras, image list, image measurements,
 /// ground control and check points, GNSS antenna positions with their covariance; see the
-/// README), adjusts image orientations, points, lever arm, GNSS drift and optionally the
-/// camera calibration together, with data snooping and variance components, and writes
-/// orientations.csv, points.csv, image_residuals.csv, gnss_residuals.csv, report.json and a
-/// self-contained report.html. Prints a summary: redundancy, σ0, per-group variance factors,
-/// lever arm, drift, observations removed and the check-point table.
+/// README), adjusts image orientations, points, lever arm, GNSS drift and latency and
+/// optionally the camera calibration together, with data snooping and variance components,
+/// and writes orientations.csv, points.csv, image_residuals.csv, gnss_residuals.csv,
+/// parameters.csv, report.json and a self-contained report.html. Prints a summary:
+/// redundancy, σ0, per-group variance factors, lever arm, drift, latency, observations
+/// removed and the check-point table.
 #[derive(clap::Args)]
 pub struct Args {
     /// The project file (TOML; see the README: cameras, images, measurements, ground points,

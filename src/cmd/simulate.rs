@@ -12,17 +12,19 @@ use std::path::{Path, PathBuf};
 /// image_observations.csv and truth_blunders.csv. The scenario keys are shown in
 /// fixtures/scenario_small.toml; every error source can be switched under `[errors]`.
 ///
-/// An adjustment project (--builtin classic-block, close-range or block1000: the classic
-/// 2-strip 1:8000 block, a close-range pair, a 1000-image block) writes project.toml and its
-/// tables, ready for `ppkat adjust --project OUT/project.toml`. Prints a summary of what was
+/// An adjustment project (--builtin classic-block, close-range, block1000 or nav-block: the
+/// classic 2-strip 1:8000 block, a close-range pair, a 1000-image block, a block with
+/// navigation-grade GPS, a 0.8 s latency and sparse control) writes project.toml and its
+/// tables, ready for `ppkat adjust --project OUT/project.toml` (nav-block also writes
+/// project_gcp_only.toml and its truth). Prints a summary of what was
 /// simulated. The results are the same for the same scenario on every run.
 #[derive(clap::Args)]
 pub struct Args {
     /// Flight scenario file (TOML; keys as in fixtures/scenario_small.toml).
     #[arg(long, value_name = "FILE.toml", conflicts_with = "builtin")]
     scenario: Option<PathBuf>,
-    /// Built-in scenario: demo, block20 or long (flights), or classic-block, close-range or
-    /// block1000 (adjustment projects).
+    /// Built-in scenario: demo, block20 or long (flights), or classic-block, close-range,
+    /// block1000 or nav-block (adjustment projects).
     #[arg(long, value_name = "NAME")]
     builtin: Option<String>,
     /// Output folder (created; files of the same names are replaced).

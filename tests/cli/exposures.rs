@@ -33,7 +33,7 @@ fn exposures_in_every_format() {
         ("pos", "latitude(deg)"),
         (
             "antenna",
-            "id,week,tow,lat,lon,h,c_ee,c_en,c_eu,c_nn,c_nu,c_uu,quality,segment",
+            "id,week,tow,lat,lon,h,c_ee,c_en,c_eu,c_nn,c_nu,c_uu,quality,segment,omega,phi,kappa,ve,vn,vu",
         ),
     ] {
         let out = dir.join(format!("stations.{fmt}"));
@@ -68,6 +68,25 @@ fn exposures_in_every_format() {
         );
         assert!(body.lines().count() > 100, "{fmt}");
     }
+    // The antenna table carries the antenna velocity from the trajectory (the demo flies its
+    // strips at 55 m/s), for `ppkat adjust` to estimate a GNSS latency with.
+    let body = std::fs::read_to_string(dir.join("stations.antenna")).unwrap();
+    let mut speeds: Vec<f64> = body
+        .lines()
+        .skip(2)
+        .map(|l| {
+            let c: Vec<f64> = l
+                .split(',')
+                .rev()
+                .take(3)
+                .map(|x| x.parse().unwrap())
+                .collect();
+            c[1].hypot(c[2])
+        })
+        .collect();
+    speeds.sort_by(f64::total_cmp);
+    let median = speeds[speeds.len() / 2];
+    assert!((median - 55.0).abs() < 1.0, "median speed {median} m/s");
     let out = dir.join("stations-utm.csv");
     succeeds(&ppkat(&[
         "exposures",

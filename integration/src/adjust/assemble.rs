@@ -6,6 +6,7 @@
 use super::error::{problem_err as err, AdjustError};
 use super::factors::{DriftModel, GnssCentre};
 use super::frame::LocalFrame;
+use super::latency::{self, Latencies};
 use super::project::{DriftGroup, PointKind, Project};
 use super::start::{intersect_point, Rays};
 use nalgebra::{DMatrix, DVector, Vector3};
@@ -57,6 +58,7 @@ pub(super) fn problem(
     rays: &Rays,
     start: &[Option<Pose>],
     antenna_of: &[Option<usize>],
+    lat: &Latencies,
 ) -> Result<(Problem, Vec<String>, Vec<(String, String)>, Vec<DriftBlock>), AdjustError> {
     let opts = &p.file.adjustment;
     let loss = match opts.loss.as_str() {
@@ -121,7 +123,7 @@ pub(super) fn problem(
     control_factors(p, frame, &mut pr, &index, loss).map_err(built)?;
     distance_factors(p, &mut pr, &index, loss).map_err(built)?;
     let drifts = match p.file.gnss.as_ref() {
-        Some(_) => gnss_factors(p, frame, &mut pr, antenna_of, loss)?,
+        Some(_) => gnss_factors(p, frame, &mut pr, (antenna_of, lat), loss)?,
         None => Vec::new(),
     };
     Ok((pr, point_names, single_ray, drifts))
@@ -204,18 +206,20 @@ fn distance_factors(
     Ok(())
 }
 
-/// Lever arms (with their priors), drift groups and one GNSS factor per image with an antenna.
+/// Lever arms (with their priors), drift groups, latency groups and one GNSS factor per image
+/// with an antenna.
 fn gnss_factors(
     p: &Project,
     frame: &LocalFrame,
     pr: &mut Problem,
-    antenna_of: &[Option<usize>],
+    (antenna_of, lat): (&[Option<usize>], &Latencies),
     loss: Loss,
 ) -> Result<Vec<DriftBlock>, AdjustError> {
     let Some(gs) = p.file.gnss.as_ref() else {
         return Ok(Vec::new());
     };
     let built = |e: photo::lsq::BuildError| err(e.to_string());
+    latency::add_blocks(gs, pr, lat, loss).map_err(built)?;
     for (c, _) in p.cameras.iter().enumerate() {
         if !p.images.iter().enumerate().any(|(i, im)| {
             im.camera == c && antenna_of[i].is_some() && pr.contains(Key::Pose(ImageId::from(i)))
@@ -312,6 +316,10 @@ fn gnss_factors(
                 ))
             })?;
         let f = GnssCentre::new(ImageId::from(i), cam, drift, frame.to_local(&ant.pos), k);
+        let f = match latency::of(p, frame, lat, i, k) {
+            Some((l, v)) => f.with_latency(l, v),
+            None => f,
+        };
         pr.add_factor(f, noise, loss, GROUP_GNSS).map_err(built)?;
     }
     Ok(drifts)

@@ -5,7 +5,8 @@
 //!
 //! Keys: `Pose(ImageId(i))` for the i-th image of the list, `Point(PointId(k))` for the k-th
 //! measured point id in sorted order (`Built::point_names`), `LeverArm(CameraId(c))` and
-//! `Camera(CameraId(c))` for camera c, `Drift(DriftId(d))` for `Built::drifts[d]`.
+//! `Camera(CameraId(c))` for camera c, `Drift(DriftId(d))` for `Built::drifts[d]`,
+//! `Latency(LatencyId(g))` for `Built::latencies[g]`.
 
 use super::assemble::problem;
 pub use super::assemble::{
@@ -31,6 +32,8 @@ pub struct Built {
     pub point_names: Vec<String>,
     /// The drift groups, by `DriftId`.
     pub drifts: Vec<DriftBlock>,
+    /// The GNSS latency groups, by `LatencyId`.
+    pub latencies: Vec<super::latency::LatencyBlock>,
     /// Points measured in a single image (not determinable): id and its image.
     pub single_ray: Vec<(String, String)>,
     /// Images and points left out of the adjustment: what ("image X", "point Y") and why.
@@ -60,13 +63,16 @@ pub fn build(p: &Project) -> Result<Built, AdjustError> {
         lost.into_iter()
             .map(|(id, why)| (format!("image {id}"), why)),
     );
-    let (mut pr, point_names, single_ray, drifts) = problem(p, &frame, &rays, &start, &antenna_of)?;
+    let lat = super::latency::groups(p, &antenna_of)?;
+    let (mut pr, point_names, single_ray, drifts) =
+        problem(p, &frame, &rays, &start, &antenna_of, &lat)?;
     super::leave_out::undetermined(p, &point_names, &mut pr, &mut left_out)?;
     Ok(Built {
         frame,
         problem: pr,
         point_names,
         drifts,
+        latencies: lat.blocks,
         single_ray,
         left_out,
         unused_antennas,

@@ -2,10 +2,12 @@
 //! plus the lever arm rotated by the camera attitude plus a drift,
 //! `X_A,obs = X_S + R·(u, v, w) + a + b·(t − t0)`; r = predicted − observed antenna (metres,
 //! adjustment frame), weighted by the trajectory's full 3×3 covariance (its noise model).
+//! With a latency δ (see `super::latency`) the observed antenna is moved along its velocity
+//! v to the exposure: r = X_S + R·(u, v, w) + drift − (X_A,obs + v·δ).
 
 use nalgebra::{DMatrix, DMatrixViewMut, Matrix3, Vector3};
 use photo::lever::LeverArm;
-use photo::lsq::{CameraId, DriftId, Factor, ImageId, Key, Params};
+use photo::lsq::{CameraId, DriftId, Factor, ImageId, Key, LatencyId, Params};
 use photo::rotation::skew;
 
 /// Which drift terms a drift block holds.
@@ -62,6 +64,8 @@ pub struct GnssCentre {
     drift: Option<(DriftModel, f64)>,
     /// The antenna record it comes from (index into the project's antennas).
     pub record: usize,
+    /// With a latency: the index of its key and the antenna velocity (adjustment frame, m/s).
+    latency: Option<(usize, Vector3<f64>)>,
 }
 
 impl GnssCentre {
@@ -83,7 +87,16 @@ impl GnssCentre {
             antenna,
             drift: drift.map(|(_, m, dt)| (m, dt)),
             record,
+            latency: None,
         }
+    }
+
+    /// The same factor with the latency of group `l`, the antenna moving at `velocity`
+    /// (adjustment frame, m/s): its last key is `Latency(l)`.
+    pub fn with_latency(mut self, l: LatencyId, velocity: Vector3<f64>) -> GnssCentre {
+        self.latency = Some((self.keys.len(), velocity));
+        self.keys.push(Key::Latency(l));
+        self
     }
 
     /// The image whose projection centre it observes.
@@ -120,7 +133,15 @@ impl Factor for GnssCentre {
             pred += v;
             jd = Some(jac);
         }
-        r.copy_from_slice((pred - self.antenna).as_slice());
+        let mut observed = self.antenna;
+        if let Some((k, v)) = self.latency {
+            let Some(d) = x.vector(k) else { return false };
+            observed += v * d[0];
+            if let Some(Some(m)) = j.get_mut(k) {
+                m.copy_from(&(-v));
+            }
+        }
+        r.copy_from_slice((pred - observed).as_slice());
         if let Some(m) = &mut j[0] {
             m.view_mut((0, 0), (3, 3)).copy_from(&(-skew(&rl)));
             m.view_mut((0, 3), (3, 3)).copy_from(&Matrix3::identity());
@@ -153,7 +174,8 @@ mod tests {
         (r, js)
     }
 
-    /// Analytic Jacobians against central differences, every block, every drift model.
+    /// Analytic Jacobians against central differences, every block (latency included), every
+    /// drift model.
     #[test]
     fn jacobians_match_finite_differences() {
         let pose = Pose {
@@ -172,13 +194,15 @@ mod tests {
                 Some((DriftId(0), model, 37.5)),
                 Vector3::new(10.2, -4.1, 1201.3),
                 0,
-            );
+            )
+            .with_latency(LatencyId(0), Vector3::new(-61.0, 4.5, 0.3));
             let blocks = vec![
                 Value::Pose(pose),
                 Value::Vector(nalgebra::DVector::from_vec(vec![0.1, -0.05, 1.4])),
                 Value::Vector(nalgebra::DVector::from_fn(model.dim(), |i, _| {
                     0.01 * (i as f64 + 1.0)
                 })),
+                Value::Vector(nalgebra::DVector::from_element(1, 0.8)),
             ];
             let (_, js) = eval(&f, &blocks);
             for (bi, j) in js.iter().enumerate() {

@@ -5,7 +5,7 @@
 use super::error::AdjustError;
 use gnss::frame::Ecef;
 use hifitime::Epoch;
-use nalgebra::{Matrix3, Vector2};
+use nalgebra::{Matrix3, Vector2, Vector3};
 use photo::camera::Camera;
 use std::path::Path;
 
@@ -131,6 +131,9 @@ pub struct Antenna {
     pub quality: u8,
     /// Camera → local ENU at the antenna, when the table carries an attitude.
     pub rotation: Option<Matrix3<f64>>,
+    /// Antenna velocity in the local ENU at the antenna (m/s), when the table carries one
+    /// (`ve,vn,vu`) or the trajectory gives it: what a GNSS latency is linearised with.
+    pub vel_enu: Option<Vector3<f64>>,
 }
 
 /// A measured distance between two points.

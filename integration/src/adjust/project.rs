@@ -11,6 +11,7 @@ use super::input::perr;
 pub use super::input::{
     Antenna, CameraDef, GroundPoint, ImageDef, MeasuredDistance, Measurement, PointKind,
 };
+pub use super::latency::LatencyGroup;
 use super::tables::{
     antennas_from_trajectory, read_antennas, read_distances, read_ground, read_images,
     read_measurements, read_patb, read_trajectory,
@@ -161,6 +162,16 @@ pub struct GnssSection {
     /// offset, linear or rate (of block, strip and segment drifts; auto drifts are offsets).
     #[serde(default = "default_drift_model")]
     pub drift_model: DriftModel,
+    /// GNSS latency δ (exposure time → GNSS time): none (default), block or flight; see
+    /// [`super::latency`].
+    #[serde(default)]
+    pub latency: LatencyGroup,
+    /// Prior σ of the latency, seconds; absent: free.
+    #[serde(default)]
+    pub latency_sigma: Option<f64>,
+    /// Start value of the latency, and the prior's mean with `latency_sigma` (s, default 0).
+    #[serde(default)]
+    pub latency_start: f64,
 }
 
 impl GnssSection {

@@ -107,6 +107,7 @@ pub fn write_all(p: &Project, r: &Results, out: &Path) -> Result<(), AdjustError
     write_text(&out.join("gnss_residuals.csv"), &s)?;
     let json = serde_json::to_string_pretty(r).map_err(|e| werr(&out.join("report.json"), e))?;
     write_text(&out.join("report.json"), &json)?;
+    write_text(&out.join("parameters.csv"), &super::parameters::csv(r))?;
     write_text(&out.join("report.html"), &html(p, r))
 }
 
@@ -195,18 +196,20 @@ fn html_groups(s: &mut String, r: &Results) {
     let _ = writeln!(s, "</table>");
 }
 
-/// Lever arms, drifts and interior parameters with σ.
+/// Lever arms, drifts, GNSS latencies and interior parameters with σ.
 fn html_parameters(s: &mut String, r: &Results) {
-    if !(r.lever_arms.is_empty() && r.drifts.is_empty() && r.interiors.is_empty()) {
+    let groups = [
+        (&r.lever_arms, "m"),
+        (&r.drifts, "m, m/s"),
+        (&r.latencies, "s"),
+        (&r.interiors, "m (f, x0, y0), distortion units"),
+    ];
+    if groups.iter().any(|(g, _)| !g.is_empty()) {
         let _ = writeln!(s, "<h2>Additional parameters</h2><table><tr><th>parameter</th><th></th><th>value</th><th>σ</th><th>unit</th></tr>");
-        for e in &r.lever_arms {
-            est_rows(s, e, "m");
-        }
-        for e in &r.drifts {
-            est_rows(s, e, "m, m/s");
-        }
-        for e in &r.interiors {
-            est_rows(s, e, "m (f, x0, y0), distortion units");
+        for (g, unit) in groups {
+            for e in g {
+                est_rows(s, e, unit);
+            }
         }
         let _ = writeln!(s, "</table>");
         if !r.drifts.is_empty() {
@@ -565,6 +568,7 @@ impl Results {
             .lever_arms
             .iter()
             .chain(&self.drifts)
+            .chain(&self.latencies)
             .chain(&self.interiors)
         {
             let v: Vec<String> = e

@@ -151,6 +151,8 @@ pub struct Results {
     pub lever_arms: Vec<Estimated>,
     /// Drift per group.
     pub drifts: Vec<Estimated>,
+    /// GNSS latency δ per group (s; see `adjust::latency` for its sign).
+    pub latencies: Vec<Estimated>,
     /// Interior orientations estimated by self-calibration.
     pub interiors: Vec<Estimated>,
     /// Reliability per observation group.
@@ -316,6 +318,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         points,
         lever_arms: lever_arms(p, &ctx),
         drifts: drifts(b, &ctx),
+        latencies: latencies(b, &ctx),
         interiors: interiors(p, &ctx),
         groups: super::quality::groups(p, s, &rel),
         removed: s
@@ -504,6 +507,19 @@ fn drifts(b: &super::build::Built, ctx: &Context) -> Vec<Estimated> {
                 DriftModel::Linear => &["aE", "aN", "aU", "bE", "bN", "bU"],
             };
             estimated(d.name.clone(), labels, ctx.pr, key, ctx.cov_of(key), d.t0)
+        })
+        .collect()
+}
+
+/// The latency of every latency group.
+fn latencies(b: &super::build::Built, ctx: &Context) -> Vec<Estimated> {
+    b.latencies
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let key = Key::Latency(photo::lsq::LatencyId::from(i));
+            let name = format!("GNSS latency ({})", l.name);
+            estimated(name, &["dt"], ctx.pr, key, ctx.cov_of(key), 0.0)
         })
         .collect()
 }

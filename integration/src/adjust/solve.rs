@@ -83,6 +83,12 @@ fn block_name(p: &Project, b: &Built, key: photo::lsq::Key) -> String {
                 .get(d.index())
                 .map_or(d.to_string(), |x| x.name.clone())
         ),
+        Key::Latency(l) => format!(
+            "the GNSS latency of {}",
+            b.latencies
+                .get(l.index())
+                .map_or(l.to_string(), |x| x.name.clone())
+        ),
         Key::LeverArm(c) => format!("the lever arm of camera {}", camera(c)),
         Key::Camera(c) => format!("the interior orientation of camera {}", camera(c)),
         k => k.to_string(),

@@ -10,7 +10,7 @@ use super::input::{
 use crate::exposure::export::Projection;
 use gnss::frame::{Ecef, Geodetic};
 use gnss::trajectory::{InterpError, Trajectory};
-use nalgebra::{Matrix3, Vector2};
+use nalgebra::{Matrix3, Vector2, Vector3};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -454,6 +454,7 @@ pub(super) fn read_antennas(path: &Path, scale: f64) -> Result<Vec<Antenna>, Adj
         (Some(a), Some(b), Some(c)) => Some([a, b, c]),
         _ => None,
     };
+    let vel = velocity_columns(&t, path)?;
     let mut out = Vec::new();
     for (line, row) in &t.rows {
         let v: Vec<f64> = need[1..]
@@ -494,9 +495,29 @@ pub(super) fn read_antennas(path: &Path, scale: f64) -> Result<Vec<Antenna>, Adj
                 None => 1,
             },
             rotation,
+            vel_enu: match vel {
+                Some(c) => Some(Vector3::new(
+                    t.num(*line, row, c[0])?,
+                    t.num(*line, row, c[1])?,
+                    t.num(*line, row, c[2])?,
+                )),
+                None => None,
+            },
         });
     }
     Ok(out)
+}
+
+/// The velocity columns `ve,vn,vu` of an antenna table: all three or none.
+fn velocity_columns(t: &Table, path: &Path) -> Result<Option<[usize; 3]>, AdjustError> {
+    match (t.col("ve"), t.col("vn"), t.col("vu")) {
+        (Some(a), Some(b), Some(c)) => Ok(Some([a, b, c])),
+        (None, None, None) => Ok(None),
+        _ => Err(perr(
+            path,
+            "the velocity needs all three columns `ve,vn,vu` (m/s, ENU at the antenna): add the missing ones or remove the others",
+        )),
+    }
 }
 
 /// Read the `.pos` trajectory a project names (segments derived from its Q changes and gaps).
@@ -540,6 +561,7 @@ pub(super) fn antennas_from_trajectory(
                     segment: ip.segment,
                     quality: ip.quality as u8,
                     rotation: None,
+                    vel_enu: Some(r * ip.vel),
                 });
             }
             Err(InterpError::Outside) => missed.push(format!("{} (outside the trajectory)", im.id)),

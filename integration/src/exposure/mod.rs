@@ -46,6 +46,10 @@ pub struct CameraStation {
     pub time: Epoch,
     /// Antenna position interpolated on the trajectory, ECEF.
     pub antenna: Ecef,
+    /// Antenna velocity, ECEF, m/s: the derivative of the interpolation, which takes the
+    /// trajectory's velocities or, when it has none (a PPK `.pos`), central differences of
+    /// the neighbouring epochs. `ppkat adjust` needs it to estimate a GNSS latency.
+    pub velocity: Vector3<f64>,
     /// Projection centre, ECEF (antenna minus the rotated lever arm).
     pub centre: Ecef,
     /// ECEF covariance of the centre, m² (from the trajectory).
@@ -181,6 +185,7 @@ pub fn compute(
             id: e.id,
             time: t,
             antenna: ip.pos,
+            velocity: ip.vel,
             centre,
             cov: ip.cov,
             quality: ip.quality,

@@ -5,7 +5,9 @@ mod bad_input;
 mod classic;
 mod close_range;
 mod inputs;
+mod latency;
 mod models;
+mod nav;
 
 use integration::adjust::{self, results::Results};
 use integration::simulate::block::{self, BlockSpec, BlockTruth};

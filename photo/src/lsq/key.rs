@@ -50,6 +50,12 @@ id!(
     DriftId,
     "drift group"
 );
+id!(
+    /// A GNSS latency group (the block, or one flight): one time offset δ between the
+    /// exposure time and the GNSS time, seconds.
+    LatencyId,
+    "latency group"
+);
 
 /// The name of a parameter block.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -64,6 +70,8 @@ pub enum Key {
     LeverArm(CameraId),
     /// Drift parameters of a GNSS drift group.
     Drift(DriftId),
+    /// Time offset δ (s, one value) of a GNSS latency group.
+    Latency(LatencyId),
     /// Any other block: a kind name and a number, for observation kinds the list above does
     /// not know yet (no solver change is needed to add one).
     Custom(&'static str, u32),
@@ -82,6 +90,8 @@ pub enum KeyKind {
     LeverArm,
     /// [`Key::Drift`].
     Drift,
+    /// [`Key::Latency`].
+    Latency,
     /// [`Key::Custom`] with this kind name.
     Custom(&'static str),
 }
@@ -95,6 +105,7 @@ impl Key {
             Key::Camera(_) => KeyKind::Camera,
             Key::LeverArm(_) => KeyKind::LeverArm,
             Key::Drift(_) => KeyKind::Drift,
+            Key::Latency(_) => KeyKind::Latency,
             Key::Custom(k, _) => KeyKind::Custom(k),
         }
     }
@@ -108,6 +119,7 @@ impl fmt::Display for Key {
             Key::Camera(c) => write!(f, "the interior orientation of {c}"),
             Key::LeverArm(c) => write!(f, "the lever arm of {c}"),
             Key::Drift(d) => write!(f, "the drift of {d}"),
+            Key::Latency(l) => write!(f, "the latency of {l}"),
             Key::Custom(k, n) => write!(f, "{k} {n}"),
         }
     }

@@ -47,7 +47,7 @@ mod value;
 pub use cofactor::Reliability;
 pub use error::SolveError;
 pub use factor::{Factor, FactorId, Group, Loss, Noise, Params};
-pub use key::{CameraId, DriftId, ImageId, Key, KeyKind, PointId};
+pub use key::{CameraId, DriftId, ImageId, Key, KeyKind, LatencyId, PointId};
 pub use lm::Summary;
 pub use options::Options;
 pub use problem::{BuildError, Problem, Timing, MAX_FACTOR_KEYS};

@@ -16,8 +16,10 @@
 //! seconds from the GPS epoch (week 0).
 
 mod files;
+pub mod nav;
 mod spec;
 
+pub use nav::{nav_block, NavSpec, NavTruth};
 pub use spec::{BlockSpec, BlockTruth};
 
 use super::error::SimError;
@@ -283,8 +285,9 @@ pub fn gnss_section(spec: &BlockSpec, tape_error: [f64; 3], group: &str, model: 
 }
 
 /// Built-in simulated adjustment projects: `classic-block` (the 2-strip block, 4 corner GCPs,
-/// tape-measured lever arm, linear drift), `close-range` (two stations) and `block1000`
-/// (20 strips × 50 photos for benchmarks). Returns a one-line summary.
+/// tape-measured lever arm, linear drift), `close-range` (two stations), `block1000`
+/// (20 strips × 50 photos for benchmarks) and `nav-block` (navigation-grade GPS with a
+/// latency, control only in a few images each; see [`nav`]). Returns a one-line summary.
 pub fn builtin(name: &str, dir: &Path) -> Option<Result<String, SimError>> {
     let classic_gnss = |spec: &BlockSpec| gnss_section(spec, TAPE_ERROR, "block", "linear");
     let aerial_summary = |spec: BlockSpec| {
@@ -322,9 +325,20 @@ pub fn builtin(name: &str, dir: &Path) -> Option<Result<String, SimError>> {
                 },
             ),
         ),
+        "nav-block" => Some(nav_block(&NavSpec::awkward(), dir).map(|t| {
+            format!(
+                "nav-block: {} images ({} without measurements), {} ground points, {} image measurements, GNSS latency {} s → {} (and project_gcp_only.toml)",
+                t.images.len(),
+                t.per_image.iter().filter(|n| **n == 0).count(),
+                t.points.len(),
+                t.measurements,
+                nav::LATENCY_S,
+                dir.join("project.toml").display()
+            )
+        })),
         _ => None,
     }
 }
 
 /// Names of the built-in adjustment projects.
-pub const BUILTINS: [&str; 3] = ["classic-block", "close-range", "block1000"];
+pub const BUILTINS: [&str; 4] = ["classic-block", "close-range", "block1000", "nav-block"];

@@ -1,0 +1,105 @@
+//! The nav-block (issue 14): navigation-grade GPS (σ 2 m) with a 0.8 s latency and a 15 m
+//! constant offset, no tie points, control measured in a few images each. The awkward block
+//! as simulated, and its resectable variant (≥ 4 control points in every image, none empty)
+//! on which the latency and the offset are recovered.
+
+use super::tmp;
+use integration::adjust::{self, results::Results};
+use integration::simulate::block::nav::{LATENCY_S, OFFSET_ENU};
+use integration::simulate::block::{nav_block, NavSpec, NavTruth};
+
+fn adjust_nav(spec: &NavSpec, name: &str, project: &str) -> (NavTruth, Results) {
+    let dir = tmp(name);
+    let truth = nav_block(spec, &dir).unwrap();
+    let res = adjust::run(&dir.join(project), &dir.join("out"), &Default::default())
+        .unwrap_or_else(|e| panic!("{project}: {e}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    (truth, res)
+}
+
+/// The awkward block is as the issue describes it: ~70 control and ~16 check points, each
+/// measured in 1–6 images, images with no point and with only one or two, velocities in the
+/// antenna table, both project files.
+#[test]
+fn nav_block_is_awkward() {
+    let dir = tmp("nav-awkward");
+    let t = nav_block(&NavSpec::awkward(), &dir).unwrap();
+    assert_eq!(t.images.len(), 144);
+    let gcp = t.points.iter().filter(|p| p.1 == "gcp").count();
+    let chk = t.points.iter().filter(|p| p.1 == "check").count();
+    assert!(
+        (60..=70).contains(&gcp) && (12..=16).contains(&chk),
+        "{gcp} {chk}"
+    );
+    let empty = t.per_image.iter().filter(|n| **n == 0).count();
+    let few = t.per_image.iter().filter(|n| (1..=2).contains(*n)).count();
+    assert!(
+        empty >= 3 && few >= 5,
+        "{empty} empty, {few} with 1–2 points"
+    );
+    let text = std::fs::read_to_string(dir.join("image_observations.csv")).unwrap();
+    for (id, _, _) in &t.points {
+        let n = text
+            .lines()
+            .filter(|l| l.split(',').nth(1) == Some(id))
+            .count();
+        assert!((1..=6).contains(&n), "{id} measured {n} times");
+    }
+    let ant = std::fs::read_to_string(dir.join("antennas.csv")).unwrap();
+    assert!(ant.lines().nth(1).unwrap().ends_with(",ve,vn,vu"));
+    assert!(dir.join("project_gcp_only.toml").exists() && dir.join("truth.toml").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// With the GNSS (block offset, block latency) on the resectable variant: the latency within
+/// 0.05 s and the offset within 0.5 m of truth, each error inside 3σ.
+#[test]
+fn nav_block_latency_and_offset_recovered() {
+    let (t, r) = adjust_nav(&NavSpec::resectable(), "nav-gnss", "project.toml");
+    assert!(t.control_per_image.iter().all(|n| *n >= 4));
+    let l = &r.latencies[0];
+    let (dl, sl) = (l.values[0] - LATENCY_S, l.sigmas[0]);
+    let d = &r.drifts[0];
+    let da: Vec<f64> = (0..3).map(|a| d.values[a] - OFFSET_ENU[a]).collect();
+    println!(
+        "latency {:.4} ± {sl:.4} s (error {dl:+.4}); offset {:.3} {:.3} {:.3} ± {:.3} {:.3} {:.3} m (errors {:+.3} {:+.3} {:+.3}); σ0 {:.3}; checks RMS {:.3} {:.3} {:.3} theoretical {:.3} {:.3} {:.3}",
+        l.values[0], d.values[0], d.values[1], d.values[2], d.sigmas[0], d.sigmas[1], d.sigmas[2],
+        da[0], da[1], da[2], r.sigma0, r.checks.rms[0], r.checks.rms[1], r.checks.rms[2],
+        r.checks.theoretical_rms[0], r.checks.theoretical_rms[1], r.checks.theoretical_rms[2]
+    );
+    assert_eq!(r.latencies.len(), 1);
+    assert!(dl.abs() < 0.05, "latency error {dl} s");
+    assert!(
+        dl.abs() < 3.0 * sl && sl < 0.05,
+        "latency error {dl} s, σ {sl} s"
+    );
+    // The drift is in the ENU at the block centre, the truth in the ENU at the first image:
+    // 2 km apart, the frames differ by 0.3 mrad, 5 mm on 15 m.
+    for (a, (e, s)) in da.iter().zip(&d.sigmas).enumerate() {
+        assert!(e.abs() < 0.5, "offset error {a}: {e} m");
+        assert!(e.abs() < 3.0 * s, "offset error {a}: {e} m, σ {s}");
+    }
+    assert!((0.7..1.3).contains(&r.sigma0), "σ0 {}", r.sigma0);
+}
+
+/// Control only on the resectable variant: the block adjusts without the GNSS. Today the
+/// solver's determinability test (an eigenvalue ratio over mixed units) calls a pose with
+/// four well-spread control points undetermined; issue 14 has it scaled.
+#[test]
+#[ignore = "blocked by the unit-dependent determinability test (issue 14)"]
+fn nav_block_control_only() {
+    let (_, r) = adjust_nav(&NavSpec::resectable(), "nav-gcp", "project_gcp_only.toml");
+    println!(
+        "σ0 {:.3}; checks {} RMS {:.3} {:.3} {:.3} theoretical {:.3} {:.3} {:.3}",
+        r.sigma0,
+        r.checks.points.len(),
+        r.checks.rms[0],
+        r.checks.rms[1],
+        r.checks.rms[2],
+        r.checks.theoretical_rms[0],
+        r.checks.theoretical_rms[1],
+        r.checks.theoretical_rms[2]
+    );
+    assert!(r.latencies.is_empty() && r.drifts.is_empty());
+    assert!((0.7..1.3).contains(&r.sigma0), "σ0 {}", r.sigma0);
+}
