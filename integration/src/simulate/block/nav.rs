@@ -81,12 +81,12 @@ impl NavSpec {
     pub fn awkward() -> NavSpec {
         NavSpec {
             seed: 2025,
-            strips: 8,
-            per_strip: 18,
+            strips: 6,
+            per_strip: 10,
             control: 70,
             checks: 16,
             min_control: 0,
-            empty_images: vec![5, 40, 97],
+            empty_images: vec![5, 23, 41],
         }
     }
 
