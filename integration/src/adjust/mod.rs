@@ -16,6 +16,7 @@
 
 mod assemble;
 pub mod build;
+pub mod camera_section;
 pub mod error;
 pub mod factors;
 mod frame;
@@ -27,6 +28,7 @@ pub mod residuals;
 pub mod results;
 pub mod solve;
 mod start;
+pub mod start_file;
 mod tables;
 
 pub use error::AdjustError;

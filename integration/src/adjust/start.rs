@@ -89,7 +89,10 @@ pub(super) fn orientations(
         .map(|g| g.lever_arm())
         .unwrap_or_default();
     let mut start: Vec<Option<Pose>> = (0..p.images.len())
-        .map(|i| start_pose(p, frame, antenna_of, &lever0, i))
+        .map(|i| {
+            super::start_file::given_start(&p.starts, frame, i)
+                .or_else(|| start_pose(p, frame, antenna_of, &lever0, i))
+        })
         .collect();
     if start.iter().any(|s| s.is_none()) {
         resect_on_ties(p, rays, &mut start);
