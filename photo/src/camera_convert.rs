@@ -10,8 +10,8 @@
 //! (metres) only sets the metric scale of ppkat's image coordinates.
 //!
 //! - **MicMac** `CalibrationInternConique` with `eConvApero_DistM2C` ([`MicMacCalibration`]):
-//!   u = PP + F·(p.x/p.z, p.y/p.z); distorted = CDist + (u − CDist)(1 + K1 r² + K2 r⁴ + K3 r⁶
-//!   + K4 r⁸) with r = |u − CDist| in pixels (`ModRad`, coefficients of r³ r⁵ r⁷ r⁹), and for
+//!   u = PP + F·(p.x/p.z, p.y/p.z); distorted = CDist + (u − CDist)·(1 + K1 r² + K2 r⁴ +
+//!   K3 r⁶ + K4 r⁸) with r = |u − CDist| in pixels (`ModRad`, coefficients of r³ r⁵ r⁷ r⁹), and for
 //!   `ModPhgrStd` plus, on d = u − CDist, Δx = P1(r² + 2dx²) + 2P2·dx·dy + b1·dx + b2·dy,
 //!   Δy = P2(r² + 2dy²) + 2P1·dx·dy (MicMac `cDistModStdPhpgr::Direct`). Exactly ppkat's form
 //!   with k_i = K_i / pixel^(2i), p1 = P1 / pixel, p2 = −P2 / pixel, b1 = b1, b2 = −b2 and the
