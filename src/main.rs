@@ -44,6 +44,7 @@ enum Cmd {
     Bal(cmd::bal::Args),
     Simulate(cmd::simulate::Args),
     Adjust(cmd::adjust::Args),
+    Import(cmd::import::Args),
     Demo(cmd::demo::Args),
     Bench(cmd::bench::Args),
 }
@@ -97,6 +98,7 @@ fn dispatch(cmd: Cmd, threads: Option<usize>) -> Result<()> {
         Cmd::Bal(a) => cmd::bal::run(a, threads),
         Cmd::Simulate(a) => cmd::simulate::run(a),
         Cmd::Adjust(a) => cmd::adjust::run(a, threads),
+        Cmd::Import(a) => cmd::import::run(a),
         Cmd::Demo(a) => cmd::demo::run(a, threads),
         Cmd::Bench(a) => cmd::bench::run(a, threads),
     }

@@ -12,6 +12,7 @@
 //!   photogrammetry software, photo matching and geotags, the lever arm from tape measurements.
 //! - [`adjust`]: the joint GNSS-supported adjustment of a project (images, measurements,
 //!   ground points, antenna table) with statistics and reports.
+//! - [`import`]: MicMac and COLMAP projects turned into ppkat project folders.
 //! - [`survey`]: the summary of a static run (`OUT.pos.json` and report lines).
 //! - [`simulate`]: a flight simulator (scenario → RINEX, navigation and truth files) and
 //!   simulated adjustment projects with truth (aerial block, close-range pair).
@@ -26,6 +27,7 @@ pub mod adjust;
 pub mod bench;
 pub mod demo;
 pub mod exposure;
+pub mod import;
 pub mod orbits;
 pub mod pipeline;
 pub mod simulate;

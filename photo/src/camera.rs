@@ -3,7 +3,14 @@
 //! Image coordinates (x, y) are metric, origin at the image centre, x right, y up. With
 //! R camera → object and projection centre S: v = Rᵀ(X − S), x_c = −f·v_x/v_z,
 //! y_c = −f·v_y/v_z (the house convention), then Brown distortion and affinity evaluated at
-//! the ideal point: x = x0 + x_c + Δx(x_c, y_c), y = y0 + y_c + Δy(x_c, y_c).
+//! the ideal point relative to the distortion centre: with d = (x_c, y_c) − (dx0, dy0),
+//! x = x0 + x_c + Δx(d), y = y0 + y_c + Δy(d), where
+//! Δx = d_x·(k1 r² + k2 r⁴ + k3 r⁶) + p1 (r² + 2 d_x²) + 2 p2 d_x d_y + b1 d_x + b2 d_y,
+//! Δy = d_y·(k1 r² + k2 r⁴ + k3 r⁶) + p2 (r² + 2 d_y²) + 2 p1 d_x d_y, r = |d| (metres).
+//! The distortion centre is held as an offset (dx0, dy0) from the principal point (zero by
+//! default: distortion about the principal point); it moves with the principal point when
+//! that is estimated, and is itself not estimated.
+//! Conversions from MicMac and OpenCV/COLMAP models: [`crate::camera_convert`].
 
 use crate::rotation::skew;
 use nalgebra::{Matrix2, Matrix2x3, Matrix3, SMatrix, Vector2, Vector3};
@@ -24,6 +31,8 @@ pub struct Camera {
     pub p: [f64; 2],
     /// Affinity and shear b1, b2.
     pub b: [f64; 2],
+    /// Distortion centre minus principal point (metres, image coordinates; zero by default).
+    pub dc: [f64; 2],
     /// Pixel size (same unit as f).
     pub pixel: f64,
     /// Image width, pixels.
@@ -66,6 +75,7 @@ impl Camera {
             k: [0.0; 3],
             p: [0.0; 2],
             b: [0.0; 2],
+            dc: [0.0; 2],
             pixel,
             width_px,
             height_px,
@@ -125,7 +135,8 @@ impl Camera {
             return None;
         }
         let c = Vector2::new(-self.f * v.x / v.z, -self.f * v.y / v.z);
-        let (delta, dj) = self.distortion(c);
+        let q = c - Vector2::new(self.dc[0], self.dc[1]);
+        let (delta, dj) = self.distortion(q);
         let out = Vector2::new(self.x0, self.y0) + c + delta;
         let dc_dv = Matrix2x3::new(
             -self.f / v.z,
@@ -145,14 +156,14 @@ impl Camera {
         ji.set_column(0, &((Matrix2::identity() + dj) * (c / self.f)));
         ji[(0, 1)] = 1.0;
         ji[(1, 2)] = 1.0;
-        let r2 = c.norm_squared();
+        let r2 = q.norm_squared();
         for (k, pw) in [r2, r2 * r2, r2 * r2 * r2].into_iter().enumerate() {
-            ji.set_column(3 + k, &(c * pw));
+            ji.set_column(3 + k, &(q * pw));
         }
-        ji.set_column(6, &Vector2::new(r2 + 2.0 * c.x * c.x, 2.0 * c.x * c.y));
-        ji.set_column(7, &Vector2::new(2.0 * c.x * c.y, r2 + 2.0 * c.y * c.y));
-        ji.set_column(8, &Vector2::new(c.x, 0.0));
-        ji.set_column(9, &Vector2::new(c.y, 0.0));
+        ji.set_column(6, &Vector2::new(r2 + 2.0 * q.x * q.x, 2.0 * q.x * q.y));
+        ji.set_column(7, &Vector2::new(2.0 * q.x * q.y, r2 + 2.0 * q.y * q.y));
+        ji.set_column(8, &Vector2::new(q.x, 0.0));
+        ji.set_column(9, &Vector2::new(q.y, 0.0));
         Some((
             out,
             Jacobians {
@@ -198,6 +209,7 @@ mod tests {
             k: [-0.05 / 0.035f64.powi(2), 0.01, 0.0],
             p: [1e-3, -2e-3],
             b: [1e-4, -2e-4],
+            dc: [2e-4, 1e-4],
             pixel: 3.9e-6,
             width_px: 6000,
             height_px: 4000,

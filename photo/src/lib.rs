@@ -7,6 +7,8 @@
 //! - [`rotation`]: SO(3) exponential and logarithm, ω-φ-κ / φ-ω-κ / yaw-pitch-roll.
 //! - [`camera`]: interior orientation (Brown distortion, affinity), collinearity with analytic
 //!   Jacobians, pixel ↔ image coordinates.
+//! - [`camera_convert`]: MicMac (`ModRad`, `ModPhgrStd`) and OpenCV/COLMAP camera models
+//!   converted into [`camera::Camera`], with the conversion's error.
 //! - [`lever`]: the GNSS lever arm, X_A = X_S + R·(u, v, w).
 //! - [`resection`], [`intersection`]: closed-form starts and least-squares refinement.
 //! - [`lsq`]: the least-squares core — typed keys, factors with their own noise model and
@@ -21,6 +23,7 @@
 
 pub mod bal;
 pub mod camera;
+pub mod camera_convert;
 pub mod factors;
 pub mod intersection;
 pub mod lever;

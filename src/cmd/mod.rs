@@ -7,6 +7,7 @@ pub mod bal;
 pub mod bench;
 pub mod demo;
 pub mod exposures;
+pub mod import;
 pub mod info;
 pub mod leverarm;
 pub mod ppk;

@@ -3,7 +3,7 @@
 use super::*;
 
 /// Every subcommand, as its words on the command line.
-const SUBCOMMANDS: [&[&str]; 13] = [
+const SUBCOMMANDS: [&[&str]; 16] = [
     &["info"],
     &["spp"],
     &["ppk"],
@@ -12,6 +12,9 @@ const SUBCOMMANDS: [&[&str]; 13] = [
     &["bal"],
     &["simulate"],
     &["adjust"],
+    &["import"],
+    &["import", "micmac"],
+    &["import", "colmap"],
     &["demo"],
     &["bench"],
     &["bench", "ingest"],

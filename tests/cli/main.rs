@@ -10,6 +10,7 @@ mod bal;
 mod exposures;
 mod gnss;
 mod help;
+mod import;
 mod info;
 mod precise;
 

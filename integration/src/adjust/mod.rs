@@ -16,6 +16,7 @@
 
 mod assemble;
 pub mod build;
+pub mod camera_section;
 mod checks;
 pub mod error;
 pub mod factors;
@@ -31,6 +32,7 @@ pub mod residuals;
 pub mod results;
 pub mod solve;
 mod start;
+pub mod start_file;
 mod tables;
 
 pub use error::AdjustError;

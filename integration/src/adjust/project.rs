@@ -5,6 +5,8 @@
 //! relative to the project file.
 //! Every problem names the file, the line and what to do.
 
+use super::camera_section::camera_def;
+pub use super::camera_section::CameraSection;
 use super::error::AdjustError;
 use super::factors::DriftModel;
 use super::input::perr;
@@ -12,12 +14,12 @@ pub use super::input::{
     Antenna, CameraDef, GroundPoint, ImageDef, MeasuredDistance, Measurement, PointKind,
 };
 pub use super::latency::LatencyGroup;
+use super::start_file::{read_starts, StartPose};
 use super::tables::{
     antennas_from_trajectory, read_antennas, read_distances, read_ground, read_images,
     read_measurements, read_patb, read_trajectory,
 };
 use crate::exposure::export::Projection;
-use photo::camera::Camera;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -65,41 +67,6 @@ pub enum Mode {
     CloseRange,
 }
 
-/// A `[[camera]]` section.
-#[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct CameraSection {
-    /// The id the image list refers to.
-    pub id: String,
-    /// Principal distance, mm.
-    pub focal_mm: f64,
-    /// Pixel size, µm.
-    pub pixel_um: f64,
-    /// Image width, pixels.
-    pub width_px: usize,
-    /// Image height, pixels.
-    pub height_px: usize,
-    /// Principal point x0, y0, mm (image coordinates: x right, y up).
-    #[serde(default)]
-    pub principal_point_mm: [f64; 2],
-    /// Radial k1, k2, k3 (image coordinates in metres).
-    #[serde(default)]
-    pub k: [f64; 3],
-    /// Decentring p1, p2.
-    #[serde(default)]
-    pub p: [f64; 2],
-    /// Image measurement σ, pixels (default 0.5).
-    #[serde(default = "default_sigma_px")]
-    pub sigma_px: f64,
-    /// Interior parameters to estimate: f, x0, y0, k1, k2, k3, p1, p2, b1, b2.
-    #[serde(default)]
-    pub self_calibrate: Vec<String>,
-}
-
-fn default_sigma_px() -> f64 {
-    0.5
-}
-
 /// The `[images]` section.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -112,6 +79,10 @@ pub struct ImagesSection {
     /// PATB-style image coordinates (mm): a photo id line, `point x y` lines, `-99`.
     #[serde(default)]
     pub patb: Option<PathBuf>,
+    /// Start orientations (`image,lat,lon,h,omega,phi,kappa`; see `start_file`), used before
+    /// any other start value.
+    #[serde(default)]
+    pub start: Option<PathBuf>,
 }
 
 /// The `[ground]` section.
@@ -283,9 +254,9 @@ pub struct Project {
     pub distances: Vec<MeasuredDistance>,
     /// What loading noticed (images outside the trajectory, …), for the report.
     pub warnings: Vec<String>,
+    /// Start orientations given by `[images] start`, by image index.
+    pub starts: BTreeMap<usize, StartPose>,
 }
-
-const INTERIOR_NAMES: [&str; 10] = ["f", "x0", "y0", "k1", "k2", "k3", "p1", "p2", "b1", "b2"];
 
 impl Project {
     /// Read the project file and every table it names.
@@ -340,6 +311,10 @@ impl Project {
             Some(g) => load_antennas(path, dir, g, &images, &mut warnings)?,
             None => Vec::new(),
         };
+        let starts = match &file.images.start {
+            Some(s) => read_starts(&dir.join(s), &images)?,
+            None => BTreeMap::new(),
+        };
         Ok(Project {
             path: path.to_path_buf(),
             file,
@@ -351,54 +326,9 @@ impl Project {
             antennas,
             distances,
             warnings,
+            starts,
         })
     }
-}
-
-/// A camera section as a camera with its estimation choices.
-fn camera_def(c: &CameraSection, path: &Path) -> Result<CameraDef, AdjustError> {
-    if !(c.focal_mm > 0.0 && c.pixel_um > 0.0 && c.width_px > 0 && c.height_px > 0) {
-        return Err(perr(
-            path,
-            format!(
-                "camera {}: focal_mm, pixel_um, width_px and height_px must be positive",
-                c.id
-            ),
-        ));
-    }
-    let mut cam = Camera::ideal(
-        c.focal_mm * 1e-3,
-        c.pixel_um * 1e-6,
-        c.width_px,
-        c.height_px,
-    );
-    cam.x0 = c.principal_point_mm[0] * 1e-3;
-    cam.y0 = c.principal_point_mm[1] * 1e-3;
-    cam.k = c.k;
-    cam.p = c.p;
-    let mut calibrate = Vec::new();
-    for n in &c.self_calibrate {
-        let i = INTERIOR_NAMES.iter().position(|x| x == n).ok_or_else(|| {
-            perr(
-                path,
-                format!(
-                    "camera {}: self_calibrate `{n}`: use {}",
-                    c.id,
-                    INTERIOR_NAMES.join(", ")
-                ),
-            )
-        })?;
-        if !calibrate.contains(&i) {
-            calibrate.push(i);
-        }
-    }
-    calibrate.sort();
-    Ok(CameraDef {
-        id: c.id.clone(),
-        camera: cam,
-        calibrate,
-        sigma_px: c.sigma_px,
-    })
 }
 
 /// The GNSS antenna positions: the antenna table, or a trajectory interpolated at the image

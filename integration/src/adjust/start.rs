@@ -101,7 +101,8 @@ pub(super) fn orientations(
             if skip[i] {
                 None
             } else {
-                start_pose(p, frame, antenna_of, &lever0, i)
+                super::start_file::given_start(&p.starts, frame, i)
+                    .or_else(|| start_pose(p, frame, antenna_of, &lever0, i))
             }
         })
         .collect();

@@ -1,0 +1,170 @@
+//! `ppkat import`: other tools' projects written as ppkat project folders.
+
+use anyhow::{bail, Result};
+use clap::Subcommand;
+use integration::import::{colmap, micmac, ProjectOut, Summary};
+use std::path::PathBuf;
+
+/// Turn a MicMac or COLMAP project into a ppkat project folder (project.toml and CSV tables)
+/// that `ppkat adjust --project DIR/project.toml` runs as it is.
+///
+/// Prints how many points, measurements, images and positions were read, and every item
+/// skipped with its reason (e.g. a measured point that is not in the ground file). Problems
+/// that would make the project wrong (duplicated points, measurements outside the
+/// calibration's image, unreadable files) stop the import with the file, line and what to do.
+#[derive(clap::Args)]
+pub struct Args {
+    #[command(subcommand)]
+    what: ImportCmd,
+}
+
+#[derive(Subcommand)]
+enum ImportCmd {
+    Micmac(MicmacArgs),
+    Colmap(ColmapArgs),
+}
+
+/// Import MicMac ground control, image measurements, calibration, orientations and GNSS.
+///
+/// Ground points keep their `Incertitude` as σ east, north, up; measurements are pixels
+/// (column, row from the top-left corner). Without --crs the ground coordinates are a local
+/// Cartesian frame, placed east/north/up on the tangent plane at latitude 0, longitude 0
+/// (outputs are then geodetic). The calibration (ModRad, ModPhgrStd) is converted into
+/// ppkat's camera and the largest difference to MicMac's model is printed.
+#[derive(clap::Args)]
+struct MicmacArgs {
+    /// Ground control points: MicMac DicoAppuisFlottant XML (NamePt, Pt, Incertitude).
+    #[arg(long, value_name = "FILE.xml")]
+    ground: PathBuf,
+    /// Image measurements of the control: SetOfMesureAppuisFlottants XML (pixels).
+    #[arg(long, value_name = "FILE.xml")]
+    measures: PathBuf,
+    /// Camera calibration: ExportAPERO/CalibrationInternConique XML (ModRad or ModPhgrStd);
+    /// default: the calibration the orientation files name, in their folder.
+    #[arg(long, value_name = "FILE.xml")]
+    calibration: Option<PathBuf>,
+    /// Check points (DicoAppuisFlottant XML); needs --check-measures.
+    #[arg(long, value_name = "FILE.xml", requires = "check_measures")]
+    check_ground: Option<PathBuf>,
+    /// Image measurements of the check points (SetOfMesureAppuisFlottants XML).
+    #[arg(long, value_name = "FILE.xml", requires = "check_ground")]
+    check_measures: Option<PathBuf>,
+    /// Coordinate system of the ground and GNSS coordinates: EPSG:326ZZ / EPSG:327ZZ or
+    /// utm:ZZN / utm:ZZS (default: a local Cartesian frame).
+    #[arg(long, value_name = "CRS")]
+    crs: Option<String>,
+    /// GNSS camera positions, OriConvert-style text (one image per line; see --gnss-format).
+    #[arg(long, value_name = "FILE")]
+    gnss: Option<PathBuf>,
+    /// Columns of the --gnss file: N image name, X Y Z coordinates, other letters ignored.
+    #[arg(long, value_name = "FORMAT", default_value = "#F=N X Y Z")]
+    gnss_format: String,
+    /// σ of the GNSS positions, horizontal and vertical, metres.
+    #[arg(long, value_name = "H,V", default_value = "0.05,0.10")]
+    gnss_sigma: String,
+    /// Folder of MicMac orientation files (Orientation-IMAGE.xml), used as start values.
+    #[arg(long, value_name = "DIR")]
+    orientations: Option<PathBuf>,
+    /// Pixel size written for the camera, µm (MicMac works in pixels; it only sets the
+    /// scale of millimetre values).
+    #[arg(long, value_name = "UM", default_value_t = 1.0)]
+    pixel_um: f64,
+    /// Image measurement σ, pixels.
+    #[arg(long, value_name = "PX", default_value_t = 1.0)]
+    sigma_px: f64,
+    /// Output folder for project.toml and its tables (created).
+    #[arg(short, long, value_name = "DIR")]
+    out: PathBuf,
+}
+
+/// Import a COLMAP sparse model (text): cameras, images, tie-point measurements and start
+/// values.
+///
+/// A COLMAP model has no datum: --gnss-exif reads the photos' EXIF GPS as GNSS camera
+/// positions with the σ of --gnss-sigma, the model is moved onto them by a similarity
+/// transformation for the start values, and the GNSS positions give the adjustment its datum.
+/// Without --gnss-exif the import stops (the adjustment would have no datum).
+#[derive(clap::Args)]
+struct ColmapArgs {
+    /// Folder with cameras.txt, images.txt and points3D.txt.
+    #[arg(value_name = "SPARSE_TXT_DIR")]
+    dir: PathBuf,
+    /// Folder of the photos: their EXIF GPS positions become GNSS camera positions.
+    #[arg(long, value_name = "PHOTO_DIR")]
+    gnss_exif: Option<PathBuf>,
+    /// σ of the EXIF GPS positions, horizontal and vertical, metres.
+    #[arg(long, value_name = "H,V", default_value = "3,5")]
+    gnss_sigma: String,
+    /// Points seen in fewer images are skipped (counted).
+    #[arg(long, value_name = "N", default_value_t = 3)]
+    min_track: usize,
+    /// Pixel size written for the camera, µm (it only sets the scale of millimetre values).
+    #[arg(long, value_name = "UM", default_value_t = 1.0)]
+    pixel_um: f64,
+    /// Image measurement σ, pixels.
+    #[arg(long, value_name = "PX", default_value_t = 1.0)]
+    sigma_px: f64,
+    /// Output folder for project.toml and its tables (created).
+    #[arg(short, long, value_name = "DIR")]
+    out: PathBuf,
+}
+
+/// Two positive numbers "H,V".
+fn pair(flag: &str, s: &str) -> Result<[f64; 2]> {
+    let v: Vec<f64> = s.split(',').filter_map(|t| t.trim().parse().ok()).collect();
+    if v.len() != 2 || v.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
+        bail!("{flag} '{s}': give two positive numbers, horizontal,vertical (m)");
+    }
+    Ok([v[0], v[1]])
+}
+
+fn positive(flag: &str, v: f64) -> Result<f64> {
+    if !(v.is_finite() && v > 0.0) {
+        bail!("{flag} {v}: give a positive number");
+    }
+    Ok(v)
+}
+
+/// Write the project and print the summary.
+fn finish(p: &ProjectOut, s: &Summary, out: &std::path::Path) -> Result<()> {
+    p.write(out)?;
+    for l in s.lines() {
+        println!("{l}");
+    }
+    println!("project written: {}", out.join("project.toml").display());
+    Ok(())
+}
+
+/// Run `ppkat import …`.
+pub fn run(args: Args) -> Result<()> {
+    match args.what {
+        ImportCmd::Micmac(a) => {
+            let job = micmac::MicMacJob {
+                ground: a.ground,
+                measures: a.measures,
+                calibration: a.calibration,
+                check: a.check_ground.zip(a.check_measures),
+                crs: a.crs,
+                gnss: a.gnss.map(|g| (g, a.gnss_format)),
+                gnss_sigma: pair("--gnss-sigma", &a.gnss_sigma)?,
+                orientations: a.orientations,
+                pixel_um: positive("--pixel-um", a.pixel_um)?,
+                sigma_px: positive("--sigma-px", a.sigma_px)?,
+            };
+            let (p, s) = micmac::import(&job)?;
+            finish(&p, &s, &a.out)
+        }
+        ImportCmd::Colmap(a) => {
+            let job = colmap::ColmapJob {
+                dir: a.dir,
+                gnss_exif: a.gnss_exif,
+                gnss_sigma: pair("--gnss-sigma", &a.gnss_sigma)?,
+                min_track: a.min_track.max(2),
+                pixel_um: positive("--pixel-um", a.pixel_um)?,
+                sigma_px: positive("--sigma-px", a.sigma_px)?,
+            };
+            let (p, s) = colmap::import(&job)?;
+            finish(&p, &s, &a.out)
+        }
+    }
+}
