@@ -258,6 +258,33 @@ pub fn resect(cam: &Camera, pts: &[Control]) -> Result<Resection, ResectionError
     refine(cam, start, pts, true)
 }
 
+/// All six elements from exactly three control points: of the (up to four) exact P3P
+/// solutions, the one `prefer` scores highest (e.g. an aerial camera looking down from above
+/// the points), refined. From four points on, [`resect`].
+pub fn resect_three(
+    cam: &Camera,
+    pts: &[Control],
+    prefer: impl Fn(&Pose) -> f64,
+) -> Result<Resection, ResectionError> {
+    if pts.len() != 3 {
+        return resect(cam, pts);
+    }
+    let span = (pts[1].object - pts[0].object)
+        .norm()
+        .max((pts[2].object - pts[0].object).norm());
+    let area = (pts[1].object - pts[0].object)
+        .cross(&(pts[2].object - pts[0].object))
+        .norm();
+    if area < 1e-6 * span * span {
+        return Err(ResectionError::Collinear);
+    }
+    let start = p3p(cam, [&pts[0], &pts[1], &pts[2]])
+        .into_iter()
+        .max_by(|a, b| prefer(a).total_cmp(&prefer(b)))
+        .ok_or(ResectionError::NoStart)?;
+    refine(cam, start, pts, true)
+}
+
 /// The three angles only, the projection centre known (≥ 2 points). `start`: a rotation to
 /// begin from (e.g. from a compass); without it the rays are aligned with the directions to
 /// the points in closed form.
@@ -377,6 +404,39 @@ mod tests {
             "{} candidates: {:?}",
             cands.len(),
             cands.iter().map(|c| c.centre).collect::<Vec<_>>()
+        );
+    }
+
+    /// Three points: of the P3P solutions, the aerial preference (camera above the points,
+    /// looking down) picks the true one; the best-fit choice of `resect` cannot (all fit).
+    #[test]
+    fn three_points_with_a_preference() {
+        let (cam, truth, pts) = scene();
+        let three = [pts[0], pts[1], pts[2]];
+        let mean_z = three.iter().map(|p| p.object.z).sum::<f64>() / 3.0;
+        let aerial = |p: &Pose| (p.centre.z - mean_z).signum() + p.r[(2, 2)];
+        let cands = p3p(&cam, [&three[0], &three[1], &three[2]]);
+        assert!(cands.len() >= 2, "an ambiguous triple: {}", cands.len());
+        let r = resect_three(&cam, &three, aerial).unwrap();
+        // The branch nearest the truth is chosen (a 60 m triangle seen from 360 m leaves the
+        // exact three-point solution metres from the truth with 1 px of noise).
+        let nearest = cands
+            .iter()
+            .min_by(|a, b| {
+                (a.centre - truth.centre)
+                    .norm()
+                    .total_cmp(&(b.centre - truth.centre).norm())
+            })
+            .unwrap();
+        assert!(
+            (r.pose.centre - nearest.centre).norm() < 0.5,
+            "{:?}",
+            r.pose.centre
+        );
+        assert!(
+            (r.pose.centre - truth.centre).norm() < 10.0,
+            "{:?}",
+            r.pose.centre
         );
     }
 

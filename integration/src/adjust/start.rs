@@ -1,7 +1,9 @@
 //! Start values of the orientations, in order of preference: the attitude of the antenna
 //! table; compass angles (refined by a three-angle resection on the control seen, close
 //! range); nadir along the strip direction of the neighbouring antennas; a resection on ≥ 4
-//! control points; a resection on tie points intersected from the images that have a start.
+//! control points, or on 3 (aerial: of the exact solutions, the camera above the points
+//! looking down); the same on tie points intersected from the images that have a start,
+//! growing the block until no image gains one.
 //! What enters: the project, the frame, the measurements by point and the antenna of each
 //! image. What leaves: a pose per image that can have one and the images left without
 //! (named, with the reason); an error only when no image has a start.
@@ -14,7 +16,7 @@ use nalgebra::{Matrix3, Vector2, Vector3};
 use photo::camera::Pose;
 use photo::intersection::{intersect, Ray};
 use photo::lever::LeverArm;
-use photo::resection::{resect, resect_angles, Control};
+use photo::resection::{resect, resect_angles, resect_three, Control};
 use std::collections::BTreeMap;
 
 /// Something left out of the adjustment (e.g. `image 17`) and why.
@@ -118,7 +120,7 @@ pub(super) fn orientations(
         .map(|((im, _), _)| {
             (
                 im.id.clone(),
-                "no start orientation: no GNSS antenna position with attitude or strip, no compass angles, and fewer than 4 control or tie points seen by other images".to_string(),
+                "no start orientation: no GNSS antenna position with attitude or strip, no compass angles, and fewer than 3 control or tie points seen by other images".to_string(),
             )
         })
         .collect();
@@ -201,8 +203,20 @@ fn start_pose(
                 .map(|x| x.pose)
         }
         _ if controls.len() >= 4 => resect(cam, &controls).ok().map(|x| x.pose),
+        _ if controls.len() == 3 && p.file.mode != Mode::CloseRange => {
+            resect_three(cam, &controls, looking_down(&controls))
+                .ok()
+                .map(|x| x.pose)
+        }
         _ => None,
     }
+}
+
+/// The aerial preference among the exact three-point solutions: the centre above the points,
+/// the camera looking down (its z axis, opposite the viewing direction, up).
+fn looking_down(pts: &[Control]) -> impl Fn(&Pose) -> f64 {
+    let mean_z = pts.iter().map(|c| c.object.z).sum::<f64>() / pts.len().max(1) as f64;
+    move |pose: &Pose| (pose.centre.z - mean_z).signum() + pose.r[(2, 2)]
 }
 
 /// Images still without a start (no GNSS, no control): resect them on tie points intersected
@@ -219,11 +233,15 @@ fn resect_on_ties(p: &Project, rays: &Rays, start: &mut [Option<Pose>], skip: &[
                 continue;
             }
             let pts = controls_in(p, i, |id| known.get(id).copied());
+            let cam = &p.cameras[p.images[i].camera].camera;
             if pts.len() >= 4 {
-                let cam = &p.cameras[p.images[i].camera].camera;
                 *st = resect(cam, &pts).ok().map(|x| x.pose);
-                gained |= st.is_some();
+            } else if pts.len() == 3 && p.file.mode != Mode::CloseRange {
+                *st = resect_three(cam, &pts, looking_down(&pts))
+                    .ok()
+                    .map(|x| x.pose);
             }
+            gained |= st.is_some();
         }
         if !gained {
             return;

@@ -106,7 +106,7 @@ fn nav_block_control_only() {
 /// The awkward block as simulated (images without points, many with one or two, no ties):
 /// with the GNSS every image that cannot be determined is named and left out and the rest
 /// adjusts, the latency within 0.05 s and the offset within 3σ; control only, the images
-/// with ≥ 4 control points adjust and every other one is named.
+/// with ≥ 3 control points adjust and every other one is named.
 #[test]
 fn nav_block_awkward_adjusts_what_it_can() {
     let (t, r) = adjust_nav(&NavSpec::awkward(), "nav-awkward-gnss", "project.toml");
@@ -159,5 +159,6 @@ fn nav_block_awkward_adjusts_what_it_can() {
         named(&c)
     );
     assert_eq!(c.images.len() + named(&c), t.images.len());
-    assert!(c.images.len() >= 10, "{} images", c.images.len());
+    // Images with ≥ 3 control points start by resection (27 of 60).
+    assert!(c.images.len() >= 24, "{} images", c.images.len());
 }
