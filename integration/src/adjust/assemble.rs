@@ -27,13 +27,16 @@ pub const GROUP_GNSS: Group = Group(2);
 pub const GROUP_PRIOR: Group = Group(3);
 /// Measured distances.
 pub const GROUP_DISTANCE: Group = Group(4);
+/// Attitude observations.
+pub const GROUP_ATTITUDE: Group = Group(5);
 /// Names of the groups, by index.
-pub const GROUP_NAMES: [&str; 5] = [
+pub const GROUP_NAMES: [&str; 6] = [
     "image points",
     "control points",
     "GNSS centres",
     "lever-arm prior",
     "distances",
+    "attitude",
 ];
 
 /// A drift group (key `Drift(DriftId(index))`): its name, model and reference time.
@@ -126,6 +129,7 @@ pub(super) fn problem(
         Some(_) => gnss_factors(p, frame, &mut pr, (antenna_of, lat), loss)?,
         None => Vec::new(),
     };
+    super::attitude::factors(p, frame, &mut pr, antenna_of, loss)?;
     Ok((pr, point_names, single_ray, drifts))
 }
 

@@ -10,7 +10,8 @@
 
 use super::assemble::problem;
 pub use super::assemble::{
-    DriftBlock, GROUP_CONTROL, GROUP_DISTANCE, GROUP_GNSS, GROUP_IMAGE, GROUP_NAMES, GROUP_PRIOR,
+    DriftBlock, GROUP_ATTITUDE, GROUP_CONTROL, GROUP_DISTANCE, GROUP_GNSS, GROUP_IMAGE,
+    GROUP_NAMES, GROUP_PRIOR,
 };
 use super::error::{problem_err as err, AdjustError};
 pub use super::frame::LocalFrame;

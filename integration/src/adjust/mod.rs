@@ -15,6 +15,7 @@
 //! → [`report`] (CSV, JSON, HTML with SVG plots). [`error`] is the error type of them all.
 
 mod assemble;
+pub mod attitude;
 pub mod build;
 pub mod camera_section;
 mod checks;
@@ -33,6 +34,7 @@ pub mod results;
 pub mod solve;
 mod start;
 pub mod start_file;
+mod summary;
 mod tables;
 
 pub use error::AdjustError;

@@ -9,6 +9,7 @@ use std::fmt::Write as _;
 fn unit(group: &str, label: &str) -> &'static str {
     match (group, label.as_bytes().first()) {
         ("lever_arm", _) => "m",
+        ("boresight", _) => "deg",
         ("drift", Some(b'a')) => "m",
         ("drift", _) => "m/s",
         ("latency", _) => "s",
@@ -21,8 +22,9 @@ fn unit(group: &str, label: &str) -> &'static str {
 /// seconds for a drift, 0 otherwise).
 pub fn csv(r: &Results) -> String {
     let mut s = String::from("# ppkat adjust: additional parameters; drift = GNSS antenna minus adjusted antenna (local ENU); latency: exposure = GNSS time + dt\ngroup,name,label,value,sigma,unit,fixed,t0\n");
-    let groups: [(&str, &Vec<Estimated>); 4] = [
+    let groups: [(&str, &Vec<Estimated>); 5] = [
         ("lever_arm", &r.lever_arms),
+        ("boresight", &r.boresights),
         ("drift", &r.drifts),
         ("latency", &r.latencies),
         ("interior", &r.interiors),

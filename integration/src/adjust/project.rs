@@ -47,6 +47,9 @@ pub struct ProjectFile {
     /// GNSS antenna positions, lever arm and drift.
     #[serde(default)]
     pub gnss: Option<GnssSection>,
+    /// Attitude observations at the exposures and the boresight.
+    #[serde(default)]
+    pub attitude: Option<super::attitude::AttitudeSection>,
     /// Solver and statistics options.
     #[serde(default)]
     pub adjustment: AdjustmentSection,

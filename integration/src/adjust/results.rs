@@ -149,6 +149,8 @@ pub struct Results {
     pub points: Vec<PointResult>,
     /// Lever arms per camera.
     pub lever_arms: Vec<Estimated>,
+    /// Boresight misalignment per camera with attitude observations (degrees).
+    pub boresights: Vec<Estimated>,
     /// Drift per group.
     pub drifts: Vec<Estimated>,
     /// GNSS latency δ per group (s; see `adjust::latency` for its sign).
@@ -317,6 +319,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         images: image_results(p, &ctx, &res.per_image),
         points,
         lever_arms: lever_arms(p, &ctx),
+        boresights: super::attitude::boresights(p, pr, |k| ctx.cov_of(k)),
         drifts: drifts(b, &ctx),
         latencies: latencies(b, &ctx),
         interiors: interiors(p, &ctx),

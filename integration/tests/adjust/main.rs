@@ -1,6 +1,7 @@
 //! The joint GNSS-supported adjustment on simulated blocks with known truth, one test binary
 //! with a module per topic; the helpers shared by them live here.
 
+mod attitude;
 mod bad_input;
 mod classic;
 mod close_range;

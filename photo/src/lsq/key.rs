@@ -72,6 +72,9 @@ pub enum Key {
     Drift(DriftId),
     /// Time offset δ (s, one value) of a GNSS latency group.
     Latency(LatencyId),
+    /// The boresight misalignment of a camera (three angles, radians): the rotation from the
+    /// attitude the IMU gives to the camera's.
+    Boresight(CameraId),
     /// Any other block: a kind name and a number, for observation kinds the list above does
     /// not know yet (no solver change is needed to add one).
     Custom(&'static str, u32),
@@ -92,6 +95,8 @@ pub enum KeyKind {
     Drift,
     /// [`Key::Latency`].
     Latency,
+    /// [`Key::Boresight`].
+    Boresight,
     /// [`Key::Custom`] with this kind name.
     Custom(&'static str),
 }
@@ -106,6 +111,7 @@ impl Key {
             Key::LeverArm(_) => KeyKind::LeverArm,
             Key::Drift(_) => KeyKind::Drift,
             Key::Latency(_) => KeyKind::Latency,
+            Key::Boresight(_) => KeyKind::Boresight,
             Key::Custom(k, _) => KeyKind::Custom(k),
         }
     }
@@ -120,6 +126,7 @@ impl fmt::Display for Key {
             Key::LeverArm(c) => write!(f, "the lever arm of {c}"),
             Key::Drift(d) => write!(f, "the drift of {d}"),
             Key::Latency(l) => write!(f, "the latency of {l}"),
+            Key::Boresight(c) => write!(f, "the boresight of {c}"),
             Key::Custom(k, n) => write!(f, "{k} {n}"),
         }
     }

@@ -1,0 +1,199 @@
+//! Attitude observations: the camera rotation an IMU (or gimbal, or navigation system) gives
+//! at an exposure, as a factor with its σ, and the boresight misalignment between that
+//! attitude and the camera's, three angles per camera, as unknowns.
+//!
+//! The observed rotation R_obs (camera → local frame) comes from the antenna table's
+//! ω-φ-κ (the exposure stage rotated the IMU attitude into the camera frame with the nominal
+//! mounting). The camera's rotation is R = R_obs · B with B = exp(b) the boresight; the
+//! residual is r = log(Bᵀ · R_obsᵀ · R), rotations about the camera's x, y, z axes (≈ ω, φ, κ
+//! for a nadir camera), radians.
+//!
+//! What enters: the project's `[attitude]` section and antenna table, the frame, the problem.
+//! What leaves: the factors (group "attitude"), the boresight blocks and their results.
+
+use super::build::{GROUP_ATTITUDE, GROUP_PRIOR};
+use super::error::{problem_err as err, AdjustError};
+use super::frame::LocalFrame;
+use super::project::Project;
+use super::results::Estimated;
+use nalgebra::{DMatrix, DMatrixViewMut, DVector, Matrix3, Vector3};
+use photo::factors::Prior;
+use photo::lsq::{CameraId, Factor, ImageId, Key, Loss, Noise, Params, Problem, Value};
+use photo::rotation::{exp_so3, log_so3};
+use serde::Deserialize;
+
+/// The `[attitude]` section: attitude observations at the exposures.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AttitudeSection {
+    /// σ of the observed attitude about the camera's x, y, z axes (≈ ω, φ, κ), degrees.
+    pub sigma_deg: [f64; 3],
+    /// Estimate a boresight misalignment per camera (default); `false`: the attitude is the
+    /// camera's.
+    #[serde(default = "yes")]
+    pub boresight: bool,
+    /// σ of a prior on the boresight (degrees, about x, y, z); omit: free.
+    #[serde(default)]
+    pub boresight_sigma_deg: Option<[f64; 3]>,
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// An observed camera rotation: r = log(exp(b)ᵀ · R_obsᵀ · R).
+pub struct AttitudeObs {
+    keys: Vec<Key>,
+    /// Observed rotation camera → adjustment frame.
+    observed: Matrix3<f64>,
+}
+
+impl AttitudeObs {
+    /// The residual at pose rotation `r` and boresight `b`.
+    fn residual(&self, r: &Matrix3<f64>, b: &Vector3<f64>) -> Vector3<f64> {
+        log_so3(&(exp_so3(b).transpose() * self.observed.transpose() * r))
+    }
+}
+
+impl Factor for AttitudeObs {
+    fn keys(&self) -> &[Key] {
+        &self.keys
+    }
+    fn dim(&self) -> usize {
+        3
+    }
+    fn evaluate(
+        &self,
+        x: &Params<'_>,
+        r: &mut [f64],
+        j: &mut [Option<DMatrixViewMut<'_, f64>>],
+    ) -> bool {
+        let Some(pose) = x.pose(0) else {
+            return false;
+        };
+        let b = match self.keys.len() {
+            2 => match x.vector(1) {
+                Some(v) if v.len() == 3 => Vector3::new(v[0], v[1], v[2]),
+                _ => return false,
+            },
+            _ => Vector3::zeros(),
+        };
+        let r0 = self.residual(&pose.r, &b);
+        r.copy_from_slice(r0.as_slice());
+        // Central differences: the pose block's left perturbation R ← exp(δ)·R (its centre
+        // does not enter), the boresight's plain increments.
+        const H: f64 = 1e-6;
+        if let Some(m) = &mut j[0] {
+            m.fill(0.0);
+            for k in 0..3 {
+                let d = Vector3::ith(k, H);
+                let c = (self.residual(&(exp_so3(&d) * pose.r), &b)
+                    - self.residual(&(exp_so3(&-d) * pose.r), &b))
+                    / (2.0 * H);
+                m.column_mut(k).rows_mut(0, 3).copy_from(&c);
+            }
+        }
+        if let Some(Some(m)) = j.get_mut(1) {
+            for k in 0..3 {
+                let d = Vector3::ith(k, H);
+                let c = (self.residual(&pose.r, &(b + d)) - self.residual(&pose.r, &(b - d)))
+                    / (2.0 * H);
+                m.column_mut(k).copy_from(&c);
+            }
+        }
+        true
+    }
+}
+
+/// One attitude factor per adjusted image whose antenna record carries an attitude, and a
+/// boresight block per camera observed (with its prior when asked).
+pub(super) fn factors(
+    p: &Project,
+    frame: &LocalFrame,
+    pr: &mut Problem,
+    antenna_of: &[Option<usize>],
+    loss: Loss,
+) -> Result<(), AdjustError> {
+    let Some(sec) = p.file.attitude.as_ref() else {
+        return Ok(());
+    };
+    if sec.sigma_deg.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+        return Err(err(
+            "[attitude] sigma_deg: three positive σ in degrees, e.g. [0.05, 0.05, 0.2]".to_string(),
+        ));
+    }
+    let built = |e: photo::lsq::BuildError| err(e.to_string());
+    let sigma: Vec<f64> = sec.sigma_deg.iter().map(|s| s.to_radians()).collect();
+    let mut n_obs = 0;
+    for (i, a) in antenna_of.iter().enumerate() {
+        let pose = Key::Pose(ImageId::from(i));
+        let Some(rot) = a.and_then(|k| {
+            let ant = &p.antennas[k];
+            ant.rotation.map(|r| frame.from_enu_at(&ant.pos) * r)
+        }) else {
+            continue;
+        };
+        if !pr.contains(pose) || pr.is_fixed(pose) {
+            continue;
+        }
+        let cam = CameraId::from(p.images[i].camera);
+        let mut keys = vec![pose];
+        if sec.boresight {
+            let bk = Key::Boresight(cam);
+            if !pr.contains(bk) {
+                pr.add_block(bk, Value::Vector(DVector::zeros(3)))
+                    .map_err(built)?;
+                if let Some(s) = sec.boresight_sigma_deg {
+                    let s: Vec<f64> = s.iter().map(|x| x.to_radians().max(1e-9)).collect();
+                    let f = Prior::new(bk, DVector::zeros(3));
+                    pr.add_factor(f, Noise::sigmas(&s), loss, GROUP_PRIOR)
+                        .map_err(built)?;
+                }
+            }
+            keys.push(bk);
+        }
+        let f = AttitudeObs {
+            keys,
+            observed: rot,
+        };
+        pr.add_factor(f, Noise::sigmas(&sigma), loss, GROUP_ATTITUDE)
+            .map_err(built)?;
+        n_obs += 1;
+    }
+    if n_obs == 0 {
+        return Err(err("[attitude] is given but no antenna record carries an attitude (omega, phi, kappa columns): export it with `ppkat exposures --format antenna` from a trajectory with attitude, or drop [attitude]".to_string()));
+    }
+    Ok(())
+}
+
+/// The boresight of every camera that has one, in degrees (about the camera's x, y, z).
+pub(super) fn boresights<'a>(
+    p: &Project,
+    pr: &Problem,
+    cov_of: impl Fn(Key) -> Option<&'a DMatrix<f64>>,
+) -> Vec<Estimated> {
+    p.cameras
+        .iter()
+        .enumerate()
+        .map(|(i, c)| (c, Key::Boresight(CameraId::from(i))))
+        .filter(|(_, k)| pr.contains(*k))
+        .map(|(c, k)| {
+            let v = pr
+                .value(k)
+                .and_then(Value::vector)
+                .cloned()
+                .unwrap_or_default();
+            let cov = cov_of(k);
+            Estimated {
+                name: format!("boresight ({})", c.id),
+                values: v.iter().map(|x| x.to_degrees()).collect(),
+                sigmas: (0..v.len())
+                    .map(|i| cov.map_or(0.0, |m| m[(i, i)].max(0.0).sqrt().to_degrees()))
+                    .collect(),
+                labels: ["rx", "ry", "rz"].iter().map(|s| s.to_string()).collect(),
+                t0: 0.0,
+                fixed: pr.is_fixed(k),
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,95 @@
+//! Attitude observations with a boresight: the classic block's antenna table given the true
+//! camera attitude rotated by a known misalignment plus noise; the adjustment recovers the
+//! misalignment within its σ.
+
+use super::*;
+use gnss::frame::{enu_rotation, Geodetic};
+use nalgebra::{Matrix3, Vector3};
+use photo::rotation::{exp_so3, Angles};
+
+/// The camera rotation of a truth pose (ENU at `origin`) in the ENU at `at`.
+fn at_antenna(r: &Matrix3<f64>, origin: &Geodetic, at: &Geodetic) -> Matrix3<f64> {
+    enu_rotation(at) * enu_rotation(origin).transpose() * r
+}
+
+#[test]
+fn boresight_is_recovered_from_attitude_observations() {
+    let dir = tmp("attitude");
+    let mut spec = BlockSpec::classic();
+    spec.project_options = gnss_options("linear");
+    let truth = block::aerial(&spec, &dir).unwrap();
+    // R = R_obs · exp(b): the IMU gives R_obs = R · exp(b)ᵀ, with 0.01° of noise per axis.
+    let b = Vector3::new(0.1f64, -0.2, 0.3).map(f64::to_radians);
+    let noise = 0.01f64.to_radians();
+    let k = std::cell::Cell::new(1u32);
+    let next = || {
+        // A fixed, deterministic sequence in [-1.7, 1.7] (uniform, σ ≈ 1).
+        k.set(k.get().wrapping_mul(1_103_515_245).wrapping_add(12_345));
+        ((k.get() >> 8) as f64 / (1u32 << 24) as f64 - 0.5) * 3.46
+    };
+    edit(&dir, "antennas.csv", |t| {
+        let mut out = String::new();
+        for l in t.lines() {
+            if l.starts_with('#') {
+                out += l;
+            } else if l.starts_with("id,") {
+                out += &format!("{l},omega,phi,kappa");
+            } else {
+                let f: Vec<&str> = l.split(',').collect();
+                let im = truth.images.iter().find(|i| i.0 == f[0]).unwrap();
+                let (lat, lon): (f64, f64) = (f[3].parse().unwrap(), f[4].parse().unwrap());
+                let at = Geodetic::from_degrees(lat, lon, 0.0);
+                let e = Vector3::new(next(), next(), next()) * noise;
+                let r_obs =
+                    at_antenna(&im.2.r, &truth.origin, &at) * exp_so3(&b).transpose() * exp_so3(&e);
+                let Angles::OmegaPhiKappa { omega, phi, kappa } = Angles::omega_phi_kappa(&r_obs)
+                else {
+                    unreachable!()
+                };
+                out += &format!(
+                    "{l},{:.7},{:.7},{:.7}",
+                    omega.to_degrees(),
+                    phi.to_degrees(),
+                    kappa.to_degrees()
+                );
+            }
+            out += "\n";
+        }
+        out
+    });
+    edit(&dir, "project.toml", |t| {
+        format!("{t}\n[attitude]\nsigma_deg = [0.01, 0.01, 0.01]\n")
+    });
+    let r = adjust::run(
+        &dir.join("project.toml"),
+        &dir.join("out"),
+        &Default::default(),
+    )
+    .unwrap();
+    let bs = &r.boresights[0];
+    println!(
+        "boresight {:?} ± {:?} (truth 0.1 -0.2 0.3 deg); σ0 {:.3}; groups {:?}",
+        bs.values,
+        bs.sigmas,
+        r.sigma0,
+        r.groups
+            .iter()
+            .map(|g| (&g.group, g.sigma_factor))
+            .collect::<Vec<_>>()
+    );
+    for (a, t) in [0.1, -0.2, 0.3].iter().enumerate() {
+        let e = bs.values[a] - t;
+        assert!(
+            e.abs() < 3.0 * bs.sigmas[a] + 1e-4,
+            "axis {a}: {e} ± {}",
+            bs.sigmas[a]
+        );
+        assert!(bs.sigmas[a] < 0.01, "σ {}", bs.sigmas[a]);
+    }
+    assert!(r
+        .groups
+        .iter()
+        .any(|g| g.group == "attitude" && g.observations == 87));
+    assert!((0.8..1.2).contains(&r.sigma0), "σ0 {}", r.sigma0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
