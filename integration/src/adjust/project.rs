@@ -86,6 +86,11 @@ pub struct ImagesSection {
     /// any other start value.
     #[serde(default)]
     pub start: Option<PathBuf>,
+    /// How the camera sits on the aircraft, for start values from the flight direction: the
+    /// angle (degrees, counter-clockwise seen from above) from the direction of flight to the
+    /// camera's x axis (image columns). 0: x along the flight; 90: x to the left, across.
+    #[serde(default)]
+    pub kappa_deg: f64,
 }
 
 /// The `[ground]` section.

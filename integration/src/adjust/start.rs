@@ -134,7 +134,8 @@ pub(super) fn orientations(
 }
 
 /// The camera rotation of image `i` from the antenna table's attitude, compass angles, or the
-/// strip direction (nadir, x along the strip) of the neighbouring antennas.
+/// strip direction (nadir, x at `[images] kappa_deg` from the strip) of the neighbouring
+/// antennas.
 fn start_rotation(
     p: &Project,
     frame: &LocalFrame,
@@ -163,7 +164,8 @@ fn start_rotation(
             }
         }
     }
-    (dir.norm() > 0.0).then(|| photo::rotation::rot_z(dir.y.atan2(dir.x)))
+    let mounting = p.file.images.kappa_deg.to_radians();
+    (dir.norm() > 0.0).then(|| photo::rotation::rot_z(dir.y.atan2(dir.x) + mounting))
 }
 
 /// The start pose of image `i` from its antenna and rotation, or a resection on the control
