@@ -258,6 +258,61 @@ pub fn resect(cam: &Camera, pts: &[Control]) -> Result<Resection, ResectionError
     refine(cam, start, pts, true)
 }
 
+/// All six elements from ≥ 4 control points of which some may be wrong (a mismeasured point,
+/// a wrong id): every triple (all of them up to 20 points, then a fixed spread of 200) gives
+/// its P3P solutions, each scored by the points it reprojects within `tolerance` (metres in
+/// the image); the best is refined on its inliers, which are returned (indices) with it.
+/// Deterministic. Fails when fewer than four points agree.
+pub fn resect_robust(
+    cam: &Camera,
+    pts: &[Control],
+    tolerance: f64,
+) -> Result<(Resection, Vec<usize>), ResectionError> {
+    let n = pts.len();
+    if n < 4 {
+        return Err(ResectionError::TooFewPoints(n, 4));
+    }
+    let mut triples = Vec::new();
+    for i in 0..n {
+        for j in i + 1..n {
+            for k in j + 1..n {
+                triples.push([i, j, k]);
+            }
+        }
+    }
+    if triples.len() > 200 {
+        let step = triples.len() as f64 / 200.0;
+        triples = (0..200)
+            .map(|m| triples[(m as f64 * step) as usize])
+            .collect();
+    }
+    let inliers_of = |pose: &Pose| -> Vec<usize> {
+        (0..n)
+            .filter(|&m| {
+                cam.project(pose, &pts[m].object)
+                    .is_some_and(|q| (q - pts[m].image).norm() <= tolerance)
+            })
+            .collect()
+    };
+    let mut best: Option<(Vec<usize>, Pose)> = None;
+    for t in triples {
+        for pose in p3p(cam, [&pts[t[0]], &pts[t[1]], &pts[t[2]]]) {
+            let inl = inliers_of(&pose);
+            if best.as_ref().is_none_or(|b| inl.len() > b.0.len()) {
+                best = Some((inl, pose));
+            }
+        }
+    }
+    let (inl, start) = best.ok_or(ResectionError::NoStart)?;
+    if inl.len() < 4 {
+        return Err(ResectionError::NoStart);
+    }
+    let kept: Vec<Control> = inl.iter().map(|&m| pts[m]).collect();
+    let r = refine(cam, start, &kept, true)?;
+    let inl = inliers_of(&r.pose);
+    Ok((r, inl))
+}
+
 /// All six elements from exactly three control points: of the (up to four) exact P3P
 /// solutions, the one `prefer` scores highest (e.g. an aerial camera looking down from above
 /// the points), refined. From four points on, [`resect`].
@@ -438,6 +493,25 @@ mod tests {
             "{:?}",
             r.pose.centre
         );
+    }
+
+    /// Two of seven points wrong by hundreds of pixels: the robust resection finds the
+    /// orientation on the five good ones and names them.
+    #[test]
+    fn robust_resection_ignores_wrong_points() {
+        let (cam, truth, mut pts) = scene();
+        pts[1].image.x += 400.0 * 3.9e-6;
+        pts[4].image.y -= 900.0 * 3.9e-6;
+        let (r, inliers) = resect_robust(&cam, &pts, 10.0 * 3.9e-6).unwrap();
+        assert_eq!(inliers, vec![0, 2, 3, 5, 6]);
+        for k in 0..3 {
+            let e = r.pose.centre[k] - truth.centre[k];
+            assert!(
+                e.abs() < 3.0 * r.cov[(3 + k, 3 + k)].sqrt(),
+                "axis {k}: {e}"
+            );
+        }
+        assert!(resect_robust(&cam, &pts[..3], 1e-5).is_err());
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! Start values of the orientations, in order of preference: the attitude of the antenna
 //! table; compass angles (refined by a three-angle resection on the control seen, close
 //! range); nadir along the strip direction of the neighbouring antennas; a resection on ≥ 4
-//! control points, or on 3 (aerial: of the exact solutions, the camera above the points
+//! control points (RANSAC over their triples, so a wrong point does not spoil it), or on 3 (aerial: of the exact solutions, the camera above the points
 //! looking down); the same on tie points intersected from the images that have a start,
 //! growing the block until no image gains one.
 //! What enters: the project, the frame, the measurements by point and the antenna of each
@@ -16,7 +16,7 @@ use nalgebra::{Matrix3, Vector2, Vector3};
 use photo::camera::Pose;
 use photo::intersection::{intersect, Ray};
 use photo::lever::LeverArm;
-use photo::resection::{resect, resect_angles, resect_three, Control};
+use photo::resection::{resect, resect_angles, resect_robust, resect_three, Control};
 use std::collections::BTreeMap;
 
 /// Something left out of the adjustment (e.g. `image 17`) and why.
@@ -204,7 +204,7 @@ fn start_pose(
                 .ok()
                 .map(|x| x.pose)
         }
-        _ if controls.len() >= 4 => resect(cam, &controls).ok().map(|x| x.pose),
+        _ if controls.len() >= 4 => robust_start(cam, &controls),
         _ if controls.len() == 3 && p.file.mode != Mode::CloseRange => {
             resect_three(cam, &controls, looking_down(&controls))
                 .ok()
@@ -212,6 +212,15 @@ fn start_pose(
         }
         _ => None,
     }
+}
+
+/// A resection on ≥ 4 points that a wrong one cannot spoil: RANSAC over the triples with a
+/// 20-pixel tolerance, then the plain best fit when too few agree.
+fn robust_start(cam: &photo::camera::Camera, pts: &[Control]) -> Option<Pose> {
+    resect_robust(cam, pts, 20.0 * cam.pixel)
+        .map(|(r, _)| r.pose)
+        .or_else(|_| resect(cam, pts).map(|r| r.pose))
+        .ok()
 }
 
 /// The aerial preference among the exact three-point solutions: the centre above the points,
@@ -237,7 +246,7 @@ fn resect_on_ties(p: &Project, rays: &Rays, start: &mut [Option<Pose>], skip: &[
             let pts = controls_in(p, i, |id| known.get(id).copied());
             let cam = &p.cameras[p.images[i].camera].camera;
             if pts.len() >= 4 {
-                *st = resect(cam, &pts).ok().map(|x| x.pose);
+                *st = robust_start(cam, &pts);
             } else if pts.len() == 3 && p.file.mode != Mode::CloseRange {
                 *st = resect_three(cam, &pts, looking_down(&pts))
                     .ok()
