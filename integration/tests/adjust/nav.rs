@@ -162,3 +162,40 @@ fn nav_block_awkward_adjusts_what_it_can() {
     // Images with ≥ 3 control points start by resection (27 of 60).
     assert!(c.images.len() >= 24, "{} images", c.images.len());
 }
+
+/// Over twelve simulated awkward blocks, the σ the adjustment reports are honest: the check
+/// points' RMS over their theoretical value averages 1 (each block has only 5–12 checks, so
+/// single ratios scatter from 0.45 to 1.6), the offset errors over their σ have a mean square
+/// near 1, and every latency is within 0.05 s.
+#[test]
+fn nav_block_sigmas_are_honest_over_seeds() {
+    let (mut ratios, mut z2, mut n) = (Vec::new(), 0.0, 0);
+    for seed in 2025..2037u64 {
+        let spec = NavSpec {
+            seed,
+            ..NavSpec::awkward()
+        };
+        let dir = tmp(&format!("nav-seed-{seed}"));
+        nav_block(&spec, &dir).unwrap();
+        let r = adjust::run(
+            &dir.join("project.toml"),
+            &dir.join("out"),
+            &Default::default(),
+        )
+        .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        let _ = std::fs::remove_dir_all(&dir);
+        for (a, truth) in OFFSET_ENU.iter().enumerate() {
+            ratios.push(r.checks.rms[a] / r.checks.theoretical_rms[a]);
+            let z = (r.drifts[0].values[a] - truth) / r.drifts[0].sigmas[a];
+            z2 += z * z;
+            n += 1;
+        }
+        let dl = r.latencies[0].values[0] - LATENCY_S;
+        assert!(dl.abs() < 0.05, "seed {seed}: latency error {dl}");
+    }
+    let mean_ratio = ratios.iter().sum::<f64>() / ratios.len() as f64;
+    let z2 = z2 / n as f64;
+    println!("mean check RMS / theoretical {mean_ratio:.3}; offset mean z² {z2:.2}");
+    assert!((0.8..1.2).contains(&mean_ratio), "{mean_ratio}");
+    assert!((0.5..2.0).contains(&z2), "{z2}");
+}
