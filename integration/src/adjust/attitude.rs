@@ -4,7 +4,8 @@
 //!
 //! The observed rotation R_obs (camera → local frame) comes from the antenna table's
 //! ω-φ-κ (the exposure stage rotated the IMU attitude into the camera frame with the nominal
-//! mounting). The camera's rotation is R = R_obs · B with B = exp(b) the boresight; the
+//! mounting), else from the image list's `omega,phi,kappa` (gimbal or navigation angles,
+//! camera → the adjustment's local ENU). The camera's rotation is R = R_obs · B with B = exp(b) the boresight; the
 //! residual is r = log(Bᵀ · R_obsᵀ · R), rotations about the camera's x, y, z axes (≈ ω, φ, κ
 //! for a nadir camera), radians.
 //!
@@ -127,10 +128,17 @@ pub(super) fn factors(
     let mut n_obs = 0;
     for (i, a) in antenna_of.iter().enumerate() {
         let pose = Key::Pose(ImageId::from(i));
-        let Some(rot) = a.and_then(|k| {
-            let ant = &p.antennas[k];
-            ant.rotation.map(|r| frame.from_enu_at(&ant.pos) * r)
-        }) else {
+        // The antenna table's attitude (ENU at the antenna), else the image list's (local).
+        let from_list = p.images[i].opk.map(|[omega, phi, kappa]| {
+            photo::rotation::Angles::OmegaPhiKappa { omega, phi, kappa }.matrix()
+        });
+        let Some(rot) = a
+            .and_then(|k| {
+                let ant = &p.antennas[k];
+                ant.rotation.map(|r| frame.from_enu_at(&ant.pos) * r)
+            })
+            .or(from_list)
+        else {
             continue;
         };
         if !pr.contains(pose) || pr.is_fixed(pose) {
@@ -161,7 +169,7 @@ pub(super) fn factors(
         n_obs += 1;
     }
     if n_obs == 0 {
-        return Err(err("[attitude] is given but no antenna record carries an attitude (omega, phi, kappa columns): export it with `ppkat exposures --format antenna` from a trajectory with attitude, or drop [attitude]".to_string()));
+        return Err(err("[attitude] is given but neither the antenna table nor the image list carries an attitude (omega, phi, kappa columns): add them, or drop [attitude]".to_string()));
     }
     Ok(())
 }

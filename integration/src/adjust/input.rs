@@ -41,6 +41,9 @@ pub struct ImageDef {
     pub strip: String,
     /// Approximate viewing direction from a compass: azimuth, elevation, roll (radians).
     pub compass: Option<[f64; 3]>,
+    /// Attitude from the list's `omega,phi,kappa` (radians; R camera → local ENU of the
+    /// adjustment frame, R = Rω·Rφ·Rκ): an observation under `[attitude]`, a start value.
+    pub opk: Option<[f64; 3]>,
     /// Exposure time (GPST), when the list gives `week,tow`.
     pub time: Option<hifitime::Epoch>,
 }

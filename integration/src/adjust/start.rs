@@ -150,6 +150,9 @@ fn start_rotation(
     if let Some([az, el, roll]) = im.compass {
         return Some(compass_rotation(az, el, roll));
     }
+    if let Some([omega, phi, kappa]) = im.opk {
+        return Some(photo::rotation::Angles::OmegaPhiKappa { omega, phi, kappa }.matrix());
+    }
     let a = antenna?;
     let here = frame.to_local(&a.pos);
     let mut dir = Vector2::zeros();

@@ -93,10 +93,14 @@ pub(super) fn read_images(
     let ci = t.need("image")?;
     let cc = t.col("camera");
     let cs = t.col("strip");
-    let compass = match (t.col("azimuth"), t.col("elevation"), t.col("roll")) {
+    let three = |a: &str, b: &str, c: &str| match (t.col(a), t.col(b), t.col(c)) {
         (Some(a), Some(e), Some(r)) => Some([a, e, r]),
         _ => None,
     };
+    let (compass, opk) = (
+        three("azimuth", "elevation", "roll"),
+        three("omega", "phi", "kappa"),
+    );
     let times = t.col("week").zip(t.col("tow"));
     let mut out: Vec<ImageDef> = Vec::new();
     for (line, row) in &t.rows {
@@ -123,14 +127,17 @@ pub(super) fn read_images(
                 what: format!("image {id} listed twice"),
             });
         }
-        let compass = match compass {
-            Some(c) => Some([
-                t.num(*line, row, c[0])?.to_radians(),
-                t.num(*line, row, c[1])?.to_radians(),
-                t.num(*line, row, c[2])?.to_radians(),
-            ]),
-            None => None,
+        let angles = |c: Option<[usize; 3]>| -> Result<Option<[f64; 3]>, AdjustError> {
+            match c {
+                Some(c) => Ok(Some([
+                    t.num(*line, row, c[0])?.to_radians(),
+                    t.num(*line, row, c[1])?.to_radians(),
+                    t.num(*line, row, c[2])?.to_radians(),
+                ])),
+                None => Ok(None),
+            }
         };
+        let (compass, opk) = (angles(compass)?, angles(opk)?);
         let time = match times {
             // Both cells empty: this image's time is unknown.
             Some((w, s)) if t.text(row, w).is_empty() && t.text(row, s).is_empty() => None,
@@ -155,6 +162,7 @@ pub(super) fn read_images(
             camera,
             strip: cs.map(|c| t.text(row, c)).unwrap_or_else(|| "1".into()),
             compass,
+            opk,
             time,
         });
     }
