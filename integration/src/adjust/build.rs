@@ -41,12 +41,21 @@ pub struct Built {
     pub left_out: Vec<(String, String)>,
     /// Antenna records whose image is not in the list.
     pub unused_antennas: Vec<String>,
+    /// Images without an antenna record in a project with GNSS (adjusted from their points).
+    pub without_antenna: Vec<String>,
 }
 
 /// Check the inputs, choose the frame and the start values, assemble the problem.
 pub fn build(p: &Project) -> Result<Built, AdjustError> {
     let (rays, empty) = measured(p)?;
     let (antenna_of, unused_antennas) = antennas_by_image(p)?;
+    let without_antenna: Vec<String> = match p.file.gnss {
+        Some(_) => (0..p.images.len())
+            .filter(|&i| antenna_of[i].is_none())
+            .map(|i| p.images[i].id.clone())
+            .collect(),
+        None => Vec::new(),
+    };
     check_datum(p, &antenna_of)?;
     let frame = frame_of(p, antenna_of.iter().any(Option::is_some));
     let skip: Vec<bool> = (0..p.images.len()).map(|i| empty.contains(&i)).collect();
@@ -77,6 +86,7 @@ pub fn build(p: &Project) -> Result<Built, AdjustError> {
         single_ray,
         left_out,
         unused_antennas,
+        without_antenna,
     })
 }
 

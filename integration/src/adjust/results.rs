@@ -564,6 +564,13 @@ fn warnings(p: &Project, b: &super::build::Built) -> Vec<String> {
     for (what, why) in &b.left_out {
         warnings.push(format!("{what} is left out of the adjustment: {why}"));
     }
+    if !b.without_antenna.is_empty() {
+        warnings.push(format!(
+            "{} image(s) have no antenna record and are adjusted from their points only (first: {}): check their ids in the antenna table",
+            b.without_antenna.len(),
+            b.without_antenna[0]
+        ));
+    }
     if !b.unused_antennas.is_empty() {
         warnings.push(format!(
             "{} antenna record(s) name images not in the list (first: {})",

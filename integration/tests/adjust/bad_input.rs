@@ -177,3 +177,26 @@ fn snooping_keeps_what_it_cannot_remove() {
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// An image the antenna table does not name is adjusted from its points and counted in a
+/// warning naming it, never silently.
+#[test]
+fn images_without_antenna_are_named() {
+    let d = project_dir("no-antenna");
+    edit(&d, "antennas.csv", |t| {
+        t.lines()
+            .filter(|l| !l.starts_with("105,"))
+            .map(|l| format!("{l}\n"))
+            .collect()
+    });
+    let r = adjust::run(&d.join("project.toml"), &d.join("out"), &Default::default()).unwrap();
+    assert!(
+        r.warnings
+            .iter()
+            .any(|w| w.starts_with("1 image(s) have no antenna record") && w.contains("105")),
+        "{:?}",
+        r.warnings
+    );
+    assert!(r.images.iter().any(|i| i.id == "105"));
+    let _ = std::fs::remove_dir_all(&d);
+}
