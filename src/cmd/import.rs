@@ -2,10 +2,10 @@
 
 use anyhow::{bail, Result};
 use clap::Subcommand;
-use integration::import::{colmap, micmac, ProjectOut, Summary};
+use integration::import::{colmap, micmac, patb, ProjectOut, Summary};
 use std::path::PathBuf;
 
-/// Turn a MicMac or COLMAP project into a ppkat project folder (project.toml and CSV tables)
+/// Turn a MicMac, COLMAP or PATB project into a ppkat project folder (project.toml and CSV tables)
 /// that `ppkat adjust --project DIR/project.toml` runs as it is.
 ///
 /// Prints how many points, measurements, images and positions were read, and every item
@@ -22,6 +22,7 @@ pub struct Args {
 enum ImportCmd {
     Micmac(MicmacArgs),
     Colmap(ColmapArgs),
+    Patb(PatbArgs),
 }
 
 /// Import MicMac ground control, image measurements, calibration, orientations and GNSS.
@@ -109,6 +110,60 @@ struct ColmapArgs {
     out: PathBuf,
 }
 
+/// Import PATB image coordinates (millimetres or pixels) and PATB control points.
+///
+/// Image file: a line `PHOTO [CAMERA]`, then `POINT x y` lines, closed by `-99`. In mm the
+/// origin is the image centre (fiducial centre), x right, y up; in px it is the top-left
+/// corner, column right, row down. Both are written as ppkat pixels (column, row from the
+/// top-left corner) with the camera's size and pixel pitch. Control file: `ID X Y Z
+/// [σX σY σZ | σXY σZ] [gcp|gcp-xy|gcp-z|check]` (X east, Y north, Z up, metres). Points not in
+/// the control file are tie points.
+#[derive(clap::Args)]
+struct PatbArgs {
+    /// PATB image coordinates.
+    #[arg(long, value_name = "FILE.patb")]
+    images: PathBuf,
+    /// Units of the image coordinates: mm (x right, y up from the image centre) or px
+    /// (column right, row down from the top-left corner).
+    #[arg(long, value_name = "UNITS", default_value = "mm", value_parser = ["mm", "px"])]
+    units: String,
+    /// Cameras: the [[camera]] tables of a ppkat project file (a photo names its camera in
+    /// the header's second field); or give --focal-mm, --pixel-um, --width-px, --height-px.
+    #[arg(long, value_name = "FILE.toml", conflicts_with_all = ["focal_mm", "pixel_um", "width_px", "height_px"])]
+    camera: Option<PathBuf>,
+    /// Principal distance, mm (one ideal camera `cam`).
+    #[arg(long, value_name = "F", requires = "pixel_um")]
+    focal_mm: Option<f64>,
+    /// Pixel pitch, µm.
+    #[arg(long, value_name = "P", requires = "focal_mm")]
+    pixel_um: Option<f64>,
+    /// Image width, pixels.
+    #[arg(long, value_name = "W")]
+    width_px: Option<usize>,
+    /// Image height, pixels.
+    #[arg(long, value_name = "H")]
+    height_px: Option<usize>,
+    /// Image measurement σ, pixels (with --focal-mm; a camera file has its own).
+    #[arg(long, value_name = "PX", default_value_t = 0.5)]
+    sigma_px: f64,
+    /// PATB control points: ID X Y Z [σ…] [kind].
+    #[arg(long, value_name = "FILE")]
+    ground: Option<PathBuf>,
+    /// Control points to use as check points, comma-separated ids.
+    #[arg(long, value_name = "IDS", value_delimiter = ',')]
+    check: Vec<String>,
+    /// σ of control points that give none, horizontal and vertical, metres.
+    #[arg(long, value_name = "H,V", default_value = "0.02,0.03")]
+    ground_sigma: String,
+    /// Coordinate system of the control: EPSG:326ZZ / EPSG:327ZZ or utm:ZZN / utm:ZZS
+    /// (default: a local Cartesian frame).
+    #[arg(long, value_name = "CRS")]
+    crs: Option<String>,
+    /// Output folder for project.toml and its tables (created).
+    #[arg(short, long, value_name = "DIR")]
+    out: PathBuf,
+}
+
 /// Two positive numbers "H,V".
 fn pair(flag: &str, s: &str) -> Result<[f64; 2]> {
     let v: Vec<f64> = s.split(',').filter_map(|t| t.trim().parse().ok()).collect();
@@ -164,6 +219,36 @@ pub fn run(args: Args) -> Result<()> {
                 sigma_px: positive("--sigma-px", a.sigma_px)?,
             };
             let (p, s) = colmap::import(&job)?;
+            finish(&p, &s, &a.out)
+        }
+        ImportCmd::Patb(a) => {
+            let camera = match (a.camera, a.focal_mm, a.pixel_um) {
+                (Some(f), ..) => patb::CameraSource::File(f),
+                (None, Some(focal_mm), Some(pixel_um)) => {
+                    patb::CameraSource::Numbers(patb::CameraNumbers {
+                        focal_mm: positive("--focal-mm", focal_mm)?,
+                        pixel_um: positive("--pixel-um", pixel_um)?,
+                        width_px: a.width_px,
+                        height_px: a.height_px,
+                        sigma_px: positive("--sigma-px", a.sigma_px)?,
+                    })
+                }
+                _ => bail!("give the camera: --camera FILE.toml, or --focal-mm F --pixel-um P --width-px W --height-px H"),
+            };
+            let job = patb::PatbJob {
+                images: a.images,
+                units: if a.units == "px" {
+                    patb::Units::Px
+                } else {
+                    patb::Units::Mm
+                },
+                camera,
+                ground: a.ground,
+                check: a.check,
+                ground_sigma: pair("--ground-sigma", &a.ground_sigma)?,
+                crs: a.crs,
+            };
+            let (p, s) = patb::import(&job)?;
             finish(&p, &s, &a.out)
         }
     }

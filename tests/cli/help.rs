@@ -3,7 +3,7 @@
 use super::*;
 
 /// Every subcommand, as its words on the command line.
-const SUBCOMMANDS: [&[&str]; 16] = [
+const SUBCOMMANDS: [&[&str]; 17] = [
     &["info"],
     &["spp"],
     &["ppk"],
@@ -15,6 +15,7 @@ const SUBCOMMANDS: [&[&str]; 16] = [
     &["import"],
     &["import", "micmac"],
     &["import", "colmap"],
+    &["import", "patb"],
     &["demo"],
     &["bench"],
     &["bench", "ingest"],

@@ -1,5 +1,6 @@
 //! `ppkat import micmac|colmap` on the shared samples: counts equal to the files' content,
-//! the imported projects adjust, bad input is named.
+//! the imported projects adjust, bad input is named; `ppkat import patb` on a small
+//! hand-written block.
 
 use super::*;
 use integration::gnss::frame::Geodetic;
@@ -243,4 +244,73 @@ fn colmap_brighton_beach_imports_and_adjusts() {
     let rms = (v.iter().map(|x| x * x).sum::<f64>() / (v.len() / 2) as f64).sqrt();
     eprintln!("σ0 {s0:.3}, reprojection RMS {rms:.3} px");
     assert!(rms < 1.0, "reprojection RMS {rms} px");
+}
+
+#[test]
+fn patb_import_prints_counts_and_names_bad_lines() {
+    let im = tmp("patb-cli.im");
+    let con = tmp("patb-cli.con");
+    // Two photos of a 1000 × 800 px camera (10 µm); photo 3 is empty, G9 never measured.
+    std::fs::write(
+        &im,
+        "1\nG1 -1.0 0.5\nT1 0.2 0.1\n-99\n2\nG1 -2.0 0.5\nT1 -0.8 0.1\n-99\n3\n-99\n",
+    )
+    .unwrap();
+    std::fs::write(&con, "G1 100 200 30 0.01 0.02\nG9 0 0 0 check\n-99\n").unwrap();
+    let out = tmp("patb-cli");
+    let mut args = vec![
+        "import",
+        "patb",
+        "--images",
+        p(&im),
+        "--focal-mm",
+        "35",
+        "--pixel-um",
+        "10",
+        "--width-px",
+        "1000",
+        "--height-px",
+        "800",
+        "--ground",
+        p(&con),
+        "-o",
+        p(&out),
+    ];
+    let t = succeeds(&ppkat(&args));
+    assert_eq!(count(&t, "photos"), 3);
+    assert_eq!(count(&t, "image measurements"), 4);
+    assert_eq!(count(&t, "gcp points"), 1);
+    assert_eq!(count(&t, "check points"), 1);
+    assert_eq!(count(&t, "tie points"), 1);
+    assert_eq!(count(&t, "images"), 2);
+    assert!(t.contains("skipped 2"), "{t}");
+    assert!(
+        t.contains("no measurements") && t.contains("not measured"),
+        "{t}"
+    );
+    // -1.0 mm, 0.5 mm from the centre: column 400, row 350.
+    let x = column(&out.join("image_observations.csv"), "x_px");
+    let y = column(&out.join("image_observations.csv"), "y_px");
+    assert_eq!((x[0].as_str(), y[0].as_str()), ("400.0000", "350.0000"));
+    // The same file read as pixels falls outside the image: file, line and a hint.
+    args.extend(["--units", "px"]);
+    fails_with(
+        &ppkat(&args),
+        &[
+            "patb-cli.im:2:",
+            "outside the 1000 × 800 px image",
+            "--units",
+        ],
+    );
+    // A line with too few fields.
+    std::fs::write(&im, "1\nG1 -1.0\n-99\n").unwrap();
+    fails_with(
+        &ppkat(&args[..args.len() - 2]),
+        &["patb-cli.im:2:", "2 field(s)"],
+    );
+    // No camera at all.
+    fails_with(
+        &ppkat(&["import", "patb", "--images", p(&im), "-o", p(&out)]),
+        &["--camera FILE.toml", "--focal-mm"],
+    );
 }

@@ -120,8 +120,9 @@ fn interior_indices(
     Ok(out)
 }
 
-/// A camera section as a camera with its estimation choices.
-pub(super) fn camera_def(c: &CameraSection, path: &Path) -> Result<CameraDef, AdjustError> {
+/// A camera section as a camera with its estimation choices; `path` (the file the section
+/// came from) names it in errors. Also used by `import::patb` for `--camera FILE.toml`.
+pub fn camera_def(c: &CameraSection, path: &Path) -> Result<CameraDef, AdjustError> {
     let focal = one_of(
         path,
         &c.id,

@@ -6,6 +6,9 @@
 //!   (start values) and `OriConvert`-style GNSS text.
 //! - [`colmap`]: a sparse text model (`cameras.txt`, `images.txt`, `points3D.txt`), its datum
 //!   from the photos' EXIF GPS.
+//! - [`patb`]: PATB image coordinates (millimetres from the image centre, y up, or pixels
+//!   from the top-left corner) and PATB control points, with the cameras from a TOML file or
+//!   from their numbers.
 //!
 //! Every importer counts what it read and what it skipped, with the reason ([`Summary`]);
 //! problems that make the result wrong name the file, the line or element and what to do
@@ -15,6 +18,7 @@
 
 pub mod colmap;
 pub mod micmac;
+pub mod patb;
 mod write;
 
 pub use write::{CameraOut, GroundOut, ProjectOut, StartOut};

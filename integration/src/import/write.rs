@@ -136,7 +136,7 @@ impl ProjectOut {
                 let p = g.pos.0;
                 let _ = writeln!(
                     s,
-                    "{},{},{:.5},{:.5},{:.5},{},{},{}",
+                    "{},{},{:.7},{:.7},{:.7},{},{},{}",
                     g.id, g.kind, p.x, p.y, p.z, g.sigma[0], g.sigma[1], g.sigma[2]
                 );
             }

@@ -9,6 +9,7 @@ mod inputs;
 mod latency;
 mod models;
 mod nav;
+mod patb;
 
 use integration::adjust::{self, results::Results};
 use integration::simulate::block::{self, BlockSpec, BlockTruth};
