@@ -340,7 +340,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
             .chain(not_compared)
             .chain(kept.iter().map(|k| {
                 format!(
-                    "{} {} ({}): |w| {:.1} is above the critical {:.2}, but it is kept: removing it would leave a parameter undetermined — check it",
+                    "{} {} ({}): |w| {:.1} is above the critical {:.2}, but it is kept: removing it would leave a parameter undetermined; its σ is multiplied by 100 — check it",
                     k.kind, k.what, k.source, k.w, s.critical
                 )
             }))

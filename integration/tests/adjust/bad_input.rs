@@ -119,7 +119,8 @@ fn undetermined_images_are_named_and_left_out() {
 
 /// Data snooping never aborts: an image held by two points and its GNSS centre has a single
 /// redundant component; a blunder there cannot be removed without leaving the image
-/// undetermined, so it is kept, flagged and reported, and the adjustment finishes.
+/// undetermined, so it is kept (weighted down), flagged and reported, and the adjustment
+/// finishes without removing the neighbours its blunder would otherwise spread into.
 #[test]
 fn snooping_keeps_what_it_cannot_remove() {
     let d = project_dir("snoop-keep");
@@ -168,6 +169,8 @@ fn snooping_keeps_what_it_cannot_remove() {
         "{:?}",
         r.kept_suspects
     );
+    // Kept with next to no weight, the blunder does not spread: nothing innocent is removed.
+    assert!(r.removed.is_empty(), "{:?}", r.removed);
     assert!(
         r.warnings
             .iter()

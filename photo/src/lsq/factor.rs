@@ -124,6 +124,18 @@ impl Noise {
         Some(Noise::Covariance { whiten, sigmas })
     }
 
+    /// The same weighting with every σ multiplied by `f` (`dim` components for [`Noise::Unit`]).
+    pub fn scaled(&self, f: f64, dim: usize) -> Noise {
+        match self {
+            Noise::Unit => Noise::isotropic(dim, f),
+            Noise::Sigmas(s) => Noise::Sigmas(s * f),
+            Noise::Covariance { whiten, sigmas } => Noise::Covariance {
+                whiten: whiten / f,
+                sigmas: sigmas * f,
+            },
+        }
+    }
+
     /// The number of components it weights (`None`: any).
     pub fn dim(&self) -> Option<usize> {
         match self {

@@ -5,6 +5,10 @@ use super::factor::{FactorId, Group};
 use super::lm::Summary;
 use super::problem::Problem;
 
+/// σ multiplier of a suspect that cannot be removed (it keeps its block determined, with
+/// next to no weight).
+pub const KEPT_SIGMA_FACTOR: f64 = 100.0;
+
 /// Least redundancy of a group whose variance component is estimated.
 pub const MIN_VCE_REDUNDANCY: f64 = 10.0;
 
@@ -14,7 +18,8 @@ impl Problem {
     /// block of an eliminated kind that a removal leaves undetermined (no more residual rows
     /// than unknowns) is fixed out, its remaining factors following with w = 0. A factor whose
     /// removal would leave any other block undetermined is kept (never an abort): it is
-    /// listed by [`Self::kept_suspects`] and the next largest |w| is tested.
+    /// listed by [`Self::kept_suspects`], its σ multiplied by [`KEPT_SIGMA_FACTOR`] (so its
+    /// blunder does not spread into its neighbours), and the next largest |w| is tested.
     pub fn data_snooping(
         &mut self,
         critical: f64,
@@ -41,6 +46,10 @@ impl Problem {
                             self.model.entries[f.0].removed = false;
                         }
                         self.model.fixed = fixed_before;
+                        // Kept, but weighted down so that its blunder does not spread into the
+                        // observations around it (which would then be removed instead).
+                        let e = &mut self.model.entries[k.0];
+                        e.noise = e.noise.scaled(KEPT_SIGMA_FACTOR, e.factor.dim());
                         self.model.kept.push((k, w));
                     }
                 }

@@ -26,6 +26,8 @@ impl Problem {
             .group_scale
             .iter()
             .for_each(|x| x.to_bits().hash(&mut h));
+        // Kept suspects had their weights changed.
+        self.model.kept.len().hash(&mut h);
         h.finish()
     }
 
