@@ -235,3 +235,24 @@ fn blunders_and_a_wrong_gcp_are_found() {
         }
     }
 }
+
+/// The check points' theoretical σ are honest over eight simulated classic blocks: one block's
+/// 39 check points share its datum error, so a single RMS/theoretical ratio scatters
+/// (0.53–1.76 per axis over these seeds), but the mean per axis is near 1.
+#[test]
+fn check_point_sigmas_are_honest_over_seeds() {
+    let mut sum = [0.0; 3];
+    let n = 8;
+    for seed in 8000..8000 + n as u64 {
+        let mut spec = BlockSpec::classic();
+        spec.seed = seed;
+        spec.project_options = gnss_options("linear");
+        let (_, r) = run(&spec, &format!("classic-seed-{seed}"));
+        for (a, s) in sum.iter_mut().enumerate() {
+            *s += r.checks.rms[a] / r.checks.theoretical_rms[a];
+        }
+    }
+    let mean = sum.map(|s| s / n as f64);
+    println!("mean check RMS / theoretical E/N/U {mean:.3?}");
+    assert!(mean.iter().all(|m| (0.75..1.25).contains(m)), "{mean:?}");
+}
