@@ -2,6 +2,7 @@
 //!
 //! - [`rinex`]: observation files (RINEX 2/3/4, Hatanaka, gzip) streamed into GPST epochs with
 //!   every event record kept; navigation files into ephemeris records.
+//! - [`raw`]: raw receiver logs (u-blox UBX) decoded and converted to RINEX 3.04.
 //! - [`orbit`]: satellite positions and clocks from broadcast ephemerides (GPS, Galileo,
 //!   BeiDou, QZSS, GLONASS) or SP3 precise orbits.
 //! - [`model`], [`signal`]: troposphere, ionosphere, frequencies.
@@ -19,6 +20,7 @@ pub mod frame;
 pub mod model;
 pub mod orbit;
 pub mod ppk;
+pub mod raw;
 pub mod rinex;
 pub mod signal;
 pub mod solution;

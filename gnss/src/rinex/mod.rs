@@ -14,6 +14,7 @@ pub mod lines;
 pub mod nav;
 mod record;
 pub mod summary;
+pub mod write;
 
 pub use header::{AntennaDelta, ObsHeader};
 pub use record::{Event, IngestStats, Obs, ObsCode, ObsEpoch, Record, SatObs, Warning};

@@ -1,0 +1,130 @@
+//! Raw receiver logs: format detection from content and conversion to RINEX 3.04.
+//!
+//! What enters: the bytes of a receiver log. What leaves: observation epochs in the records of
+//! [`crate::rinex::record`] (so that the RINEX writer and every engine take them as they take a
+//! RINEX file), camera events, and [`RawStats`] counting everything that was dropped.
+//! Uses [`crate::rinex::write`] to write RINEX. Only u-blox UBX ([`ubx`]) for now.
+//!
+//! The UBX decoder is our own rather than the `ublox` crate: the conversion must reproduce
+//! RTKLIB convbin bit for bit (its loss-of-lock rules need the raw `trkStat`, `locktime` and
+//! `cpStdev` fields), bad frames must be counted rather than skipped inside a crate, and the
+//! frame format (sync, class, id, length, payload, Fletcher checksum) is a few dozen lines.
+
+pub mod convert;
+pub mod ubx;
+pub mod ubx_obs;
+
+use std::collections::BTreeMap;
+use std::fmt;
+
+/// A raw log format that `convert` reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RawFormat {
+    /// u-blox UBX binary protocol.
+    Ubx,
+}
+
+/// The format of a log from its first bytes: UBX when a whole frame with a valid checksum
+/// starts within them. `None` when no known format is recognised.
+pub fn detect(head: &[u8]) -> Option<RawFormat> {
+    let mut i = 0;
+    while i + 8 <= head.len() {
+        if head[i] == ubx::SYNC1 && head[i + 1] == ubx::SYNC2 {
+            let len = u16::from_le_bytes([head[i + 4], head[i + 5]]) as usize;
+            let end = i + 8 + len;
+            if end <= head.len() && ubx::checksum_ok(&head[i..end]) {
+                return Some(RawFormat::Ubx);
+            }
+        }
+        i += 1;
+    }
+    None
+}
+
+/// What a conversion read and what it dropped (nothing is dropped silently).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RawStats {
+    /// Bytes read.
+    pub bytes: u64,
+    /// Frames with a valid checksum.
+    pub frames: u64,
+    /// Frames whose checksum failed (skipped; the search for the next frame went on).
+    pub checksum_failures: u64,
+    /// A frame cut off by the end of the file.
+    pub truncated_frames: u64,
+    /// Bytes outside any valid frame (noise, NMEA, other protocols).
+    pub skipped_bytes: u64,
+    /// Frames of types the converter does not use, counted by type name.
+    pub unused: BTreeMap<String, u64>,
+    /// Frames of a used type whose payload is too short for what it announces.
+    pub malformed: BTreeMap<String, u64>,
+    /// Measurement epochs stamped before the receiver knew the GPS week (week 0): skipped.
+    pub epochs_without_time: u64,
+    /// Observation epochs written.
+    pub epochs: u64,
+    /// Epochs whose time is not after the previous one (kept, as convbin does).
+    pub time_jumps: u64,
+    /// Measurements dropped, counted by reason (unknown system or satellite, signal
+    /// without a RINEX slot).
+    pub dropped: BTreeMap<String, u64>,
+    /// Camera events (time-mark edges) read.
+    pub events: u64,
+}
+
+impl RawStats {
+    /// Count one dropped measurement for `reason`.
+    pub fn drop(&mut self, reason: &str) {
+        *self.dropped.entry(reason.to_string()).or_default() += 1;
+    }
+}
+
+impl fmt::Display for RawStats {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "read {} bytes: {} frames, {} checksum failures, {} truncated, {} bytes outside frames",
+            self.bytes,
+            self.frames,
+            self.checksum_failures,
+            self.truncated_frames,
+            self.skipped_bytes
+        )?;
+        writeln!(
+            f,
+            "{} observation epochs, {} events, {} epochs before the receiver knew the time, {} time jumps",
+            self.epochs, self.events, self.epochs_without_time, self.time_jumps
+        )?;
+        let list = |m: &BTreeMap<String, u64>| {
+            m.iter()
+                .map(|(k, v)| format!("{k} ×{v}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        if !self.unused.is_empty() {
+            writeln!(f, "not used: {}", list(&self.unused))?;
+        }
+        if !self.malformed.is_empty() {
+            writeln!(f, "malformed (skipped): {}", list(&self.malformed))?;
+        }
+        if !self.dropped.is_empty() {
+            writeln!(f, "measurements dropped: {}", list(&self.dropped))?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    #[test]
+    fn detects_ubx_from_content() {
+        let f = ubx::frame(0x0d, 0x03, &[1, 2, 3, 4]);
+        let mut head = b"$GPGGA,junk\r\n".to_vec();
+        head.extend_from_slice(&f);
+        assert_eq!(detect(&head), Some(RawFormat::Ubx));
+        let n = head.len();
+        head[n - 1] ^= 0xff;
+        assert_eq!(detect(&head), None);
+        assert_eq!(detect(b"     3.04           OBSERVATION DATA"), None);
+    }
+}
