@@ -37,6 +37,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Cmd {
     Info(cmd::info::Args),
+    Convert(cmd::convert::Args),
     Spp(cmd::spp::Args),
     Ppk(cmd::ppk::Args),
     Exposures(cmd::exposures::Args),
@@ -91,6 +92,7 @@ fn run(cli: Cli) -> Result<()> {
 fn dispatch(cmd: Cmd, threads: Option<usize>) -> Result<()> {
     match cmd {
         Cmd::Info(a) => cmd::info::run(a),
+        Cmd::Convert(a) => cmd::convert::run(a),
         Cmd::Spp(a) => cmd::spp::run(a),
         Cmd::Ppk(a) => cmd::ppk::run(a),
         Cmd::Exposures(a) => cmd::exposures::run(a),

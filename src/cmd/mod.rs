@@ -5,6 +5,7 @@
 pub mod adjust;
 pub mod bal;
 pub mod bench;
+pub mod convert;
 pub mod demo;
 pub mod exposures;
 pub mod import;

@@ -3,8 +3,9 @@
 use super::*;
 
 /// Every subcommand, as its words on the command line.
-const SUBCOMMANDS: [&[&str]; 17] = [
+const SUBCOMMANDS: [&[&str]; 18] = [
     &["info"],
+    &["convert"],
     &["spp"],
     &["ppk"],
     &["exposures"],

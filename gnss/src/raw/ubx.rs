@@ -3,9 +3,8 @@
 //!
 //! What enters: a byte stream ([`FrameReader`]) or one payload ([`decode_rawx`],
 //! [`decode_tm2`]). What leaves: frames with valid checksums, decoded messages, and counts of
-//! everything skipped in [`RawStats`](super::RawStats). The conversion of measurements into
-//! RINEX observations (loss-of-lock rules) is in [`super::convert`]-side code
-//! ([`crate::raw::ubx_obs`]).
+//! everything skipped in [`RawStats`](super::RawStats). Measurements become RINEX
+//! observations (with their loss-of-lock rules) in [`super::ubx_obs`].
 //!
 //! A frame is `B5 62`, class, id, payload length (u16 LE), payload, and a two-byte Fletcher
 //! checksum over class..payload. A frame with a bad checksum is counted and the search for the
