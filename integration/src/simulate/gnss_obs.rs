@@ -15,6 +15,7 @@ use gnss::frame::{az_el, rotate_to_reception, Ecef};
 use gnss::model::{klobuchar_gps, troposphere};
 use gnss::orbit::{Ephemerides, C};
 use gnss::rinex::nav::Klobuchar;
+use gnss::rinex::write::epoch_fields;
 use gnss::sv::{Constellation, Sv};
 use gnss::time::week_tow;
 use hifitime::{Duration, Epoch, TimeScale};
@@ -418,19 +419,6 @@ fn write_epoch(body: &mut String, tag: Epoch, recs: &[SatObs]) {
         }
         body.push('\n');
     }
-}
-
-/// `yyyy mm dd hh mm ss.sssssss` as RINEX 3 epoch lines have it (seconds F11.7).
-fn epoch_fields(t: Epoch) -> String {
-    // Round to 100 ns first so that a time like 59.99999999 does not print as 60.
-    let t = Epoch::from_gpst_nanoseconds(
-        ((t.to_gpst_nanoseconds().unwrap_or(0) as f64 / 100.0).round() * 100.0) as u64,
-    );
-    let (y, mo, d, h, mi, s, ns) = t.to_gregorian(TimeScale::GPST);
-    format!(
-        "{y:04} {mo:02} {d:02} {h:02} {mi:02}{:11.7}",
-        s as f64 + ns as f64 * 1e-9
-    )
 }
 
 fn header(rx: &Receiver, p: Ecef) -> String {
