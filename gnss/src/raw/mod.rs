@@ -1,7 +1,7 @@
 //! Raw receiver logs: format detection from content and conversion to RINEX 3.04.
 //!
 //! What enters: the bytes of a receiver log. What leaves: observation epochs in the records of
-//! [`crate::rinex::record`] (so that the RINEX writer and every engine take them as they take a
+//! [`crate::rinex`] ([`ObsEpoch`](crate::rinex::ObsEpoch), [`SatObs`](crate::rinex::SatObs)) (so that the RINEX writer and every engine take them as they take a
 //! RINEX file), camera events, and [`RawStats`] counting everything that was dropped.
 //! Uses [`crate::rinex::write`] to write RINEX. Only u-blox UBX ([`ubx`]) for now.
 //!

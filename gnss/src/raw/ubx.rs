@@ -3,7 +3,7 @@
 //!
 //! What enters: a byte stream ([`FrameReader`]) or one payload ([`decode_rawx`],
 //! [`decode_tm2`]). What leaves: frames with valid checksums, decoded messages, and counts of
-//! everything skipped in [`RawStats`](super::RawStats). Measurements become RINEX
+//! everything skipped in [`RawStats`]. Measurements become RINEX
 //! observations (with their loss-of-lock rules) in [`super::ubx_obs`].
 //!
 //! A frame is `B5 62`, class, id, payload length (u16 LE), payload, and a two-byte Fletcher

@@ -1,7 +1,7 @@
 //! RINEX 3.04 observation writer: header, observation epochs and flag-5 event records, in
 //! the layout RTKLIB and the RINEX 3.04 standard use (F14.3 values, LLI and SSI digits).
 //!
-//! What enters: a [`HeaderOut`] and the records of [`super::record`] ([`SatObs`] aligned with
+//! What enters: a [`HeaderOut`] and the records of [`super`] ([`SatObs`] aligned with
 //! the header's types, NaN for blank). What leaves: text on a `Write`. Reading the text back
 //! with [`super::ObsFile`] gives the same values to the printed precision.
 
