@@ -94,6 +94,19 @@ struct Candidate<T> {
     order: usize,
 }
 
+impl<T> Candidate<T> {
+    /// The record `v` at `t` of the `order`-th file, whose records are `step` seconds apart
+    /// and span `t0`–`t1`.
+    fn new(t: Epoch, v: T, step: f64, (t0, t1): (Epoch, Epoch), order: usize) -> Self {
+        Candidate {
+            sample: Sample { t, v, step },
+            central: (t - t0).to_seconds().min((t1 - t).to_seconds()),
+            start: t0,
+            order,
+        }
+    }
+}
+
 /// Precise orbits and clocks, merged from several files.
 #[derive(Clone, Debug)]
 pub struct PreciseOrbits {
@@ -246,23 +259,15 @@ fn sp3_candidates<T: Copy + Finite>(
 ) -> BTreeMap<Sv, Vec<Candidate<T>>> {
     let mut out: BTreeMap<Sv, Vec<Candidate<T>>> = BTreeMap::new();
     for (order, f) in sp3.iter().enumerate() {
-        let Some((t0, t1)) = f.span() else { continue };
+        let Some(span) = f.span() else { continue };
         for (sv, samples) in &f.sats {
             for (&t, &(p, c)) in f.epochs.iter().zip(samples) {
                 let v = pick(p, c);
                 if !v.finite() {
                     continue;
                 }
-                out.entry(*sv).or_default().push(Candidate {
-                    sample: Sample {
-                        t,
-                        v,
-                        step: f.interval,
-                    },
-                    central: (t - t0).to_seconds().min((t1 - t).to_seconds()),
-                    start: t0,
-                    order,
-                });
+                let cand = Candidate::new(t, v, f.interval, span, order);
+                out.entry(*sv).or_default().push(cand);
             }
         }
     }
@@ -273,20 +278,13 @@ fn sp3_candidates<T: Copy + Finite>(
 fn clk_candidates(clk: &[ClockFile]) -> BTreeMap<Sv, Vec<Candidate<f64>>> {
     let mut out: BTreeMap<Sv, Vec<Candidate<f64>>> = BTreeMap::new();
     for (order, f) in clk.iter().enumerate() {
-        let Some((t0, t1)) = f.span() else { continue };
+        let Some(span) = f.span() else { continue };
         for (sv, records) in &f.sats {
-            out.entry(*sv)
-                .or_default()
-                .extend(records.iter().map(|&(t, v)| Candidate {
-                    sample: Sample {
-                        t,
-                        v,
-                        step: f.interval,
-                    },
-                    central: (t - t0).to_seconds().min((t1 - t).to_seconds()),
-                    start: t0,
-                    order,
-                }));
+            out.entry(*sv).or_default().extend(
+                records
+                    .iter()
+                    .map(|&(t, v)| Candidate::new(t, v, f.interval, span, order)),
+            );
         }
     }
     out

@@ -7,6 +7,19 @@ use gnss::frame::{enu_rotation, Geodetic};
 use nalgebra::{Matrix3, Vector3};
 use photo::rotation::{exp_so3, Angles};
 
+/// `omega,phi,kappa` columns (degrees) of a rotation camera → ENU.
+fn opk_columns(r: &Matrix3<f64>) -> String {
+    let Angles::OmegaPhiKappa { omega, phi, kappa } = Angles::omega_phi_kappa(r) else {
+        unreachable!("omega_phi_kappa returns that convention")
+    };
+    format!(
+        "{:.7},{:.7},{:.7}",
+        omega.to_degrees(),
+        phi.to_degrees(),
+        kappa.to_degrees()
+    )
+}
+
 /// The camera rotation of a truth pose (ENU at `origin`) in the ENU at `at`.
 fn at_antenna(r: &Matrix3<f64>, origin: &Geodetic, at: &Geodetic) -> Matrix3<f64> {
     enu_rotation(at) * enu_rotation(origin).transpose() * r
@@ -42,16 +55,7 @@ fn boresight_is_recovered_from_attitude_observations() {
                 let e = Vector3::new(next(), next(), next()) * noise;
                 let r_obs =
                     at_antenna(&im.2.r, &truth.origin, &at) * exp_so3(&b).transpose() * exp_so3(&e);
-                let Angles::OmegaPhiKappa { omega, phi, kappa } = Angles::omega_phi_kappa(&r_obs)
-                else {
-                    unreachable!()
-                };
-                out += &format!(
-                    "{l},{:.7},{:.7},{:.7}",
-                    omega.to_degrees(),
-                    phi.to_degrees(),
-                    kappa.to_degrees()
-                );
+                out += &format!("{l},{}", opk_columns(&r_obs));
             }
             out += "\n";
         }
@@ -189,16 +193,7 @@ fn image_list_angles_are_observations() {
             let id = l.split(',').next().unwrap();
             let im = truth.images.iter().find(|i| i.0 == id).unwrap();
             let r_obs = im.2.r * exp_so3(&b).transpose();
-            let Angles::OmegaPhiKappa { omega, phi, kappa } = Angles::omega_phi_kappa(&r_obs)
-            else {
-                unreachable!()
-            };
-            out += &format!(
-                "{l},{:.7},{:.7},{:.7}\n",
-                omega.to_degrees(),
-                phi.to_degrees(),
-                kappa.to_degrees()
-            );
+            out += &format!("{l},{}\n", opk_columns(&r_obs));
         }
         out
     });
