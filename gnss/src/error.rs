@@ -15,6 +15,14 @@ pub enum Error {
         /// What the system said.
         source: std::io::Error,
     },
+    /// The output file could not be written.
+    #[error("{path}: cannot write: {source}; check that its folder exists and is writable")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// What the system said.
+        source: std::io::Error,
+    },
     /// A line of the file does not follow the format.
     #[error("{path}:{line}: {what}")]
     Parse {

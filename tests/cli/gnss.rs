@@ -335,3 +335,14 @@ fn ppk_applies_antex_phase_centre_offsets() {
         assert!((a - b - 0.10).abs() < 0.003, "height change {}", a - b);
     }
 }
+
+/// An output in a folder that does not exist: exit 1, the file named, "cannot write".
+#[test]
+fn output_into_a_missing_folder() {
+    let Some([obs, nav]) = shared_all([GEONET_ROVER, GEONET_NAV]) else {
+        return;
+    };
+    let out = tmp("no-such-folder").join("x.pos");
+    let o = ppkat(&["spp", "--obs", p(&obs), "--nav", p(&nav), "-o", p(&out)]);
+    fails_with(&o, &["no-such-folder", "cannot write"]);
+}
