@@ -10,7 +10,7 @@
 //! the whole block shifts with them). Tie points seen in fewer than `min_track` images are
 //! skipped and counted.
 
-use super::{ferr, CameraOut, ImportError, ProjectOut, StartOut, Summary};
+use super::{ferr, lines, CameraOut, ImportError, ProjectOut, StartOut, Summary};
 use gnss::frame::{enu_rotation, Ecef, Geodetic};
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use photo::camera_convert::ColmapCamera;
@@ -41,18 +41,6 @@ struct Image {
     r: Matrix3<f64>,
     centre: Vector3<f64>,
     obs: Vec<(f64, f64, i64)>,
-}
-
-/// Data lines (not comments) with their line numbers.
-fn lines(path: &Path) -> Result<Vec<(usize, String)>, ImportError> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| ferr(path, None, format!("cannot read: {e}")))?;
-    Ok(text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim_start().starts_with('#'))
-        .map(|(i, l)| (i + 1, l.to_string()))
-        .collect())
 }
 
 fn num<T: std::str::FromStr>(path: &Path, line: usize, s: Option<&str>) -> Result<T, ImportError> {

@@ -186,3 +186,15 @@ impl GroundFrame {
         }
     }
 }
+
+/// The data lines of a text file (not `#` comments) with their 1-based line numbers.
+pub(crate) fn lines(path: &Path) -> Result<Vec<(usize, String)>, ImportError> {
+    let text =
+        std::fs::read_to_string(path).map_err(|e| ferr(path, None, format!("cannot read: {e}")))?;
+    Ok(text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim_start().starts_with('#'))
+        .map(|(i, l)| (i + 1, l.to_string()))
+        .collect())
+}

@@ -109,13 +109,9 @@ type Control = (
 
 /// Non-comment, non-blank lines split into fields, with their line numbers.
 fn fields(path: &Path) -> Result<Vec<(usize, Vec<String>)>, ImportError> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| ferr(path, None, format!("cannot read: {e}")))?;
-    Ok(text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim_start().starts_with('#'))
-        .map(|(i, l)| (i + 1, l.split_whitespace().map(String::from).collect()))
+    Ok(super::lines(path)?
+        .into_iter()
+        .map(|(i, l)| (i, l.split_whitespace().map(String::from).collect()))
         .filter(|(_, f): &(usize, Vec<String>)| !f.is_empty())
         .collect())
 }
