@@ -20,6 +20,7 @@ pub mod frame;
 pub mod model;
 pub mod orbit;
 pub mod ppk;
+pub mod ppp;
 pub mod raw;
 pub mod rinex;
 pub mod signal;

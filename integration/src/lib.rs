@@ -30,6 +30,7 @@ pub mod exposure;
 pub mod import;
 pub mod orbits;
 pub mod pipeline;
+pub mod ppp;
 pub mod simulate;
 pub mod survey;
 
