@@ -122,6 +122,54 @@ pub fn ppp(job: &PppJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PppReport>
     Ok(report)
 }
 
+/// The base marker from static PPP on the base file (for `ppk --base-from-ppp`): position,
+/// the header line that states it with its σ, and the run's warnings.
+pub fn base_from_ppp(
+    base: &ObsFile,
+    orbits: &Orbits,
+    antex: Option<&Antex>,
+    systems: &[gnss::sv::Constellation],
+) -> Result<(Ecef, String, Vec<String>)> {
+    use gnss::sv::Constellation;
+    let systems: Vec<Constellation> = systems
+        .iter()
+        .copied()
+        .filter(|s| matches!(s, Constellation::Gps | Constellation::Galileo))
+        .collect();
+    let options = PppOptions {
+        systems,
+        antex: antex.cloned().into_iter().collect(),
+        ..PppOptions::default()
+    };
+    let start = start_position(base, orbits)?;
+    let r = gnss::ppp::process(base, orbits, &options, start, &|_| {})?;
+    let Some(last) = r.epochs.last() else {
+        return Err(Error::input(
+            &base.path,
+            "PPP on the base file solved no epoch: give the base position (--base-pos or --base-llh)",
+        ));
+    };
+    let sd = PppReport::sigmas(&last.pos, &last.cov);
+    let frame = orbits
+        .precise
+        .as_ref()
+        .map(|p| p.frame.clone())
+        .unwrap_or_default();
+    let line = format!(
+        "base from : static PPP on the base file, {} epochs, σ E/N/U {:.1}/{:.1}/{:.1} mm, frame {frame}",
+        r.epochs.len(),
+        sd[0] * 1e3,
+        sd[1] * 1e3,
+        sd[2] * 1e3
+    );
+    let warnings = r
+        .warnings
+        .iter()
+        .map(|w| format!("base PPP: {w}"))
+        .collect();
+    Ok((last.pos, line, warnings))
+}
+
 /// The warning about clocks interpolated from SP3 records.
 fn clock_warning(interval: f64) -> String {
     format!(
