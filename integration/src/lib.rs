@@ -30,7 +30,9 @@ pub mod exposure;
 pub mod import;
 pub mod orbits;
 pub mod pipeline;
+mod plot;
 pub mod ppp;
+mod ppp_report;
 pub mod simulate;
 pub mod survey;
 

@@ -57,6 +57,8 @@ pub struct PppReport {
     pub out: PathBuf,
     /// The JSON summary, in static mode.
     pub summary: Option<PathBuf>,
+    /// The HTML report (`OUT.pos.html`).
+    pub html: Option<PathBuf>,
     /// Reference frame of the orbits.
     pub frame: String,
     /// Seconds spent.
@@ -71,6 +73,8 @@ pub fn ppp(job: &PppJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PppReport>
     let obs = ObsFile::read(&job.obs)?;
     gnss::ppk::require_phase(&obs, "observation")?;
     let (orbits, mut warnings) = load_orbits(&job.nav, &job.sp3, &job.clk)?;
+    // PPP needs neither broadcast ionosphere nor group delays (IF combination, precise clocks).
+    warnings.retain(|w| !w.contains("Klobuchar"));
     check_overlap(&obs, &orbits, &job.nav)?;
     let mut options = job.options.clone();
     options.antex = job
@@ -107,6 +111,7 @@ pub fn ppp(job: &PppJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PppReport>
         motion: options.motion,
         out: job.out.clone(),
         summary: None,
+        html: None,
         frame,
         seconds: 0.0,
         header_position: header_point(&obs, options.refer),
@@ -114,11 +119,15 @@ pub fn ppp(job: &PppJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PppReport>
     write_pos(&job.out, &report.header(job), &report.records(), job.format)?;
     let mut report = report;
     if let Some(json) = report.json() {
-        let path = summary_path(&job.out);
+        let path = side_path(&job.out, ".json");
         write_atomic(&path, |w| w.write_all(json.as_bytes()))?;
         report.summary = Some(path);
     }
     report.seconds = t0.elapsed().as_secs_f64();
+    let html_path = side_path(&job.out, ".html");
+    let page = crate::ppp_report::html(&report, &job.obs.display().to_string());
+    write_atomic(&html_path, |w| w.write_all(page.as_bytes()))?;
+    report.html = Some(html_path);
     Ok(report)
 }
 
@@ -177,10 +186,10 @@ fn clock_warning(interval: f64) -> String {
     )
 }
 
-/// `OUT.pos.json` beside `OUT.pos`.
-fn summary_path(out: &std::path::Path) -> PathBuf {
+/// `OUT.pos` + `ext` (`.json`, `.html`) beside `OUT.pos`.
+fn side_path(out: &std::path::Path, ext: &str) -> PathBuf {
     let mut name = out.as_os_str().to_owned();
-    name.push(".json");
+    name.push(ext);
     PathBuf::from(name)
 }
 
@@ -363,7 +372,10 @@ impl fmt::Display for PppReport {
         }
         write!(f, "wrote {}", self.out.display())?;
         if let Some(s) = &self.summary {
-            write!(f, " and {}", s.display())?;
+            write!(f, ", {}", s.display())?;
+        }
+        if let Some(s) = &self.html {
+            write!(f, ", {}", s.display())?;
         }
         writeln!(f, " in {:.1} s", self.seconds)
     }

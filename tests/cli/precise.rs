@@ -207,6 +207,15 @@ fn ppp_static_and_ppk_base_from_ppp() {
         .sqrt();
     assert!(err < 0.03, "PPP 3D error {err} m");
     assert_eq!(json["frame"], "IGb00");
+    let page = std::fs::read_to_string(format!("{}.html", out.display())).unwrap();
+    assert!(
+        page.contains("Convergence") && page.matches("<svg").count() == 3,
+        "three plots"
+    );
+    assert!(
+        !text.contains("Klobuchar"),
+        "no broadcast ionosphere is needed: {text}"
+    );
     let last = xyz_rows(&out).pop().unwrap().1;
     assert!(
         (0..3).all(|k| (last[k] - ecef[k]).abs() < 1e-3),
