@@ -337,8 +337,8 @@ impl fmt::Display for PppReport {
             r.residual_rms(1),
             r.inflation.0,
             r.inflation.1,
-            gnss::ppp::SIGMA_FLOOR.0 * 1e3,
-            gnss::ppp::SIGMA_FLOOR.1 * 1e3,
+            r.floor.0 * 1e3,
+            r.floor.1 * 1e3,
         )?;
         if let Some((pos, cov)) = self.last {
             let g = pos.to_geodetic();

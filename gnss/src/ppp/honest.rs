@@ -19,6 +19,11 @@ use std::collections::BTreeMap;
 /// orbits against ITRF (a centimetre for older products).
 pub const FLOOR: (f64, f64) = (0.010, 0.015);
 
+/// The floor when an antenna is not modelled (no ANTEX entry for the receiver antenna or for
+/// some satellites): phase-centre offsets reach decimetres, of which the float ambiguities
+/// and clocks absorb most; centimetres remain, mostly in the height.
+pub const FLOOR_UNMODELLED: (f64, f64) = (0.020, 0.050);
+
 /// Running statistics of normalised post-fit phase residuals.
 #[derive(Clone, Debug, Default)]
 pub struct Consistency {
@@ -80,13 +85,13 @@ impl Consistency {
     }
 }
 
-/// The covariance of `pos` scaled by `k` with the floor added.
-pub fn honest_cov(pos: &Ecef, cov: &Matrix3<f64>, k: f64) -> Matrix3<f64> {
+/// The covariance of `pos` scaled by `k` with the floor (σ horizontal, up) added.
+pub fn honest_cov(pos: &Ecef, cov: &Matrix3<f64>, k: f64, floor: (f64, f64)) -> Matrix3<f64> {
     let r = enu_rotation(&pos.to_geodetic());
     let floor = Matrix3::from_diagonal(&nalgebra::Vector3::new(
-        FLOOR.0 * FLOOR.0,
-        FLOOR.0 * FLOOR.0,
-        FLOOR.1 * FLOOR.1,
+        floor.0 * floor.0,
+        floor.0 * floor.0,
+        floor.1 * floor.1,
     ));
     cov * k + r.transpose() * floor * r
 }

@@ -14,7 +14,6 @@ mod filter;
 mod honest;
 
 pub use corr::SatAntennas;
-pub use honest::FLOOR as SIGMA_FLOOR;
 
 use crate::error::{Error, Result};
 use crate::frame::Ecef;
@@ -153,6 +152,8 @@ pub struct PppResult {
     /// The factor applied to the filter's covariances, and the lag-one correlation of the
     /// normalised phase residuals it rests on.
     pub inflation: (f64, f64),
+    /// The σ floor (horizontal, up, m) added: larger when an antenna was not modelled.
+    pub floor: (f64, f64),
 }
 
 impl PppResult {
@@ -249,8 +250,13 @@ pub fn process(
         }
     };
     out.inflation = (k, out.consistency.correlation());
+    out.floor = if rx_ant.is_none() || !mem.no_antenna.is_empty() {
+        honest::FLOOR_UNMODELLED
+    } else {
+        honest::FLOOR
+    };
     for e in &mut out.epochs {
-        e.cov = honest::honest_cov(&e.pos, &e.cov, k);
+        e.cov = honest::honest_cov(&e.pos, &e.cov, k, out.floor);
     }
     Ok(out)
 }
