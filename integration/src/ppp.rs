@@ -59,6 +59,8 @@ pub struct PppReport {
     pub summary: Option<PathBuf>,
     /// The HTML report (`OUT.pos.html`).
     pub html: Option<PathBuf>,
+    /// The zenith total delay series (`OUT.pos.ztd.csv`).
+    pub ztd: Option<PathBuf>,
     /// Reference frame of the orbits.
     pub frame: String,
     /// Seconds spent.
@@ -112,6 +114,7 @@ pub fn ppp(job: &PppJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PppReport>
         out: job.out.clone(),
         summary: None,
         html: None,
+        ztd: None,
         frame,
         seconds: 0.0,
         header_position: header_point(&obs, options.refer),
@@ -124,6 +127,22 @@ pub fn ppp(job: &PppJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PppReport>
         report.summary = Some(path);
     }
     report.seconds = t0.elapsed().as_secs_f64();
+    let ztd_path = side_path(&job.out, ".ztd.csv");
+    write_atomic(&ztd_path, |w| {
+        writeln!(w, "gpst,zenith_total_delay_m,sigma_m,satellites")?;
+        for e in &report.result.epochs {
+            writeln!(
+                w,
+                "{},{:.4},{:.4},{}",
+                format_ymdhms(e.time),
+                e.ztd.0,
+                e.ztd.1,
+                e.nsat
+            )?;
+        }
+        Ok(())
+    })?;
+    report.ztd = Some(ztd_path);
     let html_path = side_path(&job.out, ".html");
     let page = crate::ppp_report::html(&report, &job.obs.display().to_string());
     write_atomic(&html_path, |w| w.write_all(page.as_bytes()))?;
@@ -224,6 +243,16 @@ fn header_point(obs: &ObsFile, refer: Reference) -> Option<Ecef> {
     })
 }
 
+/// The middle of a span as a decimal year (the epoch at which a station coordinate in a
+/// moving frame holds).
+fn decimal_year(a: hifitime::Epoch, b: hifitime::Epoch) -> f64 {
+    let mid = a + (b - a) * 0.5;
+    let (y, ..) = mid.to_gregorian_utc();
+    let start = hifitime::Epoch::from_gregorian_utc_at_midnight(y, 1, 1);
+    let end = hifitime::Epoch::from_gregorian_utc_at_midnight(y + 1, 1, 1);
+    y as f64 + (mid - start).to_seconds() / (end - start).to_seconds()
+}
+
 /// Name of a reference point.
 fn refer_name(r: Reference) -> &'static str {
     match r {
@@ -294,6 +323,7 @@ impl PppReport {
             "mode": "ppp-static",
             "refers_to": refer_name(self.refer),
             "frame": self.frame,
+            "epoch_decimal_year": decimal_year(first.time, lastep.time),
             "position": {
                 "ecef_m": [pos.0.x, pos.0.y, pos.0.z],
                 "latitude_deg": g.lat.to_degrees(),
@@ -345,7 +375,7 @@ impl fmt::Display for PppReport {
             let sd = Self::sigmas(&pos, &cov);
             writeln!(
                 f,
-                "static {}: X {:.4} Y {:.4} Z {:.4} m (lat {:.9} lon {:.9} h {:.4} m), σ E/N/U {:.1}/{:.1}/{:.1} mm, frame {}",
+                "static {}: X {:.4} Y {:.4} Z {:.4} m (lat {:.9} lon {:.9} h {:.4} m), σ E/N/U {:.1}/{:.1}/{:.1} mm, frame {} at epoch {:.3}",
                 refer_name(self.refer),
                 pos.0.x,
                 pos.0.y,
@@ -356,7 +386,11 @@ impl fmt::Display for PppReport {
                 sd[0] * 1e3,
                 sd[1] * 1e3,
                 sd[2] * 1e3,
-                self.frame
+                self.frame,
+                match (self.result.epochs.first(), self.result.epochs.last()) {
+                    (Some(a), Some(b)) => decimal_year(a.time, b.time),
+                    _ => f64::NAN,
+                }
             )?;
             if let Some(h) = self.header_position {
                 let d = h.enu_from(&pos).0;
@@ -372,6 +406,9 @@ impl fmt::Display for PppReport {
         }
         write!(f, "wrote {}", self.out.display())?;
         if let Some(s) = &self.summary {
+            write!(f, ", {}", s.display())?;
+        }
+        if let Some(s) = &self.ztd {
             write!(f, ", {}", s.display())?;
         }
         if let Some(s) = &self.html {

@@ -207,6 +207,23 @@ fn ppp_static_and_ppk_base_from_ppp() {
         .sqrt();
     assert!(err < 0.03, "PPP 3D error {err} m");
     assert_eq!(json["frame"], "IGb00");
+    let epoch = json["epoch_decimal_year"].as_f64().unwrap();
+    assert!((epoch - 2005.6123).abs() < 0.0005, "{epoch}");
+    let ztd = std::fs::read_to_string(format!("{}.ztd.csv", out.display())).unwrap();
+    assert_eq!(ztd.lines().count(), 2881, "a header and a line per epoch");
+    let last_ztd: f64 = ztd
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(
+        (2.3..2.6).contains(&last_ztd),
+        "ZTD at Onsala near sea level: {last_ztd} m"
+    );
     let page = std::fs::read_to_string(format!("{}.html", out.display())).unwrap();
     assert!(
         page.contains("Convergence") && page.matches("<svg").count() == 3,
