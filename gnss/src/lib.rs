@@ -2,7 +2,8 @@
 //!
 //! - [`rinex`]: observation files (RINEX 2/3/4, Hatanaka, gzip) streamed into GPST epochs with
 //!   every event record kept; navigation files into ephemeris records.
-//! - [`raw`]: raw receiver logs (u-blox UBX) decoded and converted to RINEX 3.04.
+//! - [`raw`]: raw receiver logs (u-blox UBX) decoded (measurements, ephemerides, time marks)
+//!   and converted to RINEX 3.04.
 //! - [`orbit`]: satellite positions and clocks from broadcast ephemerides (GPS, Galileo,
 //!   BeiDou, QZSS, GLONASS) or SP3 precise orbits.
 //! - [`model`], [`signal`]: troposphere, ionosphere, frequencies.
