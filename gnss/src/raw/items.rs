@@ -4,7 +4,7 @@
 //! What enters: the path of a log and its format (detected from content when not given).
 //! What leaves: each [`RawItem`] handed to a callback as it is decoded (so memory stays
 //! bounded), and the [`RawStats`] of everything read and dropped. Used by
-//! [`super::convert`] (RINEX files).
+//! [`super::convert`] (RINEX files) and [`super::source`] (observations in memory).
 
 use super::ubx::{self, FrameReader, Tm2};
 use super::ubx_nav::{NavDecoder, NavOut};

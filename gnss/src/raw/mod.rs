@@ -16,6 +16,7 @@ pub mod inav;
 pub mod items;
 pub mod lnav;
 pub mod records;
+pub mod source;
 pub mod ubx;
 pub mod ubx_nav;
 pub mod ubx_obs;

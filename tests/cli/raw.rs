@@ -1,0 +1,103 @@
+//! u-blox logs given where RINEX observations are taken: `info`, `spp` and `ppk` tell the
+//! format from the content (or take --obs-format), and `spp` uses the log's own ephemerides
+//! when no navigation file is given.
+
+use super::*;
+
+const COLD: &str = "gnss/ubx-navsol-2025/16dBatt_no_interference_coldstart.ubx";
+const COLD_NAV: &str = "gnss/ubx-navsol-2025/16dBatt_no_interference_coldstart.nav.gz";
+
+/// The data lines of a .pos file.
+fn pos_lines(path: &Path) -> Vec<String> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with('%'))
+        .map(String::from)
+        .collect()
+}
+
+#[test]
+fn info_describes_a_ubx_log() {
+    let Some(log) = shared(COLD) else {
+        return;
+    };
+    let t = succeeds(&ppkat(&["info", p(&log)]));
+    assert!(t.contains("562"), "{t}");
+    assert!(
+        t.contains("3843 navigation messages: 28 ephemerides"),
+        "{t}"
+    );
+    // Forced to RINEX, the log is refused with the reader's reason.
+    fails_with(
+        &ppkat(&["info", p(&log), "--obs-format", "rinex"]),
+        &["coldstart.ubx", "RINEX VERSION / TYPE"],
+    );
+}
+
+#[test]
+fn spp_on_a_ubx_log_equals_spp_on_its_conversion() {
+    let Some([log, nav]) = shared_all([COLD, COLD_NAV]) else {
+        return;
+    };
+    let (obs, a, b, c) = (
+        tmp("raw-cold.obs"),
+        tmp("raw-a.pos"),
+        tmp("raw-b.pos"),
+        tmp("raw-c.pos"),
+    );
+    succeeds(&ppkat(&["convert", "--in", p(&log), "-o", p(&obs)]));
+    let t = succeeds(&ppkat(&[
+        "spp",
+        "--obs",
+        p(&log),
+        "--nav",
+        p(&nav),
+        "-o",
+        p(&a),
+    ]));
+    assert!(t.contains("read as a u-blox UBX log: 562 epochs"), "{t}");
+    succeeds(&ppkat(&[
+        "spp",
+        "--obs",
+        p(&obs),
+        "--obs-format",
+        "rinex",
+        "--nav",
+        p(&nav),
+        "-o",
+        p(&b),
+    ]));
+    let (la, lb) = (pos_lines(&a), pos_lines(&b));
+    assert_eq!(la.len(), 561);
+    assert_eq!(la, lb, "the same positions to the last printed digit");
+    // Without --nav: the log's own ephemerides.
+    let t = succeeds(&ppkat(&["spp", "--obs", p(&log), "-o", p(&c)]));
+    assert!(
+        t.contains("using the 28 ephemerides decoded from the log"),
+        "{t}"
+    );
+    assert!(t.contains("562 of 562 epochs solved"), "{t}");
+}
+
+#[test]
+fn spp_without_orbits_says_what_to_give() {
+    let Some(f9t) = shared("gnss/ubx-navsol-2025/F9T-L2-5min.ubx") else {
+        return;
+    };
+    let out = tmp("raw-f9t.pos");
+    fails_with(
+        &ppkat(&["spp", "--obs", p(&f9t), "-o", p(&out)]),
+        &["no orbits", "--nav", "--sp3"],
+    );
+    let junk = tmp("junk.bin");
+    std::fs::write(&junk, b"neither RINEX nor UBX").unwrap();
+    fails_with(
+        &ppkat(&["spp", "--obs", p(&junk), "-o", p(&out)]),
+        &[
+            "junk.bin",
+            "neither a RINEX observation file",
+            "--obs-format",
+        ],
+    );
+}
