@@ -101,3 +101,19 @@ fn spp_without_orbits_says_what_to_give() {
         ],
     );
 }
+
+#[test]
+fn bench_ingest_times_the_conversion_of_a_log() {
+    let Some(log) = shared(COLD) else {
+        return;
+    };
+    let t = succeeds(&ppkat(&["bench", "ingest", p(&log)]));
+    assert!(
+        t.contains("convert: 3.0 MB of raw log (562 epochs, 28 ephemerides)"),
+        "{t}"
+    );
+    assert!(
+        t.contains("MB/s per CPU second") && t.contains("peak RSS"),
+        "{t}"
+    );
+}

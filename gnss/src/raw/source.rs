@@ -11,6 +11,7 @@ use super::records::{span, RinexOrder, RinexOut, Scan};
 use super::{RawFormat, RawStats};
 use crate::error::Result;
 use crate::rinex::lines::parse_real;
+use crate::rinex::write::f14_3;
 use crate::rinex::{AntennaDelta, Event, IngestStats, ObsEpoch, ObsFile, ObsHeader, SatObs};
 use hifitime::TimeScale;
 use std::path::Path;
@@ -26,19 +27,15 @@ pub struct RawLog {
     pub stats: RawStats,
 }
 
-/// Values as RINEX carries them: F14.3 of the value modulo 10⁹, read back by the RINEX
-/// reader's own number parser (formatting rounds ties to even, so no arithmetic shortcut
-/// gives the same digits).
-fn printed(mut sats: Vec<SatObs>, buf: &mut String) -> Vec<SatObs> {
-    use std::fmt::Write;
+/// Values as RINEX carries them: F14.3 of the value modulo 10⁹ as the writer prints it, read
+/// back by the RINEX reader's own number parser (printing rounds ties to even, so no
+/// arithmetic shortcut gives the same digits).
+fn printed(mut sats: Vec<SatObs>) -> Vec<SatObs> {
+    let mut buf = [0u8; 32];
     for s in &mut sats {
         for o in s.obs.iter_mut().filter(|o| !o.value.is_nan()) {
-            buf.clear();
-            let _ = write!(buf, "{:.3}", o.value % 1e9);
-            o.value = parse_real(buf.as_bytes())
-                .ok()
-                .flatten()
-                .unwrap_or(f64::NAN);
+            let n = f14_3(o.value % 1e9, &mut buf);
+            o.value = parse_real(&buf[..n]).ok().flatten().unwrap_or(f64::NAN);
         }
     }
     sats
@@ -64,14 +61,13 @@ pub fn read_log(path: &Path, format: Option<RawFormat>) -> Result<RawLog> {
     let types = scan.types();
     let mut order = RinexOrder::new(&types);
     let (mut epochs, mut events) = (Vec::new(), Vec::new());
-    let mut buf = String::new();
     let mut put = |o: RinexOut| -> std::result::Result<(), ()> {
         match o {
             RinexOut::Epoch(time, sats) => epochs.push(ObsEpoch {
                 time,
                 flag: 0,
                 clock_offset: None,
-                sats: printed(sats, &mut buf),
+                sats: printed(sats),
                 line: 0,
             }),
             RinexOut::Event(t, records) => events.push(Event {
