@@ -30,6 +30,9 @@ pub struct Args {
 /// Read the file and print its summary.
 pub fn run(args: Args) -> Result<()> {
     let input = read_obs(&args.file, args.obs_format.into())?;
+    if input.raw.is_some() {
+        println!("u-blox UBX log, described as its RINEX 3.04 conversion (ppkat convert):");
+    }
     print!("{}", ObsSummary::of(&input.obs));
     if let Some(st) = &input.raw {
         print!("{st}");

@@ -117,3 +117,35 @@ fn bench_ingest_times_the_conversion_of_a_log() {
         "{t}"
     );
 }
+
+#[test]
+fn simulate_writes_the_rover_and_base_also_as_ubx() {
+    let dir = tmp("sim-raw");
+    let scen = fixture("scenario_small.toml");
+    let t = succeeds(&ppkat(&[
+        "simulate",
+        "--scenario",
+        p(&scen),
+        "--out",
+        p(&dir),
+        "--raw",
+        "ubx",
+    ]));
+    assert!(t.contains("0 measurements UBX cannot carry"), "{t}");
+    let i = succeeds(&ppkat(&["info", p(&dir.join("rover.ubx"))]));
+    assert!(i.starts_with("u-blox UBX log"), "{i}");
+    assert!(i.contains("26 external events"), "{i}");
+    assert!(i.contains("signals C1C L1C D1C S1C C2X L2X D2X S2X"), "{i}");
+    fails_with(
+        &ppkat(&[
+            "simulate",
+            "--builtin",
+            "close-range",
+            "--out",
+            p(&dir),
+            "--raw",
+            "ubx",
+        ]),
+        &["--raw applies to flights"],
+    );
+}

@@ -20,6 +20,7 @@ pub mod source;
 pub mod ubx;
 pub mod ubx_nav;
 pub mod ubx_obs;
+pub mod ubx_write;
 
 use std::collections::BTreeMap;
 use std::fmt;

@@ -98,7 +98,7 @@ pub fn read_log(path: &Path, format: Option<RawFormat>) -> Result<RawLog> {
         glonass_channels: scan.glonass.clone(),
         time_scale: TimeScale::GPST,
         leap_seconds: None,
-        notes: vec!["format: u-blox UBX".into()],
+        notes: Vec::new(),
         lines: 0,
     };
     let obs = ObsFile {
