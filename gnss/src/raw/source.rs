@@ -12,8 +12,7 @@ use super::{RawFormat, RawStats};
 use crate::error::Result;
 use crate::rinex::lines::parse_real;
 use crate::rinex::write::f14_3;
-use crate::rinex::{AntennaDelta, Event, IngestStats, ObsEpoch, ObsFile, ObsHeader, SatObs};
-use hifitime::TimeScale;
+use crate::rinex::{Event, IngestStats, ObsEpoch, ObsFile, ObsHeader, SatObs};
 use std::path::Path;
 
 /// A raw log read into memory.
@@ -84,22 +83,9 @@ pub fn read_log(path: &Path, format: Option<RawFormat>) -> Result<RawLog> {
     }
     let _ = order.finish(&mut put);
     let header = ObsHeader {
-        version: 3.04,
-        crinex: None,
-        file_system: None,
-        marker: String::new(),
-        marker_number: String::new(),
-        receiver: String::new(),
-        antenna: String::new(),
-        approx_position: None,
-        antenna_delta: AntennaDelta::default(),
-        interval: None,
         obs_types: types.into_iter().collect(),
         glonass_channels: scan.glonass.clone(),
-        time_scale: TimeScale::GPST,
-        leap_seconds: None,
-        notes: Vec::new(),
-        lines: 0,
+        ..ObsHeader::new(3.04)
     };
     let obs = ObsFile {
         path: path.to_path_buf(),

@@ -43,25 +43,38 @@ pub fn epoch_fields(t: Epoch) -> String {
     )
 }
 
-fn line(w: &mut dyn Write, a: &str, label: &str) -> Result<()> {
+/// One header line: `a` in columns 1–60, the label after.
+pub(super) fn line(w: &mut dyn Write, a: &str, label: &str) -> Result<()> {
     writeln!(w, "{a:<60.60}{label}")
 }
 
-/// Write the header.
-pub fn write_header(w: &mut dyn Write, h: &HeaderOut) -> Result<()> {
+/// The first lines of a RINEX 3.04 header of file type `kind` (`"OBSERVATION DATA"`,
+/// `"N: GNSS NAV DATA"`): version and type, program, comments.
+pub(super) fn opening(
+    w: &mut dyn Write,
+    kind: &str,
+    program: &str,
+    comments: &[String],
+) -> Result<()> {
     line(
         w,
-        "     3.04           OBSERVATION DATA    M: Mixed",
+        &format!("     3.04           {kind:<20}M: Mixed"),
         "RINEX VERSION / TYPE",
     )?;
     line(
         w,
-        &format!("{:<20}{:<20}", h.program, "ppkat"),
+        &format!("{program:<20}{:<20}", "ppkat"),
         "PGM / RUN BY / DATE",
     )?;
-    for c in &h.comments {
+    for c in comments {
         line(w, c, "COMMENT")?;
     }
+    Ok(())
+}
+
+/// Write the header.
+pub fn write_header(w: &mut dyn Write, h: &HeaderOut) -> Result<()> {
+    opening(w, "OBSERVATION DATA", &h.program, &h.comments)?;
     line(w, &h.marker, "MARKER NAME")?;
     line(w, "", "OBSERVER / AGENCY")?;
     line(w, "", "REC # / TYPE / VERS")?;

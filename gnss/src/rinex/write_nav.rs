@@ -6,7 +6,7 @@
 //! [`super::nav::NavFile`] reads back the same values to 13 significant digits.
 
 use super::nav::{Klobuchar, NavRecord};
-use super::write::epoch_fields;
+use super::write::{epoch_fields, line, opening};
 use crate::sv::Constellation;
 use std::io::{Result, Write};
 
@@ -33,25 +33,9 @@ pub fn sci(x: f64, width: usize, decimals: usize) -> String {
     format!("{:>width$}", format!("{m}E{sign}{:02}", e.abs()))
 }
 
-fn line(w: &mut dyn Write, a: &str, label: &str) -> Result<()> {
-    writeln!(w, "{a:<60.60}{label}")
-}
-
 /// Write the header.
 pub fn write_nav_header(w: &mut dyn Write, h: &NavHeaderOut) -> Result<()> {
-    line(
-        w,
-        "     3.04           N: GNSS NAV DATA    M: Mixed",
-        "RINEX VERSION / TYPE",
-    )?;
-    line(
-        w,
-        &format!("{:<20}{:<20}", h.program, "ppkat"),
-        "PGM / RUN BY / DATE",
-    )?;
-    for c in &h.comments {
-        line(w, c, "COMMENT")?;
-    }
+    opening(w, "N: GNSS NAV DATA", &h.program, &h.comments)?;
     if let Some(k) = &h.gps_iono {
         for (name, v) in [("GPSA", k.alpha), ("GPSB", k.beta)] {
             let vals: String = v.iter().map(|x| sci(*x, 12, 4)).collect();
