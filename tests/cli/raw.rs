@@ -148,4 +148,45 @@ fn simulate_writes_the_rover_and_base_also_as_ubx() {
         ]),
         &["--raw applies to flights"],
     );
+    // PPK on the logs against PPK on the RINEX files, the base position given to both (a log
+    // has no header position): the same fix state everywhere, positions within 1 mm (they
+    // differ by the 0.1 mm the .pos prints at most).
+    let xyz = t
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("base:"))
+        .and_then(|l| l.split(" at ").nth(1))
+        .map(|l| l.split_whitespace().take(3).collect::<Vec<_>>().join(","))
+        .unwrap();
+    let base_pos = format!("--base-pos={xyz}");
+    let nav = dir.join("nav.rnx");
+    let run = |rover: &str, base: &str, out: &Path| {
+        succeeds(&ppkat(&[
+            "ppk",
+            "--rover",
+            p(&dir.join(rover)),
+            "--base",
+            p(&dir.join(base)),
+            "--nav",
+            p(&nav),
+            &base_pos,
+            "-o",
+            p(out),
+        ]))
+    };
+    let (u, r) = (tmp("sim-ubx.pos"), tmp("sim-rnx.pos"));
+    run("rover.ubx", "base.ubx", &u);
+    run("rover.obs", "base.obs", &r);
+    let (lu, lr) = (pos_lines(&u), pos_lines(&r));
+    assert_eq!(lu.len(), 1175);
+    assert_eq!(lu.len(), lr.len());
+    for (a, b) in lu.iter().zip(&lr) {
+        let fa: Vec<&str> = a.split_whitespace().collect();
+        let fb: Vec<&str> = b.split_whitespace().collect();
+        assert_eq!((fa[0], fa[1], fa[5]), (fb[0], fb[1], fb[5]), "time and Q");
+        for k in 2..5 {
+            let d = fa[k].parse::<f64>().unwrap() - fb[k].parse::<f64>().unwrap();
+            let metres = if k < 4 { d * 111_320.0 } else { d };
+            assert!(metres.abs() <= 1e-3, "{a}\n{b}");
+        }
+    }
 }
