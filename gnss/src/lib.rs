@@ -23,6 +23,7 @@ pub mod model;
 pub mod obs;
 pub mod orbit;
 pub mod ppk;
+pub mod ppp;
 pub mod raw;
 pub mod rinex;
 pub mod signal;

@@ -33,6 +33,9 @@ pub mod import;
 pub mod observations;
 pub mod orbits;
 pub mod pipeline;
+mod plot;
+pub mod ppp;
+mod ppp_report;
 pub mod simulate;
 pub mod survey;
 

@@ -171,6 +171,9 @@ pub struct PpkJob {
     pub clk: Vec<PathBuf>,
     /// Where the base antenna is.
     pub base_position: gnss::ppk::BasePosition,
+    /// Find the base marker by static PPP on the base file first (needs SP3), instead of
+    /// `base_position`.
+    pub base_from_ppp: bool,
     /// Processing options.
     pub options: gnss::ppk::PpkOptions,
     /// Coordinates of the `.pos` written.
@@ -225,16 +228,27 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
         &job.options.systems,
     )?);
     warnings.extend(file_warnings(rover).chain(file_warnings(base)));
+    let mut base_position = job.base_position;
+    let mut base_line = None;
+    if job.base_from_ppp {
+        if orbits.precise.is_none() {
+            return Err(Error::NoData(
+                "--base-from-ppp needs precise orbits (--sp3)".into(),
+            ));
+        }
+        let (p, line, w) = crate::ppp::base_from_ppp(
+            base,
+            &orbits,
+            job.options.antex.as_deref(),
+            &job.options.systems,
+        )?;
+        base_position = gnss::ppk::BasePosition::Given(p);
+        base_line = Some(line);
+        warnings.extend(w);
+    }
     let read_seconds = t0.elapsed().as_secs_f64();
     let t1 = std::time::Instant::now();
-    let result = gnss::ppk::process(
-        rover,
-        base,
-        job.base_position,
-        &orbits,
-        &job.options,
-        progress,
-    )?;
+    let result = gnss::ppk::process(rover, base, base_position, &orbits, &job.options, progress)?;
     let process_seconds = t1.elapsed().as_secs_f64();
     warnings.extend(result.warnings.iter().cloned());
     let o = &job.options;
@@ -278,6 +292,7 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
             "ref pos   : {:.4} {:.4} {:.4} (ECEF, base marker)",
             b.0.x, b.0.y, b.0.z
         ),
+        base_line.unwrap_or_else(|| "base from : given position or the base header".into()),
         format!(
             "epochs    : {} rover, {} solved, {} fixed",
             result.rover_epochs,

@@ -12,6 +12,7 @@ pub mod import;
 pub mod info;
 pub mod leverarm;
 pub mod ppk;
+pub mod ppp;
 pub mod simulate;
 pub mod spp;
 

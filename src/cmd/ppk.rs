@@ -81,6 +81,12 @@ pub struct Args {
     /// (default: the base file's header position).
     #[arg(long, value_name = "LAT,LON,H", allow_hyphen_values = true)]
     base_llh: Option<String>,
+    /// Find the base marker first by static precise point positioning on the base file
+    /// (as `ppkat ppp` does, GPS and Galileo, with --sp3/--clk and the --antex model),
+    /// stated with its σ in the .pos header. Needs --sp3; a few hours of base data give
+    /// centimetres.
+    #[arg(long, requires = "sp3", conflicts_with_all = ["base_pos", "base_llh"])]
+    base_from_ppp: bool,
     /// Which filter passes run.
     #[arg(long, value_enum, default_value = "combined")]
     filter: FilterArg,
@@ -247,6 +253,7 @@ pub fn run_job(args: Args) -> Result<pipeline::PpkReport> {
         sp3: args.sp3,
         clk: args.clk,
         base_position,
+        base_from_ppp: args.base_from_ppp,
         options,
         format: args.format.into(),
         out: args.out,

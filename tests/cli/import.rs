@@ -221,9 +221,11 @@ fn colmap_brighton_beach_imports_and_adjusts() {
     assert_eq!(count(&t, "images"), 18);
     assert_eq!(count(&t, "points"), 7751);
     assert_eq!(count(&t, "EXIF GPS positions"), 18);
-    // 30,702 observations: 1,188 of the 594 two-image points skipped, 29,514 kept.
-    assert_eq!(count(&t, "observations kept"), 29514);
+    // 30,702 observations: 155 second observations of a point in one image and 1,188 of the
+    // 594 two-image points skipped, 29,359 kept.
+    assert_eq!(count(&t, "observations kept"), 29359);
     assert!(t.contains("skipped 1188 observations"), "{t}");
+    assert!(t.contains("skipped 155 observations"), "{t}");
     let adj = out.join("out");
     let s = succeeds(&ppkat(&[
         "adjust",

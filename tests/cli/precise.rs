@@ -174,3 +174,94 @@ fn orbit_flags_that_do_not_go_together() {
         fails_with(&ppkat(args), &["no orbits", "--nav", "--sp3"]);
     }
 }
+
+/// `ppkat ppp` on ONSA's day writes the coordinate within centimetres of the truth and says
+/// so in OUT.pos.json; `ppk --base-from-ppp` on a zero baseline (ONSA against itself) puts
+/// the base, and so the rover, there too and states it in the header.
+#[test]
+fn ppp_static_and_ppk_base_from_ppp() {
+    let Some(f) = onsa() else {
+        return;
+    };
+    let Some([atx01, atx05]) = shared_all([
+        "gnss/onsa-2005-224/igs_01.atx",
+        "gnss/bell-ebre-2002-030/igs05.atx",
+    ]) else {
+        return;
+    };
+    let out = tmp("onsa_ppp.pos");
+    let mut args = vec!["ppp", "--obs", p(&f[0]), "-o", p(&out)];
+    args.extend(sp3_flags(&f));
+    args.extend(["--antex", p(&atx01), "--antex", p(&atx05)]);
+    let text = succeeds(&ppkat(&args));
+    assert!(text.contains("static marker"), "{text}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(format!("{}.json", out.display())).unwrap())
+            .unwrap();
+    let ecef: Vec<f64> = json["position"]["ecef_m"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let err = (0..3)
+        .map(|k| (ecef[k] - ONSA_TRUTH[k]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    assert!(err < 0.03, "PPP 3D error {err} m");
+    assert_eq!(json["frame"], "IGb00");
+    let page = std::fs::read_to_string(format!("{}.html", out.display())).unwrap();
+    assert!(
+        page.contains("Convergence") && page.matches("<svg").count() == 3,
+        "three plots"
+    );
+    assert!(
+        !text.contains("Klobuchar"),
+        "no broadcast ionosphere is needed: {text}"
+    );
+    let last = xyz_rows(&out).pop().unwrap().1;
+    assert!(
+        (0..3).all(|k| (last[k] - ecef[k]).abs() < 1e-3),
+        "the last line is the final one"
+    );
+
+    let zb = tmp("onsa_zero_baseline.pos");
+    let mut args = vec![
+        "ppk",
+        "--rover",
+        p(&f[0]),
+        "--base",
+        p(&f[0]),
+        "--base-from-ppp",
+        "--mode",
+        "static",
+        "--refer",
+        "marker",
+        "--format",
+        "xyz",
+        "--antex",
+        p(&atx01),
+        "-o",
+        p(&zb),
+    ];
+    args.extend(sp3_flags(&f));
+    let text = succeeds(&ppkat(&args));
+    let header = std::fs::read_to_string(&zb).unwrap();
+    assert!(
+        header.contains("% base from : static PPP on the base file"),
+        "{header}"
+    );
+    assert!(
+        text.contains("base PPP:"),
+        "the PPP's warnings are passed on: {text}"
+    );
+    let rover = xyz_rows(&zb).pop().unwrap().1;
+    let err = (0..3)
+        .map(|k| (rover[k] - ONSA_TRUTH[k]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    assert!(
+        err < 0.05,
+        "zero-baseline rover from the PPP base: 3D error {err} m"
+    );
+}

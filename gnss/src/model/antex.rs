@@ -1,8 +1,11 @@
-//! Receiver antenna phase-centre offsets and variations from ANTEX 1.4 files.
+//! Receiver and satellite antenna phase-centre offsets and variations from ANTEX 1.3/1.4
+//! files. Satellite entries are kept with their satellite (when the file names one, as
+//! absolute-model files do) and validity span; old relative-model files list blocks only.
 
 use crate::error::{Error, Result};
 use crate::rinex::lines::{cols, label, parse_real, Lines};
-use crate::sv::Constellation;
+use crate::sv::{Constellation, Sv};
+use hifitime::Epoch;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -61,11 +64,53 @@ impl AntennaPcv {
     }
 }
 
-/// The receiver antennas of an ANTEX file (satellite antennas are skipped).
+/// One satellite antenna entry: a block (e.g. `BLOCK IIA`) and, in absolute-model files, the
+/// satellite it describes and when.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SatAntenna {
+    /// Antenna type, the satellite block (ANTEX columns 1–20).
+    pub block: String,
+    /// The satellite (columns 21–23), absent in block-only (relative-model) files.
+    pub sv: Option<Sv>,
+    /// Start of validity (GPST), when given.
+    pub valid_from: Option<Epoch>,
+    /// End of validity (GPST), when given.
+    pub valid_until: Option<Epoch>,
+    /// By ANTEX frequency code: offsets x, y, z in the satellite body frame (stored in
+    /// `neu`), metres, and variations by nadir angle.
+    pub freqs: BTreeMap<String, FreqPcv>,
+}
+
+impl SatAntenna {
+    /// Whether the entry is valid at `t`.
+    pub fn valid_at(&self, t: Epoch) -> bool {
+        self.valid_from.is_none_or(|f| f <= t) && self.valid_until.is_none_or(|u| t <= u)
+    }
+
+    /// Offset (body x, y, z, metres) and variation at nadir angle `nadir_deg` of `band`
+    /// of `sys` (falling back to the GPS frequency of the same band); None when absent.
+    pub fn offset_pcv(
+        &self,
+        sys: Constellation,
+        band: u8,
+        nadir_deg: f64,
+    ) -> Option<([f64; 3], f64)> {
+        let code = format!("{}0{}", sys.letter(), band as char);
+        let gps = format!("G0{}", band as char);
+        let f = self.freqs.get(&code).or_else(|| self.freqs.get(&gps))?;
+        Some((f.neu, f.pcv(nadir_deg)))
+    }
+}
+
+/// The antennas of an ANTEX file.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Antex {
     /// The receiver antennas, in file order.
     pub antennas: Vec<AntennaPcv>,
+    /// The satellite antennas, in file order.
+    pub satellites: Vec<SatAntenna>,
+    /// Whether the file holds a relative model (`PCV TYPE / REFANT` R) rather than absolute.
+    pub relative: bool,
 }
 
 impl Antex {
@@ -75,6 +120,7 @@ impl Antex {
         let mut out = Antex::default();
         let mut cur: Option<AntennaPcv> = None;
         let mut satellite = false;
+        let mut sat: Option<SatAntenna> = None;
         let mut freq: Option<(String, FreqPcv)> = None;
         let (mut zen1, mut dzen) = (0.0, 5.0);
         let mut saw_version = false;
@@ -85,6 +131,7 @@ impl Antex {
             let bad = |what: &str| Error::parse(path, ln, what.to_string());
             match lab {
                 b"ANTEX VERSION / SYST" => saw_version = true,
+                b"PCV TYPE / REFANT" => out.relative = line.first() == Some(&b'R'),
                 b"START OF ANTENNA" => {
                     cur = Some(AntennaPcv {
                         name: String::new(),
@@ -102,6 +149,28 @@ impl Antex {
                         satellite = serial.len() == 3
                             && serial[1].is_ascii_digit()
                             && serial[0].is_ascii_uppercase();
+                        // Relative-model files name blocks without a satellite.
+                        if satellite || a.name.starts_with("BLOCK") || a.name.starts_with("GLONASS")
+                        {
+                            satellite = true;
+                            sat = Some(SatAntenna {
+                                block: a.name.clone(),
+                                sv: Sv::parse(serial),
+                                valid_from: None,
+                                valid_until: None,
+                                freqs: BTreeMap::new(),
+                            });
+                        }
+                    }
+                }
+                b"VALID FROM" | b"VALID UNTIL" => {
+                    let t = valid_time(line).ok_or_else(|| bad("unreadable validity date"))?;
+                    if let Some(s) = sat.as_mut() {
+                        if lab == b"VALID FROM" {
+                            s.valid_from = Some(t);
+                        } else {
+                            s.valid_until = Some(t);
+                        }
                     }
                 }
                 b"ZEN1 / ZEN2 / DZEN" => {
@@ -133,6 +202,9 @@ impl Antex {
                 }
                 b"END OF FREQUENCY" => {
                     if let (Some((code, f)), Some(a)) = (freq.take(), cur.as_mut()) {
+                        if let Some(s) = sat.as_mut() {
+                            s.freqs.insert(code.clone(), f.clone());
+                        }
                         a.freqs.insert(code, f);
                     }
                 }
@@ -142,6 +214,7 @@ impl Antex {
                             out.antennas.push(a);
                         }
                     }
+                    out.satellites.extend(sat.take());
                 }
                 _ => {
                     if let Some((_, f)) = freq.as_mut() {
@@ -166,6 +239,22 @@ impl Antex {
         Ok(out)
     }
 
+    /// The entry of satellite `sv` valid at `t` (files naming satellites).
+    pub fn satellite(&self, sv: Sv, t: Epoch) -> Option<&SatAntenna> {
+        self.satellites
+            .iter()
+            .find(|a| a.sv == Some(sv) && a.valid_at(t))
+    }
+
+    /// The block-only entry (no satellite named) of block `name`, as relative-model files
+    /// hold them.
+    pub fn block(&self, name: &str) -> Option<&SatAntenna> {
+        let norm = |s: &str| s.split_whitespace().collect::<Vec<_>>().join(" ");
+        self.satellites
+            .iter()
+            .find(|a| a.sv.is_none() && norm(&a.block) == norm(name))
+    }
+
     /// The antenna of a RINEX header type (type + radome); a missing radome entry falls back
     /// to the same type with radome NONE. Returns the entry and whether it was a fallback.
     pub fn find(&self, rinex_type: &str) -> Option<(&AntennaPcv, bool)> {
@@ -182,6 +271,39 @@ impl Antex {
     }
 }
 
+/// The GPST epoch of a `VALID FROM` / `VALID UNTIL` line (year, month, day, hour, minute,
+/// seconds).
+fn valid_time(line: &[u8]) -> Option<Epoch> {
+    let txt = String::from_utf8_lossy(cols(line, 0, 60));
+    let v: Vec<f64> = txt
+        .split_whitespace()
+        .map(|t| t.parse::<f64>())
+        .collect::<std::result::Result<_, _>>()
+        .ok()?;
+    let [y, mo, d, h, mi, s] = v.as_slice() else {
+        return None;
+    };
+    let ok = (1950.0..2200.0).contains(y)
+        && (1.0..=12.0).contains(mo)
+        && (1.0..=31.0).contains(d)
+        && (0.0..24.0).contains(h)
+        && (0.0..60.0).contains(mi)
+        && (0.0..61.0).contains(s);
+    if !ok {
+        return None;
+    }
+    let whole = s.floor();
+    Some(crate::time::gpst(
+        *y as i32,
+        *mo as u8,
+        *d as u8,
+        *h as u8,
+        *mi as u8,
+        whole as u8,
+        ((s - whole) * 1e9).round().min(999_999_999.0) as u32,
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -191,7 +313,16 @@ mod tests {
         let path =
             std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fixtures/test.atx");
         let atx = Antex::read(&path).unwrap();
-        assert_eq!(atx.antennas.len(), 1, "the satellite antenna is skipped");
+        assert_eq!(atx.antennas.len(), 1, "the satellite antenna is kept apart");
+        assert_eq!(atx.satellites.len(), 1);
+        let g05 = Sv::new(Constellation::Gps, 5);
+        let t = crate::time::gpst(2020, 1, 1, 0, 0, 0, 0);
+        let s = atx
+            .satellite(g05, t)
+            .expect("G05 is listed without a validity span");
+        assert_eq!(s.block, "BLOCK IIR-M");
+        assert!(atx.satellite(Sv::new(Constellation::Gps, 6), t).is_none());
+        assert!(!atx.relative);
         let (a, fallback) = atx.find("PPKATTEST").unwrap();
         assert!(fallback, "no radome given: the NONE entry is used");
         assert_eq!(a.freqs["G01"].neu, [0.0, 0.0, 0.1]);

@@ -3,6 +3,7 @@
 //! GPS/QZSS/Galileo users and the BeiDou variant.
 
 pub mod antex;
+pub mod astro;
 
 use crate::frame::Geodetic;
 use crate::orbit::C;

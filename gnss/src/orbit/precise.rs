@@ -121,6 +121,8 @@ pub struct PreciseOrbits {
     pub merge: MergeReport,
     /// What the user should know (files in different frames …).
     pub warnings: Vec<String>,
+    /// Reference frame of the (first) SP3 file, e.g. `IGb00`.
+    pub frame: String,
 }
 
 impl PreciseOrbits {
@@ -187,7 +189,28 @@ impl PreciseOrbits {
             files,
             merge,
             warnings,
+            frame: sp3.first().map(|s| s.frame.clone()).unwrap_or_default(),
         })
+    }
+
+    /// Seconds from the clock record of `sv` before `t` and to the one after (0 and the
+    /// interval at a record): how far an interpolated clock is from measured ones.
+    pub fn clock_node_distance(&self, sv: Sv, t: Epoch) -> Option<(f64, f64)> {
+        let v = self.clocks.get(&sv)?;
+        let (k, at) = bracket(v, t)?;
+        if at {
+            return Some((0.0, 0.0));
+        }
+        Some(((t - v[k].t).to_seconds(), (v[k + 1].t - t).to_seconds()))
+    }
+
+    /// The shortest nominal interval of the clock records, seconds.
+    pub fn clock_interval(&self) -> f64 {
+        self.clocks
+            .values()
+            .flatten()
+            .map(|s| s.step)
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// First and last position sample over all satellites.

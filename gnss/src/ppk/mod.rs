@@ -21,7 +21,7 @@ mod checks;
 pub mod combine;
 mod dd;
 mod filter;
-mod geometry;
+pub(crate) mod geometry;
 mod inputs;
 pub mod lambda;
 mod measure;

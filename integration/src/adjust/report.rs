@@ -6,6 +6,7 @@
 use super::error::AdjustError;
 use super::project::{Mode, Project};
 use super::results::{Estimated, Results};
+use crate::plot::{axes, range, svg};
 use gnss::solution::write_atomic;
 use plotters::prelude::*;
 use std::fmt::Write as _;
@@ -353,59 +354,6 @@ fn html_images(s: &mut String, r: &Results) {
             )
         };
         let _ = writeln!(s, "<tr><td>{}</td><td>{}</td>{xy}<td>{:.3}</td><td>{:.4}</td><td>{:.4}</td><td>{:.4}</td>{}{}<td>{}</td><td>{:.2}</td></tr>", i.id, i.strip, i.position.h, i.opk_deg[0], i.opk_deg[1], i.opk_deg[2], f3(i.sigma_centre, 1.0, 3), f3(i.sigma_angles_deg, 1.0, 4), i.points, i.rms_px);
-    }
-}
-
-/// A plot into an SVG string; drawing errors leave a note instead of the plot.
-type Plot = Result<(), Box<dyn std::error::Error>>;
-
-fn svg(
-    title: &str,
-    draw: impl FnOnce(&DrawingArea<SVGBackend, plotters::coord::Shift>) -> Plot,
-) -> String {
-    let mut buf = String::new();
-    let ok = {
-        let root = SVGBackend::with_string(&mut buf, (900, 420)).into_drawing_area();
-        root.fill(&WHITE).is_ok() && draw(&root).is_ok() && root.present().is_ok()
-    };
-    if ok {
-        format!("<h3>{title}</h3>\n{buf}\n")
-    } else {
-        format!("<h3>{title}</h3><p>(plot could not be drawn)</p>\n")
-    }
-}
-
-type Chart<'a, 'b> = ChartContext<
-    'a,
-    SVGBackend<'b>,
-    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
->;
-
-/// The report's axes: margins, label areas, a mesh with the axis descriptions.
-fn axes<'a, 'b>(
-    root: &'a DrawingArea<SVGBackend<'b>, plotters::coord::Shift>,
-    x: std::ops::Range<f64>,
-    y: std::ops::Range<f64>,
-    desc: (&str, &str),
-    y_label_px: u32,
-) -> Result<Chart<'a, 'b>, Box<dyn std::error::Error>> {
-    let mut ch = ChartBuilder::on(root)
-        .margin(10)
-        .x_label_area_size(30)
-        .y_label_area_size(y_label_px)
-        .build_cartesian_2d(x, y)?;
-    ch.configure_mesh().x_desc(desc.0).y_desc(desc.1).draw()?;
-    Ok(ch)
-}
-
-fn range(v: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
-    let lo = v.clone().fold(f64::INFINITY, f64::min);
-    let hi = v.fold(f64::NEG_INFINITY, f64::max);
-    if lo.is_finite() && hi.is_finite() && hi > lo {
-        let m = 0.05 * (hi - lo);
-        (lo - m, hi + m)
-    } else {
-        (-1.0, 1.0)
     }
 }
 

@@ -187,22 +187,46 @@ pub(super) fn read_measurements(
     );
     let cs = t.col("sigma_px");
     let mut out = Vec::new();
+    let mut seen: BTreeMap<(usize, String), usize> = BTreeMap::new();
+    let bad = |line: usize, what: String| AdjustError::Input {
+        path: path.display().to_string(),
+        line,
+        what,
+    };
     for (line, row) in &t.rows {
         let im = t.text(row, ci);
-        let &i = index.get(im.as_str()).ok_or_else(|| AdjustError::Input {
-            path: path.display().to_string(),
-            line: *line,
-            what: format!("image `{im}` is not in the image list"),
-        })?;
+        let &i = index
+            .get(im.as_str())
+            .ok_or_else(|| bad(*line, format!("image `{im}` is not in the image list")))?;
+        let point = t.text(row, cp);
+        if let Some(first) = seen.insert((i, point.clone()), *line) {
+            return Err(bad(
+                *line,
+                format!("point `{point}` is measured twice in image `{im}` (lines {first} and {line}): keep one measurement"),
+            ));
+        }
         let cam = &cameras[images[i].camera];
         let px = Vector2::new(t.num(*line, row, cx)?, t.num(*line, row, cy)?);
+        // A margin of 2 % of the frame: measurements at the edge pass, those of an image of
+        // another size (half, double) do not.
+        let (w, h) = (cam.camera.width_px as f64, cam.camera.height_px as f64);
+        let m = 0.02 * w.max(h);
+        if !(-m..=w + m).contains(&px.x) || !(-m..=h + m).contains(&px.y) {
+            return Err(bad(
+                *line,
+                format!(
+                    "point `{point}` in image `{im}` at ({:.1}, {:.1}) px lies outside the {w}×{h} px frame of camera `{}`: is the calibration for another image size (or are the measurements in another unit)?",
+                    px.x, px.y, cameras[images[i].camera].id
+                ),
+            ));
+        }
         let sigma_px = match cs {
             Some(c) if !t.text(row, c).is_empty() => t.num(*line, row, c)?,
             _ => cam.sigma_px,
         };
         out.push(Measurement {
             image: i,
-            point: t.text(row, cp),
+            point,
             xy: cam.camera.pixel_to_image(px),
             sigma: sigma_px * cam.camera.pixel,
             source: format!("{}:{line}", path.display()),

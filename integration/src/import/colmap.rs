@@ -282,6 +282,7 @@ pub fn import(job: &ColmapJob) -> Result<(ProjectOut, Summary), ImportError> {
     ));
     let flip = Matrix3::from_diagonal(&Vector3::new(1.0, -1.0, -1.0));
     let mut skipped_short = 0usize;
+    let mut twice = 0usize;
     let mut kept = 0usize;
     for (id, im) in &images {
         let cam = format!("c{}", im.camera);
@@ -311,8 +312,14 @@ pub fn import(job: &ColmapJob) -> Result<(ProjectOut, Summary), ImportError> {
                 [job.gnss_sigma[0], job.gnss_sigma[0], job.gnss_sigma[1]],
             ));
         }
+        let mut in_image = std::collections::BTreeSet::new();
         for &(x, y, p) in &im.obs {
             if p < 0 {
+                continue;
+            }
+            if !in_image.insert(p) {
+                // COLMAP may keep two keypoints of one image in one track: one is kept.
+                twice += 1;
                 continue;
             }
             match tracks.get(&p) {
@@ -328,6 +335,12 @@ pub fn import(job: &ColmapJob) -> Result<(ProjectOut, Summary), ImportError> {
                 )),
             }
         }
+    }
+    if twice > 0 {
+        sum.skipped.push((
+            format!("{twice} observations"),
+            "a second observation of a point in the same image (the first is kept)".into(),
+        ));
     }
     if skipped_short > 0 {
         sum.skipped.push((

@@ -46,6 +46,32 @@ fn bad_input_gives_clear_errors() {
             && e.contains("image `777` is not in the image list"),
         "{e}"
     );
+    // A point measured twice in one image: both lines named.
+    let d = project_dir("bad-dup");
+    edit(&d, "image_observations.csv", |t| {
+        let second = t.lines().nth(1).unwrap().to_string();
+        format!("{t}{second}\n")
+    });
+    let e = fails(&d);
+    assert!(
+        e.contains("is measured twice in image") && e.contains("(lines 2 and"),
+        "{e}"
+    );
+    // Measurements made on images of another size than the calibration's.
+    let d = project_dir("bad-size");
+    edit(&d, "image_observations.csv", |t| {
+        let mut l: Vec<String> = t.lines().map(String::from).collect();
+        let f: Vec<&str> = l[3].split(',').collect();
+        let x: f64 = f[2].parse().unwrap();
+        l[3] = format!("{},{},{},{}", f[0], f[1], x + 1.0e5, f[3..].join(","));
+        l.join("\n") + "\n"
+    });
+    let e = fails(&d);
+    assert!(
+        e.contains("image_observations.csv, line 4")
+            && e.contains("is the calibration for another image size"),
+        "{e}"
+    );
     // A coordinate that is not a finite number.
     let d = project_dir("bad-nan");
     edit(&d, "ground_points.csv", |t| {
@@ -66,7 +92,15 @@ fn bad_input_gives_clear_errors() {
     });
     let e = fails(&d);
     assert!(e.contains("drift_modle"), "{e}");
-    for n in ["bad-strip", "bad-gcp", "bad-datum", "bad-meas", "bad-key"] {
+    for n in [
+        "bad-strip",
+        "bad-gcp",
+        "bad-datum",
+        "bad-meas",
+        "bad-key",
+        "bad-dup",
+        "bad-size",
+    ] {
         let _ = std::fs::remove_dir_all(tmp(n));
     }
 }

@@ -1,0 +1,96 @@
+//! Static precise point positioning on ONSA (IGS station, 2005-08-12, 24 h of 30-s GPS data)
+//! with the IGS final orbits and their 15-min clocks and the relative antenna model of the
+//! time (`igs_01.atx`, blocks assigned to satellites by `igs05.atx`), against the station's
+//! ITRF2014 marker coordinate at the epoch of the data.
+
+mod common;
+
+use gnss::frame::{enu_rotation, Ecef};
+use gnss::model::antex::Antex;
+use gnss::orbit::{Ephemerides, Orbits, PreciseOrbits, Sp3};
+use gnss::ppp::{process, PppEpoch, PppOptions};
+use gnss::rinex::ObsFile;
+use nalgebra::Vector3;
+
+/// ITRF2014 marker of ONSA at 2005.61 (the data set's truth.txt).
+const TRUTH: [f64; 3] = [3370658.5313, 711877.1456, 5349786.9559];
+
+/// East, north, up error (m) and σ (m) of a solution.
+fn enu_error(e: &PppEpoch) -> ([f64; 3], [f64; 3]) {
+    let truth = Ecef::new(TRUTH[0], TRUTH[1], TRUTH[2]);
+    let r = enu_rotation(&truth.to_geodetic());
+    let d = r * (e.pos.0 - truth.0);
+    let c = r * e.cov * r.transpose();
+    ([d.x, d.y, d.z], [0, 1, 2].map(|i| c[(i, i)].sqrt()))
+}
+
+#[test]
+fn onsa_static_ppp_reaches_centimetres_with_honest_sigmas() {
+    let Some(dir) = common::data("gnss/onsa-2005-224") else {
+        return;
+    };
+    let Some(bell) = common::data("gnss/bell-ebre-2002-030") else {
+        return;
+    };
+    let obs = ObsFile::read(&dir.join("onsa2240.05o")).unwrap();
+    let sp3: Vec<Sp3> = ["igs13354.sp3", "igs13355.sp3", "igs13356.sp3"]
+        .iter()
+        .map(|n| Sp3::read(&dir.join(n)).unwrap())
+        .collect();
+    let orbits = Orbits {
+        broadcast: Ephemerides::from_nav(&[]),
+        precise: Some(PreciseOrbits::new(&sp3, &[]).unwrap()),
+    };
+    let opts = PppOptions {
+        antex: vec![
+            Antex::read(&dir.join("igs_01.atx")).unwrap(),
+            Antex::read(&bell.join("igs05.atx")).unwrap(),
+        ],
+        ..PppOptions::default()
+    };
+    // The header's approximate position (0.42 m off) as the start.
+    let start = obs.header.approx_position.unwrap();
+    let r = process(&obs, &orbits, &opts, start, &|_| {}).unwrap();
+    assert_eq!(r.epochs.len(), 2880, "every epoch solved");
+    assert!(
+        r.warnings
+            .iter()
+            .all(|w| !w.contains("no satellite antenna")),
+        "{:?}",
+        r.warnings
+    );
+    // After 2 h (the forward filter has seen the first 2 h only) and after 24 h.
+    let two_hours = r
+        .epochs
+        .iter()
+        .find(|e| e.time >= r.epochs[0].time + hifitime::Duration::from_seconds(7170.0))
+        .unwrap();
+    for (e, limit) in [(two_hours, 0.10), (r.epochs.last().unwrap(), 0.03)] {
+        let (d, sd) = enu_error(e);
+        let d3 = Vector3::from(d).norm();
+        assert!(
+            d3 <= limit,
+            "{}: 3D error {d3:.3} m > {limit} m ({d:?})",
+            e.time
+        );
+        for k in 0..3 {
+            assert!(
+                d[k].abs() <= 3.0 * sd[k],
+                "{}: axis {k} error {:.3} m, σ {:.3} m",
+                e.time,
+                d[k],
+                sd[k]
+            );
+        }
+    }
+    let (_, sd) = enu_error(r.epochs.last().unwrap());
+    assert!(
+        sd[2] < 0.03 && sd[0] < 0.02,
+        "σ after a day not uselessly large: {sd:?}"
+    );
+    assert!(
+        r.residual_rms(0) < 0.06,
+        "phase residual RMS {}",
+        r.residual_rms(0)
+    );
+}

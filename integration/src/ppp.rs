@@ -1,0 +1,382 @@
+//! `ppkat ppp`: read the observation file, precise orbits and clocks and ANTEX files, find a
+//! start position by single-point positioning, run [`gnss::ppp::process`], write the `.pos`
+//! (and in static mode `OUT.pos.json` with the final coordinate), and report.
+//!
+//! Enters: a [`PppJob`]. Leaves: the files and a [`PppReport`] whose `Display` is what the
+//! command prints.
+
+use crate::orbits::{check_overlap, load_orbits};
+use gnss::error::{Error, Result};
+use gnss::frame::{enu_rotation, Ecef};
+use gnss::model::antex::Antex;
+use gnss::orbit::{ClockSource, Orbits};
+use gnss::ppk::{Motion, Reference};
+use gnss::ppp::{PppOptions, PppResult};
+use gnss::rinex::ObsFile;
+use gnss::solution::{write_atomic, write_pos, PosFormat, PosRecord, Quality};
+use gnss::spp::{solve_epoch, SppOptions};
+use gnss::time::format_ymdhms;
+use nalgebra::Matrix3;
+use serde_json::json;
+use std::fmt;
+use std::path::PathBuf;
+
+/// Inputs of a PPP run.
+#[derive(Clone, Debug)]
+pub struct PppJob {
+    /// Observation file.
+    pub obs: PathBuf,
+    /// SP3 files (merged).
+    pub sp3: Vec<PathBuf>,
+    /// RINEX clock files (merged), preferred to the SP3 clocks.
+    pub clk: Vec<PathBuf>,
+    /// Navigation files (optional: GLONASS channels only).
+    pub nav: Vec<PathBuf>,
+    /// ANTEX files: the model first (see [`PppOptions::antex`]).
+    pub antex: Vec<PathBuf>,
+    /// Options (the ANTEX files are filled in from `antex`).
+    pub options: PppOptions,
+    /// Coordinates of the `.pos`.
+    pub format: PosFormat,
+    /// Output `.pos`.
+    pub out: PathBuf,
+}
+
+/// What a PPP run did.
+#[derive(Clone, Debug)]
+pub struct PppReport {
+    /// The solver's result.
+    pub result: PppResult,
+    /// Static mode: the final position and covariance (ECEF m, m²).
+    pub last: Option<(Ecef, Matrix3<f64>)>,
+    /// The reference point of the positions.
+    pub refer: Reference,
+    /// The motion model.
+    pub motion: Motion,
+    /// The `.pos` written, and the JSON summary (static).
+    pub out: PathBuf,
+    /// The JSON summary, in static mode.
+    pub summary: Option<PathBuf>,
+    /// The HTML report (`OUT.pos.html`).
+    pub html: Option<PathBuf>,
+    /// Reference frame of the orbits.
+    pub frame: String,
+    /// Seconds spent.
+    pub seconds: f64,
+    /// The header's approximate position (moved to the point asked for), to compare.
+    pub header_position: Option<Ecef>,
+}
+
+/// Run PPP as the job says.
+pub fn ppp(job: &PppJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PppReport> {
+    let t0 = std::time::Instant::now();
+    let obs = ObsFile::read(&job.obs)?;
+    gnss::ppk::require_phase(&obs, "observation")?;
+    let (orbits, mut warnings) = load_orbits(&job.nav, None, &job.sp3, &job.clk)?;
+    // PPP needs neither broadcast ionosphere nor group delays (IF combination, precise clocks).
+    warnings.retain(|w| !w.contains("Klobuchar"));
+    check_overlap(&obs, &orbits, &job.nav)?;
+    let mut options = job.options.clone();
+    options.antex = job
+        .antex
+        .iter()
+        .map(|p| Antex::read(p))
+        .collect::<Result<_>>()?;
+    if let Some(p) = &orbits.precise {
+        if p.clock_source == ClockSource::Sp3 {
+            warnings.push(clock_warning(p.clock_interval()));
+        }
+    }
+    let start = start_position(&obs, &orbits)?;
+    let mut result = gnss::ppp::process(&obs, &orbits, &options, start, progress)?;
+    result.warnings.splice(0..0, warnings);
+    if result.epochs.is_empty() {
+        return Err(Error::NoData(format!(
+            "{}: no epoch solved (fewer than 4 satellites with two frequencies, precise orbits and clocks above the mask)",
+            job.obs.display()
+        )));
+    }
+    let frame = orbits
+        .precise
+        .as_ref()
+        .map(|p| p.frame.clone())
+        .unwrap_or_default();
+    let last = (options.motion == Motion::Static)
+        .then(|| result.epochs.last().map(|e| (e.pos, e.cov)))
+        .flatten();
+    let report = PppReport {
+        result,
+        last,
+        refer: options.refer,
+        motion: options.motion,
+        out: job.out.clone(),
+        summary: None,
+        html: None,
+        frame,
+        seconds: 0.0,
+        header_position: header_point(&obs, options.refer),
+    };
+    write_pos(&job.out, &report.header(job), &report.records(), job.format)?;
+    let mut report = report;
+    if let Some(json) = report.json() {
+        let path = side_path(&job.out, ".json");
+        write_atomic(&path, |w| w.write_all(json.as_bytes()))?;
+        report.summary = Some(path);
+    }
+    report.seconds = t0.elapsed().as_secs_f64();
+    let html_path = side_path(&job.out, ".html");
+    let page = crate::ppp_report::html(&report, &job.obs.display().to_string());
+    write_atomic(&html_path, |w| w.write_all(page.as_bytes()))?;
+    report.html = Some(html_path);
+    Ok(report)
+}
+
+/// The base marker from static PPP on the base file (for `ppk --base-from-ppp`): position,
+/// the header line that states it with its σ, and the run's warnings.
+pub fn base_from_ppp(
+    base: &ObsFile,
+    orbits: &Orbits,
+    antex: Option<&Antex>,
+    systems: &[gnss::sv::Constellation],
+) -> Result<(Ecef, String, Vec<String>)> {
+    use gnss::sv::Constellation;
+    let systems: Vec<Constellation> = systems
+        .iter()
+        .copied()
+        .filter(|s| matches!(s, Constellation::Gps | Constellation::Galileo))
+        .collect();
+    let options = PppOptions {
+        systems,
+        antex: antex.cloned().into_iter().collect(),
+        ..PppOptions::default()
+    };
+    let start = start_position(base, orbits)?;
+    let r = gnss::ppp::process(base, orbits, &options, start, &|_| {})?;
+    let Some(last) = r.epochs.last() else {
+        return Err(Error::input(
+            &base.path,
+            "PPP on the base file solved no epoch: give the base position (--base-pos or --base-llh)",
+        ));
+    };
+    let sd = PppReport::sigmas(&last.pos, &last.cov);
+    let frame = orbits
+        .precise
+        .as_ref()
+        .map(|p| p.frame.clone())
+        .unwrap_or_default();
+    let line = format!(
+        "base from : static PPP on the base file, {} epochs, σ E/N/U {:.1}/{:.1}/{:.1} mm, frame {frame}",
+        r.epochs.len(),
+        sd[0] * 1e3,
+        sd[1] * 1e3,
+        sd[2] * 1e3
+    );
+    let warnings = r
+        .warnings
+        .iter()
+        .map(|w| format!("base PPP: {w}"))
+        .collect();
+    Ok((last.pos, line, warnings))
+}
+
+/// The warning about clocks interpolated from SP3 records.
+fn clock_warning(interval: f64) -> String {
+    format!(
+        "satellite clocks from the SP3 file ({interval:.0} s records, interpolated linearly): expect centimetres of clock error per epoch; 30-s clock files (--clk) do better"
+    )
+}
+
+/// `OUT.pos` + `ext` (`.json`, `.html`) beside `OUT.pos`.
+fn side_path(out: &std::path::Path, ext: &str) -> PathBuf {
+    let mut name = out.as_os_str().to_owned();
+    name.push(ext);
+    PathBuf::from(name)
+}
+
+/// A start position: the first epoch a single-point solution passes its checks, else the
+/// header's approximate position.
+fn start_position(obs: &ObsFile, orbits: &Orbits) -> Result<Ecef> {
+    let opts = SppOptions::default();
+    let prior = obs.header.approx_position;
+    for e in obs.epochs.iter().take(50) {
+        if let Ok(s) = solve_epoch(e, &obs.header, orbits, &opts, prior) {
+            return Ok(s.pos);
+        }
+    }
+    prior.ok_or_else(|| {
+        Error::input(
+            &obs.path,
+            "no single-point solution in the first 50 epochs and no approximate position in the header: cannot start PPP",
+        )
+    })
+}
+
+/// The header's approximate position (of the marker) at the point asked for.
+fn header_point(obs: &ObsFile, refer: Reference) -> Option<Ecef> {
+    let p = obs.header.approx_position?;
+    let d = obs.header.antenna_delta;
+    Some(match refer {
+        Reference::Marker => p,
+        Reference::Arp => {
+            let r = enu_rotation(&p.to_geodetic());
+            Ecef(p.0 + r.transpose() * nalgebra::Vector3::new(d.east, d.north, d.up))
+        }
+    })
+}
+
+/// Name of a reference point.
+fn refer_name(r: Reference) -> &'static str {
+    match r {
+        Reference::Arp => "arp",
+        Reference::Marker => "marker",
+    }
+}
+
+impl PppReport {
+    /// The `.pos` header lines.
+    fn header(&self, job: &PppJob) -> Vec<String> {
+        let motion = match self.motion {
+            Motion::Static => "static",
+            Motion::Kinematic => "kinematic",
+        };
+        vec![
+            format!(
+                "program   : ppkat {} (PPP {motion})",
+                env!("CARGO_PKG_VERSION")
+            ),
+            format!("inp file  : {}", job.obs.display()),
+            format!("positions : {} (Q=6: PPP float)", refer_name(self.refer)),
+            format!(
+                "frame     : {} (the orbits' frame, at the epoch of the data)",
+                self.frame
+            ),
+            format!(
+                "epochs    : {} read, {} solved",
+                self.result.input_epochs,
+                self.result.epochs.len()
+            ),
+        ]
+    }
+
+    /// The `.pos` records.
+    fn records(&self) -> Vec<PosRecord> {
+        self.result
+            .epochs
+            .iter()
+            .map(|e| PosRecord {
+                time: e.time,
+                pos: e.pos,
+                quality: Quality::Ppp,
+                nsat: e.nsat,
+                cov: e.cov,
+                age: 0.0,
+                ratio: 0.0,
+            })
+            .collect()
+    }
+
+    /// σ east, north, up (m) of a covariance at a position.
+    fn sigmas(pos: &Ecef, cov: &Matrix3<f64>) -> [f64; 3] {
+        let r = enu_rotation(&pos.to_geodetic());
+        let c = r * cov * r.transpose();
+        [0, 1, 2].map(|i| c[(i, i)].max(0.0).sqrt())
+    }
+
+    /// The JSON summary of a static run.
+    fn json(&self) -> Option<String> {
+        let (pos, cov) = self.last?;
+        let g = pos.to_geodetic();
+        let sd = Self::sigmas(&pos, &cov);
+        let first = self.result.epochs.first()?;
+        let lastep = self.result.epochs.last()?;
+        let v = json!({
+            "program": format!("ppkat {}", env!("CARGO_PKG_VERSION")),
+            "mode": "ppp-static",
+            "refers_to": refer_name(self.refer),
+            "frame": self.frame,
+            "position": {
+                "ecef_m": [pos.0.x, pos.0.y, pos.0.z],
+                "latitude_deg": g.lat.to_degrees(),
+                "longitude_deg": g.lon.to_degrees(),
+                "ellipsoidal_height_m": g.h,
+            },
+            "sigma_m": { "east": sd[0], "north": sd[1], "up": sd[2] },
+            "first_epoch_gpst": format_ymdhms(first.time),
+            "last_epoch_gpst": format_ymdhms(lastep.time),
+            "epochs": self.result.epochs.len(),
+            "zenith_total_delay_m": lastep.ztd.0,
+            "residual_rms_m": { "phase": self.result.residual_rms(0), "code": self.result.residual_rms(1) },
+            "rejected": self.result.rejected.iter().map(|(k, n)| (k.describe().to_string(), *n)).collect::<std::collections::BTreeMap<_, _>>(),
+            "ambiguity_restarts": self.result.slips,
+        });
+        serde_json::to_string_pretty(&v).ok().map(|s| s + "\n")
+    }
+}
+
+impl fmt::Display for PppReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for w in &self.result.warnings {
+            writeln!(f, "warning: {w}")?;
+        }
+        let r = &self.result;
+        writeln!(
+            f,
+            "{} epochs read, {} solved, {} without 4 usable satellites; {} ambiguity restarts at slips",
+            r.input_epochs,
+            r.epochs.len(),
+            r.unsolved,
+            r.slips
+        )?;
+        for (k, n) in &r.rejected {
+            writeln!(f, "  {n} satellite-epochs {}", k.describe())?;
+        }
+        writeln!(
+            f,
+            "post-fit residuals RMS: phase {:.1} mm, code {:.2} m; σ scaled by √{:.1} for their size and correlation (lag-one {:.2}) plus a floor of {:.0}/{:.0} mm horizontal/up",
+            r.residual_rms(0) * 1e3,
+            r.residual_rms(1),
+            r.inflation.0,
+            r.inflation.1,
+            gnss::ppp::SIGMA_FLOOR.0 * 1e3,
+            gnss::ppp::SIGMA_FLOOR.1 * 1e3,
+        )?;
+        if let Some((pos, cov)) = self.last {
+            let g = pos.to_geodetic();
+            let sd = Self::sigmas(&pos, &cov);
+            writeln!(
+                f,
+                "static {}: X {:.4} Y {:.4} Z {:.4} m (lat {:.9} lon {:.9} h {:.4} m), σ E/N/U {:.1}/{:.1}/{:.1} mm, frame {}",
+                refer_name(self.refer),
+                pos.0.x,
+                pos.0.y,
+                pos.0.z,
+                g.lat.to_degrees(),
+                g.lon.to_degrees(),
+                g.h,
+                sd[0] * 1e3,
+                sd[1] * 1e3,
+                sd[2] * 1e3,
+                self.frame
+            )?;
+            if let Some(h) = self.header_position {
+                let d = h.enu_from(&pos).0;
+                writeln!(
+                    f,
+                    "  {:.3} m from the header's approximate position (E/N/U {:+.3}/{:+.3}/{:+.3} m: header minus PPP; a header in another frame, e.g. ETRS89, differs by decimetres)",
+                    d.norm(),
+                    d.x,
+                    d.y,
+                    d.z
+                )?;
+            }
+        }
+        write!(f, "wrote {}", self.out.display())?;
+        if let Some(s) = &self.summary {
+            write!(f, ", {}", s.display())?;
+        }
+        if let Some(s) = &self.html {
+            write!(f, ", {}", s.display())?;
+        }
+        writeln!(f, " in {:.1} s", self.seconds)
+    }
+}

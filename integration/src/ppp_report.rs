@@ -1,0 +1,134 @@
+//! `OUT.pos.html` of `ppkat ppp`: what was solved, and pictures of how the solution
+//! converged (static: each epoch's running solution against the final one; kinematic: the
+//! positions about their mean), of the zenith total delay and of the satellites used.
+//!
+//! Enters: a [`PppReport`] (after the run). Leaves: a self-contained HTML text.
+
+use crate::plot::{axes, range, svg};
+use crate::ppp::PppReport;
+use gnss::frame::Ecef;
+use plotters::prelude::*;
+use std::fmt::Write as _;
+
+/// Hours since the first epoch, and the series of one value per solved epoch.
+fn hours(r: &PppReport) -> Vec<f64> {
+    let Some(t0) = r.result.epochs.first().map(|e| e.time) else {
+        return Vec::new();
+    };
+    r.result
+        .epochs
+        .iter()
+        .map(|e| (e.time - t0).to_seconds() / 3600.0)
+        .collect()
+}
+
+/// East, north, up of every epoch from `origin`, metres.
+fn enu_from(r: &PppReport, origin: &Ecef) -> Vec<[f64; 3]> {
+    r.result
+        .epochs
+        .iter()
+        .map(|e| {
+            let d = e.pos.enu_from(origin).0;
+            [d.x, d.y, d.z]
+        })
+        .collect()
+}
+
+/// The report page.
+pub fn html(r: &PppReport, input: &str) -> String {
+    let mut s = String::from("<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>ppkat ppp</title><style>body{font-family:sans-serif;max-width:960px;margin:auto}td,th{padding:2px 8px;text-align:right}pre{white-space:pre-wrap}</style></head><body>\n");
+    let _ = writeln!(
+        s,
+        "<h1>Precise point positioning</h1><p>{}</p><pre>{}</pre>",
+        html_escape(input),
+        html_escape(&r.to_string())
+    );
+    let t = hours(r);
+    let (origin, what) = match (r.last, r.result.epochs.first()) {
+        (Some((p, _)), _) => (p, "running solution minus the final one"),
+        (None, Some(_)) => (mean(r), "position minus the mean position"),
+        (None, None) => return s + "</body></html>\n",
+    };
+    let enu = enu_from(r, &origin);
+    s += &svg(
+        &format!("Convergence: {what} (m, clipped to ±0.5 m)"),
+        |root| {
+            let mut ch = axes(
+                root,
+                range(t.iter().copied()).0..range(t.iter().copied()).1,
+                -0.5..0.5,
+                ("hours", "m"),
+                50,
+            )?;
+            for (k, (name, col)) in [("east", RED), ("north", BLUE), ("up", GREEN)]
+                .into_iter()
+                .enumerate()
+            {
+                ch.draw_series(LineSeries::new(
+                    t.iter().zip(&enu).map(|(x, v)| (*x, v[k].clamp(-0.5, 0.5))),
+                    col,
+                ))?
+                .label(name)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], col));
+            }
+            ch.configure_series_labels()
+                .border_style(BLACK)
+                .background_style(WHITE.mix(0.8))
+                .position(SeriesLabelPosition::LowerRight)
+                .draw()?;
+            Ok(())
+        },
+    );
+    let ztd: Vec<f64> = r.result.epochs.iter().map(|e| e.ztd.0).collect();
+    s += &svg("Zenith total delay (m)", |root| {
+        let (y0, y1) = range(ztd.iter().copied());
+        let mut ch = axes(
+            root,
+            range(t.iter().copied()).0..range(t.iter().copied()).1,
+            y0..y1,
+            ("hours", "m"),
+            60,
+        )?;
+        ch.draw_series(LineSeries::new(
+            t.iter().copied().zip(ztd.iter().copied()),
+            BLUE,
+        ))?;
+        Ok(())
+    });
+    let ns: Vec<f64> = r.result.epochs.iter().map(|e| e.nsat as f64).collect();
+    s += &svg("Satellites used", |root| {
+        let mut ch = axes(
+            root,
+            range(t.iter().copied()).0..range(t.iter().copied()).1,
+            0.0..ns.iter().copied().fold(4.0, f64::max) + 1.0,
+            ("hours", "satellites"),
+            40,
+        )?;
+        ch.draw_series(LineSeries::new(
+            t.iter().copied().zip(ns.iter().copied()),
+            BLACK,
+        ))?;
+        Ok(())
+    });
+    s + "</body></html>\n"
+}
+
+/// The mean of the epochs' positions.
+fn mean(r: &PppReport) -> Ecef {
+    let n = r.result.epochs.len().max(1) as f64;
+    Ecef(
+        r.result
+            .epochs
+            .iter()
+            .map(|e| e.pos.0)
+            .sum::<nalgebra::Vector3<f64>>()
+            / n,
+    )
+}
+
+/// Text safe inside HTML.
+fn html_escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
