@@ -2,7 +2,9 @@
 //!
 //! - [`rinex`]: observation files (RINEX 2/3/4, Hatanaka, gzip) streamed into GPST epochs with
 //!   every event record kept; navigation files into ephemeris records.
-//! - [`raw`]: raw receiver logs (u-blox UBX) decoded and converted to RINEX 3.04.
+//! - [`raw`]: raw receiver logs (u-blox UBX) decoded (measurements, ephemerides, time marks)
+//!   and converted to RINEX 3.04; [`obs`]: one entry for observations, RINEX or raw log,
+//!   told apart by content.
 //! - [`orbit`]: satellite positions and clocks from broadcast ephemerides (GPS, Galileo,
 //!   BeiDou, QZSS, GLONASS) or SP3 precise orbits.
 //! - [`model`], [`signal`]: troposphere, ionosphere, frequencies.
@@ -18,6 +20,7 @@
 pub mod error;
 pub mod frame;
 pub mod model;
+pub mod obs;
 pub mod orbit;
 pub mod ppk;
 pub mod ppp;

@@ -5,7 +5,7 @@
 
 mod common;
 
-use gnss::raw::convert::convert;
+use gnss::raw::convert::{convert, Outputs};
 use gnss::raw::ubx::frame;
 use gnss::rinex::ObsFile;
 use gnss::time::gpst;
@@ -16,6 +16,14 @@ fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("ppkat-ubx-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d.join(name)
+}
+
+fn obs_only(obs: &Path) -> Outputs<'_> {
+    Outputs {
+        obs,
+        nav: None,
+        events: None,
+    }
 }
 
 /// Differences between convbin's file and ours over the span ours covers.
@@ -98,7 +106,7 @@ fn f9t_l1_l2_log_matches_convbin_exactly() {
         return;
     };
     let out = tmp("f9t.obs");
-    let st = convert(&dir.join("F9T-L2-5min.ubx"), None, &out, None).unwrap();
+    let st = convert(&dir.join("F9T-L2-5min.ubx"), None, obs_only(&out)).unwrap();
     assert_eq!(st.epochs, 299);
     assert_eq!(st.checksum_failures, 0);
     // BeiDou B1C has no RINEX slot in convbin: dropped, and counted.
@@ -125,8 +133,7 @@ fn coldstart_log_matches_convbin_over_the_common_span() {
     let st = convert(
         &dir.join("16dBatt_no_interference_coldstart.ubx"),
         None,
-        &out,
-        None,
+        obs_only(&out),
     )
     .unwrap();
     assert_eq!(st.epochs, 562);
@@ -198,7 +205,12 @@ fn time_marks_become_flag5_records_and_csv() {
     let input = tmp("marks.ubx");
     std::fs::write(&input, &log).unwrap();
     let (out, csv) = (tmp("marks.obs"), tmp("marks.csv"));
-    let st = convert(&input, None, &out, Some(&csv)).unwrap();
+    let outs = Outputs {
+        obs: &out,
+        nav: None,
+        events: Some(&csv),
+    };
+    let st = convert(&input, None, outs).unwrap();
     assert_eq!((st.epochs, st.events, st.truncated_frames), (2, 2, 1));
     assert_eq!(st.unused.get("NAV-PVT"), Some(&1));
     let f = ObsFile::read(&out).unwrap();

@@ -1,15 +1,142 @@
 //! Benchmarks run by `ppkat bench`: throughput and peak memory of the stages. Enters: an
-//! observation file ([`ingest`]: plain, gzip or Hatanaka; parsed by `gnss::rinex`) or a block
+//! observation file ([`ingest`]: RINEX plain, gzip or Hatanaka, parsed by `gnss::rinex`; or a
+//! raw receiver log, converted by `gnss::raw::convert`) or a block
 //! size ([`adjust`]: simulated by [`crate::simulate::block`], adjusted by [`crate::adjust`]),
-//! or a finished `ppk` run ([`PpkBench::of`]). Leaves: an [`IngestBench`], [`PpkBench`] or
+//! or a finished `ppk` run ([`PpkBench::of`]). Leaves: an [`Ingest`], [`PpkBench`] or
 //! [`AdjustBench`] with wall times (s) and the peak resident memory of the process (Linux
-//! `VmHWM`, KiB); nothing is kept but a temporary file (removed), the benchmark block's
+//! `VmHWM`, KiB); nothing is kept but temporary files (removed), the benchmark block's
 //! folder and the `ppk` run's outputs.
 
 use gnss::error::Result;
+use gnss::obs::{detect_format, ObsFormat};
+use gnss::raw::convert::{convert, Outputs};
+use gnss::raw::RawStats;
 use gnss::rinex::{ObsReader, Record};
 use std::path::Path;
 use std::time::Instant;
+
+/// Result of an ingest benchmark: RINEX parsing or raw-log conversion.
+#[derive(Clone, Debug)]
+pub enum Ingest {
+    /// A RINEX observation file parsed.
+    Rinex(IngestBench),
+    /// A raw receiver log converted (boxed: its statistics are large).
+    Raw(Box<ConvertBench>),
+}
+
+impl std::fmt::Display for Ingest {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Ingest::Rinex(b) => b.fmt(f),
+            Ingest::Raw(b) => b.fmt(f),
+        }
+    }
+}
+
+/// Result of converting a raw log (as `ppkat convert --nav` does, the navigation file left
+/// out when the log has no ephemeris), repeated until at least a second has passed so that
+/// small logs give a stable figure.
+#[derive(Clone, Debug)]
+pub struct ConvertBench {
+    /// Bytes of the log.
+    pub bytes: u64,
+    /// Conversions run.
+    pub runs: usize,
+    /// Wall time of all runs, seconds.
+    pub seconds: f64,
+    /// CPU time of the process's main thread over the runs, seconds (Linux; None where
+    /// unknown): on a loaded machine the wall time overstates the cost.
+    pub cpu_seconds: Option<f64>,
+    /// What one conversion read and dropped.
+    pub stats: RawStats,
+    /// Peak resident set size of the process, KiB (None where unknown).
+    pub peak_rss_kib: Option<u64>,
+}
+
+impl ConvertBench {
+    /// Megabytes of log converted per second.
+    pub fn mb_per_s(&self) -> f64 {
+        self.bytes as f64 * self.runs as f64 / 1e6 / self.seconds
+    }
+}
+
+impl std::fmt::Display for ConvertBench {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "convert: {:.1} MB of raw log ({} epochs, {} ephemerides) to RINEX observations and \
+             navigation, {} runs in {:.3} s = {:.0} MB/s",
+            self.bytes as f64 / 1e6,
+            self.stats.epochs,
+            self.stats.nav.ephemerides,
+            self.runs,
+            self.seconds,
+            self.mb_per_s()
+        )?;
+        if let Some(c) = self.cpu_seconds {
+            writeln!(
+                f,
+                "CPU time: {c:.3} s = {:.0} MB/s per CPU second (files written with fsync)",
+                self.bytes as f64 * self.runs as f64 / 1e6 / c
+            )?;
+        }
+        writeln!(f, "peak RSS: {}", mib(self.peak_rss_kib))
+    }
+}
+
+/// CPU time this thread has run, seconds (Linux `/proc/thread-self/schedstat`).
+fn thread_cpu_seconds() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: u64 = s.split_whitespace().next()?.parse().ok()?;
+    Some(ns as f64 * 1e-9)
+}
+
+/// Convert a raw log to temporary RINEX observation and navigation files, repeatedly.
+fn convert_bench(path: &Path, format: Option<gnss::raw::RawFormat>) -> Result<ConvertBench> {
+    let dir = std::env::temp_dir();
+    let id = std::process::id();
+    let (obs, nav) = (
+        dir.join(format!("ppkat-bench-{id}.obs")),
+        dir.join(format!("ppkat-bench-{id}.nav")),
+    );
+    // A first, untimed run warms the file cache and says whether the log has ephemerides
+    // (without any, convert refuses a navigation file).
+    let first = convert(
+        path,
+        format,
+        Outputs {
+            obs: &obs,
+            nav: None,
+            events: None,
+        },
+    );
+    let with_nav = first.as_ref().is_ok_and(|s| s.nav.ephemerides > 0);
+    let outs = Outputs {
+        obs: &obs,
+        nav: with_nav.then_some(nav.as_path()),
+        events: None,
+    };
+    let (t, cpu0) = (Instant::now(), thread_cpu_seconds());
+    let mut runs = 0;
+    let mut last = first;
+    while last.is_ok() && (runs == 0 || (t.elapsed().as_secs_f64() < 1.0 && runs < 1000)) {
+        last = convert(path, format, outs);
+        runs += 1;
+    }
+    let seconds = t.elapsed().as_secs_f64();
+    let cpu_seconds = cpu0.zip(thread_cpu_seconds()).map(|(a, b)| b - a);
+    let _ = std::fs::remove_file(&obs);
+    let _ = std::fs::remove_file(&nav);
+    let stats = last?;
+    Ok(ConvertBench {
+        bytes: stats.bytes,
+        runs,
+        seconds,
+        cpu_seconds,
+        stats,
+        peak_rss_kib: peak_rss_kib(),
+    })
+}
 
 /// Result of an ingest benchmark.
 #[derive(Clone, Debug)]
@@ -58,10 +185,19 @@ pub fn peak_rss_kib() -> Option<u64> {
         .and_then(|v| v.parse().ok())
 }
 
+/// Benchmark the ingest of an observation file, its format told from the content: a raw log
+/// is converted ([`ConvertBench`]), a RINEX file parsed ([`rinex_ingest`]).
+pub fn ingest(path: &Path) -> Result<Ingest> {
+    match detect_format(path)? {
+        ObsFormat::Raw(f) => convert_bench(path, Some(f)).map(|b| Ingest::Raw(Box::new(b))),
+        ObsFormat::Rinex => rinex_ingest(path).map(Ingest::Rinex),
+    }
+}
+
 /// Stream an observation file through the parser, keeping nothing (the pure parse cost).
 /// A compressed file (gzip, Hatanaka) is first expanded to a temporary plain RINEX file, so the
 /// figure is the parser's speed on plain text, as the benchmark target is stated.
-pub fn ingest(path: &Path) -> Result<IngestBench> {
+pub fn rinex_ingest(path: &Path) -> Result<IngestBench> {
     let plain = std::env::temp_dir().join(format!("ppkat-bench-{}.rnx", std::process::id()));
     let io = gnss::Error::io(&plain);
     let mut f = std::io::BufWriter::new(std::fs::File::create(&plain).map_err(io)?);

@@ -5,8 +5,10 @@
 //! per command and prints what comes back.
 //!
 //! - [`pipeline`]: the whole-stage runs of `ppkat spp`, `ppk` and `exposures` — job (input
-//!   paths, library options) in, output file and report out; [`orbits`]: the orbit files a
-//!   run names (navigation, SP3, RINEX clock) read and checked against the observations.
+//!   paths, library options) in, output file and report out; [`observations`]: a run's
+//!   observation files, RINEX or raw receiver log; [`orbits`]: the orbit files a run names
+//!   (navigation, SP3, RINEX clock, or a log's own ephemerides) read and checked against the
+//!   observations.
 //! - [`exposure`]: exposure times (RINEX flag-5 events, DJI MRK, CSV) on a trajectory → camera
 //!   stations (projection centres with covariance, attitude, ambiguity segment), exports for
 //!   photogrammetry software, photo matching and geotags, the lever arm from tape measurements.
@@ -19,7 +21,7 @@
 //! - [`demo`]: the whole chain on a simulated flight, compared with the truth.
 //! - [`bench`](mod@bench): throughput and peak memory of ingest and adjustment.
 //!
-//! Dependency direction: `pipeline` and `demo` use `exposure`; `pipeline` uses `orbits` and `survey`; `demo` and `bench` use
+//! Dependency direction: `pipeline` and `demo` use `exposure`; `pipeline` uses `observations`, `orbits` and `survey`; `demo` and `bench` use
 //! `simulate` and `adjust`; `simulate` writes the files `adjust` reads. Times are GPST, angles
 //! radians unless a file says degrees, lengths metres.
 
@@ -28,6 +30,7 @@ pub mod bench;
 pub mod demo;
 pub mod exposure;
 pub mod import;
+pub mod observations;
 pub mod orbits;
 pub mod pipeline;
 mod plot;

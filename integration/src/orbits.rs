@@ -17,15 +17,20 @@ use std::path::PathBuf;
 /// Read navigation files, SP3 files and clock files into an orbit source. With SP3 files,
 /// satellite positions (and clocks, unless clock files are given) come from them; navigation
 /// files are then optional (they still give group delays, ionosphere parameters and GLONASS
-/// frequency channels).
+/// frequency channels). `from_log` holds the ephemerides decoded from a raw observation log:
+/// they are used only when no navigation file is given.
 pub fn load_orbits(
     nav: &[PathBuf],
+    from_log: Option<&NavFile>,
     sp3: &[PathBuf],
     clk: &[PathBuf],
 ) -> Result<(Orbits, Vec<String>)> {
-    if nav.is_empty() && sp3.is_empty() {
+    let from_log = from_log.filter(|_| nav.is_empty());
+    if nav.is_empty() && sp3.is_empty() && from_log.is_none() {
         return Err(Error::NoData(
-            "no orbits: give navigation files (--nav) or SP3 precise orbits (--sp3)".into(),
+            "no orbits: give navigation files (--nav) or SP3 precise orbits (--sp3), or a raw \
+             log with navigation subframes"
+                .into(),
         ));
     }
     if !clk.is_empty() && sp3.is_empty() {
@@ -37,8 +42,18 @@ pub fn load_orbits(
     for p in nav {
         navs.push(NavFile::read(p)?);
     }
+    let mut warnings: Vec<String> = Vec::new();
+    if let Some(n) = from_log {
+        warnings.push(format!(
+            "{}: no navigation file given: using the {} ephemerides decoded from the log's \
+             navigation messages",
+            n.path.display(),
+            n.records.len()
+        ));
+        navs.push(n.clone());
+    }
     let eph = Ephemerides::from_nav(&navs);
-    let mut warnings: Vec<String> = eph.stats.skipped.clone();
+    warnings.extend(eph.stats.skipped.iter().cloned());
     if eph.stats.unhealthy > 0 {
         warnings.push(format!(
             "{} ephemerides flagged unhealthy were not used",
@@ -51,10 +66,10 @@ pub fn load_orbits(
             eph.stats.unused
         ));
     }
-    if nav.is_empty() {
+    if navs.is_empty() {
         warnings.push("no navigation file: no Klobuchar ionosphere parameters (ionosphere not modelled, code weights lowered) and no broadcast group delays (TGD) applied to the precise clocks".into());
     } else if eph.gps_iono.is_none() {
-        warnings.push("no Klobuchar ionosphere parameters in the navigation files: ionosphere not modelled, code weights lowered".into());
+        warnings.push("no Klobuchar ionosphere parameters in the navigation data: ionosphere not modelled, code weights lowered".into());
     }
     let precise = if sp3.is_empty() {
         None

@@ -7,9 +7,11 @@
 //! prints. Uses `gnss` (RINEX, orbits, SPP, PPK, `.pos`) and [`crate::exposure`]; prints
 //! nothing itself.
 
+use crate::observations::{nav_sources, read_observations};
 use crate::orbits::check_glonass_channels;
 pub use crate::orbits::{check_overlap, load_orbits};
 use gnss::error::{Error, Result};
+use gnss::obs::ObsFormat;
 use gnss::rinex::ObsFile;
 use gnss::solution::{write_pos, PosFormat, PosRecord, Quality};
 use gnss::spp::{SppOptions, SppRun};
@@ -21,9 +23,11 @@ use std::path::PathBuf;
 /// Inputs of a single-point run.
 #[derive(Clone, Debug)]
 pub struct SppJob {
-    /// Observation file.
+    /// Observation file: RINEX or raw receiver log.
     pub obs: PathBuf,
-    /// Navigation files (optional with SP3 files).
+    /// Its format (`None`: told from the content).
+    pub obs_format: Option<ObsFormat>,
+    /// Navigation files (optional with SP3 files, or with a raw log carrying ephemerides).
     pub nav: Vec<PathBuf>,
     /// Precise orbits (SP3; any number, merged), used instead of the broadcast ones when given.
     pub sp3: Vec<PathBuf>,
@@ -61,9 +65,12 @@ fn file_warnings(f: &ObsFile) -> impl Iterator<Item = String> + '_ {
 
 /// Run single-point positioning over a file and write the `.pos` output.
 pub fn spp(job: &SppJob) -> Result<SppReport> {
-    let obs = ObsFile::read(&job.obs)?;
-    let (orbits, mut warnings) = load_orbits(&job.nav, &job.sp3, &job.clk)?;
-    check_overlap(&obs, &orbits, &job.nav)?;
+    let input = read_observations(&job.obs, job.obs_format)?;
+    let log_nav = input.nav.as_ref();
+    let (orbits, mut warnings) = load_orbits(&job.nav, log_nav, &job.sp3, &job.clk)?;
+    let obs = input.obs;
+    check_overlap(&obs, &orbits, &nav_sources(&job.nav, log_nav))?;
+    warnings.extend(input.warnings);
     warnings.extend(check_glonass_channels(&obs, &orbits, &job.options.systems)?);
     warnings.extend(file_warnings(&obs));
     let run = gnss::spp::run(&obs.epochs, &obs.header, &orbits, &job.options);
@@ -149,11 +156,14 @@ impl fmt::Display for SppReport {
 /// Inputs of a carrier-phase run.
 #[derive(Clone, Debug)]
 pub struct PpkJob {
-    /// Rover observation file.
+    /// Rover observation file: RINEX or raw receiver log.
     pub rover: PathBuf,
-    /// Base observation file.
+    /// Base observation file: RINEX or raw receiver log.
     pub base: PathBuf,
-    /// Navigation files (optional with SP3 files).
+    /// Format of both (`None`: each told from its content).
+    pub obs_format: Option<ObsFormat>,
+    /// Navigation files (optional with SP3 files, or with raw logs carrying ephemerides:
+    /// the rover's are used, else the base's).
     pub nav: Vec<PathBuf>,
     /// Precise orbits (SP3; any number, merged), used instead of the broadcast ones when given.
     pub sp3: Vec<PathBuf>,
@@ -203,18 +213,21 @@ fn summary_path(out: &std::path::Path) -> PathBuf {
 /// Run PPK and write the `.pos` output. `progress(n)` is called as epochs are processed.
 pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport> {
     let t0 = std::time::Instant::now();
-    let rover = ObsFile::read(&job.rover)?;
-    let base = ObsFile::read(&job.base)?;
-    gnss::ppk::require_phase(&rover, "rover")?;
-    gnss::ppk::require_phase(&base, "base")?;
-    let (orbits, mut warnings) = load_orbits(&job.nav, &job.sp3, &job.clk)?;
-    check_overlap(&rover, &orbits, &job.nav)?;
+    let rover_in = read_observations(&job.rover, job.obs_format)?;
+    let base_in = read_observations(&job.base, job.obs_format)?;
+    let (rover, base) = (&rover_in.obs, &base_in.obs);
+    gnss::ppk::require_phase(rover, "rover")?;
+    gnss::ppk::require_phase(base, "base")?;
+    let log_nav = rover_in.nav.as_ref().or(base_in.nav.as_ref());
+    let (orbits, mut warnings) = load_orbits(&job.nav, log_nav, &job.sp3, &job.clk)?;
+    check_overlap(rover, &orbits, &nav_sources(&job.nav, log_nav))?;
+    warnings.extend(rover_in.warnings.iter().chain(&base_in.warnings).cloned());
     warnings.extend(check_glonass_channels(
-        &rover,
+        rover,
         &orbits,
         &job.options.systems,
     )?);
-    warnings.extend(file_warnings(&rover).chain(file_warnings(&base)));
+    warnings.extend(file_warnings(rover).chain(file_warnings(base)));
     let mut base_position = job.base_position;
     let mut base_line = None;
     if job.base_from_ppp {
@@ -224,7 +237,7 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
             ));
         }
         let (p, line, w) = crate::ppp::base_from_ppp(
-            &base,
+            base,
             &orbits,
             job.options.antex.as_deref(),
             &job.options.systems,
@@ -235,14 +248,7 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
     }
     let read_seconds = t0.elapsed().as_secs_f64();
     let t1 = std::time::Instant::now();
-    let result = gnss::ppk::process(
-        &rover,
-        &base,
-        base_position,
-        &orbits,
-        &job.options,
-        progress,
-    )?;
+    let result = gnss::ppk::process(rover, base, base_position, &orbits, &job.options, progress)?;
     let process_seconds = t1.elapsed().as_secs_f64();
     warnings.extend(result.warnings.iter().cloned());
     let o = &job.options;

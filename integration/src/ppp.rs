@@ -74,7 +74,7 @@ pub fn ppp(job: &PppJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PppReport>
     let t0 = std::time::Instant::now();
     let obs = ObsFile::read(&job.obs)?;
     gnss::ppk::require_phase(&obs, "observation")?;
-    let (orbits, mut warnings) = load_orbits(&job.nav, &job.sp3, &job.clk)?;
+    let (orbits, mut warnings) = load_orbits(&job.nav, None, &job.sp3, &job.clk)?;
     // PPP needs neither broadcast ionosphere nor group delays (IF combination, precise clocks).
     warnings.retain(|w| !w.contains("Klobuchar"));
     check_overlap(&obs, &orbits, &job.nav)?;

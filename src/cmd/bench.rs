@@ -10,7 +10,8 @@ use std::path::PathBuf;
 /// joint adjustment's wall time and memory.
 ///
 /// `ppkat bench ingest FILE` streams an observation file through the parser and prints MB/s
-/// of RINEX text and the peak memory. `ppkat bench ppk …` runs `ppkat ppk` with the same
+/// of RINEX text and the peak memory; given a raw receiver log (u-blox UBX) it times its
+/// conversion to RINEX observations and navigation instead and prints MB/s of log. `ppkat bench ppk …` runs `ppkat ppk` with the same
 /// flags and prints the engine's milliseconds per rover epoch and the peak memory.
 /// `ppkat bench adjust` simulates a block of photos and prints its joint adjustment's wall
 /// time and peak memory.
@@ -27,15 +28,19 @@ enum BenchCmd {
     Adjust(AdjustArgs),
 }
 
-/// Stream an observation file through the parser and report MB/s and peak RSS.
+/// Stream an observation file through the parser, or convert a raw log, and report MB/s and
+/// peak RSS.
 ///
-/// Reads the file keeping nothing (the pure parse cost); a compressed file (gzip, Hatanaka)
-/// is first expanded to a temporary plain RINEX file, so the figure is the parser's speed on
-/// plain text. Prints the megabytes of RINEX text, epochs and satellite records, the time,
-/// MB/s and the peak resident memory (Linux). Writes only that temporary file, removed after.
+/// A RINEX file is read keeping nothing (the pure parse cost); a compressed file (gzip,
+/// Hatanaka) is first expanded to a temporary plain RINEX file, so the figure is the parser's
+/// speed on plain text. Prints the megabytes of RINEX text, epochs and satellite records, the
+/// time, MB/s and the peak resident memory (Linux). A raw log (told from its content) is
+/// converted as `ppkat convert --nav` does, to temporary files, repeatedly for at least a
+/// second; prints megabytes of log, epochs, ephemerides, runs, MB/s and the peak memory.
+/// Writes only those temporary files, removed after.
 #[derive(clap::Args)]
 struct IngestArgs {
-    /// RINEX observation file to parse (plain, Hatanaka or gzip).
+    /// RINEX observation file to parse (plain, Hatanaka or gzip), or a u-blox UBX log.
     #[arg(value_name = "FILE")]
     file: PathBuf,
 }

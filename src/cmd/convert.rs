@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::ValueEnum;
-use integration::gnss::raw::convert::convert;
+use integration::gnss::raw::convert::{convert, Outputs};
 use integration::gnss::raw::RawFormat;
 use std::path::PathBuf;
 
@@ -21,7 +21,9 @@ pub enum FormatArg {
 /// carrier phase, Doppler and C/N0 with their loss-of-lock indicators, exactly as RTKLIB
 /// convbin writes them (signal codes with the combined attribute: GPS C1C/C2X, Galileo C1X/C7X,
 /// BeiDou C2I…); TIM-TM2 time marks become flag-5 event records (falling edges, as convbin)
-/// and, with --events, a CSV of every edge. The format is recognised from the content, not
+/// and, with --events, a CSV of every edge. With --nav, the ephemerides decoded from the
+/// navigation subframes (RXM-SFRBX; GPS/QZSS words parity-checked, Galileo pages CRC-checked)
+/// go to a RINEX 3.04 navigation file. The format is recognised from the content, not
 /// the file name. Prints what was read and everything skipped: checksum failures, truncated
 /// frames, unused message types with their counts, dropped measurements by reason.
 #[derive(clap::Args)]
@@ -38,6 +40,10 @@ pub struct Args {
     /// CSV of the time-mark edges to write (week, tow, edge, count, valid).
     #[arg(long, value_name = "OUT.csv")]
     events: Option<PathBuf>,
+    /// RINEX 3.04 mixed navigation file to write, of the ephemerides decoded from the log's
+    /// navigation subframes (RXM-SFRBX: GPS/QZSS LNAV, Galileo I/NAV).
+    #[arg(long, value_name = "OUT.nav")]
+    nav: Option<PathBuf>,
 }
 
 /// Convert and print the report.
@@ -46,11 +52,18 @@ pub fn run(a: Args) -> Result<()> {
         FormatArg::Auto => None,
         FormatArg::Ubx => Some(RawFormat::Ubx),
     };
-    let st = convert(&a.input, format, &a.out, a.events.as_deref())?;
+    let outs = Outputs {
+        obs: &a.out,
+        nav: a.nav.as_deref(),
+        events: a.events.as_deref(),
+    };
+    let st = convert(&a.input, format, outs)?;
     print!("{st}");
-    println!("wrote {}", a.out.display());
-    if let Some(e) = &a.events {
-        println!("wrote {}", e.display());
+    for p in [Some(&a.out), a.nav.as_ref(), a.events.as_ref()]
+        .into_iter()
+        .flatten()
+    {
+        println!("wrote {}", p.display());
     }
     Ok(())
 }

@@ -18,6 +18,8 @@ pub mod spp;
 
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
+use integration::gnss::obs::ObsFormat;
+use integration::gnss::raw::RawFormat;
 use integration::gnss::solution::PosFormat;
 use integration::gnss::sv::Constellation;
 
@@ -35,6 +37,28 @@ impl From<PosFormatArg> for PosFormat {
         match f {
             PosFormatArg::Llh => PosFormat::Llh,
             PosFormatArg::Xyz => PosFormat::Xyz,
+        }
+    }
+}
+
+/// The format of an observation input.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum ObsFormatArg {
+    /// Tell it from the content: RINEX (its first line, or gzip) or a raw receiver log (UBX
+    /// frames with valid checksums)
+    Auto,
+    /// RINEX 2/3/4 observations (plain, gzip, Hatanaka)
+    Rinex,
+    /// u-blox UBX log (RXM-RAWX measurements, RXM-SFRBX ephemerides, TIM-TM2 time marks)
+    Ubx,
+}
+
+impl From<ObsFormatArg> for Option<ObsFormat> {
+    fn from(f: ObsFormatArg) -> Option<ObsFormat> {
+        match f {
+            ObsFormatArg::Auto => None,
+            ObsFormatArg::Rinex => Some(ObsFormat::Rinex),
+            ObsFormatArg::Ubx => Some(ObsFormat::Raw(RawFormat::Ubx)),
         }
     }
 }

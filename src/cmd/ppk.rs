@@ -1,6 +1,6 @@
 //! `ppkat ppk`: carrier-phase kinematic positioning of a rover against a base.
 
-use super::{elev_mask, systems, triple, PosFormatArg};
+use super::{elev_mask, systems, triple, ObsFormatArg, PosFormatArg};
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use integration::gnss::frame::{Ecef, Geodetic};
@@ -15,8 +15,10 @@ use std::sync::Arc;
 /// Carrier-phase kinematic positioning of a rover against a base (double differences,
 /// integer ambiguities), written as an RTKLIB-compatible .pos file.
 ///
-/// Reads the rover's and the base's RINEX observation files and the orbits (navigation
-/// files, or SP3 precise orbits with clocks from the SP3 or RINEX clock files), forms double
+/// Reads the rover's and the base's observation files — RINEX or raw u-blox UBX logs, each
+/// told apart by content (or by --obs-format) — and the orbits (navigation files, or SP3
+/// precise orbits with clocks from the SP3 or RINEX clock files; without either, the
+/// ephemerides a UBX log decoded from its navigation subframes), forms double
 /// differences of carrier phase and code between rover and base, runs a Kalman filter
 /// forward and/or backward in time, resolves the integer ambiguities (LAMBDA, partial
 /// resolution by success rate, ratio test) and writes an RTKLIB-compatible `.pos` file in
@@ -37,16 +39,20 @@ use std::sync::Arc;
 /// no satellite antenna offset is applied: in double differences the difference to the
 /// broadcast antenna phase centre largely cancels).
 #[derive(clap::Args)]
-#[command(group(clap::ArgGroup::new("orbits").required(true).multiple(true).args(["nav", "sp3"])))]
 pub struct Args {
-    /// RINEX observation file of the moving receiver.
+    /// Observation file of the moving receiver: RINEX, or a u-blox UBX log.
     #[arg(long, value_name = "FILE")]
     rover: PathBuf,
-    /// RINEX observation file of the base (reference) receiver.
+    /// Observation file of the base (reference) receiver: RINEX, or a u-blox UBX log.
     #[arg(long, value_name = "FILE")]
     base: PathBuf,
+    /// Format of both observation files; auto tells each from its content (so a UBX rover
+    /// and a RINEX base mix).
+    #[arg(long, value_enum, value_name = "FORMAT", default_value = "auto")]
+    obs_format: ObsFormatArg,
     /// Navigation file (RINEX 2/3/4 broadcast ephemerides); give the flag once per file
-    /// (e.g. one per constellation). Required unless --sp3 is given; with --sp3 it still
+    /// (e.g. one per constellation). Required unless --sp3 is given or a UBX log carries
+    /// ephemerides (the rover's are used, else the base's); with --sp3 it still
     /// gives the GLONASS frequency channels when the observation headers lack them.
     #[arg(long, value_name = "FILE")]
     nav: Vec<PathBuf>,
@@ -242,6 +248,7 @@ pub fn run_job(args: Args) -> Result<pipeline::PpkReport> {
     let job = pipeline::PpkJob {
         rover: args.rover,
         base: args.base,
+        obs_format: args.obs_format.into(),
         nav: args.nav,
         sp3: args.sp3,
         clk: args.clk,

@@ -9,7 +9,9 @@ use std::path::{Path, PathBuf};
 /// A flight (--scenario FILE.toml, or --builtin demo, block20 or long) writes into the output
 /// folder: rover.obs (10 Hz, flag-5 events at the exposures), base.obs, nav.rnx (a synthetic
 /// constellation), truth_trajectory.csv, truth_exposures.csv, ground_points.csv,
-/// image_observations.csv and truth_blunders.csv. The scenario keys are shown in
+/// image_observations.csv and truth_blunders.csv; with --raw ubx also rover.ubx and base.ubx,
+/// the same observations as u-blox logs (RXM-RAWX, and TIM-TM2 time marks at the exposures).
+/// The scenario keys are shown in
 /// fixtures/scenario_small.toml; every error source can be switched under `[errors]`.
 ///
 /// An adjustment project (--builtin classic-block, close-range, block1000 or nav-block: the
@@ -30,11 +32,28 @@ pub struct Args {
     /// Output folder (created; files of the same names are replaced).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
+    /// Also write the rover and base as raw receiver logs of this format (flights only).
+    #[arg(long, value_enum, value_name = "FORMAT")]
+    raw: Option<RawArg>,
+}
+
+/// A raw log format the simulator writes.
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum RawArg {
+    /// u-blox UBX: RXM-RAWX measurements, TIM-TM2 time marks
+    Ubx,
 }
 
 /// Simulate the built-in project or the flight scenario named by the arguments and print the
 /// summary.
 pub fn run(args: Args) -> Result<()> {
+    let project = args
+        .builtin
+        .as_deref()
+        .is_some_and(|b| block::BUILTINS.contains(&b));
+    if project && args.raw.is_some() {
+        bail!("--raw applies to flights (a scenario, or --builtin demo, block20 or long), not to adjustment projects");
+    }
     if let Some(r) = args
         .builtin
         .as_deref()
@@ -44,7 +63,16 @@ pub fn run(args: Args) -> Result<()> {
         return Ok(());
     }
     let s = scenario(args.scenario.as_deref(), args.builtin.as_deref())?;
-    print!("{}", simulate::run(&s, &args.out)?);
+    let rep = simulate::run(&s, &args.out)?;
+    print!("{rep}");
+    if let Some(RawArg::Ubx) = args.raw {
+        let (rover, base, dropped) = simulate::write_ubx(&rep)?;
+        println!(
+            "raw logs: {} and {} (u-blox UBX; {dropped} measurements UBX cannot carry)",
+            rover.display(),
+            base.display()
+        );
+    }
     Ok(())
 }
 

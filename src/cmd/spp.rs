@@ -1,6 +1,6 @@
 //! `ppkat spp`: single-point positioning of every epoch.
 
-use super::{elev_mask, systems, PosFormatArg};
+use super::{elev_mask, systems, ObsFormatArg, PosFormatArg};
 use anyhow::{Context, Result};
 use integration::gnss::spp::SppOptions;
 use integration::pipeline;
@@ -8,8 +8,11 @@ use std::path::PathBuf;
 
 /// Single-point positioning of every epoch, written as an RTKLIB-compatible .pos file.
 ///
-/// Reads one RINEX observation file and the orbits: navigation files (broadcast ephemerides),
-/// or SP3 precise orbits (with clocks from the SP3 files or from RINEX clock files), or both;
+/// Reads one observation file — RINEX, or a raw u-blox UBX log (told apart by content, or
+/// by --obs-format) — and the orbits: navigation files (broadcast ephemerides), or SP3
+/// precise orbits (with clocks from the SP3 files or from RINEX clock files), or both; a UBX
+/// log with navigation subframes (RXM-SFRBX) brings its own ephemerides, used when no
+/// navigation file is given;
 /// solves a code-only position and receiver clock per epoch (with fault detection and
 /// exclusion), and writes an RTKLIB-compatible `.pos` file in GPS time with quality Q = 5.
 /// Prints the number of epochs read and solved, why unsolved epochs failed and why satellites
@@ -19,13 +22,16 @@ use std::path::PathBuf;
 /// then not modelled (code weights are lowered, and a warning says so), no broadcast group
 /// delay is applied, and GLONASS satellites need the observation header's frequency channels.
 #[derive(clap::Args)]
-#[command(group(clap::ArgGroup::new("orbits").required(true).multiple(true).args(["nav", "sp3"])))]
 pub struct Args {
-    /// RINEX observation file of the receiver to position.
+    /// Observation file of the receiver to position: RINEX, or a u-blox UBX log.
     #[arg(long, value_name = "FILE")]
     obs: PathBuf,
+    /// Format of the observation file; auto tells it from the content.
+    #[arg(long, value_enum, value_name = "FORMAT", default_value = "auto")]
+    obs_format: ObsFormatArg,
     /// Navigation file (RINEX 2/3/4 broadcast ephemerides); give the flag once per file
-    /// (e.g. one per constellation). Required unless --sp3 is given; with --sp3 it still
+    /// (e.g. one per constellation). Required unless --sp3 is given or the UBX log carries
+    /// ephemerides (then those are used); with --sp3 it still
     /// gives the ionosphere parameters, group delays and GLONASS frequency channels.
     #[arg(long, value_name = "FILE")]
     nav: Vec<PathBuf>,
@@ -62,6 +68,7 @@ pub fn run(args: Args) -> Result<()> {
     let systems = systems(&args.systems)?;
     let job = pipeline::SppJob {
         obs: args.obs,
+        obs_format: args.obs_format.into(),
         nav: args.nav,
         sp3: args.sp3,
         clk: args.clk,

@@ -49,3 +49,39 @@ fn rinex_given_as_a_raw_log_is_refused() {
     );
     assert!(!out.exists());
 }
+
+#[test]
+fn writes_the_ephemerides_of_the_navigation_subframes() {
+    let Some(log) = shared("gnss/ubx-navsol-2025/16dBatt_no_interference_coldstart.ubx") else {
+        return;
+    };
+    let (out, nav) = (tmp("cold.obs"), tmp("cold.nav"));
+    let t = succeeds(&ppkat(&[
+        "convert",
+        "--in",
+        p(&log),
+        "-o",
+        p(&out),
+        "--nav",
+        p(&nav),
+    ]));
+    assert!(
+        t.contains("3843 navigation messages: 28 ephemerides"),
+        "{t}"
+    );
+    assert!(t.contains("0 parity failures, 0 CRC failures"), "{t}");
+    let text = std::fs::read_to_string(&nav).unwrap();
+    assert!(text.starts_with("     3.04           N: GNSS NAV DATA    M: Mixed"));
+    assert_eq!(text.lines().filter(|l| l.starts_with('G')).count(), 9);
+    assert_eq!(text.lines().filter(|l| l.starts_with('E')).count(), 19);
+    // A log without navigation subframes: --nav is refused and nothing is written.
+    let Some(f9t) = shared("gnss/ubx-navsol-2025/F9T-L2-5min.ubx") else {
+        return;
+    };
+    let (o2, n2) = (tmp("f9t-nonav.obs"), tmp("f9t.nav"));
+    fails_with(
+        &ppkat(&["convert", "--in", p(&f9t), "-o", p(&o2), "--nav", p(&n2)]),
+        &["F9T-L2-5min.ubx", "no complete ephemeris", "RXM-SFRBX"],
+    );
+    assert!(!o2.exists() && !n2.exists());
+}

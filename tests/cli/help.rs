@@ -59,8 +59,9 @@ fn every_argument_of_every_subcommand_is_described() {
     // The flags the issue named, with their texts.
     let t = succeeds(&ppkat(&["ppk", "--help"]));
     for needle in [
-        "--rover <FILE>\n          RINEX observation file",
-        "--base <FILE>\n          RINEX observation file",
+        "--rover <FILE>\n          Observation file of the moving receiver: RINEX, or a u-blox UBX log",
+        "--base <FILE>\n          Observation file of the base (reference) receiver: RINEX, or a u-blox UBX log",
+        "--obs-format <FORMAT>\n          Format of both observation files",
         "--format <FORMAT>\n          Coordinates",
         "-o, --out <OUT.pos>\n          Output .pos file",
     ] {

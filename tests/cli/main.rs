@@ -14,6 +14,7 @@ mod help;
 mod import;
 mod info;
 mod precise;
+mod raw;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -10,9 +10,17 @@
 //! `cpStdev` fields), bad frames must be counted rather than skipped inside a crate, and the
 //! frame format (sync, class, id, length, payload, Fletcher checksum) is a few dozen lines.
 
+pub mod bits;
 pub mod convert;
+pub mod inav;
+pub mod items;
+pub mod lnav;
+pub mod records;
+pub mod source;
 pub mod ubx;
+pub mod ubx_nav;
 pub mod ubx_obs;
+pub mod ubx_write;
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -69,6 +77,35 @@ pub struct RawStats {
     pub dropped: BTreeMap<String, u64>,
     /// Camera events (time-mark edges) read.
     pub events: u64,
+    /// Navigation messages (subframes, pages) and what became of them.
+    pub nav: NavStats,
+}
+
+/// What became of the navigation messages of a log: every subframe or page that failed a
+/// check is counted here and dropped; none of it is fatal.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NavStats {
+    /// Navigation messages read (u-blox RXM-SFRBX).
+    pub messages: u64,
+    /// GPS/QZSS subframes with a word whose parity fails.
+    pub parity_failures: u64,
+    /// Galileo pages whose CRC-24Q fails.
+    pub crc_failures: u64,
+    /// Subframes or pages out of structure: a GPS preamble or subframe id that is wrong, a
+    /// Galileo page whose halves are not even then odd.
+    pub page_errors: u64,
+    /// Galileo alert pages (no navigation data).
+    pub alert_pages: u64,
+    /// Sets whose parts carried different issues of data when the last part arrived (a new
+    /// upload being broadcast); the set completes with later parts.
+    pub inconsistent: u64,
+    /// GPS/QZSS sets complete before the receiver knew the GPS week (the broadcast week is
+    /// modulo 1024); the set completes again when it is rebroadcast.
+    pub before_week_known: u64,
+    /// Distinct ephemerides decoded.
+    pub ephemerides: u64,
+    /// Satellites whose last parts never formed an ephemeris by the end of the log.
+    pub incomplete: u64,
 }
 
 impl RawStats {
@@ -100,6 +137,24 @@ impl fmt::Display for RawStats {
                 .collect::<Vec<_>>()
                 .join(", ")
         };
+        let n = &self.nav;
+        if n.messages > 0 {
+            writeln!(
+                f,
+                "{} navigation messages: {} ephemerides; dropped {} parity failures, {} CRC \
+                 failures, {} out of structure, {} alert pages; {} sets of mixed issue of data, \
+                 {} before the week was known, {} satellites left incomplete",
+                n.messages,
+                n.ephemerides,
+                n.parity_failures,
+                n.crc_failures,
+                n.page_errors,
+                n.alert_pages,
+                n.inconsistent,
+                n.before_week_known,
+                n.incomplete
+            )?;
+        }
         if !self.unused.is_empty() {
             writeln!(f, "not used: {}", list(&self.unused))?;
         }

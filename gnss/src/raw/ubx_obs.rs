@@ -81,9 +81,9 @@ pub struct RawxConverter {
     locks: HashMap<(Sv, usize), Lock>,
 }
 
-/// System and RINEX PRN of a u-blox measurement (RTKLIB's satellite ranges).
-fn satellite(m: &RawxMeas) -> Option<Sv> {
-    let (sys, lo, hi, off) = match m.gnss_id {
+/// System and RINEX PRN of a u-blox GNSS id and satellite id (RTKLIB's satellite ranges).
+pub(crate) fn satellite(gnss_id: u8, sv_id: u8) -> Option<Sv> {
+    let (sys, lo, hi, off) = match gnss_id {
         0 => (Constellation::Gps, 1, 32, 0),
         1 => (Constellation::Sbas, 120, 158, 100),
         2 => (Constellation::Galileo, 1, 36, 0),
@@ -94,8 +94,8 @@ fn satellite(m: &RawxMeas) -> Option<Sv> {
         _ => return None,
     };
     (lo..=hi)
-        .contains(&m.sv_id)
-        .then(|| Sv::new(sys, m.sv_id - off))
+        .contains(&sv_id)
+        .then(|| Sv::new(sys, sv_id - off))
 }
 
 /// RINEX band+attribute and frequency slot of a signal; `None` when it has no slot.
@@ -152,7 +152,7 @@ impl RawxConverter {
             if m.sig_id > 1 {
                 self.gen9 = true;
             }
-            let Some(sv) = satellite(m) else {
+            let Some(sv) = satellite(m.gnss_id, m.sv_id) else {
                 stats.drop("unknown system or satellite number");
                 continue;
             };

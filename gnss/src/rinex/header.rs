@@ -58,6 +58,29 @@ pub struct ObsHeader {
 }
 
 impl ObsHeader {
+    /// A header of RINEX `version` that says nothing else: no marker, receiver, antenna,
+    /// position, interval or types; GPST.
+    pub fn new(version: f64) -> Self {
+        ObsHeader {
+            version,
+            crinex: None,
+            file_system: None,
+            marker: String::new(),
+            marker_number: String::new(),
+            receiver: String::new(),
+            antenna: String::new(),
+            approx_position: None,
+            antenna_delta: AntennaDelta::default(),
+            interval: None,
+            obs_types: BTreeMap::new(),
+            glonass_channels: BTreeMap::new(),
+            time_scale: TimeScale::GPST,
+            leap_seconds: None,
+            notes: Vec::new(),
+            lines: 0,
+        }
+    }
+
     /// Observation types of a satellite's system.
     pub fn types_of(&self, sys: Constellation) -> &[ObsCode] {
         self.obs_types
@@ -115,22 +138,8 @@ struct TypeLists {
 pub(crate) fn read_header(src: &mut Lines, crinex: Option<f64>) -> Result<ObsHeader> {
     let path = src.path.clone();
     let mut h = ObsHeader {
-        version: 0.0,
         crinex,
-        file_system: None,
-        marker: String::new(),
-        marker_number: String::new(),
-        receiver: String::new(),
-        antenna: String::new(),
-        approx_position: None,
-        antenna_delta: AntennaDelta::default(),
-        interval: None,
-        obs_types: BTreeMap::new(),
-        glonass_channels: BTreeMap::new(),
-        time_scale: TimeScale::GPST,
-        leap_seconds: None,
-        notes: Vec::new(),
-        lines: 0,
+        ..ObsHeader::new(0.0)
     };
     let mut types = TypeLists::default();
     let mut saw_version = false;

@@ -15,6 +15,7 @@ pub mod nav;
 mod record;
 pub mod summary;
 pub mod write;
+pub mod write_nav;
 
 pub use header::{AntennaDelta, ObsHeader};
 pub use record::{Event, IngestStats, Obs, ObsCode, ObsEpoch, Record, SatObs, Warning};

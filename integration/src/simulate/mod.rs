@@ -40,6 +40,7 @@ use flight::Flight;
 use gnss::frame::Ecef;
 use gnss::orbit::Ephemerides;
 use gnss::rinex::nav::{Klobuchar, NavFile};
+use gnss::rinex::ObsFile;
 use hifitime::{Duration, Epoch};
 use io::write;
 use rng::Rng;
@@ -193,6 +194,23 @@ pub fn run(s: &Scenario, dir: &Path) -> Result<SimReport, SimError> {
         base_position: base_ecef,
         seconds: t_start.elapsed().as_secs_f64(),
     })
+}
+
+/// The rover and base of a simulation also as u-blox UBX logs (`rover.ubx`, `base.ubx`:
+/// RXM-RAWX per epoch, TIM-TM2 per exposure), made from the RINEX files it wrote: their paths
+/// and how many measurements UBX could not carry (none for the simulator's GPS L1/L2 and
+/// Galileo E1/E5a).
+pub fn write_ubx(rep: &SimReport) -> Result<(PathBuf, PathBuf, u64), SimError> {
+    let mut paths = Vec::new();
+    let mut dropped = 0;
+    for (src, name) in [(&rep.rover, "rover.ubx"), (&rep.base, "base.ubx")] {
+        let (bytes, d) = gnss::raw::ubx_write::ubx_from_obs(&ObsFile::read(src)?);
+        dropped += d;
+        paths.push(io::write_bytes(&rep.dir, name, &bytes)?);
+    }
+    let base = paths.pop().unwrap_or_default();
+    let rover = paths.pop().unwrap_or_default();
+    Ok((rover, base, dropped))
 }
 
 /// The synthetic constellation's navigation file for `[start, end]` (GPST), written to

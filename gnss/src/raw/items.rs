@@ -1,0 +1,210 @@
+//! The items of a raw log in file order: measurement epochs, camera events (time marks),
+//! ephemerides and ionosphere parameters.
+//!
+//! What enters: the path of a log and its format (detected from content when not given).
+//! What leaves: each [`RawItem`] handed to a callback as it is decoded (so memory stays
+//! bounded), and the [`RawStats`] of everything read and dropped. Used by
+//! [`super::convert`] (RINEX files) and [`super::source`] (observations in memory).
+
+use super::ubx::{self, FrameReader, Tm2};
+use super::ubx_nav::{NavDecoder, NavOut};
+use super::ubx_obs::{RawEpoch, RawxConverter};
+use super::{detect, RawFormat, RawStats};
+use crate::error::{Error, Result};
+use crate::rinex::nav::{Klobuchar, NavFile, NavRecord};
+use hifitime::Epoch;
+use std::fs::File;
+use std::io::{BufReader, Read};
+use std::path::Path;
+
+/// Which edge of a time-mark pulse.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Edge {
+    /// Rising edge.
+    Rising,
+    /// Falling edge.
+    Falling,
+}
+
+/// One time-mark edge of TIM-TM2: a camera event.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EventMark {
+    /// GPS week.
+    pub week: u16,
+    /// GPS time of week, seconds (converted from UTC when the receiver reported UTC).
+    pub tow: f64,
+    /// The edge.
+    pub edge: Edge,
+    /// The receiver's edge counter.
+    pub count: u16,
+    /// The receiver marked the time valid.
+    pub valid: bool,
+}
+
+/// One item of a raw log, in file order.
+#[derive(Clone, Debug)]
+pub enum RawItem {
+    /// A measurement epoch.
+    Epoch(RawEpoch),
+    /// A time-mark edge.
+    Event(EventMark),
+    /// An ephemeris decoded from navigation subframes (each distinct one once).
+    Ephemeris(NavRecord),
+    /// GPS Klobuchar parameters and leap seconds (GPS − UTC) from the navigation message.
+    GpsIono(Klobuchar, i32),
+}
+
+/// The navigation data of a log, gathered from its items.
+#[derive(Clone, Debug, Default)]
+pub struct LogNav {
+    /// Ephemerides in the order they were decoded.
+    pub records: Vec<NavRecord>,
+    /// The last GPS Klobuchar parameters broadcast.
+    pub gps_iono: Option<Klobuchar>,
+    /// The last leap seconds broadcast.
+    pub leap_seconds: Option<i32>,
+}
+
+impl LogNav {
+    /// Keep what `it` holds of navigation data.
+    pub fn add(&mut self, it: &RawItem) {
+        match it {
+            RawItem::Ephemeris(r) => self.records.push(r.clone()),
+            RawItem::GpsIono(k, leap) => {
+                self.gps_iono = Some(*k);
+                self.leap_seconds = Some(*leap);
+            }
+            _ => {}
+        }
+    }
+
+    /// As a navigation file read from `path` (the log), for [`crate::orbit::Ephemerides`].
+    pub fn to_nav_file(&self, path: &Path) -> NavFile {
+        NavFile {
+            path: path.to_path_buf(),
+            version: 3.04,
+            records: self.records.clone(),
+            gps_iono: self.gps_iono,
+            bds_iono: None,
+            leap_seconds: self.leap_seconds,
+            skipped: Vec::new(),
+        }
+    }
+}
+
+/// GPST epoch of a week and time of week.
+pub fn gpst(week: u16, tow: f64) -> Epoch {
+    let ticks = (tow * 1e7).round() as i64; // 100 ns, as RINEX prints
+    let ns = week as i64 * 604_800_000_000_000 + ticks * 100;
+    Epoch::from_gpst_nanoseconds(ns.max(0) as u64)
+}
+
+/// Read every item of a log, calling `f` on each; returns what was read and dropped.
+pub fn for_each_item(
+    path: &Path,
+    format: Option<RawFormat>,
+    mut f: impl FnMut(RawItem),
+) -> Result<RawStats> {
+    let io = Error::io(path);
+    let mut file = BufReader::new(File::open(path).map_err(io)?);
+    let format = match format {
+        Some(fm) => fm,
+        None => {
+            let mut head = Vec::new();
+            (&mut file)
+                .take(1 << 16)
+                .read_to_end(&mut head)
+                .map_err(io)?;
+            let fm = detect(&head).ok_or_else(|| {
+                Error::input(
+                    path,
+                    "no UBX frame (B5 62 with a valid checksum) in the first 64 KiB: not a \
+                     u-blox log; give a UBX log, or --format ubx to read it anyway",
+                )
+            })?;
+            file = BufReader::new(File::open(path).map_err(io)?);
+            fm
+        }
+    };
+    let RawFormat::Ubx = format;
+    let mut r = FrameReader::new(file);
+    let mut st = RawStats::default();
+    let mut conv = RawxConverter::new();
+    let mut nav = NavDecoder::new();
+    let mut week = None;
+    let mut leap = 18i8;
+    let mut last: Option<(u16, f64)> = None;
+    while let Some(fr) = r.next_frame(&mut st).map_err(io)? {
+        match (fr.class, fr.id) {
+            (0x02, 0x15) => {
+                let Some(x) = ubx::decode_rawx(fr.payload) else {
+                    *st.malformed.entry("RXM-RAWX".into()).or_default() += 1;
+                    continue;
+                };
+                if x.leap_valid {
+                    leap = x.leap_s;
+                }
+                if x.week != 0 {
+                    week = Some(x.week);
+                }
+                if let Some(e) = conv.epoch(&x, &mut st) {
+                    let t = (e.week, e.tow);
+                    if last.is_some_and(|l| (l.0, l.1) >= t) {
+                        st.time_jumps += 1;
+                    }
+                    last = Some(t);
+                    st.epochs += 1;
+                    f(RawItem::Epoch(e));
+                }
+            }
+            (0x0d, 0x03) => {
+                let Some(t) = ubx::decode_tm2(fr.payload) else {
+                    *st.malformed.entry("TIM-TM2".into()).or_default() += 1;
+                    continue;
+                };
+                for ev in marks(&t, leap) {
+                    st.events += 1;
+                    f(RawItem::Event(ev));
+                }
+            }
+            (0x02, 0x13) => match nav.push(fr.payload, week, &mut st) {
+                Some(NavOut::Ephemeris(r)) => f(RawItem::Ephemeris(r)),
+                Some(NavOut::GpsIono(k, l)) => f(RawItem::GpsIono(k, l)),
+                None => {}
+            },
+            (c, i) => *st.unused.entry(ubx::type_name(c, i)).or_default() += 1,
+        }
+    }
+    nav.finish(&mut st);
+    Ok(st)
+}
+
+/// The new edges of a TIM-TM2 message as events in GPST.
+fn marks(t: &Tm2, leap: i8) -> Vec<EventMark> {
+    let mut v = Vec::new();
+    for (new, edge, (week, tow)) in [
+        (t.new_rising, Edge::Rising, t.rising),
+        (t.new_falling, Edge::Falling, t.falling),
+    ] {
+        if !new {
+            continue;
+        }
+        let mut tow = tow;
+        let mut week = week;
+        if t.time_base == 2 {
+            tow += leap as f64;
+            if tow >= 604_800.0 {
+                tow -= 604_800.0;
+                week += 1;
+            }
+        }
+        v.push(EventMark {
+            week,
+            tow,
+            edge,
+            count: t.count,
+            valid: t.time_valid,
+        });
+    }
+    v
+}

@@ -1,0 +1,217 @@
+//! Raw items into RINEX records, the same whether they are written to a file or kept in
+//! memory: the observation types of the header, each epoch's satellites aligned with them,
+//! and camera events placed as convbin places them.
+//!
+//! What enters: [`RawItem`]s in file order. What leaves: [`RinexOut`]s in RINEX order, and
+//! the header's types and span from a [`Scan`].
+
+use super::items::{gpst, Edge, EventMark, RawItem};
+use super::ubx_obs::RawEpoch;
+use crate::error::{Error, Result};
+use crate::rinex::{Obs, ObsCode, SatObs};
+use crate::sv::Constellation;
+use hifitime::Epoch;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Observation types per system from the first pass: per slot, the code and which of C, L,
+/// D, S ever had a value.
+#[derive(Default)]
+pub struct Scan {
+    codes: BTreeMap<(usize, usize, [u8; 2]), u8>,
+    /// GLONASS slots and their frequency channels.
+    pub glonass: BTreeMap<u8, i8>,
+    /// Time of the first epoch.
+    pub first: Option<Epoch>,
+    /// Time of the last epoch.
+    pub last: Option<Epoch>,
+}
+
+impl Scan {
+    /// Take in one epoch.
+    pub fn add(&mut self, e: &RawEpoch) {
+        let t = gpst(e.week, e.tow);
+        self.first.get_or_insert(t);
+        self.last = Some(t);
+        for &(s, c) in &e.glonass {
+            self.glonass.entry(s).or_insert(c);
+        }
+        for s in &e.sats {
+            for (idx, g) in s.sig.iter().enumerate() {
+                let Some(g) = g else { continue };
+                let m = self
+                    .codes
+                    .entry((s.sv.sys.index(), idx, g.code))
+                    .or_default();
+                *m |= u8::from(g.pr != 0.0)
+                    | u8::from(g.cp != 0.0) << 1
+                    | u8::from(g.doppler != 0.0) << 2
+                    | u8::from(g.cno != 0.0) << 3;
+            }
+        }
+    }
+
+    /// Observation types per system, in RTKLIB's order of systems.
+    pub fn types(&self) -> Vec<(Constellation, Vec<ObsCode>)> {
+        let mut out: Vec<(Constellation, Vec<ObsCode>)> = Vec::new();
+        for sys in RINEX_ORDER {
+            let mut v = Vec::new();
+            for (&(s, _, code), &mask) in &self.codes {
+                if s != sys.index() {
+                    continue;
+                }
+                for (j, k) in b"CLDS".iter().enumerate() {
+                    if mask & (1 << j) != 0 {
+                        v.push(ObsCode([*k, code[0], code[1]]));
+                    }
+                }
+            }
+            if !v.is_empty() {
+                out.push((sys, v));
+            }
+        }
+        out
+    }
+}
+
+/// Systems in the order RTKLIB writes them.
+const RINEX_ORDER: [Constellation; 7] = [
+    Constellation::Gps,
+    Constellation::Glonass,
+    Constellation::Galileo,
+    Constellation::Qzss,
+    Constellation::Sbas,
+    Constellation::BeiDou,
+    Constellation::Irnss,
+];
+
+/// One epoch's satellites aligned with the header's types; satellites with none are left out.
+fn sat_records(e: &RawEpoch, types: &[(Constellation, Vec<ObsCode>)]) -> Vec<SatObs> {
+    let mut out = Vec::new();
+    for s in &e.sats {
+        let Some((_, ts)) = types.iter().find(|(sys, _)| *sys == s.sv.sys) else {
+            continue;
+        };
+        let mut any = false;
+        let obs = ts
+            .iter()
+            .map(|t| {
+                let g = s
+                    .sig
+                    .iter()
+                    .flatten()
+                    .find(|g| g.code == [t.band(), t.attribute()]);
+                let Some(g) = g else { return Obs::MISSING };
+                any = true;
+                let (v, lli) = match t.kind() {
+                    b'C' => (g.pr, 0),
+                    b'L' => (g.cp, g.lli & 3),
+                    b'D' => (g.doppler, 0),
+                    _ => (g.cno, 0),
+                };
+                Obs {
+                    value: if v == 0.0 { f64::NAN } else { v },
+                    lli,
+                    ssi: 0,
+                }
+            })
+            .collect();
+        if any {
+            out.push(SatObs { sv: s.sv, obs });
+        }
+    }
+    out
+}
+
+/// The first and last epoch of a scan, or the error saying the log has no usable epoch.
+pub fn span(scan: &Scan, input: &Path) -> Result<(Epoch, Epoch)> {
+    match (scan.first, scan.last) {
+        (Some(a), Some(b)) => Ok((a, b)),
+        _ => Err(Error::input(
+            input,
+            "no RXM-RAWX measurement epoch with a known GPS week: enable UBX-RXM-RAWX output \
+             on the receiver, and log after it has acquired time",
+        )),
+    }
+}
+
+/// One RINEX record of a log.
+pub enum RinexOut {
+    /// An observation epoch (flag 0) with its satellites.
+    Epoch(Epoch, Vec<SatObs>),
+    /// A flag-5 event with its comment lines.
+    Event(Epoch, Vec<String>),
+}
+
+/// Puts a log's items in RINEX order: a time mark's falling edge (as convbin) goes before the
+/// first epoch not earlier than it; every edge is kept in `marks` for the CSV.
+pub struct RinexOrder<'a> {
+    types: &'a [(Constellation, Vec<ObsCode>)],
+    pending: Vec<EventMark>,
+    /// Every time-mark edge, in file order.
+    pub marks: Vec<EventMark>,
+}
+
+impl<'a> RinexOrder<'a> {
+    /// An ordering for a header with `types`.
+    pub fn new(types: &'a [(Constellation, Vec<ObsCode>)]) -> Self {
+        RinexOrder {
+            types,
+            pending: Vec::new(),
+            marks: Vec::new(),
+        }
+    }
+
+    /// Take one item; hand the records it completes to `out`.
+    pub fn item<E>(
+        &mut self,
+        it: RawItem,
+        out: &mut impl FnMut(RinexOut) -> std::result::Result<(), E>,
+    ) -> std::result::Result<(), E> {
+        match it {
+            RawItem::Event(ev) => {
+                self.marks.push(ev);
+                if ev.edge == Edge::Falling {
+                    self.pending.push(ev);
+                }
+            }
+            RawItem::Ephemeris(_) | RawItem::GpsIono(..) => {}
+            RawItem::Epoch(e) => {
+                let t = gpst(e.week, e.tow);
+                let (now, later): (Vec<_>, Vec<_>) = self
+                    .pending
+                    .drain(..)
+                    .partition(|m| gpst(m.week, m.tow) <= t);
+                for m in &now {
+                    out(mark(m))?;
+                }
+                self.pending = later;
+                let sats = sat_records(&e, self.types);
+                if !sats.is_empty() {
+                    out(RinexOut::Epoch(t, sats))?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The events after the last epoch.
+    pub fn finish<E>(
+        &mut self,
+        out: &mut impl FnMut(RinexOut) -> std::result::Result<(), E>,
+    ) -> std::result::Result<(), E> {
+        for m in std::mem::take(&mut self.pending) {
+            out(mark(&m))?;
+        }
+        Ok(())
+    }
+}
+
+fn mark(m: &EventMark) -> RinexOut {
+    let c = if m.valid {
+        vec![]
+    } else {
+        vec![" Time mark is not valid".to_string()]
+    };
+    RinexOut::Event(gpst(m.week, m.tow), c)
+}

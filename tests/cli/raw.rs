@@ -1,0 +1,192 @@
+//! u-blox logs given where RINEX observations are taken: `info`, `spp` and `ppk` tell the
+//! format from the content (or take --obs-format), and `spp` uses the log's own ephemerides
+//! when no navigation file is given.
+
+use super::*;
+
+const COLD: &str = "gnss/ubx-navsol-2025/16dBatt_no_interference_coldstart.ubx";
+const COLD_NAV: &str = "gnss/ubx-navsol-2025/16dBatt_no_interference_coldstart.nav.gz";
+
+/// The data lines of a .pos file.
+fn pos_lines(path: &Path) -> Vec<String> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with('%'))
+        .map(String::from)
+        .collect()
+}
+
+#[test]
+fn info_describes_a_ubx_log() {
+    let Some(log) = shared(COLD) else {
+        return;
+    };
+    let t = succeeds(&ppkat(&["info", p(&log)]));
+    assert!(t.contains("562"), "{t}");
+    assert!(
+        t.contains("3843 navigation messages: 28 ephemerides"),
+        "{t}"
+    );
+    // Forced to RINEX, the log is refused with the reader's reason.
+    fails_with(
+        &ppkat(&["info", p(&log), "--obs-format", "rinex"]),
+        &["coldstart.ubx", "RINEX VERSION / TYPE"],
+    );
+}
+
+#[test]
+fn spp_on_a_ubx_log_equals_spp_on_its_conversion() {
+    let Some([log, nav]) = shared_all([COLD, COLD_NAV]) else {
+        return;
+    };
+    let (obs, a, b, c) = (
+        tmp("raw-cold.obs"),
+        tmp("raw-a.pos"),
+        tmp("raw-b.pos"),
+        tmp("raw-c.pos"),
+    );
+    succeeds(&ppkat(&["convert", "--in", p(&log), "-o", p(&obs)]));
+    let t = succeeds(&ppkat(&[
+        "spp",
+        "--obs",
+        p(&log),
+        "--nav",
+        p(&nav),
+        "-o",
+        p(&a),
+    ]));
+    assert!(t.contains("read as a u-blox UBX log: 562 epochs"), "{t}");
+    succeeds(&ppkat(&[
+        "spp",
+        "--obs",
+        p(&obs),
+        "--obs-format",
+        "rinex",
+        "--nav",
+        p(&nav),
+        "-o",
+        p(&b),
+    ]));
+    let (la, lb) = (pos_lines(&a), pos_lines(&b));
+    assert_eq!(la.len(), 561);
+    assert_eq!(la, lb, "the same positions to the last printed digit");
+    // Without --nav: the log's own ephemerides.
+    let t = succeeds(&ppkat(&["spp", "--obs", p(&log), "-o", p(&c)]));
+    assert!(
+        t.contains("using the 28 ephemerides decoded from the log"),
+        "{t}"
+    );
+    assert!(t.contains("562 of 562 epochs solved"), "{t}");
+}
+
+#[test]
+fn spp_without_orbits_says_what_to_give() {
+    let Some(f9t) = shared("gnss/ubx-navsol-2025/F9T-L2-5min.ubx") else {
+        return;
+    };
+    let out = tmp("raw-f9t.pos");
+    fails_with(
+        &ppkat(&["spp", "--obs", p(&f9t), "-o", p(&out)]),
+        &["no orbits", "--nav", "--sp3"],
+    );
+    let junk = tmp("junk.bin");
+    std::fs::write(&junk, b"neither RINEX nor UBX").unwrap();
+    fails_with(
+        &ppkat(&["spp", "--obs", p(&junk), "-o", p(&out)]),
+        &[
+            "junk.bin",
+            "neither a RINEX observation file",
+            "--obs-format",
+        ],
+    );
+}
+
+#[test]
+fn bench_ingest_times_the_conversion_of_a_log() {
+    let Some(log) = shared(COLD) else {
+        return;
+    };
+    let t = succeeds(&ppkat(&["bench", "ingest", p(&log)]));
+    assert!(
+        t.contains("convert: 3.0 MB of raw log (562 epochs, 28 ephemerides)"),
+        "{t}"
+    );
+    assert!(
+        t.contains("MB/s per CPU second") && t.contains("peak RSS"),
+        "{t}"
+    );
+}
+
+#[test]
+fn simulate_writes_the_rover_and_base_also_as_ubx() {
+    let dir = tmp("sim-raw");
+    let scen = fixture("scenario_small.toml");
+    let t = succeeds(&ppkat(&[
+        "simulate",
+        "--scenario",
+        p(&scen),
+        "--out",
+        p(&dir),
+        "--raw",
+        "ubx",
+    ]));
+    assert!(t.contains("0 measurements UBX cannot carry"), "{t}");
+    let i = succeeds(&ppkat(&["info", p(&dir.join("rover.ubx"))]));
+    assert!(i.starts_with("u-blox UBX log"), "{i}");
+    assert!(i.contains("26 external events"), "{i}");
+    assert!(i.contains("signals C1C L1C D1C S1C C2X L2X D2X S2X"), "{i}");
+    fails_with(
+        &ppkat(&[
+            "simulate",
+            "--builtin",
+            "close-range",
+            "--out",
+            p(&dir),
+            "--raw",
+            "ubx",
+        ]),
+        &["--raw applies to flights"],
+    );
+    // PPK on the logs against PPK on the RINEX files, the base position given to both (a log
+    // has no header position): the same fix state everywhere, positions within 1 mm (they
+    // differ by the 0.1 mm the .pos prints at most).
+    let xyz = t
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("base:"))
+        .and_then(|l| l.split(" at ").nth(1))
+        .map(|l| l.split_whitespace().take(3).collect::<Vec<_>>().join(","))
+        .unwrap();
+    let base_pos = format!("--base-pos={xyz}");
+    let nav = dir.join("nav.rnx");
+    let run = |rover: &str, base: &str, out: &Path| {
+        succeeds(&ppkat(&[
+            "ppk",
+            "--rover",
+            p(&dir.join(rover)),
+            "--base",
+            p(&dir.join(base)),
+            "--nav",
+            p(&nav),
+            &base_pos,
+            "-o",
+            p(out),
+        ]))
+    };
+    let (u, r) = (tmp("sim-ubx.pos"), tmp("sim-rnx.pos"));
+    run("rover.ubx", "base.ubx", &u);
+    run("rover.obs", "base.obs", &r);
+    let (lu, lr) = (pos_lines(&u), pos_lines(&r));
+    assert_eq!(lu.len(), 1175);
+    assert_eq!(lu.len(), lr.len());
+    for (a, b) in lu.iter().zip(&lr) {
+        let fa: Vec<&str> = a.split_whitespace().collect();
+        let fb: Vec<&str> = b.split_whitespace().collect();
+        assert_eq!((fa[0], fa[1], fa[5]), (fb[0], fb[1], fb[5]), "time and Q");
+        for k in 2..5 {
+            let d = fa[k].parse::<f64>().unwrap() - fb[k].parse::<f64>().unwrap();
+            let metres = if k < 4 { d * 111_320.0 } else { d };
+            assert!(metres.abs() <= 1e-3, "{a}\n{b}");
+        }
+    }
+}
