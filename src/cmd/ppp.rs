@@ -34,7 +34,8 @@ use std::path::PathBuf;
 /// 1/1.5 cm horizontal/up (2/5 cm when an antenna is not modelled).
 #[derive(clap::Args)]
 pub struct Args {
-    /// RINEX observation file (2/3/4, Hatanaka, gzip) with two frequencies of code and phase.
+    /// Observation file with two frequencies of code and phase: RINEX 2/3/4 (Hatanaka, gzip)
+    /// or a u-blox UBX log (RXM-RAWX), told from the content.
     #[arg(long, value_name = "FILE")]
     obs: PathBuf,
     /// Precise orbits (SP3-a/b/c/d, plain or gzip); give the flag once per file: the
