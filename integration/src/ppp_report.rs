@@ -80,37 +80,32 @@ pub fn html(r: &PppReport, input: &str) -> String {
         },
     );
     let ztd: Vec<f64> = r.result.epochs.iter().map(|e| e.ztd.0).collect();
-    s += &svg("Zenith total delay (m)", |root| {
-        let (y0, y1) = range(ztd.iter().copied());
-        let mut ch = axes(
-            root,
-            range(t.iter().copied()).0..range(t.iter().copied()).1,
-            y0..y1,
-            ("hours", "m"),
-            60,
-        )?;
-        ch.draw_series(LineSeries::new(
-            t.iter().copied().zip(ztd.iter().copied()),
-            BLUE,
-        ))?;
-        Ok(())
-    });
+    let zr = range(ztd.iter().copied());
+    s += &series("Zenith total delay (m)", &t, &ztd, zr.0..zr.1, "m", BLUE);
     let ns: Vec<f64> = r.result.epochs.iter().map(|e| e.nsat as f64).collect();
-    s += &svg("Satellites used", |root| {
-        let mut ch = axes(
-            root,
-            range(t.iter().copied()).0..range(t.iter().copied()).1,
-            0.0..ns.iter().copied().fold(4.0, f64::max) + 1.0,
-            ("hours", "satellites"),
-            40,
-        )?;
+    let top = ns.iter().copied().fold(4.0, f64::max) + 1.0;
+    s += &series("Satellites used", &t, &ns, 0.0..top, "satellites", BLACK);
+    s + "</body></html>\n"
+}
+
+/// One value per epoch against hours, as a titled line plot.
+fn series(
+    title: &str,
+    t: &[f64],
+    v: &[f64],
+    y: std::ops::Range<f64>,
+    unit: &str,
+    colour: RGBColor,
+) -> String {
+    let (t0, t1) = range(t.iter().copied());
+    svg(title, |root| {
+        let mut ch = axes(root, t0..t1, y, ("hours", unit), 60)?;
         ch.draw_series(LineSeries::new(
-            t.iter().copied().zip(ns.iter().copied()),
-            BLACK,
+            t.iter().copied().zip(v.iter().copied()),
+            colour,
         ))?;
         Ok(())
-    });
-    s + "</body></html>\n"
+    })
 }
 
 /// The mean of the epochs' positions.
