@@ -25,9 +25,8 @@
 //!    the epoch's ambiguity segment ([`super::segment`]).
 
 use super::ar;
-use super::geometry::{day_of_year, tropo, wet_mapping, SatView};
+use super::geometry::{day_of_year, tropo, wet_mapping, ReceiverEpoch};
 use super::measure::{self, ObsKind};
-use super::obs::SatMeas;
 use super::options::{ArMode, Estimate, Motion, PpkOptions};
 use super::output::{EpochSol, PassStats};
 use super::pair::{observes, Pair};
@@ -37,7 +36,6 @@ use super::smooth::{self, Prior};
 use super::state::{AmbKey, State, StateKey};
 use crate::frame::{Ecef, Geodetic};
 use crate::model::antex::AntennaPcv;
-use crate::orbit::Orbits;
 use crate::solution::Quality;
 use hifitime::Epoch;
 
@@ -57,7 +55,6 @@ const POSITION_SIGMA: f64 = 30.0;
 /// The filter of one pass.
 pub struct Filter<'a> {
     opts: &'a PpkOptions,
-    orbits: &'a Orbits,
     base: Ecef,
     base_geo: Geodetic,
     state: State,
@@ -102,14 +99,12 @@ impl<'a> Filter<'a> {
     /// ambiguity segment starts.
     pub fn new(
         opts: &'a PpkOptions,
-        orbits: &'a Orbits,
         base: Ecef,
         antennas: (Option<AntennaPcv>, Option<AntennaPcv>),
         segment_gap: f64,
     ) -> Self {
         Filter {
             opts,
-            orbits,
             base,
             base_geo: base.to_geodetic(),
             state: State::new(1e4),
@@ -131,19 +126,17 @@ impl<'a> Filter<'a> {
     /// two-filter smoother's and is resolved without holding. None when no double
     /// difference could be formed. The state before the measurements is kept for
     /// [`Self::take_prior`].
-    #[allow(clippy::too_many_arguments)]
     pub fn step(
         &mut self,
-        t: Epoch,
-        rover: &[SatMeas],
-        tb: Epoch,
-        base: &[SatMeas],
+        rover: ReceiverEpoch,
+        base: ReceiverEpoch,
         start: Ecef,
         slips: &StepSlips,
         prior: Option<&Prior>,
     ) -> Option<EpochSol> {
+        let (t, tb) = (rover.time, base.time);
         let dt = self.elapsed(t);
-        let pairs = self.form_pairs(t, rover, tb, base, &start);
+        let pairs = self.form_pairs(rover, base, &start);
         self.predict(&start);
         let iono = IonoConstraint::at(&start, &self.base, self.opts);
         self.update_ambiguity_bookkeeping(t, dt, slips, iono.process_noise);
@@ -180,28 +173,20 @@ impl<'a> Filter<'a> {
 
     /// Satellites seen by both receivers with an orbit, above the mask (rover elevation: an
     /// aircraft sees more sky than its base), with their geometry and antenna corrections.
-    fn form_pairs(
-        &mut self,
-        t: Epoch,
-        rover: &[SatMeas],
-        tb: Epoch,
-        base: &[SatMeas],
-        start: &Ecef,
-    ) -> Vec<Pair> {
+    fn form_pairs(&mut self, rover: ReceiverEpoch, base: ReceiverEpoch, start: &Ecef) -> Vec<Pair> {
+        let (t, tb) = (rover.time, base.time);
         let mut pairs: Vec<Pair> = Vec::new();
         let start_geo = start.to_geodetic();
         let doy = day_of_year(t);
         let age_sigma = self.opts.age_error_rate
             * (t - tb).to_seconds().abs()
             * (1.0 + (start.0 - self.base.0).norm() / 10_000.0);
-        for r in rover {
-            let Some(b) = base.iter().find(|b| b.sv == r.sv) else {
+        for (r, vr) in rover.meas.iter().zip(rover.views) {
+            let Some(k) = base.meas.iter().position(|b| b.sv == r.sv) else {
                 continue;
             };
-            let (Some(vr), Some(vb)) = (
-                SatView::at(self.orbits, r, t),
-                SatView::at(self.orbits, b, tb),
-            ) else {
+            let b = &base.meas[k];
+            let (Some(vr), Some(vb)) = (*vr, base.views[k]) else {
                 self.stats.no_orbit += 1;
                 continue;
             };

@@ -9,6 +9,29 @@ use crate::orbit::{Orbits, C};
 use hifitime::{Duration, Epoch};
 use nalgebra::Vector3;
 
+/// One receiver's epoch as the filter reads it: its time, measurements, and each
+/// satellite's view (aligned with `meas`; None without an orbit at that time).
+#[derive(Clone, Copy, Debug)]
+pub struct ReceiverEpoch<'a> {
+    /// Receiver time tag (GPST).
+    pub time: Epoch,
+    /// The satellites' measurements.
+    pub meas: &'a [SatMeas],
+    /// The satellites at their transmission times, aligned with `meas`.
+    pub views: &'a [Option<SatView>],
+}
+
+/// The view of every satellite of every epoch of one receiver (computed once per run, in
+/// parallel: both filter passes and every rover epoch paired with a base epoch read them).
+pub fn views(orbits: &Orbits, times: &[Epoch], meas: &[Vec<SatMeas>]) -> Vec<Vec<Option<SatView>>> {
+    use rayon::prelude::*;
+    times
+        .par_iter()
+        .zip(meas)
+        .map(|(t, m)| m.iter().map(|s| SatView::at(orbits, s, *t)).collect())
+        .collect()
+}
+
 /// A satellite as seen by one receiver at its epoch.
 #[derive(Clone, Copy, Debug)]
 pub struct SatView {

@@ -7,6 +7,7 @@
 //! [`PassInputs`], which every pass reads and none changes; errors when no rover epoch pairs
 //! with a base epoch.
 
+use super::geometry::{views, ReceiverEpoch, SatView};
 use super::obs::{extract, SatMeas, SignalPlan};
 use super::{checks, slip, PpkOptions};
 use crate::error::{Error, Result};
@@ -30,6 +31,30 @@ pub(super) struct PassInputs<'a> {
     pub(super) rover_breaks: Vec<slip::Slips>,
     /// Arc breaks of the base's phase, per base epoch.
     pub(super) base_breaks: Vec<slip::Slips>,
+    /// Each rover satellite's view, aligned with `rover_meas`.
+    pub(super) rover_views: Vec<Vec<Option<SatView>>>,
+    /// Each base satellite's view, aligned with `base_meas`.
+    pub(super) base_views: Vec<Vec<Option<SatView>>>,
+}
+
+impl PassInputs<'_> {
+    /// Rover epoch `i` as the filter reads it.
+    pub(super) fn rover_epoch(&self, i: usize) -> ReceiverEpoch<'_> {
+        ReceiverEpoch {
+            time: self.rover.epochs[i].time,
+            meas: &self.rover_meas[i],
+            views: &self.rover_views[i],
+        }
+    }
+
+    /// Base epoch `j` as the filter reads it.
+    pub(super) fn base_epoch(&self, j: usize) -> ReceiverEpoch<'_> {
+        ReceiverEpoch {
+            time: self.base.epochs[j].time,
+            meas: &self.base_meas[j],
+            views: &self.base_views[j],
+        }
+    }
 }
 
 /// The measurements of the processed systems of one file, per epoch.
@@ -97,6 +122,10 @@ pub(super) fn prepare<'a>(
         || slip::arc_breaks(&rover_times, &rover_meas, opts.max_gap, rover_doppler),
         || slip::arc_breaks(&base_times, &base_meas, base_gap, base_doppler),
     );
+    let (rover_views, base_views) = rayon::join(
+        || views(orbits, &rover_times, &rover_meas),
+        || views(orbits, &base_times, &base_meas),
+    );
     let lonely = checks::without_common(&rover_meas, &base_meas, &pairing.matched);
     let stretches = checks::lonely_stretches(&rover_times, &lonely);
     warnings.extend(checks::lonely_warnings(&stretches));
@@ -109,6 +138,8 @@ pub(super) fn prepare<'a>(
         starts: start_values(rover, orbits, opts),
         rover_breaks,
         base_breaks,
+        rover_views,
+        base_views,
     })
 }
 

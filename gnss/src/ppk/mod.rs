@@ -262,10 +262,8 @@ fn run_pass(
         };
         (prev_i, prev_j) = (Some(i), Some(j));
         out.sols[i] = f.step(
-            inputs.rover.epochs[i].time,
-            &inputs.rover_meas[i],
-            inputs.base.epochs[j].time,
-            &inputs.base_meas[j],
+            inputs.rover_epoch(i),
+            inputs.base_epoch(j),
             *start,
             &slips,
             priors.and_then(|p| p[i].as_ref()),
@@ -441,7 +439,7 @@ pub fn process(
     // A step longer than 2.5 nominal intervals between solved epochs starts a new segment.
     let segment_gap = 2.5 * interval(rover);
     let run = |backward: bool, o: &PpkOptions, priors: Option<&[Option<smooth::Prior>]>| {
-        let mut f = filter::Filter::new(o, orbits, base_arp, antennas.clone(), segment_gap);
+        let mut f = filter::Filter::new(o, base_arp, antennas.clone(), segment_gap);
         if backward && priors.is_none() && o.ar == ArMode::Off {
             f.record_priors();
         }
