@@ -15,6 +15,7 @@
 
 #![deny(missing_docs)]
 
+pub mod atomic;
 pub mod error;
 pub mod frame;
 pub mod model;
