@@ -13,7 +13,9 @@ mod gnss;
 mod help;
 mod import;
 mod info;
+mod kill;
 mod precise;
+mod reliability;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -118,6 +120,29 @@ fn pos_rows(path: &Path) -> Vec<Vec<String>> {
         .filter(|l| !l.starts_with('%'))
         .map(|l| l.split_whitespace().map(str::to_string).collect())
         .collect()
+}
+
+/// The folder of one `ppkat demo` run, made once and shared by the tests that only read it
+/// (rover, base, navigation, trajectory, adjustment project).
+fn demo_dir() -> &'static Path {
+    static DIR: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    DIR.get_or_init(|| {
+        let d = tmp("shared-demo");
+        succeeds(&ppkat(&["demo", "--out", p(&d)]));
+        d
+    })
+}
+
+/// Assert exit code 3 (finished, inputs skipped) and that standard error names every needle.
+fn skips(o: &Output, needles: &[&str]) -> String {
+    let t = text(o);
+    assert_eq!(o.status.code(), Some(3), "expected exit code 3: {t}");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("input(s) skipped"), "{err}");
+    for n in needles {
+        assert!(err.contains(n), "stderr lacks '{n}': {err}");
+    }
+    t
 }
 
 /// A path as a command-line argument.
