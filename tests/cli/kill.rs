@@ -59,17 +59,7 @@ fn killed_ppk_leaves_the_earlier_pos_whole() {
         demo.join("base.obs"),
         demo.join("nav.rnx"),
     );
-    let args = [
-        "ppk",
-        "--rover",
-        p(&rover),
-        "--base",
-        p(&base),
-        "--nav",
-        p(&nav),
-        "-o",
-        p(&out),
-    ];
+    let args = ppk_args(&rover, &base, &[&nav], &out, &[]);
     succeeds(&ppkat(&args));
     let new = std::fs::read(&out).unwrap();
     mark_old(&out);

@@ -145,6 +145,24 @@ fn skips(o: &Output, needles: &[&str]) -> String {
     t
 }
 
+/// The arguments of `ppkat ppk` of `rover` against `base` with the navigation files and
+/// `extra` flags into `out`.
+fn ppk_args<'a>(
+    rover: &'a Path,
+    base: &'a Path,
+    nav: &[&'a Path],
+    out: &'a Path,
+    extra: &[&'a str],
+) -> Vec<&'a str> {
+    let mut args = vec!["ppk", "--rover", p(rover), "--base", p(base)];
+    for n in nav {
+        args.extend(["--nav", p(n)]);
+    }
+    args.extend(["-o", p(out)]);
+    args.extend_from_slice(extra);
+    args
+}
+
 /// A path as a command-line argument.
 fn p(x: &Path) -> &str {
     x.to_str().unwrap()
