@@ -156,7 +156,7 @@ fn runs_that_solve_nothing_fail_and_say_why() {
         );
         assert!(!out.exists(), "no header-only .pos");
         let o = ppkat(&ppk_args(&rover, &base, &[&nav], &out, &extra));
-        fails_with(&o, &["rover.obs", "epoch"]);
+        fails_with(&o, &[".obs", "epoch", "--"]);
         assert!(!out.exists(), "no header-only .pos");
     }
 }
