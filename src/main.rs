@@ -1,6 +1,7 @@
 //! `ppkat` command line: parse the arguments, hand them to the subcommand's module
-//! ([`cmd`]), map its result to the exit code (0 success, 1 failure; clap exits with 2 on bad
-//! usage).
+//! ([`cmd`]), map its result to the exit code: 0 all done, 3 finished but inputs skipped (named
+//! and counted on standard error, [`cmd::Incomplete`]), 1 failed or produced nothing usable;
+//! clap exits with 2 on bad usage.
 
 mod cmd;
 
@@ -68,6 +69,10 @@ fn main() {
     }
     let cli = Cli::parse();
     if let Err(e) = run(cli) {
+        if let Some(i) = e.downcast_ref::<cmd::Incomplete>() {
+            eprintln!("warning: {i}");
+            std::process::exit(3);
+        }
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }

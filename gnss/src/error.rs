@@ -7,21 +7,22 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
-    /// The file could not be opened or read.
-    #[error("{path}: cannot read: {source}; check that the path exists and is readable")]
+    /// The file could not be opened or read. (The system's error is part of the message, not
+    /// a chained source, so that a report of the whole chain says it once.)
+    #[error("{path}: cannot read: {}", read_advice(.cause))]
     Io {
         /// The file.
         path: PathBuf,
         /// What the system said.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// The output file could not be written.
-    #[error("{path}: cannot write: {source}; check that its folder exists and is writable")]
+    #[error("{path}: cannot write: {cause}; check that its folder exists and is writable")]
     Write {
         /// The file.
         path: PathBuf,
         /// What the system said.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// A line of the file does not follow the format.
     #[error("{path}:{line}: {what}")]
@@ -46,6 +47,23 @@ pub enum Error {
     NoData(String),
 }
 
+/// What the system said about a failed read, and what to do about it: a file that is there
+/// but is not text gets no advice to check that it exists.
+pub fn read_advice(e: &std::io::Error) -> String {
+    use std::io::ErrorKind as K;
+    match e.kind() {
+        K::InvalidData => {
+            "it is not text (not valid UTF-8): check that it is the file meant, not a binary \
+             or compressed one"
+                .into()
+        }
+        K::NotFound => format!("{e}; check the path"),
+        K::PermissionDenied => format!("{e}; check that the file is readable"),
+        K::IsADirectory => format!("{e}; give a file, not a folder"),
+        _ => format!("{e}; check that the path exists and is readable"),
+    }
+}
+
 /// Result alias of the `gnss` crate.
 pub type Result<T> = std::result::Result<T, Error>;
 
@@ -60,9 +78,9 @@ impl Error {
     }
     /// A function turning an I/O failure on `path` into an [`Error::Io`] (for `map_err`).
     pub fn io(path: &std::path::Path) -> impl Fn(std::io::Error) -> Error + Copy + '_ {
-        move |source| Error::Io {
+        move |cause| Error::Io {
             path: path.to_path_buf(),
-            source,
+            cause,
         }
     }
     /// An [`Error::Input`] about `path`.

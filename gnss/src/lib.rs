@@ -17,6 +17,7 @@
 
 #![deny(missing_docs)]
 
+pub mod atomic;
 pub mod error;
 pub mod frame;
 pub mod model;

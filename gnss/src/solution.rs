@@ -7,11 +7,11 @@
 //! sdyz sdzx in ECEF for xyz); age (s); ratio. [`crate::trajectory::Trajectory`] is the value
 //! these lines serialise.
 
+pub use crate::atomic::write_atomic;
 use crate::error::{Error, Result};
 use crate::frame::{enu_rotation, Ecef, Geodetic};
 use hifitime::Epoch;
 use nalgebra::Matrix3;
-use std::io::Write;
 use std::path::Path;
 
 /// Solution quality, numbered as RTKLIB numbers it (lower is better).
@@ -80,38 +80,6 @@ fn sqvar(v: f64) -> f64 {
     } else {
         v.sqrt()
     }
-}
-
-/// Write `path` atomically: to a temporary file beside it, then renamed over it.
-pub fn write_atomic(
-    path: &Path,
-    f: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
-) -> Result<()> {
-    let io = |source| Error::Write {
-        path: path.to_path_buf(),
-        source,
-    };
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let res = (|| {
-        let file = std::fs::File::create(&tmp)?;
-        let mut w = std::io::BufWriter::new(file);
-        f(&mut w)?;
-        w.flush()?;
-        w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if res.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    res.map_err(io)
 }
 
 /// Format one record as RTKLIB does.

@@ -38,6 +38,23 @@ pub fn from_week_tow(week: u32, tow: f64) -> Epoch {
     Epoch::from_gpst_seconds(week as f64 * WEEK_SECONDS) + Duration::from_seconds(tow)
 }
 
+/// The GPST epoch of a GPS week and seconds of week read from a file, checked first: the
+/// week a whole number from 0 to 9999, the seconds finite and within the week (0 to
+/// 604800). `Err` says which is wrong, for the caller to add file, line and column.
+pub fn checked_week_tow(week: f64, tow: f64) -> Result<Epoch, String> {
+    if !(week.is_finite() && week.fract() == 0.0 && (0.0..10_000.0).contains(&week)) {
+        return Err(format!(
+            "GPS week {week} is not a whole number from 0 to 9999"
+        ));
+    }
+    if !(tow.is_finite() && (0.0..=WEEK_SECONDS).contains(&tow)) {
+        return Err(format!(
+            "seconds of week {tow} are not a number from 0 to 604800"
+        ));
+    }
+    Ok(from_week_tow(week as u32, tow))
+}
+
 /// `a − b` in seconds.
 pub fn diff_s(a: Epoch, b: Epoch) -> f64 {
     (a - b).to_seconds()

@@ -158,15 +158,14 @@ impl TransverseMercator {
     }
 }
 
+/// `a` in [−π, π], by whole turns, without a loop (a huge or infinite angle cannot hang).
 fn wrap_pi(a: f64) -> f64 {
-    let mut a = a;
-    while a > std::f64::consts::PI {
-        a -= 2.0 * std::f64::consts::PI;
+    use std::f64::consts::{PI, TAU};
+    if (-PI..=PI).contains(&a) {
+        a
+    } else {
+        (a + PI).rem_euclid(TAU) - PI
     }
-    while a < -std::f64::consts::PI {
-        a += 2.0 * std::f64::consts::PI;
-    }
-    a
 }
 
 #[cfg(test)]

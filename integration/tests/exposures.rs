@@ -345,7 +345,7 @@ fn photos_are_matched_and_geotagged_copies_written() {
     assert!(list.iter().all(|p| p.taken.is_some()), "capture times read");
     photos::check(&list, &stations).unwrap();
     let out = tmp("geotagged");
-    let written = photos::geotag(&list, &stations, &out).unwrap();
+    let written = photos::geotag(&list, &stations, &out).unwrap().written;
     assert_eq!(written.len(), 6);
     for (k, w) in written.iter().enumerate() {
         let (lat, lon, h) = photos::read_position(w).expect("GPS tags written");
@@ -361,6 +361,12 @@ fn photos_are_matched_and_geotagged_copies_written() {
             "original untouched"
         );
     }
+    // The copies keep the photos' other EXIF fields (the capture times).
+    let copies = photos::list(&out).unwrap();
+    assert!(copies
+        .iter()
+        .zip(&list)
+        .all(|(c, o)| c.taken.is_some() && c.taken == o.taken));
     // Writing into the photos' own folder is refused.
     assert!(photos::geotag(&list, &stations, &dir).is_err());
     // A photo missing in the middle.

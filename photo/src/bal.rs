@@ -17,17 +17,21 @@ use std::path::Path;
 #[derive(Debug, thiserror::Error)]
 pub enum BalError {
     /// The file cannot be read.
-    #[error("{path}: cannot read: {source}")]
+    #[error("{path}: cannot read: {}", if cause.kind() == std::io::ErrorKind::InvalidData {
+        "it is not text (not valid UTF-8): check that it is the BAL file meant".to_string()
+    } else {
+        cause.to_string()
+    })]
     Io {
         /// The file.
         path: String,
-        /// Why.
-        source: std::io::Error,
+        /// Why (part of the message, not a chained source: a report says it once).
+        cause: std::io::Error,
     },
     /// The file is not a BAL problem.
     #[error("{path}: {what}")]
     Format {
-        /// The file.
+        /// The file and line, `path:line`.
         path: String,
         /// What is wrong.
         what: String,
@@ -76,45 +80,64 @@ pub struct BalProblem {
 
 impl BalProblem {
     /// Read a BAL file (counts, observations, cameras, points); every number is checked, and
-    /// an error names the file and the element.
+    /// an error names the file, the line and the element. Counts are whole numbers and nothing
+    /// is reserved beyond what the file's size can hold.
     pub fn read(path: &Path) -> Result<BalProblem, BalError> {
         let p = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| BalError::Io {
+        let text = std::fs::read_to_string(path).map_err(|cause| BalError::Io {
             path: p.clone(),
-            source,
+            cause,
         })?;
-        let mut it = text.split_ascii_whitespace();
+        let mut it = text
+            .lines()
+            .enumerate()
+            .flat_map(|(i, l)| l.split_ascii_whitespace().map(move |t| (i + 1, t)));
+        let line = std::cell::Cell::new(1);
         let mut next = |what: &str| -> Result<f64, BalError> {
-            let tok = it.next().ok_or_else(|| BalError::Format {
-                path: p.clone(),
+            let (l, tok) = it.next().ok_or_else(|| BalError::Format {
+                path: format!("{p}:{}", line.get()),
                 what: format!("the file ends before {what}"),
             })?;
+            line.set(l);
+            let at = format!("{p}:{l}");
             let v: f64 = tok.parse().map_err(|_| BalError::Format {
-                path: p.clone(),
+                path: at.clone(),
                 what: format!("'{tok}' is not a number ({what})"),
             })?;
             if v.is_finite() {
                 Ok(v)
             } else {
                 Err(BalError::Format {
-                    path: p.clone(),
+                    path: at,
                     what: format!("{what} is not finite"),
                 })
             }
         };
+        let mut count = |what: &str| -> Result<usize, BalError> {
+            let v = next(what)?;
+            if v < 0.0 || v.fract() != 0.0 || v > 1e12 {
+                return Err(BalError::Format {
+                    path: format!("{p}:{}", line.get()),
+                    what: format!("{what} {v} is not a whole number of at most 10¹²"),
+                });
+            }
+            Ok(v as usize)
+        };
         let (nc, np, no) = (
-            next("the camera count")? as usize,
-            next("the point count")? as usize,
-            next("the observation count")? as usize,
+            count("the camera count")?,
+            count("the point count")?,
+            count("the observation count")?,
         );
-        let mut obs = Vec::with_capacity(no);
+        // An observation takes at least 8 bytes, a camera 18, a point 6.
+        let room = |n: usize, bytes: usize| n.min(text.len() / bytes + 1);
+        let mut obs = Vec::with_capacity(room(no, 8));
         for k in 0..no {
             let cam = next("an observation's camera")? as usize;
             let pt = next("an observation's point")? as usize;
             let (u, v) = (next("an image x")?, next("an image y")?);
             if cam >= nc || pt >= np {
                 return Err(BalError::Format {
-                    path: p.clone(),
+                    path: format!("{p}:{}", line.get()),
                     what: format!(
                         "observation {k} names camera {cam} / point {pt} beyond {nc} / {np}"
                     ),
@@ -126,7 +149,7 @@ impl BalProblem {
                 uv: Vector2::new(u, v),
             });
         }
-        let mut cameras = Vec::with_capacity(nc);
+        let mut cameras = Vec::with_capacity(room(nc, 18));
         for _ in 0..nc {
             let mut c = [0.0; 9];
             for x in c.iter_mut() {
@@ -140,7 +163,7 @@ impl BalProblem {
                 k2: c[8],
             });
         }
-        let mut points = Vec::with_capacity(np);
+        let mut points = Vec::with_capacity(room(np, 6));
         for _ in 0..np {
             points.push(Vector3::new(
                 next("a point")?,

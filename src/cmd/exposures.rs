@@ -21,7 +21,8 @@ use std::path::PathBuf;
 /// exposure, with accuracy and flags, in the chosen format. The lever arm (u, v, w) is the
 /// antenna in the camera frame: X_antenna = X_camera + R·(u, v, w). Optionally matches the
 /// photographs of a folder to the exposures and writes geotagged copies (originals are never
-/// modified). Prints how many stations were written, what was refused and why, and warnings.
+/// modified). Prints how many stations were written, what was refused and why, and warnings;
+/// exits with code 3 when exposures were refused or photos left out (each named on stderr).
 #[derive(clap::Args)]
 pub struct Args {
     /// Antenna trajectory (.pos from ppkat or RTKLIB, llh or xyz).
@@ -57,12 +58,13 @@ pub struct Args {
         long,
         value_name = "MS",
         default_value_t = 0.0,
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        value_parser = super::finite_number
     )]
     delay_ms: f64,
     /// Longest trajectory gap to interpolate across, seconds (default: 2.5 trajectory
     /// intervals); exposures in longer gaps are refused.
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", value_parser = super::finite_number)]
     max_gap: Option<f64>,
     /// Output layout.
     #[arg(long, value_enum, default_value = "csv")]
@@ -177,6 +179,7 @@ pub fn run(args: Args) -> Result<()> {
         photos: args.photos,
         geotag: args.geotag,
     };
-    print!("{}", pipeline::exposures(&job).context("exposures failed")?);
-    Ok(())
+    let report = pipeline::exposures(&job).context("exposures failed")?;
+    print!("{report}");
+    super::complete(report.skipped())
 }

@@ -16,10 +16,10 @@ pub struct Args {
     #[arg(long, value_name = "D0,DX,DY,DZ")]
     tapes: String,
     /// Distance A of the x, y and z marks from the origin mark, metres.
-    #[arg(long, value_name = "A")]
+    #[arg(long, value_name = "A", value_parser = super::finite_number)]
     ruler: f64,
     /// Sigma of one tape length, metres.
-    #[arg(long, value_name = "M", default_value_t = 0.002)]
+    #[arg(long, value_name = "M", default_value_t = 0.002, value_parser = super::finite_number)]
     sigma: f64,
 }
 

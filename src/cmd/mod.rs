@@ -23,6 +23,35 @@ use integration::gnss::raw::RawFormat;
 use integration::gnss::solution::PosFormat;
 use integration::gnss::sv::Constellation;
 
+/// A run that finished but left inputs out: `ppkat` exits with code 3 and prints this on
+/// standard error (the count, then each input named with the reason).
+#[derive(Debug)]
+pub struct Incomplete(pub Vec<String>);
+
+impl std::fmt::Display for Incomplete {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "finished, but {} input(s) skipped:", self.0.len())?;
+        for s in self.0.iter().take(50) {
+            write!(f, "\n  {s}")?;
+        }
+        if self.0.len() > 50 {
+            write!(f, "\n  … {} more (see the report above)", self.0.len() - 50)?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for Incomplete {}
+
+/// `Ok` when nothing was skipped, else the [`Incomplete`] error that makes the exit code 3.
+pub fn complete(skipped: Vec<String>) -> Result<()> {
+    if skipped.is_empty() {
+        Ok(())
+    } else {
+        Err(Incomplete(skipped).into())
+    }
+}
+
 /// Coordinates written into a `.pos` file.
 #[derive(Clone, Copy, ValueEnum)]
 pub enum PosFormatArg {
@@ -60,6 +89,14 @@ impl From<ObsFormatArg> for Option<ObsFormat> {
             ObsFormatArg::Rinex => Some(ObsFormat::Rinex),
             ObsFormatArg::Ubx => Some(ObsFormat::Raw(RawFormat::Ubx)),
         }
+    }
+}
+
+/// A flag's number: finite (NaN and infinities are refused as bad usage, exit code 2).
+pub fn finite_number(s: &str) -> std::result::Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() => Ok(x),
+        _ => Err(format!("'{s}' is not a finite number")),
     }
 }
 

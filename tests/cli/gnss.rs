@@ -6,13 +6,7 @@ use super::*;
 /// `ppkat ppk` of `rover` against `base` with the navigation files and `extra` flags into
 /// `out`.
 fn ppk(rover: &Path, base: &Path, nav: &[&Path], out: &Path, extra: &[&str]) -> Output {
-    let mut args = vec!["ppk", "--rover", p(rover), "--base", p(base)];
-    for n in nav {
-        args.extend(["--nav", p(n)]);
-    }
-    args.extend(["-o", p(out)]);
-    args.extend_from_slice(extra);
-    ppkat(&args)
+    ppkat(&ppk_args(rover, base, nav, out, extra))
 }
 
 #[test]

@@ -13,8 +13,10 @@ mod gnss;
 mod help;
 mod import;
 mod info;
+mod kill;
 mod precise;
 mod raw;
+mod reliability;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -119,6 +121,47 @@ fn pos_rows(path: &Path) -> Vec<Vec<String>> {
         .filter(|l| !l.starts_with('%'))
         .map(|l| l.split_whitespace().map(str::to_string).collect())
         .collect()
+}
+
+/// The folder of one `ppkat demo` run, made once and shared by the tests that only read it
+/// (rover, base, navigation, trajectory, adjustment project).
+fn demo_dir() -> &'static Path {
+    static DIR: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    DIR.get_or_init(|| {
+        let d = tmp("shared-demo");
+        succeeds(&ppkat(&["demo", "--out", p(&d)]));
+        d
+    })
+}
+
+/// Assert exit code 3 (finished, inputs skipped) and that standard error names every needle.
+fn skips(o: &Output, needles: &[&str]) -> String {
+    let t = text(o);
+    assert_eq!(o.status.code(), Some(3), "expected exit code 3: {t}");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("input(s) skipped"), "{err}");
+    for n in needles {
+        assert!(err.contains(n), "stderr lacks '{n}': {err}");
+    }
+    t
+}
+
+/// The arguments of `ppkat ppk` of `rover` against `base` with the navigation files and
+/// `extra` flags into `out`.
+fn ppk_args<'a>(
+    rover: &'a Path,
+    base: &'a Path,
+    nav: &[&'a Path],
+    out: &'a Path,
+    extra: &[&'a str],
+) -> Vec<&'a str> {
+    let mut args = vec!["ppk", "--rover", p(rover), "--base", p(base)];
+    for n in nav {
+        args.extend(["--nav", p(n)]);
+    }
+    args.extend(["-o", p(out)]);
+    args.extend_from_slice(extra);
+    args
 }
 
 /// A path as a command-line argument.

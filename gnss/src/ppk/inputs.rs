@@ -99,6 +99,15 @@ pub(super) fn prepare<'a>(
         .iter()
         .map(|s| s.letter().to_string())
         .collect();
+    if !usable.iter().any(|u| *u) {
+        return Err(Error::NoData(format!(
+            "{}: no epoch holds phase of the processed systems ({}) with an orbit: check that \
+             --systems names systems the file contains and that the navigation or orbit files \
+             cover them",
+            base.path.display(),
+            systems.join(" ")
+        )));
+    }
     if pairing.matched.iter().all(|m| m.is_none()) {
         return Err(Error::NoData(format!(
             "{} and {}: no rover epoch has a base epoch within {} s holding phase of the processed systems ({}): the files do not cover a common time",

@@ -23,9 +23,33 @@ fn write_text(path: &Path, text: &str) -> Result<(), AdjustError> {
     write_atomic(path, |w| w.write_all(text.as_bytes())).map_err(|e| werr(path, e))
 }
 
-/// Write every output into `out` (created), each file atomically.
+/// The files of an output folder of `ppkat adjust`.
+pub const OUTPUTS: [&str; 7] = [
+    "orientations.csv",
+    "points.csv",
+    "image_residuals.csv",
+    "gnss_residuals.csv",
+    "report.json",
+    "parameters.csv",
+    "report.html",
+];
+
+/// Write every output into the folder `out` as a whole: into a staging folder beside it,
+/// swapped in at the end, so that `out` holds the previous run's set or this one's, never a
+/// mix. An existing `out` holding other files than [`OUTPUTS`] is refused.
 pub fn write_all(p: &Project, r: &Results, out: &Path) -> Result<(), AdjustError> {
-    std::fs::create_dir_all(out).map_err(|e| werr(out, e))?;
+    if let Some(parent) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent).map_err(|e| werr(parent, e))?;
+    }
+    // Their messages name the folder already.
+    let named = |e: gnss::Error| AdjustError::Problem(e.to_string());
+    let staged = gnss::atomic::StagedDir::new(out, &OUTPUTS).map_err(named)?;
+    write_files(p, r, staged.path())?;
+    staged.commit().map_err(named)
+}
+
+/// Write the files of [`OUTPUTS`] into the folder `out`.
+fn write_files(p: &Project, r: &Results, out: &Path) -> Result<(), AdjustError> {
     // Projected coordinates first when there is a projection; geodetic always.
     let geo = r.crs.starts_with("WGS84");
     let proj_head = if geo { "" } else { "easting,northing," };

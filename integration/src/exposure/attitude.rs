@@ -8,7 +8,7 @@
 //! rotation matrices (camera → ENU) and ω-φ-κ of a matrix. Uses `photo::rotation::Angles`.
 
 use gnss::error::{Error, Result};
-use gnss::time::from_week_tow;
+use gnss::time::checked_week_tow;
 use hifitime::Epoch;
 use nalgebra::Matrix3;
 use photo::rotation::Angles;
@@ -72,16 +72,14 @@ pub struct AttitudeTable {
     pub angles: Vec<[f64; 3]>,
 }
 
+/// `a` moved by whole turns to within half a turn of `reference` (both finite).
 fn unwrap_to(a: f64, reference: f64) -> f64 {
-    let mut x = a;
-    while x - reference > std::f64::consts::PI {
-        x -= 2.0 * std::f64::consts::PI;
-    }
-    while reference - x > std::f64::consts::PI {
-        x += 2.0 * std::f64::consts::PI;
-    }
-    x
+    use std::f64::consts::{PI, TAU};
+    reference + (a - reference + PI).rem_euclid(TAU) - PI
 }
+
+/// Largest attitude angle accepted from a file, degrees (two turns either way).
+const MAX_ANGLE_DEG: f64 = 720.0;
 
 impl AttitudeTable {
     /// CSV with header `week,tow,a1,a2,a3` (degrees), GPST.
@@ -115,7 +113,20 @@ impl AttitudeTable {
                     "five columns expected: week,tow,angle1,angle2,angle3",
                 ));
             }
-            times.push(from_week_tow(f[0] as u32, f[1]));
+            let time = checked_week_tow(f[0], f[1])
+                .map_err(|e| Error::parse(path, i + 1, format!("columns 1–2: {e}")))?;
+            if let Some(k) = (2..5).find(|&k| !(-MAX_ANGLE_DEG..=MAX_ANGLE_DEG).contains(&f[k])) {
+                return Err(Error::parse(
+                    path,
+                    i + 1,
+                    format!(
+                        "column {}: angle {} is not a number of degrees within ±{MAX_ANGLE_DEG}",
+                        k + 1,
+                        f[k]
+                    ),
+                ));
+            }
+            times.push(time);
             angles.push([f[2].to_radians(), f[3].to_radians(), f[4].to_radians()]);
         }
         if times.len() < 2 {
@@ -171,5 +182,6 @@ mod tests {
                 < 1e-12
         );
         assert!((unwrap_to(3.1, -3.1) - (3.1 - 2.0 * std::f64::consts::PI)).abs() < 1e-12);
+        assert!((unwrap_to(0.5 + 40.0 * std::f64::consts::PI, 0.4) - 0.5).abs() < 1e-9);
     }
 }

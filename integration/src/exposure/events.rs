@@ -8,7 +8,7 @@
 use gnss::error::{Error, Result};
 use gnss::frame::{Ecef, Geodetic};
 use gnss::rinex::ObsFile;
-use gnss::time::from_week_tow;
+use gnss::time::checked_week_tow;
 use gnss::trajectory::Trajectory;
 use hifitime::{Duration, Epoch, TimeScale};
 use std::path::Path;
@@ -122,12 +122,13 @@ pub fn read_mrk(path: &Path) -> Result<Vec<ExposureEvent>> {
         let tow: f64 = f[1]
             .trim()
             .parse()
-            .map_err(|_| bad("unreadable GPS seconds of week"))?;
-        let week: u32 = f[2]
+            .map_err(|_| bad("column 2: unreadable GPS seconds of week"))?;
+        let week: f64 = f[2]
             .trim()
             .trim_matches(['[', ']'])
             .parse()
-            .map_err(|_| bad("unreadable [week]"))?;
+            .map_err(|_| bad("column 3: unreadable [week]"))?;
+        let time = checked_week_tow(week, tow).map_err(|e| bad(&format!("columns 2–3: {e}")))?;
         let (n, e, v) = (
             num_before_comma(f[3]),
             num_before_comma(f[4]),
@@ -145,14 +146,25 @@ pub fn read_mrk(path: &Path) -> Result<Vec<ExposureEvent>> {
         let q = num_before_comma(f[10]).unwrap_or(0.0) as u8;
         let (Some(n), Some(e), Some(v), Some(lat), Some(lon), Some(h)) = (n, e, v, lat, lon, h)
         else {
-            return Err(bad("unreadable offsets or position"));
+            return Err(bad("columns 4–9: unreadable offsets or position"));
         };
         if sig.len() != 3 {
-            return Err(bad("three sigmas expected (N, E, V)"));
+            return Err(bad("column 10: three sigmas expected (N, E, V)"));
+        }
+        let sane = [n, e, v, h]
+            .iter()
+            .chain(&sig)
+            .all(|x| x.is_finite() && x.abs() < 1e7)
+            && (-90.0..=90.0).contains(&lat)
+            && (-360.0..=360.0).contains(&lon);
+        if !sane {
+            return Err(bad(
+                "columns 4–10: offsets, position or sigmas not finite or out of range",
+            ));
         }
         out.push(ExposureEvent {
             id: f[0].trim().to_string(),
-            time: from_week_tow(week, tow),
+            time,
             line: i + 1,
             mrk: Some(MrkInfo {
                 offset_neu: [n / 1000.0, e / 1000.0, -v / 1000.0],
@@ -200,15 +212,13 @@ pub fn read_times_csv(path: &Path, system: TimeSystem) -> Result<Vec<ExposureEve
         let f: Vec<&str> = line.split(',').map(|x| x.trim()).collect();
         let bad = |what: &str| Error::parse(path, i + 1, what);
         let t = if let (Some(w), Some(s)) = (week, tow) {
-            let w: u32 = f
-                .get(w)
-                .and_then(|x| x.parse().ok())
-                .ok_or_else(|| bad("unreadable week"))?;
-            let s: f64 = f
-                .get(s)
-                .and_then(|x| x.parse().ok())
-                .ok_or_else(|| bad("unreadable seconds of week"))?;
-            let g = from_week_tow(w, s);
+            let col_num = |c: usize, what: &str| -> Result<f64> {
+                f.get(c)
+                    .and_then(|x| x.parse().ok())
+                    .ok_or_else(|| bad(&format!("column {} ({what}): unreadable", c + 1)))
+            };
+            let (w, s) = (col_num(w, "week")?, col_num(s, "tow")?);
+            let g = checked_week_tow(w, s).map_err(|e| bad(e.as_str()))?;
             if system == TimeSystem::Utc {
                 calendar_as_utc(g)
             } else {

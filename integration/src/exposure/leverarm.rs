@@ -95,6 +95,9 @@ pub enum TapeError {
     /// A length is not a positive number.
     #[error("tape lengths must be positive")]
     Length,
+    /// The sigma of a length is not a finite number ≥ 0.
+    #[error("the sigma of a tape length must be a finite number of metres, 0 or more")]
+    Sigma,
     /// The lengths do not form a triangle consistent with orthogonal axes.
     #[error("the lengths are inconsistent: u² + v² + w² = {sum:.4} m² but D0² = {d0sq:.4} m² (check the marks and the axes)")]
     Inconsistent {
@@ -113,6 +116,9 @@ pub fn solve(d0: f64, d: [f64; 3], a: f64, sigma: f64) -> Result<TapeSolution, T
     }
     if !positive(d0) || d.iter().any(|x| !positive(*x)) {
         return Err(TapeError::Length);
+    }
+    if !(sigma.is_finite() && sigma >= 0.0) {
+        return Err(TapeError::Sigma);
     }
     let c = |dx: f64| (d0 * d0 + a * a - dx * dx) / (2.0 * a);
     let off = Vector3::new(c(d[0]), c(d[1]), c(d[2]));

@@ -16,6 +16,7 @@
 
 pub mod attitude;
 pub mod events;
+pub mod exif_io;
 pub mod export;
 pub mod leverarm;
 pub mod photos;

@@ -4,13 +4,10 @@
 //!
 //! Enters: a folder of JPEG files and the camera stations. Leaves: the matched photo list (or
 //! why it does not match) and geotagged copies in another folder (WGS84 latitude, longitude,
-//! ellipsoidal height of the projection centre). Uses `little_exif`.
+//! ellipsoidal height of the projection centre). Uses [`super::exif_io`].
 
-use super::CameraStation;
+use super::{exif_io, CameraStation};
 use gnss::error::{Error, Result};
-use little_exif::exif_tag::ExifTag;
-use little_exif::metadata::Metadata;
-use little_exif::rational::uR64;
 use std::path::{Path, PathBuf};
 
 /// A photograph and the camera-clock time it was taken (seconds, camera time scale).
@@ -22,6 +19,9 @@ pub struct Photo {
     pub name: String,
     /// EXIF `DateTimeOriginal` as seconds of the camera's clock (read as UTC), when present.
     pub taken: Option<f64>,
+    /// Why the photo's EXIF could not be read (damaged, looping, lying about its sizes), when
+    /// it could not: the photo still takes its place in the list, without a capture time.
+    pub exif_error: Option<String>,
 }
 
 fn exif_seconds(s: &str) -> Option<f64> {
@@ -64,18 +64,24 @@ pub fn list(dir: &Path) -> Result<Vec<Photo>> {
                 .is_some_and(|x| x.eq_ignore_ascii_case("jpg") || x.eq_ignore_ascii_case("jpeg"))
         })
         .map(|path| {
-            let taken = Metadata::new_from_path(&path).ok().and_then(|m| {
-                m.get_tag(&ExifTag::DateTimeOriginal(String::new()))
-                    .find_map(|t| match t {
-                        ExifTag::DateTimeOriginal(s) => exif_seconds(s),
-                        _ => None,
-                    })
-            });
+            let (taken, exif_error) = match exif_io::read(&path) {
+                Ok(x) => (
+                    x.and_then(|x| exif_io::ascii(&x, exif::Tag::DateTimeOriginal))
+                        .and_then(|s| exif_seconds(&s)),
+                    None,
+                ),
+                Err(why) => (None, Some(why)),
+            };
             let name = path
                 .file_name()
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_default();
-            Photo { path, name, taken }
+            Photo {
+                path,
+                name,
+                taken,
+                exif_error,
+            }
         })
         .collect();
     out.sort_by(|a, b| a.name.cmp(&b.name));
@@ -119,112 +125,67 @@ pub fn check(photos: &[Photo], stations: &[CameraStation]) -> std::result::Resul
     Ok(())
 }
 
-fn dms(v: f64) -> Vec<uR64> {
-    let a = v.abs();
-    let d = a.floor();
-    let m = ((a - d) * 60.0).floor();
-    let s = ((a - d) * 60.0 - m) * 60.0;
-    vec![
-        uR64 {
-            nominator: d as u32,
-            denominator: 1,
-        },
-        uR64 {
-            nominator: m as u32,
-            denominator: 1,
-        },
-        uR64 {
-            nominator: (s * 10_000.0).round() as u32,
-            denominator: 10_000,
-        },
-    ]
+/// What geotagging did: the copies written, and the photos left out with the reason.
+#[derive(Clone, Debug, Default)]
+pub struct Geotagged {
+    /// The copies written.
+    pub written: Vec<PathBuf>,
+    /// Originals that got no copy, and why (nothing of them is left in the output folder).
+    pub skipped: Vec<(PathBuf, String)>,
 }
 
 /// Write geotagged copies of the photos into `out_dir` (created), the originals untouched.
-/// Photo k gets station k's projection centre. Returns the paths written.
-pub fn geotag(
-    photos: &[Photo],
-    stations: &[CameraStation],
-    out_dir: &Path,
-) -> Result<Vec<PathBuf>> {
+/// Photo k gets station k's projection centre. Each copy appears whole or not at all; a photo
+/// that cannot be tagged (not a JPEG, damaged, EXIF unreadable) is named in
+/// [`Geotagged::skipped`] and the others are still written. `Err` only when nothing can be
+/// written (the folder) or the output would replace an original.
+pub fn geotag(photos: &[Photo], stations: &[CameraStation], out_dir: &Path) -> Result<Geotagged> {
     std::fs::create_dir_all(out_dir).map_err(Error::io(out_dir))?;
-    let mut written = Vec::new();
+    let mut done = Geotagged::default();
     for (p, s) in photos.iter().zip(stations) {
         let dest = out_dir.join(&p.name);
-        if dest == p.path {
+        if dest == p.path || same_file(&dest, &p.path) {
             return Err(Error::input(
                 &dest,
                 "refusing to overwrite an original photograph: choose another output folder",
             ));
         }
-        let io = Error::io(&dest);
-        std::fs::copy(&p.path, &dest).map_err(io)?;
         let g = s.centre.to_geodetic();
-        let mut m = Metadata::new_from_path(&dest).unwrap_or_else(|_| Metadata::new());
-        m.set_tag(ExifTag::GPSVersionID(vec![2, 3, 0, 0]));
-        m.set_tag(ExifTag::GPSLatitudeRef(
-            if g.lat >= 0.0 { "N" } else { "S" }.to_string(),
-        ));
-        m.set_tag(ExifTag::GPSLatitude(dms(g.lat.to_degrees())));
-        m.set_tag(ExifTag::GPSLongitudeRef(
-            if g.lon >= 0.0 { "E" } else { "W" }.to_string(),
-        ));
-        m.set_tag(ExifTag::GPSLongitude(dms(g.lon.to_degrees())));
-        m.set_tag(ExifTag::GPSAltitudeRef(vec![if g.h >= 0.0 {
-            0
-        } else {
-            1
-        }]));
-        m.set_tag(ExifTag::GPSAltitude(vec![uR64 {
-            nominator: (g.h.abs() * 1000.0).round() as u32,
-            denominator: 1000,
-        }]));
-        m.set_tag(ExifTag::GPSMapDatum("WGS-84".to_string()));
-        m.write_to_file(&dest).map_err(io)?;
-        written.push(dest);
+        let tagged = read_limited(&p.path).and_then(|jpeg| {
+            exif_io::geotagged(&jpeg, g.lat.to_degrees(), g.lon.to_degrees(), g.h)
+        });
+        match tagged {
+            Ok(bytes) => {
+                gnss::solution::write_atomic(&dest, |w| w.write_all(&bytes))?;
+                done.written.push(dest);
+            }
+            Err(why) => done.skipped.push((p.path.clone(), why)),
+        }
     }
-    Ok(written)
+    Ok(done)
 }
 
-/// Latitude, longitude (degrees) and height read back from a geotagged photo.
-pub fn read_position(path: &Path) -> Option<(f64, f64, f64)> {
-    let m = Metadata::new_from_path(path).ok()?;
-    let get = |tag: ExifTag| m.get_tag(&tag).next().cloned();
-    let val = |v: &[uR64]| {
-        v.iter()
-            .zip([1.0, 60.0, 3600.0])
-            .map(|(r, d)| r.nominator as f64 / r.denominator as f64 / d)
-            .sum::<f64>()
-    };
-    let lat = match get(ExifTag::GPSLatitude(vec![]))? {
-        ExifTag::GPSLatitude(v) => val(&v),
-        _ => return None,
-    };
-    let lon = match get(ExifTag::GPSLongitude(vec![]))? {
-        ExifTag::GPSLongitude(v) => val(&v),
-        _ => return None,
-    };
-    let h = match get(ExifTag::GPSAltitude(vec![]))? {
-        ExifTag::GPSAltitude(v) => v
-            .first()
-            .map(|r| r.nominator as f64 / r.denominator as f64)?,
-        _ => return None,
-    };
-    let s = |t: ExifTag| match get(t) {
-        Some(ExifTag::GPSLatitudeRef(r)) | Some(ExifTag::GPSLongitudeRef(r)) => {
-            r.starts_with('S') || r.starts_with('W')
-        }
+/// Whether two paths name one existing file (a folder reached by another name).
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
         _ => false,
-    };
-    let lat = if s(ExifTag::GPSLatitudeRef(String::new())) {
-        -lat
-    } else {
-        lat
-    };
-    let lon = if s(ExifTag::GPSLongitudeRef(String::new())) {
-        -lon
-    } else {
-        lon
-    };
-    Some((lat, lon, h))
+    }
+}
+
+/// The bytes of a photo, refusing files beyond [`exif_io::MAX_PHOTO_BYTES`].
+fn read_limited(path: &Path) -> std::result::Result<Vec<u8>, String> {
+    let len = std::fs::metadata(path)
+        .map_err(|e| format!("cannot read: {e}"))?
+        .len();
+    if len > exif_io::MAX_PHOTO_BYTES {
+        return Err(format!("{len} bytes: too large for a photograph"));
+    }
+    std::fs::read(path).map_err(|e| format!("cannot read: {e}"))
+}
+
+/// Latitude, longitude (degrees) and height read back from a geotagged photo (`None` when it
+/// has no GPS position or its EXIF cannot be read).
+pub fn read_position(path: &Path) -> Option<(f64, f64, f64)> {
+    exif_io::gps_position(&exif_io::read(path).ok()??)
 }

@@ -20,6 +20,9 @@ use hifitime::Epoch;
 use std::fmt;
 use std::path::PathBuf;
 
+mod exposures;
+pub use exposures::{exposures, EventSource, ExposureJob, ExposureReport};
+
 /// Inputs of a single-point run.
 #[derive(Clone, Debug)]
 pub struct SppJob {
@@ -63,8 +66,37 @@ fn file_warnings(f: &ObsFile) -> impl Iterator<Item = String> + '_ {
         .map(|w| format!("{}:{}: {}", f.path.display(), w.line, w.what))
 }
 
-/// Run single-point positioning over a file and write the `.pos` output.
+/// The error of a run that solved no epoch: how many epochs, why (the reasons counted, most
+/// frequent first), and what to check. No `.pos` is written then: a header alone is no result.
+fn nothing_solved(what: &str, epochs: usize, reasons: Vec<String>, details: &[String]) -> Error {
+    let mut count: std::collections::BTreeMap<String, usize> = Default::default();
+    for r in reasons {
+        *count.entry(r).or_default() += 1;
+    }
+    let mut count: Vec<(String, usize)> = count.into_iter().collect();
+    count.sort_by(|a, b| b.1.cmp(&a.1).then_with(|| a.0.cmp(&b.0)));
+    let why: Vec<String> = count
+        .iter()
+        .take(3)
+        .map(|(r, n)| format!("{n} × {r}"))
+        .chain(details.iter().take(3).cloned())
+        .collect();
+    Error::NoData(format!(
+        "{what}: none of the {epochs} epochs could be solved, no output written ({}); check that \
+         --systems names systems the files contain, that --elev-mask is not too high, and \
+         that the navigation or orbit files are complete and cover the observations",
+        if why.is_empty() {
+            "no epoch to solve".to_string()
+        } else {
+            why.join("; ")
+        }
+    ))
+}
+
+/// Run single-point positioning over a file and write the `.pos` output; `Err` when no
+/// epoch is solved.
 pub fn spp(job: &SppJob) -> Result<SppReport> {
+    gnss::atomic::clean_stale(&job.out);
     let input = read_observations(&job.obs, job.obs_format)?;
     let log_nav = input.nav.as_ref();
     let (orbits, mut warnings) = load_orbits(&job.nav, log_nav, &job.sp3, &job.clk)?;
@@ -87,6 +119,24 @@ pub fn spp(job: &SppJob) -> Result<SppReport> {
             ratio: 0.0,
         })
         .collect();
+    if records.is_empty() {
+        let rejected: Vec<String> = run
+            .rejections
+            .iter()
+            .map(|(r, n)| format!("satellite-epochs rejected, {r}: {n}"))
+            .collect();
+        let failures = run
+            .failures
+            .iter()
+            .map(|(_, f)| f.kind().to_string())
+            .collect();
+        return Err(nothing_solved(
+            &format!("single point on {}", job.obs.display()),
+            obs.epochs.len(),
+            failures,
+            &rejected,
+        ));
+    }
     let systems: String = job.options.systems.iter().map(|s| s.letter()).collect();
     let header = vec![
         format!(
@@ -211,8 +261,10 @@ fn summary_path(out: &std::path::Path) -> PathBuf {
 }
 
 /// Run PPK and write the `.pos` output. `progress(n)` is called as epochs are processed.
+/// `Err` when no epoch is solved.
 pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport> {
     let t0 = std::time::Instant::now();
+    gnss::atomic::clean_stale(&job.out);
     let rover_in = read_observations(&job.rover, job.obs_format)?;
     let base_in = read_observations(&job.base, job.obs_format)?;
     let (rover, base) = (&rover_in.obs, &base_in.obs);
@@ -250,6 +302,15 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
     let t1 = std::time::Instant::now();
     let result = gnss::ppk::process(rover, base, base_position, &orbits, &job.options, progress)?;
     let process_seconds = t1.elapsed().as_secs_f64();
+    if result.trajectory.epochs.is_empty() {
+        let reasons = result.unsolved.iter().map(|(_, w)| w.clone()).collect();
+        return Err(nothing_solved(
+            &format!("ppk of {}", job.rover.display()),
+            result.rover_epochs,
+            reasons,
+            &result.warnings,
+        ));
+    }
     warnings.extend(result.warnings.iter().cloned());
     let o = &job.options;
     let b = result.base_marker;
@@ -394,180 +455,6 @@ impl fmt::Display for PpkReport {
         }
         for w in self.warnings.iter().take(20) {
             writeln!(f, "  warning: {w}")?;
-        }
-        Ok(())
-    }
-}
-
-/// Where the exposure times come from.
-#[derive(Clone, Debug)]
-pub enum EventSource {
-    /// Flag-5 events of a RINEX observation file (receiver clock removed).
-    Rinex(PathBuf),
-    /// A DJI `Timestamp.MRK`.
-    Mrk(PathBuf),
-    /// A CSV of times in the given time system.
-    Times(PathBuf, crate::exposure::events::TimeSystem),
-}
-
-/// Inputs of the exposure stage.
-#[derive(Clone, Debug)]
-pub struct ExposureJob {
-    /// The trajectory (`.pos`, ours or RTKLIB's).
-    pub trajectory: PathBuf,
-    /// Where the exposure times come from.
-    pub events: EventSource,
-    /// Lever arm, attitude, delay, gap limit.
-    pub options: crate::exposure::ExposureOptions,
-    /// Output layout.
-    pub format: crate::exposure::export::Format,
-    /// Horizontal coordinates of the output.
-    pub projection: crate::exposure::export::Projection,
-    /// Output file.
-    pub out: PathBuf,
-    /// Photographs to match to the exposures (their names become the station labels).
-    pub photos: Option<PathBuf>,
-    /// Write geotagged copies of the photos into this folder (originals untouched).
-    pub geotag: Option<PathBuf>,
-}
-
-/// What the exposure stage did.
-#[derive(Clone, Debug)]
-pub struct ExposureReport {
-    /// The stations and what was refused.
-    pub result: crate::exposure::ExposureResult,
-    /// Exposures read.
-    pub events: usize,
-    /// Largest receiver clock correction applied to the event times, seconds.
-    pub clock_correction: f64,
-    /// The file written.
-    pub out: PathBuf,
-    /// Photo matching: Ok(number matched) or the mismatch found.
-    pub photos: Option<std::result::Result<usize, String>>,
-    /// Geotagged copies written.
-    pub geotagged: usize,
-}
-
-/// Read events and trajectory, compute projection centres, write them.
-pub fn exposures(job: &ExposureJob) -> Result<ExposureReport> {
-    use crate::exposure::{compute, events, export};
-    use gnss::trajectory::Trajectory;
-    let traj = Trajectory::read_pos(&job.trajectory)?;
-    let (evs, clock_correction) = match &job.events {
-        EventSource::Rinex(p) => {
-            let obs = ObsFile::read(p)?;
-            let (e, c) = events::from_rinex(&obs, &traj);
-            if e.is_empty() {
-                return Err(Error::input(
-                    p,
-                    "the file holds no flag-5 event (camera exposure) records",
-                ));
-            }
-            (e, c)
-        }
-        EventSource::Mrk(p) => (events::read_mrk(p)?, 0.0),
-        EventSource::Times(p, sys) => (events::read_times_csv(p, *sys)?, 0.0),
-    };
-    let n = evs.len();
-    let mut result = compute(evs, &traj, &job.options);
-    if result.stations.is_empty() {
-        return Err(Error::NoData(format!(
-            "none of the {n} exposures could be placed on the trajectory {} (first refusal: {})",
-            job.trajectory.display(),
-            result
-                .refused
-                .first()
-                .map(|r| format!("{} at {}: {}", r.id, format_ymdhms(r.time), r.why))
-                .unwrap_or_default()
-        )));
-    }
-    let mut photos = None;
-    let mut geotagged = 0;
-    if let Some(dir) = &job.photos {
-        let list = crate::exposure::photos::list(dir)?;
-        match crate::exposure::photos::check(&list, &result.stations) {
-            Ok(()) => {
-                for (s, p) in result.stations.iter_mut().zip(&list) {
-                    s.id = p.name.clone();
-                }
-                if let Some(g) = &job.geotag {
-                    geotagged = crate::exposure::photos::geotag(&list, &result.stations, g)?.len();
-                }
-                photos = Some(Ok(list.len()));
-            }
-            Err(why) => {
-                if job.geotag.is_some() {
-                    return Err(Error::input(
-                        dir,
-                        format!("the photos do not match the exposures, nothing geotagged: {why}"),
-                    ));
-                }
-                photos = Some(Err(why));
-            }
-        }
-    }
-    export::write(&job.out, &result.stations, job.format, job.projection)?;
-    Ok(ExposureReport {
-        result,
-        events: n,
-        clock_correction,
-        out: job.out.clone(),
-        photos,
-        geotagged,
-    })
-}
-
-impl fmt::Display for ExposureReport {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let r = &self.result;
-        writeln!(
-            f,
-            "exposures: {} read, {} camera stations written → {}",
-            self.events,
-            r.stations.len(),
-            self.out.display()
-        )?;
-        if self.clock_correction > 0.0 {
-            writeln!(
-                f,
-                "  event times corrected by the receiver clock (up to {:.3} ms)",
-                self.clock_correction * 1e3
-            )?;
-        }
-        match &self.photos {
-            Some(Ok(n)) => writeln!(f, "  {n} photos matched to the exposures (names used as labels); {} geotagged copies written", self.geotagged)?,
-            Some(Err(why)) => writeln!(f, "  PHOTOS DO NOT MATCH: {why}; stations keep their event numbers")?,
-            None => {}
-        }
-        let flagged = r.stations.iter().filter(|s| !s.flags.is_empty()).count();
-        if flagged > 0 {
-            writeln!(
-                f,
-                "  {flagged} stations flagged (see the flags column): e.g. {}",
-                r.stations
-                    .iter()
-                    .find(|s| !s.flags.is_empty())
-                    .map(|s| s.flags.join("; "))
-                    .unwrap_or_default()
-            )?;
-        }
-        for x in r.refused.iter().take(20) {
-            writeln!(
-                f,
-                "  refused {} at {}: {}",
-                x.id,
-                format_ymdhms(x.time),
-                x.why
-            )?;
-        }
-        if r.refused.len() > 20 {
-            writeln!(f, "  … {} more refused", r.refused.len() - 20)?;
-        }
-        for w in &r.warnings {
-            writeln!(f, "  warning: {w}")?;
-        }
-        for n in &r.notes {
-            writeln!(f, "  note: {n}")?;
         }
         Ok(())
     }

@@ -1,0 +1,229 @@
+//! Outputs that appear whole or not at all: a file is written to a hidden temporary beside it
+//! and renamed over it; a folder is written into a hidden sibling folder and swapped in
+//! (the old one renamed away, the new one renamed in, the old one removed). What a killed run
+//! leaves behind (its temporaries, or a folder renamed away just before the swap) is cleaned
+//! up, or put back, by the next run that writes the same output.
+//!
+//! Temporaries are named `.NAME.PID.tmp` (files), `.NAME.PID.new` and `.NAME.PID.old`
+//! (folders); one whose process is gone is stale.
+
+use crate::error::{Error, Result};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// The folder of `path` (`.` for a bare name) and its file name.
+fn split(path: &Path) -> (PathBuf, String) {
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    (dir.to_path_buf(), name)
+}
+
+/// The hidden sibling of `path` for this process, with `kind` (`tmp`, `new`, `old`).
+fn sibling(path: &Path, kind: &str) -> PathBuf {
+    let (dir, name) = split(path);
+    dir.join(format!(".{name}.{}.{kind}", std::process::id()))
+}
+
+/// Whether process `pid` still runs (where that can be told; elsewhere: no).
+fn alive(pid: u32) -> bool {
+    pid == std::process::id() || Path::new("/proc").join(pid.to_string()).exists()
+}
+
+/// Siblings of `path` of `kind` left by processes that are gone.
+fn stale(path: &Path, kind: &str) -> Vec<PathBuf> {
+    let (dir, name) = split(path);
+    let (head, tail) = (format!(".{name}."), format!(".{kind}"));
+    let Ok(rd) = std::fs::read_dir(&dir) else {
+        return Vec::new();
+    };
+    rd.filter_map(|e| e.ok())
+        .filter(|e| {
+            let n = e.file_name().to_string_lossy().into_owned();
+            n.strip_prefix(&head)
+                .and_then(|r| r.strip_suffix(&tail))
+                .and_then(|pid| pid.parse::<u32>().ok())
+                .is_some_and(|pid| !alive(pid))
+        })
+        .map(|e| e.path())
+        .collect()
+}
+
+/// Remove what killed runs left of `path`: stale temporary files and staging folders; a
+/// folder renamed away just before its swap is put back when `path` is missing.
+pub fn clean_stale(path: &Path) {
+    for t in stale(path, "tmp").into_iter().chain(stale(path, "new")) {
+        let _ = std::fs::remove_dir_all(&t).or_else(|_| std::fs::remove_file(&t));
+    }
+    for old in stale(path, "old") {
+        if !path.exists() && std::fs::rename(&old, path).is_ok() {
+            continue;
+        }
+        let _ = std::fs::remove_dir_all(&old);
+    }
+}
+
+/// Write `path` atomically: to a temporary file beside it, then renamed over it (stale
+/// temporaries of killed runs are removed first).
+pub fn write_atomic(
+    path: &Path,
+    f: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<()> {
+    let io = |cause| Error::Write {
+        path: path.to_path_buf(),
+        cause,
+    };
+    clean_stale(path);
+    let tmp = sibling(path, "tmp");
+    let res = (|| {
+        let file = std::fs::File::create(&tmp)?;
+        let mut w = std::io::BufWriter::new(file);
+        f(&mut w)?;
+        w.flush()?;
+        w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if res.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    res.map_err(io)
+}
+
+/// A folder being written whole: fill [`StagedDir::path`], then [`StagedDir::commit`] swaps it
+/// in for the target. Dropped without a commit, the staging folder is removed and the target
+/// stays as it was.
+#[derive(Debug)]
+pub struct StagedDir {
+    target: PathBuf,
+    staging: PathBuf,
+    done: bool,
+}
+
+impl StagedDir {
+    /// Start writing `target`, a folder of the files named in `owned`: leftovers of killed
+    /// runs are cleaned up and an empty staging folder is made beside it. An existing target
+    /// holding anything else (a user's files) is refused, since the commit replaces it whole.
+    pub fn new(target: &Path, owned: &[&str]) -> Result<StagedDir> {
+        let err = |cause| Error::Write {
+            path: target.to_path_buf(),
+            cause,
+        };
+        clean_stale(target);
+        if target.is_file() {
+            return Err(Error::input(
+                target,
+                "is a file, but an output folder is wanted: give a folder",
+            ));
+        }
+        if target.exists() {
+            let rd = std::fs::read_dir(target).map_err(err)?;
+            let names: Vec<String> = rd
+                .filter_map(|e| e.ok())
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .collect();
+            if let Some(other) = names.iter().find(|n| !owned.contains(&n.as_str())) {
+                return Err(Error::input(
+                    target,
+                    format!(
+                        "holds `{other}`, which this command does not write, and an output folder \
+                         is replaced whole: give a new or empty folder, or one of an earlier run"
+                    ),
+                ));
+            }
+        }
+        let staging = sibling(target, "new");
+        let _ = std::fs::remove_dir_all(&staging);
+        std::fs::create_dir_all(&staging).map_err(err)?;
+        Ok(StagedDir {
+            target: target.to_path_buf(),
+            staging,
+            done: false,
+        })
+    }
+
+    /// Where the files go until the commit.
+    pub fn path(&self) -> &Path {
+        &self.staging
+    }
+
+    /// Put the written folder in place of the target: the old one renamed away, the new one
+    /// renamed in, the old one removed. A kill between the two renames leaves the old folder
+    /// beside the missing target, and the next run puts it back.
+    pub fn commit(mut self) -> Result<()> {
+        let err = |cause| Error::Write {
+            path: self.target.clone(),
+            cause,
+        };
+        let old = sibling(&self.target, "old");
+        let had = self.target.exists();
+        if had {
+            std::fs::rename(&self.target, &old).map_err(err)?;
+        }
+        if let Err(e) = std::fs::rename(&self.staging, &self.target) {
+            if had {
+                let _ = std::fs::rename(&old, &self.target);
+            }
+            return Err(err(e));
+        }
+        self.done = true;
+        if had {
+            let _ = std::fs::remove_dir_all(&old);
+        }
+        Ok(())
+    }
+}
+
+impl Drop for StagedDir {
+    fn drop(&mut self) {
+        if !self.done {
+            let _ = std::fs::remove_dir_all(&self.staging);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_folder_is_swapped_whole_and_leftovers_are_cleaned() {
+        let base = std::env::temp_dir().join(format!("ppkat-atomic-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&base);
+        let out = base.join("out");
+        std::fs::create_dir_all(&out).unwrap();
+        std::fs::write(out.join("a"), "old a").unwrap();
+        std::fs::write(out.join("b"), "old b").unwrap();
+        // A killed run's leftovers (pid 4000000000 runs nowhere): a temporary, a staging
+        // folder, and the old folder renamed away while `out` exists.
+        std::fs::write(base.join(".out.4000000000.tmp"), "partial").unwrap();
+        std::fs::create_dir_all(base.join(".out.4000000000.new")).unwrap();
+        std::fs::create_dir_all(base.join(".out.4000000001.old")).unwrap();
+        // A folder with files of others is refused.
+        assert!(StagedDir::new(&out, &["a"]).is_err());
+        // Not finished: the target stays as it was.
+        let s = StagedDir::new(&out, &["a", "b"]).unwrap();
+        std::fs::write(s.path().join("a"), "new a").unwrap();
+        drop(s);
+        assert_eq!(std::fs::read_to_string(out.join("a")).unwrap(), "old a");
+        let s = StagedDir::new(&out, &["a", "b"]).unwrap();
+        write_atomic(&s.path().join("a"), |w| w.write_all(b"new a")).unwrap();
+        s.commit().unwrap();
+        assert_eq!(std::fs::read_to_string(out.join("a")).unwrap(), "new a");
+        assert!(!out.join("b").exists(), "nothing of the old set is left");
+        let names: Vec<String> = std::fs::read_dir(&base)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names, ["out"]);
+        // Killed between the renames: the old folder comes back.
+        std::fs::rename(&out, base.join(".out.4000000002.old")).unwrap();
+        clean_stale(&out);
+        assert_eq!(std::fs::read_to_string(out.join("a")).unwrap(), "new a");
+        let _ = std::fs::remove_dir_all(&base);
+    }
+}

@@ -1,0 +1,145 @@
+//! `kill -9` of `ppk` and `adjust` at several moments, over the outputs of an earlier run:
+//! the earlier outputs stay whole or the new ones appear whole, never a mix or a partial file,
+//! and the next run leaves no temporary behind.
+
+use super::*;
+use std::time::Duration;
+
+/// Start `args`, kill it (SIGKILL) after `after`, wait for it.
+fn kill_after(args: &[&str], after: Duration) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_ppkat"))
+        .args(args)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("start ppkat");
+    std::thread::sleep(after);
+    let _ = child.kill();
+    let _ = child.wait();
+}
+
+/// The names in a folder.
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+/// The files of a folder with their contents.
+fn contents(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    names(dir)
+        .into_iter()
+        .map(|n| {
+            let b = std::fs::read(dir.join(&n)).unwrap();
+            (n, b)
+        })
+        .collect()
+}
+
+/// Mark an earlier run's output as old: a comment line appended to the file.
+fn mark_old(path: &Path) {
+    let mut b = std::fs::read(path).unwrap();
+    b.extend_from_slice(b"# old run\n");
+    std::fs::write(path, b).unwrap();
+}
+
+const MOMENTS_MS: [u64; 5] = [30, 150, 400, 800, 1500];
+
+#[test]
+fn killed_ppk_leaves_the_earlier_pos_whole() {
+    let demo = demo_dir();
+    let dir = tmp("kill-ppk");
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("out.pos");
+    let (rover, base, nav) = (
+        demo.join("rover.obs"),
+        demo.join("base.obs"),
+        demo.join("nav.rnx"),
+    );
+    let args = ppk_args(&rover, &base, &[&nav], &out, &[]);
+    succeeds(&ppkat(&args));
+    let new = std::fs::read(&out).unwrap();
+    mark_old(&out);
+    let old = std::fs::read(&out).unwrap();
+    for ms in MOMENTS_MS {
+        kill_after(&args, Duration::from_millis(ms));
+        let now = std::fs::read(&out).unwrap();
+        assert!(
+            now == old || now == new,
+            "killed at {ms} ms: a partial .pos"
+        );
+        // Only the output itself, and perhaps the killed run's hidden temporary.
+        for n in names(&dir) {
+            assert!(n == "out.pos" || n.starts_with(".out.pos."), "{n}");
+        }
+        std::fs::write(&out, &old).unwrap();
+    }
+    succeeds(&ppkat(&args));
+    assert_eq!(
+        std::fs::read(&out).unwrap(),
+        new,
+        "reruns are bit-identical"
+    );
+    assert_eq!(
+        names(&dir),
+        ["out.pos"],
+        "the next run removed the temporaries"
+    );
+}
+
+#[test]
+fn killed_adjust_leaves_the_earlier_folder_whole() {
+    let demo = demo_dir();
+    let work = tmp("kill-adjust");
+    std::fs::create_dir_all(&work).unwrap();
+    let out = work.join("adj");
+    let project = demo.join("project.toml");
+    let args = ["adjust", "--project", p(&project), "-o", p(&out)];
+    succeeds(&ppkat(&args));
+    let new = contents(&out);
+    assert!(new.len() >= 6, "{:?}", names(&out));
+    for n in names(&out) {
+        mark_old(&out.join(n));
+    }
+    let old = contents(&out);
+    for ms in MOMENTS_MS {
+        kill_after(&args, Duration::from_millis(ms));
+        if !out.exists() {
+            // Killed between the two renames of the swap: the old folder is beside it, whole,
+            // and the next run puts it back.
+            let parked: Vec<String> = names(&work)
+                .into_iter()
+                .filter(|n| n.ends_with(".old"))
+                .collect();
+            assert_eq!(parked.len(), 1, "{:?}", names(&work));
+            assert_eq!(contents(&work.join(&parked[0])), old, "killed at {ms} ms");
+            succeeds(&ppkat(&args));
+        }
+        let now = contents(&out);
+        assert!(
+            now == old || now == new,
+            "killed at {ms} ms: a mix of old and new files: {:?}",
+            now.iter()
+                .map(|(n, b)| (n, old.iter().any(|o| &o.1 == b)))
+                .collect::<Vec<_>>()
+        );
+        for n in names(&work) {
+            assert!(n == "adj" || n.starts_with(".adj."), "{n}");
+        }
+        std::fs::remove_dir_all(&out).unwrap();
+        std::fs::create_dir_all(&out).unwrap();
+        for (n, b) in &old {
+            std::fs::write(out.join(n), b).unwrap();
+        }
+    }
+    succeeds(&ppkat(&args));
+    assert_eq!(contents(&out), new, "reruns are bit-identical");
+    assert_eq!(
+        names(&work),
+        ["adj"],
+        "the next run removed the temporaries"
+    );
+}

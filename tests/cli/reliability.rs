@@ -1,0 +1,176 @@
+//! Issue 19's findings, replayed end to end: hostile photos, non-finite numbers, runs that
+//! solve nothing, skipped inputs and the exit code 3, error texts.
+
+use super::*;
+
+/// The hostile photo `name` of `tests/fixtures/exif`.
+fn hostile(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/exif")
+        .join(name)
+}
+
+/// A file of this test run's temporary folder with `text`.
+fn file(name: &str, text: &[u8]) -> PathBuf {
+    let f = tmp(name);
+    std::fs::write(&f, text).unwrap();
+    f
+}
+
+/// `ppkat exposures` on the demo's trajectory with `extra` arguments, output into `out`.
+fn exposures(out: &Path, extra: &[&str]) -> Output {
+    let traj = demo_dir().join("rover_ppk.pos");
+    let mut args = vec!["exposures", "--trajectory", p(&traj), "-o", p(out)];
+    args.extend_from_slice(extra);
+    ppkat(&args)
+}
+
+/// Three exposures 3 s apart inside the demo's flight (GPS week 2318).
+const TIMES: &str = "id,week,tow\nA,2318,291700\nB,2318,291703\nC,2318,291706\n";
+
+#[test]
+fn exposures_outside_the_trajectory_are_named_with_exit_code_3() {
+    let times = file(
+        "times-outside.csv",
+        format!("{TIMES}D,2318,100\n").as_bytes(),
+    );
+    let out = tmp("outside.csv");
+    let o = exposures(&out, &["--times", p(&times)]);
+    skips(
+        &o,
+        &["1 input(s) skipped", "exposure D", "outside the trajectory"],
+    );
+    assert!(out.exists(), "the stations placed are written");
+}
+
+#[test]
+fn hostile_photos_cost_one_message_each_and_the_rest_are_geotagged() {
+    let photos = tmp("hostile-photos");
+    std::fs::create_dir_all(&photos).unwrap();
+    std::fs::copy(fixture("photo_16x16.jpg"), photos.join("a_good.jpg")).unwrap();
+    for n in ["self_loop.jpg", "renamed_png.jpg"] {
+        std::fs::copy(hostile(n), photos.join(n)).unwrap();
+    }
+    let times = file("times-photos.csv", TIMES.as_bytes());
+    let (out, tagged) = (tmp("photos.csv"), tmp("tagged"));
+    // Matching alone: the photo whose EXIF loops is named, the rest used.
+    let o = exposures(&out, &["--times", p(&times), "--photos", p(&photos)]);
+    skips(&o, &["self_loop.jpg", "EXIF cannot be read"]);
+    let o = exposures(
+        &out,
+        &[
+            "--times",
+            p(&times),
+            "--photos",
+            p(&photos),
+            "--geotag",
+            p(&tagged),
+        ],
+    );
+    let png = photos.join("renamed_png.jpg");
+    skips(
+        &o,
+        &["2 input(s) skipped", p(&png), "not a JPEG", "self_loop.jpg"],
+    );
+    let mut written: Vec<String> = std::fs::read_dir(&tagged)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    written.sort();
+    assert_eq!(written, ["a_good.jpg"], "no untagged copy, no temporary");
+}
+
+#[test]
+fn non_finite_numbers_are_refused_at_the_line_and_column() {
+    let out = tmp("nan.csv");
+    for (name, text, needles) in [
+        (
+            "tow-nan.csv",
+            "id,week,tow\nA,2318,NaN\n",
+            &["tow-nan.csv:2", "seconds of week NaN"][..],
+        ),
+        (
+            "tow-inf.csv",
+            "id,week,tow\nA,2318,inf\n",
+            &["tow-inf.csv:2", "seconds of week inf"][..],
+        ),
+    ] {
+        let f = file(name, text.as_bytes());
+        fails_with(&exposures(&out, &["--times", p(&f)]), needles);
+    }
+    let mrk = file(
+        "nan.MRK",
+        b"1\tNaN\t[2318]\t1,N\t2,E\t3,V\t47.3,Lat\t8.5,Lon\t830,Ellh\t0.01, 0.01, 0.02\t50,Q\n",
+    );
+    fails_with(
+        &exposures(&out, &["--mrk", p(&mrk)]),
+        &["nan.MRK:1", "column", "seconds of week"],
+    );
+    let times = file("times-att.csv", TIMES.as_bytes());
+    for (k, angle) in ["inf", "1e308", "1e20", "NaN"].into_iter().enumerate() {
+        let att = file(
+            &format!("att-{k}.csv"),
+            format!("week,tow,yaw,pitch,roll\n2318,291600,0,0,0\n2318,291800,{angle},0,0\n")
+                .as_bytes(),
+        );
+        fails_with(
+            &exposures(&out, &["--times", p(&times), "--attitude", p(&att)]),
+            &[&format!("att-{k}.csv:3"), "column 3", "degrees"],
+        );
+    }
+    let att = file(
+        "att-tow.csv",
+        b"week,tow,yaw,pitch,roll\n2318,291600,0,0,0\n2318,NaN,0,0,0\n",
+    );
+    fails_with(
+        &exposures(&out, &["--times", p(&times), "--attitude", p(&att)]),
+        &["att-tow.csv:3", "seconds of week"],
+    );
+    let o = ppkat(&[
+        "leverarm", "--tapes", "1,1,1,1", "--ruler", "1", "--sigma", "NaN",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    let o = exposures(&out, &["--times", p(&times), "--delay-ms", "inf"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+}
+
+#[test]
+fn runs_that_solve_nothing_fail_and_say_why() {
+    let d = demo_dir();
+    let (rover, base, nav) = (d.join("rover.obs"), d.join("base.obs"), d.join("nav.rnx"));
+    for (name, extra) in [
+        ("mask", ["--elev-mask", "89"]),
+        ("systems", ["--systems", "C"]),
+    ] {
+        let out = tmp(&format!("nothing-{name}.pos"));
+        let o = ppkat(
+            &[
+                &["spp", "--obs", p(&rover), "--nav", p(&nav), "-o", p(&out)][..],
+                &extra,
+            ]
+            .concat(),
+        );
+        fails_with(
+            &o,
+            &["none of the", "epochs could be solved", "--elev-mask"],
+        );
+        assert!(!out.exists(), "no header-only .pos");
+        let o = ppkat(&ppk_args(&rover, &base, &[&nav], &out, &extra));
+        fails_with(&o, &[".obs", "epoch", "--"]);
+        assert!(!out.exists(), "no header-only .pos");
+    }
+}
+
+#[test]
+fn error_texts_say_what_is_wrong_once() {
+    let bin = file("binary.csv", &[0x66, 0x6f, 0xff, 0xfe, 0x0a, 0x80]);
+    let o = exposures(&tmp("x.csv"), &["--times", p(&bin)]);
+    fails_with(&o, &["binary.csv", "not text"]);
+    let t = text(&o);
+    assert!(!t.contains("check that the path exists"), "{t}");
+    assert_eq!(t.matches("UTF-8").count(), 1, "said once: {t}");
+    let bal = file("bad.bal", b"1 1 1\n0 0 1.0 2.0\n1 2 3 4 5 6 7 8 x\n");
+    fails_with(&ppkat(&["bal", p(&bal)]), &["bad.bal:3", "'x'"]);
+    let bal = file("huge.bal", b"1 1 1e11\n0 0 1.0 2.0\n");
+    fails_with(&ppkat(&["bal", p(&bal)]), &["huge.bal:2", "ends before"]);
+}
