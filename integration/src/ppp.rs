@@ -72,12 +72,19 @@ pub struct PppReport {
 /// Run PPP as the job says.
 pub fn ppp(job: &PppJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PppReport> {
     let t0 = std::time::Instant::now();
-    let obs = ObsFile::read(&job.obs)?;
+    for ext in ["", ".json", ".ztd.csv", ".html"] {
+        gnss::atomic::clean_stale(&side_path(&job.out, ext));
+    }
+    // RINEX or a raw receiver log, told from the content.
+    let input = crate::observations::read_observations(&job.obs, None)?;
+    let obs = input.obs;
     gnss::ppk::require_phase(&obs, "observation")?;
-    let (orbits, mut warnings) = load_orbits(&job.nav, None, &job.sp3, &job.clk)?;
+    let log_nav = input.nav.as_ref();
+    let (orbits, mut warnings) = load_orbits(&job.nav, log_nav, &job.sp3, &job.clk)?;
     // PPP needs neither broadcast ionosphere nor group delays (IF combination, precise clocks).
     warnings.retain(|w| !w.contains("Klobuchar"));
-    check_overlap(&obs, &orbits, &job.nav)?;
+    warnings.extend(input.warnings);
+    check_overlap(&obs, &orbits, &crate::observations::nav_sources(&job.nav, log_nav))?;
     let mut options = job.options.clone();
     options.antex = job
         .antex
