@@ -282,10 +282,8 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
             "systems   : {}",
             o.systems.iter().map(|s| s.letter()).collect::<String>()
         ),
-        format!(
-            "ref pos   : {:.4} {:.4} {:.4} (ECEF, base marker)",
-            b.0.x, b.0.y, b.0.z
-        ),
+        gnss::solution::ref_pos_line(&b, job.format),
+        "ref point : base marker, in the coordinates of the body (RTKLIB's layout)".into(),
         base_line.unwrap_or_else(|| "base from : given position or the base header".into()),
         format!(
             "epochs    : {} rover, {} solved, {} fixed",
