@@ -13,6 +13,7 @@
 //! - [`adjust`]: the joint GNSS-supported adjustment of a project (images, measurements,
 //!   ground points, antenna table) with statistics and reports.
 //! - [`import`]: MicMac and COLMAP projects turned into ppkat project folders.
+//! - [`crs`]: projected systems by EPSG code (`--crs EPSG:CODE`), pure-Rust `proj4rs`.
 //! - [`survey`]: the summary of a static run (`OUT.pos.json` and report lines).
 //! - [`simulate`]: a flight simulator (scenario → RINEX, navigation and truth files) and
 //!   simulated adjustment projects with truth (aerial block, close-range pair).
@@ -25,6 +26,7 @@
 
 pub mod adjust;
 pub mod bench;
+pub mod crs;
 pub mod demo;
 pub mod exposure;
 pub mod import;

@@ -75,8 +75,14 @@ pub struct Args {
     #[arg(long, value_name = "OUTDIR", requires = "photos")]
     geotag: Option<PathBuf>,
     /// Horizontal coordinates of the output: geodetic, utm (zone of the first station),
-    /// utm:ZONE or gk:CENTRAL_MERIDIAN (Gauss–Krüger, degrees).
-    #[arg(long, value_name = "PROJECTION", default_value = "geodetic")]
+    /// utm:ZONE, gk:CENTRAL_MERIDIAN (Gauss–Krüger, degrees) or EPSG:CODE (any projected
+    /// system, e.g. EPSG:32632 or a national grid); heights stay ellipsoidal. Also --crs.
+    #[arg(
+        long,
+        alias = "crs",
+        value_name = "PROJECTION",
+        default_value = "geodetic"
+    )]
     projection: String,
     /// Output file (replaced if it exists).
     #[arg(short = 'o', long, value_name = "OUT")]
@@ -151,7 +157,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let projection = Projection::parse(&args.projection).with_context(|| {
         format!(
-            "--projection {}: use geodetic, utm, utm:ZONE or gk:CENTRAL_MERIDIAN",
+            "--projection {}: use geodetic, utm, utm:ZONE, gk:CENTRAL_MERIDIAN or EPSG:CODE",
             args.projection
         )
     })?;

@@ -105,6 +105,7 @@ fn exposures_in_every_format() {
         "{}",
         &body[..300]
     );
+    odm_geo_txt_first_line(&dir);
     // An observation file without events is refused by name.
     let o = ppkat(&[
         "exposures",
@@ -116,4 +117,96 @@ fn exposures_in_every_format() {
         p(&dir.join("x.csv")),
     ]);
     fails_with(&o, &["base.obs", "no flag-5 event"]);
+}
+
+/// The SRS of a `geo.txt` first line as OpenDroneMap's `parse_srs_header` reads it: split at
+/// single spaces; `WGS84 UTM <zone><N|S>`; else a line holding `+proj`; else `epsg:CODE`
+/// (case-insensitive); anything else is refused.
+#[derive(Debug, PartialEq)]
+enum OdmSrs {
+    Utm { zone: u8, south: bool },
+    Proj(String),
+    Epsg(u32),
+}
+
+fn odm_parse_srs_header(header: &str) -> Option<OdmSrs> {
+    let header = header.trim();
+    let r: Vec<&str> = header.split(' ').collect();
+    if r.len() >= 3 && r[0] == "WGS84" && r[1] == "UTM" {
+        let (zone, pole) = r[2].split_at(r[2].len() - 1);
+        return Some(OdmSrs::Utm {
+            zone: zone.parse().ok()?,
+            south: pole.eq_ignore_ascii_case("S"),
+        });
+    }
+    if header.contains("+proj") {
+        return Some(OdmSrs::Proj(header.to_string()));
+    }
+    let l = header.to_lowercase();
+    l.strip_prefix("epsg:")
+        .and_then(|c| c.parse().ok())
+        .map(OdmSrs::Epsg)
+}
+
+/// ODM `geo.txt` for `utm`, `--crs EPSG:32632` and `gk:9`: first lines ODM parses, and the
+/// same easting/northing (to 1 mm) from our transverse Mercator and from proj4rs' EPSG:32632.
+fn odm_geo_txt_first_line(dir: &Path) {
+    let geo = |crs: &str, name: &str| -> Vec<String> {
+        let out = dir.join(name);
+        let (traj, rover) = (dir.join("rover_ppk.pos"), dir.join("rover.obs"));
+        succeeds(&ppkat(&[
+            "exposures",
+            "--trajectory",
+            p(&traj),
+            "--events",
+            p(&rover),
+            "--format",
+            "odm",
+            "--crs",
+            crs,
+            "-o",
+            p(&out),
+        ]));
+        std::fs::read_to_string(&out)
+            .unwrap()
+            .lines()
+            .map(String::from)
+            .collect()
+    };
+    let utm = geo("utm", "geo-utm.txt");
+    let epsg = geo("EPSG:32632", "geo-epsg.txt");
+    let gk = geo("gk:9", "geo-gk.txt");
+    assert_eq!(utm[0], "WGS84 UTM 32N");
+    assert_eq!(
+        odm_parse_srs_header(&utm[0]),
+        Some(OdmSrs::Utm {
+            zone: 32,
+            south: false
+        })
+    );
+    assert_eq!(epsg[0], "EPSG:32632");
+    assert_eq!(odm_parse_srs_header(&epsg[0]), Some(OdmSrs::Epsg(32632)));
+    assert!(
+        matches!(odm_parse_srs_header(&gk[0]), Some(OdmSrs::Proj(s)) if s.contains("+lon_0=9 "))
+    );
+    assert_eq!(utm.len(), epsg.len());
+    let nums = |l: &str| -> Vec<f64> {
+        l.split_whitespace()
+            .skip(1)
+            .map(|x| x.parse().unwrap())
+            .collect()
+    };
+    for (a, b) in utm[1..].iter().zip(&epsg[1..]) {
+        let (a, b) = (nums(a), nums(b));
+        assert!(
+            a[0] > 400_000.0 && a[1] > 4_000_000.0,
+            "easting, northing: {a:?}"
+        );
+        assert!((a[0] - b[0]).hypot(a[1] - b[1]) < 1e-3, "{a:?} vs {b:?}");
+        assert_eq!(a[2], b[2], "heights untouched");
+    }
+    // UTM zone 32 is Gauss–Krüger at 9° scaled by 0.9996 about the central meridian.
+    let (u, g) = (nums(&utm[1]), nums(&gk[1]));
+    assert!(((u[0] - 500_000.0) - 0.9996 * (g[0] - 500_000.0)).abs() < 1e-3);
+    assert!((u[1] - 0.9996 * g[1]).abs() < 1e-3);
 }
