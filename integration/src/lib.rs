@@ -33,6 +33,7 @@ pub mod import;
 pub mod orbits;
 pub mod pipeline;
 mod plot;
+mod ppk_report;
 pub mod ppp;
 mod ppp_report;
 pub mod simulate;

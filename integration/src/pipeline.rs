@@ -170,6 +170,8 @@ pub struct PpkJob {
     pub format: PosFormat,
     /// Output `.pos`.
     pub out: PathBuf,
+    /// The quality report to write (HTML), if any.
+    pub report: Option<PathBuf>,
 }
 
 /// What a carrier-phase run did.
@@ -181,6 +183,8 @@ pub struct PpkReport {
     pub out: PathBuf,
     /// The static summary written beside it (`OUT.pos.json`; static runs only).
     pub summary: Option<PathBuf>,
+    /// The quality report written (HTML), when asked for.
+    pub report: Option<PathBuf>,
     /// The point of the rover the positions describe.
     pub refer: gnss::ppk::Reference,
     /// Problems with the inputs and the run.
@@ -300,16 +304,29 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
         gnss::solution::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
         summary = Some(path);
     }
-    Ok(PpkReport {
+    let mut report = PpkReport {
         result,
         summary,
+        report: None,
         refer: o.refer,
         read_seconds,
         process_seconds,
         out: job.out.clone(),
         warnings,
         seconds: t0.elapsed().as_secs_f64(),
-    })
+    };
+    if let Some(path) = &job.report {
+        let events: Vec<Epoch> = rover
+            .events
+            .iter()
+            .filter(|e| e.flag == 5)
+            .filter_map(|e| e.time)
+            .collect();
+        report.report = Some(path.clone());
+        let page = crate::ppk_report::html(&report, &header, &events);
+        gnss::solution::write_atomic(path, |w| w.write_all(page.as_bytes()))?;
+    }
+    Ok(report)
 }
 
 impl fmt::Display for PpkReport {
@@ -383,6 +400,9 @@ impl fmt::Display for PpkReport {
             if let Some(p) = &self.summary {
                 writeln!(f, "  summary → {}", p.display())?;
             }
+        }
+        if let Some(p) = &self.report {
+            writeln!(f, "  report → {}", p.display())?;
         }
         for w in self.warnings.iter().take(20) {
             writeln!(f, "  warning: {w}")?;

@@ -128,6 +128,11 @@ pub struct Args {
     /// Output .pos file (replaced if it exists; not written on failure).
     #[arg(short = 'o', long, value_name = "OUT.pos")]
     out: PathBuf,
+    /// Also write a quality report: a self-contained HTML page with the ground track
+    /// coloured by Q (exposure events circled), satellites, ratio, σ east/north/up and age
+    /// over time, the fix rate, the ambiguity segments and the settings used.
+    #[arg(long, value_name = "OUT.html")]
+    report: Option<PathBuf>,
 }
 
 /// Which filter passes run.
@@ -250,6 +255,7 @@ pub fn run_job(args: Args) -> Result<pipeline::PpkReport> {
         options,
         format: args.format.into(),
         out: args.out,
+        report: args.report,
     };
     let bar = indicatif::ProgressBar::new_spinner();
     bar.set_style(

@@ -13,6 +13,7 @@ mod gnss;
 mod help;
 mod import;
 mod info;
+mod outputs;
 mod precise;
 
 use std::path::{Path, PathBuf};
