@@ -14,6 +14,7 @@
 //!   ground points, antenna table) with statistics and reports.
 //! - [`import`]: MicMac and COLMAP projects turned into ppkat project folders.
 //! - [`crs`]: projected systems by EPSG code (`--crs EPSG:CODE`), pure-Rust `proj4rs`.
+//! - [`vector`]: trajectories as `.pos`, KML, GeoJSON or GPX.
 //! - [`survey`]: the summary of a static run (`OUT.pos.json` and report lines).
 //! - [`simulate`]: a flight simulator (scenario → RINEX, navigation and truth files) and
 //!   simulated adjustment projects with truth (aerial block, close-range pair).
@@ -38,6 +39,7 @@ pub mod ppp;
 mod ppp_report;
 pub mod simulate;
 pub mod survey;
+pub mod vector;
 
 pub use gnss;
 pub use photo;

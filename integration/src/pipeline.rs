@@ -11,7 +11,7 @@ use crate::orbits::check_glonass_channels;
 pub use crate::orbits::{check_overlap, load_orbits};
 use gnss::error::{Error, Result};
 use gnss::rinex::ObsFile;
-use gnss::solution::{write_pos, PosFormat, PosRecord, Quality};
+use gnss::solution::{PosRecord, Quality};
 use gnss::spp::{SppOptions, SppRun};
 use gnss::time::format_ymdhms;
 use hifitime::Epoch;
@@ -31,8 +31,8 @@ pub struct SppJob {
     pub clk: Vec<PathBuf>,
     /// Processing options.
     pub options: SppOptions,
-    /// Coordinates of the `.pos` written.
-    pub format: PosFormat,
+    /// Layout of the trajectory written (`.pos` llh/xyz, KML, GeoJSON, GPX).
+    pub format: crate::vector::TrajectoryFormat,
     /// Output `.pos`.
     pub out: PathBuf,
 }
@@ -99,7 +99,7 @@ pub fn spp(job: &SppJob) -> Result<SppReport> {
     for n in job.nav.iter().chain(&job.sp3).chain(&job.clk).rev() {
         header.insert(2, format!("inp file  : {}", n.display()));
     }
-    write_pos(&job.out, &header, &records, job.format)?;
+    crate::vector::write(&job.out, &header, &records, job.format)?;
     Ok(SppReport {
         epochs: obs.epochs.len(),
         solved: records.len(),
@@ -166,8 +166,8 @@ pub struct PpkJob {
     pub base_from_ppp: bool,
     /// Processing options.
     pub options: gnss::ppk::PpkOptions,
-    /// Coordinates of the `.pos` written.
-    pub format: PosFormat,
+    /// Layout of the trajectory written (`.pos` llh/xyz, KML, GeoJSON, GPX).
+    pub format: crate::vector::TrajectoryFormat,
     /// Output `.pos`.
     pub out: PathBuf,
     /// The quality report to write (HTML), if any.
@@ -286,7 +286,7 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
             "systems   : {}",
             o.systems.iter().map(|s| s.letter()).collect::<String>()
         ),
-        gnss::solution::ref_pos_line(&b, job.format),
+        gnss::solution::ref_pos_line(&b, job.format.pos_format()),
         "ref point : base marker, in the coordinates of the body (RTKLIB's layout)".into(),
         base_line.unwrap_or_else(|| "base from : given position or the base header".into()),
         format!(
@@ -296,7 +296,8 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
             result.fixed()
         ),
     ];
-    result.trajectory.write_pos(&job.out, &header, job.format)?;
+    let records = result.trajectory.records();
+    crate::vector::write(&job.out, &header, &records, job.format)?;
     let mut summary = None;
     if let Some(st) = &result.static_solution {
         let path = summary_path(&job.out);

@@ -20,6 +20,7 @@ use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use integration::gnss::solution::PosFormat;
 use integration::gnss::sv::Constellation;
+use integration::vector::TrajectoryFormat;
 
 /// Coordinates written into a `.pos` file.
 #[derive(Clone, Copy, ValueEnum)]
@@ -35,6 +36,33 @@ impl From<PosFormatArg> for PosFormat {
         match f {
             PosFormatArg::Llh => PosFormat::Llh,
             PosFormatArg::Xyz => PosFormat::Xyz,
+        }
+    }
+}
+
+/// Layout of a trajectory file (`spp`, `ppk`).
+#[derive(Clone, Copy, ValueEnum)]
+pub enum TrajectoryFormatArg {
+    /// RTKLIB .pos: latitude, longitude (degrees), ellipsoidal height (m)
+    Llh,
+    /// RTKLIB .pos: Earth-centred, Earth-fixed X, Y, Z (m)
+    Xyz,
+    /// KML for Google Earth: the track and a placemark per epoch coloured by Q
+    Kml,
+    /// GeoJSON for QGIS: the track and a point per epoch with time, Q, σ
+    Geojson,
+    /// GPX 1.1: one track, a track point per epoch with time, Q, σ
+    Gpx,
+}
+
+impl From<TrajectoryFormatArg> for TrajectoryFormat {
+    fn from(f: TrajectoryFormatArg) -> TrajectoryFormat {
+        match f {
+            TrajectoryFormatArg::Llh => TrajectoryFormat::Pos(PosFormat::Llh),
+            TrajectoryFormatArg::Xyz => TrajectoryFormat::Pos(PosFormat::Xyz),
+            TrajectoryFormatArg::Kml => TrajectoryFormat::Kml,
+            TrajectoryFormatArg::Geojson => TrajectoryFormat::GeoJson,
+            TrajectoryFormatArg::Gpx => TrajectoryFormat::Gpx,
         }
     }
 }

@@ -61,8 +61,8 @@ fn every_argument_of_every_subcommand_is_described() {
     for needle in [
         "--rover <FILE>\n          RINEX observation file",
         "--base <FILE>\n          RINEX observation file",
-        "--format <FORMAT>\n          Coordinates",
-        "-o, --out <OUT.pos>\n          Output .pos file",
+        "--format <FORMAT>\n          Layout of the output",
+        "-o, --out <OUT.pos>\n          Output file",
     ] {
         assert!(t.contains(needle), "no '{needle}' in\n{t}");
     }
