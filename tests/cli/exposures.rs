@@ -22,7 +22,7 @@ fn leverarm_from_tapes() {
 #[test]
 fn exposures_in_every_format() {
     let dir = tmp("exp-formats");
-    succeeds(&ppkat(&["demo", "--out", p(&dir)]));
+    succeeds(&ppkat(&["demo", "-o", p(&dir)]));
     let traj = dir.join("rover_ppk.pos");
     let rover = dir.join("rover.obs");
     for (fmt, needle) in [
@@ -88,17 +88,7 @@ fn exposures_in_every_format() {
     let median = speeds[speeds.len() / 2];
     assert!((median - 55.0).abs() < 1.0, "median speed {median} m/s");
     let out = dir.join("stations-utm.csv");
-    succeeds(&ppkat(&[
-        "exposures",
-        "--trajectory",
-        p(&traj),
-        "--events",
-        p(&rover),
-        "--projection",
-        "utm",
-        "-o",
-        p(&out),
-    ]));
+    demo_exposures(&dir, &["--projection", "utm"], &out);
     let body = std::fs::read_to_string(&out).unwrap();
     assert!(
         body.contains("UTM zone 32N") && body.contains("easting,northing"),
@@ -153,20 +143,7 @@ fn odm_parse_srs_header(header: &str) -> Option<OdmSrs> {
 fn odm_geo_txt_first_line(dir: &Path) {
     let geo = |crs: &str, name: &str| -> Vec<String> {
         let out = dir.join(name);
-        let (traj, rover) = (dir.join("rover_ppk.pos"), dir.join("rover.obs"));
-        succeeds(&ppkat(&[
-            "exposures",
-            "--trajectory",
-            p(&traj),
-            "--events",
-            p(&rover),
-            "--format",
-            "odm",
-            "--crs",
-            crs,
-            "-o",
-            p(&out),
-        ]));
+        demo_exposures(dir, &["--format", "odm", "--crs", crs], &out);
         std::fs::read_to_string(&out)
             .unwrap()
             .lines()
@@ -209,4 +186,14 @@ fn odm_geo_txt_first_line(dir: &Path) {
     let (u, g) = (nums(&utm[1]), nums(&gk[1]));
     assert!(((u[0] - 500_000.0) - 0.9996 * (g[0] - 500_000.0)).abs() < 1e-3);
     assert!((u[1] - 0.9996 * g[1]).abs() < 1e-3);
+}
+
+/// `ppkat exposures` of the demo's rover events on its PPK trajectory in `dir`, with `extra`
+/// arguments, into `out`; it must succeed.
+fn demo_exposures(dir: &Path, extra: &[&str], out: &Path) {
+    let (traj, rover) = (dir.join("rover_ppk.pos"), dir.join("rover.obs"));
+    let mut args = vec!["exposures", "--trajectory", p(&traj), "--events", p(&rover)];
+    args.extend_from_slice(extra);
+    args.extend(["-o", p(out)]);
+    succeeds(&ppkat(&args));
 }

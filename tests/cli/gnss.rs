@@ -43,18 +43,7 @@ fn spp_writes_an_rtklib_pos_file() {
     };
     for (fmt, cols) in [("llh", "latitude(deg)"), ("xyz", "x-ecef(m)")] {
         let out = tmp(&format!("geonet-{fmt}.pos"));
-        let o = ppkat(&[
-            "spp",
-            "--obs",
-            p(&obs),
-            "--nav",
-            p(&nav),
-            "--format",
-            fmt,
-            "-o",
-            p(&out),
-        ]);
-        succeeds(&o);
+        succeeds(&spp_to(&obs, &nav, fmt, &out));
         let pos = std::fs::read_to_string(&out).unwrap();
         assert!(pos.lines().any(|l| l.starts_with('%') && l.contains(cols)));
         let rows = pos_rows(&out);

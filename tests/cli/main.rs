@@ -121,6 +121,21 @@ fn pos_rows(path: &Path) -> Vec<Vec<String>> {
         .collect()
 }
 
+/// `ppkat spp` of `obs` with the navigation file `nav` in `format` into `out`.
+fn spp_to(obs: &Path, nav: &Path, format: &str, out: &Path) -> Output {
+    ppkat(&[
+        "spp",
+        "--obs",
+        p(obs),
+        "--nav",
+        p(nav),
+        "--format",
+        format,
+        "-o",
+        p(out),
+    ])
+}
+
 /// A path as a command-line argument.
 fn p(x: &Path) -> &str {
     x.to_str().unwrap()

@@ -65,17 +65,7 @@ fn spp_trajectory_as_geojson_kml_gpx() {
     };
     let run = |fmt: &str, name: &str| -> (PathBuf, String) {
         let out = tmp(name);
-        succeeds(&ppkat(&[
-            "spp",
-            "--obs",
-            p(&obs),
-            "--nav",
-            p(&nav),
-            "--format",
-            fmt,
-            "-o",
-            p(&out),
-        ]));
+        succeeds(&spp_to(&obs, &nav, fmt, &out));
         let text = std::fs::read_to_string(&out).unwrap();
         (out, text)
     };
