@@ -180,8 +180,8 @@ fn ground_track(tr: &Trajectory, events: &[Epoch]) -> String {
         .map(|i| east_north(&origin, &i.pos))
         .collect();
     let (w, h) = (900u32, 700u32);
-    // Plot area in pixels (margins 10, label areas 30 below and 70 left).
-    let (pw, ph) = (f64::from(w - 20 - 70), f64::from(h - 20 - 30));
+    // Plot area in pixels (margins 10 and 30 on the right, label areas 30 below and 70 left).
+    let (pw, ph) = (f64::from(w - 40 - 70), f64::from(h - 20 - 30));
     let (x0, x1) = range(pts.iter().map(|p| p.0));
     let (y0, y1) = range(pts.iter().map(|p| p.1));
     let m = ((x1 - x0) / pw).max((y1 - y0) / ph);
@@ -205,13 +205,19 @@ fn ground_track(tr: &Trajectory, events: &[Epoch]) -> String {
         "East and north from the mean position (m, same scale)",
         (w, h),
         |root| {
-            let mut ch = axes(
-                root,
-                cx - hx..cx + hx,
-                cy - hy..cy + hy,
-                ("east (m)", "north (m)"),
-                70,
-            )?;
+            // Whole metres on the axes, and room on the right for the last east label.
+            let mut ch = ChartBuilder::on(root)
+                .margin(10)
+                .margin_right(30)
+                .x_label_area_size(30)
+                .y_label_area_size(70)
+                .build_cartesian_2d(cx - hx..cx + hx, cy - hy..cy + hy)?;
+            ch.configure_mesh()
+                .x_desc("east (m)")
+                .y_desc("north (m)")
+                .x_label_formatter(&|v| format!("{v:.0}"))
+                .y_label_formatter(&|v| format!("{v:.0}"))
+                .draw()?;
             for (q, ..) in QUALITIES {
                 ch.draw_series(
                     pts.iter()
@@ -267,7 +273,7 @@ fn satellites_and_ratio(tr: &Trajectory, axis: &TimeAxis) -> String {
     });
     const CLIP: f64 = 50.0;
     s += &svg_sized(
-        &format!("Ambiguity ratio test (clipped at {CLIP})"),
+        &format!("Ambiguity ratio test (clipped at {CLIP}; 0 where no fix was tried)"),
         (900, 300),
         |root| {
             let mut ch = axes(
