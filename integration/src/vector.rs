@@ -40,24 +40,42 @@ impl TrajectoryFormat {
 }
 
 /// Write `records` to `path` in `format`; `header` are the `.pos` header lines (for the
-/// vector formats they become the description).
+/// vector formats they become the description). Epochs are named by their GPST.
 pub fn write(
     path: &Path,
     header: &[String],
     records: &[PosRecord],
     format: TrajectoryFormat,
 ) -> Result<()> {
+    write_named(path, header, records, &[], format)
+}
+
+/// [`write`] with a name per record (photo labels; records beyond `names` are named by their
+/// GPST). A `.pos` has no room for names.
+pub fn write_named(
+    path: &Path,
+    header: &[String],
+    records: &[PosRecord],
+    names: &[String],
+    format: TrajectoryFormat,
+) -> Result<()> {
+    let pts: Vec<Point> = records
+        .iter()
+        .enumerate()
+        .map(|(i, r)| point(r, names.get(i)))
+        .collect();
     let text = match format {
         TrajectoryFormat::Pos(f) => return write_pos(path, header, records, f),
-        TrajectoryFormat::Kml => kml(header, records),
-        TrajectoryFormat::GeoJson => geojson(header, records),
-        TrajectoryFormat::Gpx => gpx(header, records),
+        TrajectoryFormat::Kml => kml(header, &pts),
+        TrajectoryFormat::GeoJson => geojson(header, &pts),
+        TrajectoryFormat::Gpx => gpx(header, &pts),
     };
     write_atomic(path, |w| w.write_all(text.as_bytes()))
 }
 
 /// One epoch in the numbers the vector formats carry.
 struct Point {
+    name: String,
     lat: f64,
     lon: f64,
     h: f64,
@@ -71,17 +89,19 @@ struct Point {
     age: f64,
 }
 
-fn point(r: &PosRecord) -> Point {
+fn point(r: &PosRecord, name: Option<&String>) -> Point {
     let g = r.pos.to_geodetic();
     let rot = enu_rotation(&g);
     let c = rot * r.cov * rot.transpose();
+    let gpst = format_ymdhms_us(r.time);
     Point {
+        name: name.cloned().unwrap_or_else(|| gpst.clone()),
         lat: g.lat.to_degrees(),
         lon: g.lon.to_degrees(),
         h: g.h,
         sigma: [0, 1, 2].map(|k| c[(k, k)].max(0.0).sqrt()),
         utc: iso_utc(r.time),
-        gpst: format_ymdhms_us(r.time),
+        gpst,
         q: r.quality as u8,
         ns: r.nsat,
         ratio: r.ratio,
@@ -128,8 +148,7 @@ fn kml_colour(q: u8) -> &'static str {
     }
 }
 
-fn kml(header: &[String], records: &[PosRecord]) -> String {
-    let pts: Vec<Point> = records.iter().map(point).collect();
+fn kml(header: &[String], pts: &[Point]) -> String {
     let mut s = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<kml xmlns=\"http://www.opengis.net/kml/2.2\">\n<Document>\n<name>ppkat trajectory</name>\n");
     let _ = writeln!(
         s,
@@ -141,15 +160,15 @@ fn kml(header: &[String], records: &[PosRecord]) -> String {
     }
     s += "<Style id=\"track\"><LineStyle><color>ff808080</color><width>2</width></LineStyle></Style>\n";
     s += "<Placemark><name>track</name><styleUrl>#track</styleUrl><LineString><tessellate>1</tessellate><coordinates>\n";
-    for p in &pts {
+    for p in pts {
         let _ = writeln!(s, "{:.9},{:.9},{:.4}", p.lon, p.lat, p.h);
     }
     s += "</coordinates></LineString></Placemark>\n<Folder><name>epochs</name>\n";
-    for p in &pts {
+    for p in pts {
         let _ = writeln!(
             s,
             "<Placemark><name>{}</name><TimeStamp><when>{}</when></TimeStamp><styleUrl>#q{}</styleUrl><ExtendedData>{}</ExtendedData><Point><coordinates>{:.9},{:.9},{:.4}</coordinates></Point></Placemark>",
-            p.gpst,
+            xml(&p.name),
             p.utc,
             p.q.clamp(1, 6),
             [
@@ -174,9 +193,8 @@ fn kml(header: &[String], records: &[PosRecord]) -> String {
     s + "</Folder>\n</Document>\n</kml>\n"
 }
 
-fn geojson(header: &[String], records: &[PosRecord]) -> String {
+fn geojson(header: &[String], pts: &[Point]) -> String {
     use serde_json::json;
-    let pts: Vec<Point> = records.iter().map(point).collect();
     let mut features = vec![json!({
         "type": "Feature",
         "properties": {
@@ -194,7 +212,7 @@ fn geojson(header: &[String], records: &[PosRecord]) -> String {
         json!({
             "type": "Feature",
             "properties": {
-                "name": p.gpst,
+                "name": p.name,
                 "time": p.utc,
                 "gpst": p.gpst,
                 "q": p.q,
@@ -213,15 +231,14 @@ fn geojson(header: &[String], records: &[PosRecord]) -> String {
     serde_json::to_string_pretty(&v).unwrap_or_default() + "\n"
 }
 
-fn gpx(header: &[String], records: &[PosRecord]) -> String {
+fn gpx(header: &[String], pts: &[Point]) -> String {
     let mut s = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<gpx version=\"1.1\" creator=\"ppkat\" xmlns=\"http://www.topografix.com/GPX/1/1\" xmlns:ppkat=\"https://ppkat.invalid/gpx/1\">\n");
     let _ = writeln!(
         s,
         "<metadata><desc>{}\nele is the ellipsoidal (WGS84) height.</desc></metadata>\n<trk><name>ppkat trajectory</name><trkseg>",
         xml(&header.join("\n"))
     );
-    for r in records {
-        let p = point(r);
+    for p in pts {
         // GPX fix: carrier-phase and code differential → dgps, single point → 3d.
         let fix = match p.q {
             1 | 2 | 4 => "dgps",
@@ -230,7 +247,7 @@ fn gpx(header: &[String], records: &[PosRecord]) -> String {
         let _ = writeln!(
             s,
             "<trkpt lat=\"{:.9}\" lon=\"{:.9}\"><ele>{:.4}</ele><time>{}</time><name>{}</name><desc>Q={} {} ns={} sE={:.4} sN={:.4} sU={:.4} m</desc><fix>{fix}</fix><sat>{}</sat><extensions><ppkat:q>{}</ppkat:q><ppkat:sigma_e>{:.4}</ppkat:sigma_e><ppkat:sigma_n>{:.4}</ppkat:sigma_n><ppkat:sigma_u>{:.4}</ppkat:sigma_u><ppkat:ratio>{:.1}</ppkat:ratio><ppkat:age>{:.2}</ppkat:age></extensions></trkpt>",
-            p.lat, p.lon, p.h, p.utc, p.gpst, p.q, q_name(p.q), p.ns, p.sigma[0], p.sigma[1], p.sigma[2],
+            p.lat, p.lon, p.h, p.utc, xml(&p.name), p.q, q_name(p.q), p.ns, p.sigma[0], p.sigma[1], p.sigma[2],
             p.ns, p.q, p.sigma[0], p.sigma[1], p.sigma[2], p.ratio, p.age
         );
     }
@@ -242,6 +259,14 @@ mod tests {
     use super::*;
     use gnss::frame::Geodetic;
     use nalgebra::Matrix3;
+
+    fn points(names: &[String]) -> Vec<Point> {
+        records()
+            .iter()
+            .enumerate()
+            .map(|(i, r)| point(r, names.get(i)))
+            .collect()
+    }
 
     fn records() -> Vec<PosRecord> {
         let t0 =
@@ -268,7 +293,7 @@ mod tests {
     /// (GPST − 13 s in 2005).
     #[test]
     fn geojson_holds_every_epoch() {
-        let v: serde_json::Value = serde_json::from_str(&geojson(&[], &records())).unwrap();
+        let v: serde_json::Value = serde_json::from_str(&geojson(&[], &points(&[]))).unwrap();
         let f = v["features"].as_array().unwrap();
         assert_eq!(f.len(), 6);
         assert_eq!(f[0]["geometry"]["coordinates"].as_array().unwrap().len(), 5);
@@ -289,12 +314,13 @@ mod tests {
 
     #[test]
     fn kml_and_gpx_hold_every_epoch() {
-        let k = kml(&["a <b>".into()], &records());
+        let k = kml(&["a <b>".into()], &points(&["DJI_0001".into()]));
+        assert!(k.contains("<Placemark><name>DJI_0001</name>"));
         assert_eq!(k.matches("<Placemark>").count(), 6);
         assert_eq!(k.matches("<styleUrl>#q2</styleUrl>").count(), 2);
         assert!(k.contains("a &lt;b&gt;"));
         assert!(k.contains("<coordinates>139.610000000,35.160040000,124.0000</coordinates>"));
-        let g = gpx(&[], &records());
+        let g = gpx(&[], &points(&[]));
         assert_eq!(g.matches("<trkpt ").count(), 5);
         assert!(g.contains("<trkpt lat=\"35.160040000\" lon=\"139.610000000\"><ele>124.0000</ele><time>2005-04-02T00:01:47.000Z</time>"));
     }

@@ -124,6 +124,12 @@ enum ExportArg {
     Pos,
     /// Antenna positions with full covariance and segments: the GNSS input of `adjust`
     Antenna,
+    /// KML of the projection centres for Google Earth, named by the station labels
+    Kml,
+    /// GeoJSON of the projection centres for QGIS (name, time, Q, σ per station)
+    Geojson,
+    /// GPX of the projection centres (a track point per station)
+    Gpx,
 }
 
 /// Convert the arguments into a [`pipeline::ExposureJob`], run it and print its report.
@@ -177,6 +183,9 @@ pub fn run(args: Args) -> Result<()> {
             ExportArg::Csv => Format::Csv,
             ExportArg::Pos => Format::Pos,
             ExportArg::Antenna => Format::Antenna,
+            ExportArg::Kml => Format::Kml,
+            ExportArg::Geojson => Format::GeoJson,
+            ExportArg::Gpx => Format::Gpx,
         },
         projection,
         out: args.out,

@@ -31,6 +31,9 @@ fn exposures_in_every_format() {
         ("pix4d", "imagename,latitude"),
         ("odm", "EPSG:4326"),
         ("pos", "latitude(deg)"),
+        ("kml", "<kml xmlns"),
+        ("geojson", "\"FeatureCollection\""),
+        ("gpx", "<gpx version=\"1.1\""),
         (
             "antenna",
             "id,week,tow,lat,lon,h,c_ee,c_en,c_eu,c_nn,c_nu,c_uu,quality,segment,omega,phi,kappa,ve,vn,vu",
@@ -95,6 +98,7 @@ fn exposures_in_every_format() {
         "{}",
         &body[..300]
     );
+    vector_stations(&dir);
     odm_geo_txt_first_line(&dir);
     // An observation file without events is refused by name.
     let o = ppkat(&[
@@ -196,4 +200,33 @@ fn demo_exposures(dir: &Path, extra: &[&str], out: &Path) {
     args.extend_from_slice(extra);
     args.extend(["-o", p(out)]);
     succeeds(&ppkat(&args));
+}
+
+/// KML, GeoJSON and GPX of the stations: one point per CSV station, named by its label, at
+/// the CSV's latitude and longitude.
+fn vector_stations(dir: &Path) {
+    let csv = std::fs::read_to_string(dir.join("stations.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(2)
+        .map(|l| l.split(',').collect())
+        .collect();
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("stations.geojson")).unwrap())
+            .unwrap();
+    let f = &v["features"].as_array().unwrap()[1..];
+    assert_eq!(f.len(), rows.len());
+    for (feat, r) in f.iter().zip(&rows) {
+        assert_eq!(feat["properties"]["name"], r[0]);
+        let c = &feat["geometry"]["coordinates"];
+        let lat: f64 = r[3].parse().unwrap();
+        let lon: f64 = r[4].parse().unwrap();
+        assert!((c[1].as_f64().unwrap() - lat).abs() < 2e-9, "{c} vs {lat}");
+        assert!((c[0].as_f64().unwrap() - lon).abs() < 2e-9, "{c} vs {lon}");
+    }
+    let kml = std::fs::read_to_string(dir.join("stations.kml")).unwrap();
+    assert_eq!(kml.matches("<Placemark>").count(), rows.len() + 1);
+    assert!(kml.contains(&format!("<Placemark><name>{}</name>", rows[0][0])));
+    let gpx = std::fs::read_to_string(dir.join("stations.gpx")).unwrap();
+    assert_eq!(gpx.matches("<trkpt ").count(), rows.len());
 }

@@ -11,9 +11,10 @@
 use super::attitude::omega_phi_kappa;
 use super::CameraStation;
 use crate::crs::EpsgProjection;
+use crate::vector::TrajectoryFormat;
 use gnss::error::Result;
 use gnss::frame::enu_rotation;
-use gnss::solution::{write_atomic, write_pos, PosFormat, PosRecord};
+use gnss::solution::{write_atomic, PosFormat, PosRecord};
 use gnss::tmerc::{Projected, TransverseMercator};
 use std::io::Write;
 use std::path::Path;
@@ -31,6 +32,12 @@ pub enum Format {
     Csv,
     /// RTKLIB `.pos` of the projection centres (llh, with the ECEF covariance).
     Pos,
+    /// KML of the projection centres (a placemark per station, named by its label).
+    Kml,
+    /// GeoJSON of the projection centres (a point feature per station).
+    GeoJson,
+    /// GPX of the projection centres (a track point per station).
+    Gpx,
     /// Antenna positions with their full ENU covariance, ambiguity segment and attitude:
     /// the GNSS input of `ppkat adjust` (lever arm not applied).
     Antenna,
@@ -233,7 +240,10 @@ fn rows(st: &[CameraStation], proj: Projection) -> Result<(Vec<Row>, CrsNames)> 
 /// Write stations in a format.
 pub fn write(path: &Path, st: &[CameraStation], format: Format, proj: Projection) -> Result<()> {
     let text_format: TextFormat = match format {
-        Format::Pos => return write_centres_pos(path, st),
+        Format::Pos => return write_centres(path, st, TrajectoryFormat::Pos(PosFormat::Llh)),
+        Format::Kml => return write_centres(path, st, TrajectoryFormat::Kml),
+        Format::GeoJson => return write_centres(path, st, TrajectoryFormat::GeoJson),
+        Format::Gpx => return write_centres(path, st, TrajectoryFormat::Gpx),
         Format::Antenna => return write_antenna(path, st),
         Format::Metashape => write_metashape,
         Format::Pix4d => write_pix4d,
@@ -250,8 +260,9 @@ pub fn write(path: &Path, st: &[CameraStation], format: Format, proj: Projection
 /// northing, metres).
 type TextFormat = fn(&mut dyn Write, &[Row], &CrsNames, bool) -> std::io::Result<()>;
 
-/// The projection centres as an RTKLIB `.pos` (llh) with their ECEF covariance.
-fn write_centres_pos(path: &Path, st: &[CameraStation]) -> Result<()> {
+/// The projection centres as an RTKLIB `.pos` (llh) with their ECEF covariance, or as KML,
+/// GeoJSON or GPX named by the station labels.
+fn write_centres(path: &Path, st: &[CameraStation], format: TrajectoryFormat) -> Result<()> {
     let recs: Vec<PosRecord> = st
         .iter()
         .map(|s| PosRecord {
@@ -264,12 +275,9 @@ fn write_centres_pos(path: &Path, st: &[CameraStation]) -> Result<()> {
             ratio: 0.0,
         })
         .collect();
-    write_pos(
-        path,
-        &["program   : ppkat exposures (projection centres)".to_string()],
-        &recs,
-        PosFormat::Llh,
-    )
+    let names: Vec<String> = st.iter().map(|s| s.id.clone()).collect();
+    let header = ["program   : ppkat exposures (projection centres)".to_string()];
+    crate::vector::write_named(path, &header, &recs, &names, format)
 }
 
 /// Metashape reference CSV: label, longitude/latitude (or easting/northing), altitude,
