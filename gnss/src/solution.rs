@@ -133,6 +133,80 @@ pub fn column_header(format: PosFormat) -> &'static str {
     }
 }
 
+/// The `ref pos   : …` header line (without the leading `% `) in the layout RTKLIB's
+/// `postpos.c` writes for each format, so that RTKLIB's solution reader gets the base back:
+/// it reads the three numbers after the `:` in the coordinates the column header announces —
+/// latitude and longitude in degrees (`%13.9f %14.9f`) and ellipsoidal height (`%10.4f`) when
+/// the body is llh, ECEF x y z (`%14.4f` each) when it is xyz. Nothing may follow them.
+pub fn ref_pos_line(base: &Ecef, format: PosFormat) -> String {
+    match format {
+        PosFormat::Llh => {
+            let g = base.to_geodetic();
+            format!(
+                "ref pos   :{:13.9} {:14.9} {:10.4}",
+                g.lat.to_degrees(),
+                g.lon.to_degrees(),
+                g.h
+            )
+        }
+        PosFormat::Xyz => format!(
+            "ref pos   :{:14.4} {:14.4} {:14.4}",
+            base.0.x, base.0.y, base.0.z
+        ),
+    }
+}
+
+/// The base position of a `.pos` text read as RTKLIB's solution reader (`solution.c`) reads
+/// it: the format and the field separator come from the column header (`latitude(deg)` →
+/// llh, `x-ecef(m)` → xyz; the character after that name), then the first `%` line holding
+/// `ref pos` and a `:` gives three numbers after the `:`, split at that separator, each read
+/// as C's `atof` reads (the longest numeric prefix, else 0). `None` without such a line.
+pub fn rtklib_ref_pos(text: &str) -> Option<Ecef> {
+    let head: Vec<&str> = text.lines().take(100).collect();
+    let mut format = None;
+    for l in head
+        .iter()
+        .filter(|l| l.starts_with('%') || l.starts_with('+'))
+    {
+        for (name, f) in [
+            ("x-ecef(m)", PosFormat::Xyz),
+            ("latitude(deg)", PosFormat::Llh),
+        ] {
+            if let Some(at) = l.find(name) {
+                let sep = l[at + name.len()..].chars().next().unwrap_or(' ');
+                format = Some((f, sep));
+            }
+        }
+    }
+    let (format, sep) = format?;
+    let line = text
+        .lines()
+        .find(|l| l.starts_with('%') && l.contains("ref pos") && l.contains(':'))?;
+    let rest = &line[line.find(':')? + 1..];
+    let v: Vec<f64> = rest
+        .split(sep)
+        .filter(|f| !f.is_empty())
+        .map(c_atof)
+        .collect();
+    if v.len() < 3 {
+        return None;
+    }
+    Some(match format {
+        PosFormat::Xyz => Ecef::new(v[0], v[1], v[2]),
+        PosFormat::Llh => Geodetic::from_degrees(v[0], v[1], v[2]).to_ecef(),
+    })
+}
+
+/// C's `atof`: leading white space skipped, the longest prefix that is a number, else 0.
+fn c_atof(s: &str) -> f64 {
+    let s = s.trim_start();
+    (0..=s.len())
+        .rev()
+        .filter(|&n| s.is_char_boundary(n))
+        .find_map(|n| s[..n].parse::<f64>().ok())
+        .unwrap_or(0.0)
+}
+
 /// Write a `.pos` file: `%` header lines (given, then the column names), then one line per record.
 pub fn write_pos(
     path: &Path,
@@ -144,9 +218,13 @@ pub fn write_pos(
         for h in header {
             writeln!(w, "% {h}")?;
         }
+        let frame = match format {
+            PosFormat::Llh => "lat/lon/height=WGS84/ellipsoidal",
+            PosFormat::Xyz => "x/y/z-ecef=WGS84",
+        };
         writeln!(
             w,
-            "% (lat/lon/height=WGS84/ellipsoidal, Q=1:fix,2:float,4:dgps,5:single, ns=# of satellites)"
+            "% ({frame}, Q=1:fix,2:float,4:dgps,5:single,6:ppp, ns=# of satellites)"
         )?;
         writeln!(w, "{}", column_header(format))?;
         for r in records {
@@ -266,4 +344,72 @@ fn parse_time(date: &str, time: &str) -> Option<Epoch> {
     )
     .ok()?;
     Some(base + hifitime::Duration::from_seconds(s))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A `.pos` with the header `write_pos` writes and RTKLIB's base line for `format`.
+    fn written(format: PosFormat, base: &Ecef, name: &str) -> String {
+        let path = std::env::temp_dir().join(format!("ppkat-refpos-{}-{name}", std::process::id()));
+        let t = Epoch::from_gregorian_hms(2005, 4, 2, 0, 0, 0, hifitime::TimeScale::GPST);
+        let rec = PosRecord {
+            time: t,
+            pos: Ecef::new(-3976219.1869, 3382371.6036, 3652511.1410),
+            quality: Quality::Fixed,
+            nsat: 9,
+            cov: Matrix3::identity() * 1e-4,
+            age: 0.0,
+            ratio: 12.5,
+        };
+        let header = vec![
+            "program   : ppkat (carrier-phase kinematic)".to_string(),
+            ref_pos_line(base, format),
+            "ref point : base marker".to_string(),
+        ];
+        write_pos(&path, &header, &[rec], format).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        std::fs::remove_file(&path).unwrap();
+        text
+    }
+
+    /// RTKLIB's reader gets the base back from our llh and xyz files (to 0.1 mm: the nine
+    /// decimals of a degree are 0.1 mm, the height and ECEF have four).
+    #[test]
+    fn rtklib_reads_the_base_position_we_wrote() {
+        let base = Ecef::new(-3978241.958, 3382840.234, 3649900.853);
+        for (format, name) in [(PosFormat::Llh, "llh"), (PosFormat::Xyz, "xyz")] {
+            let text = written(format, &base, name);
+            let got = rtklib_ref_pos(&text).expect("a ref pos line");
+            let err = (got.0 - base.0).norm();
+            assert!(err < 1e-4, "{name}: {err} m off\n{text}");
+        }
+        let llh = written(PosFormat::Llh, &base, "llh2");
+        let line = llh.lines().find(|l| l.contains("ref pos")).unwrap();
+        // RTKLIB's %13.9f %14.9f %10.4f (checked against an independent ECEF→geodetic).
+        assert_eq!(line, "% ref pos   : 35.132057068  139.624306577    73.9077");
+        assert!(llh.contains("% (lat/lon/height=WGS84/ellipsoidal, Q=1:fix"));
+        let xyz = written(PosFormat::Xyz, &base, "xyz2");
+        let line = xyz.lines().find(|l| l.contains("ref pos")).unwrap();
+        assert_eq!(
+            line,
+            "% ref pos   : -3978241.9580   3382840.2340   3649900.8530"
+        );
+        assert!(xyz.contains("% (x/y/z-ecef=WGS84, Q=1:fix"));
+    }
+
+    /// The old layout (ECEF in an llh file) is what RTKLIB misread: latitude −3978241.958°.
+    #[test]
+    fn an_ecef_ref_pos_in_an_llh_file_is_misread() {
+        let text = format!(
+            "% ref pos   : -3978241.9580 3382840.2340 3649900.8530 (ECEF, base marker)\n{}\n",
+            column_header(PosFormat::Llh)
+        );
+        let got = rtklib_ref_pos(&text).unwrap();
+        let g = got.to_geodetic();
+        assert!((g.lat.to_degrees() - 35.1344).abs() > 1.0, "{g:?}");
+        assert_eq!(c_atof(" 12.5e1xyz"), 125.0);
+        assert_eq!(c_atof("(ECEF,"), 0.0);
+    }
 }

@@ -15,6 +15,8 @@
 //! - [`adjust`]: the joint GNSS-supported adjustment of a project (images, measurements,
 //!   ground points, antenna table) with statistics and reports.
 //! - [`import`]: MicMac and COLMAP projects turned into ppkat project folders.
+//! - [`crs`]: projected systems by EPSG code (`--crs EPSG:CODE`), pure-Rust `proj4rs`.
+//! - [`vector`]: trajectories as `.pos`, KML, GeoJSON or GPX.
 //! - [`survey`]: the summary of a static run (`OUT.pos.json` and report lines).
 //! - [`simulate`]: a flight simulator (scenario → RINEX, navigation and truth files) and
 //!   simulated adjustment projects with truth (aerial block, close-range pair).
@@ -27,6 +29,7 @@
 
 pub mod adjust;
 pub mod bench;
+pub mod crs;
 pub mod demo;
 pub mod exposure;
 pub mod import;
@@ -34,10 +37,12 @@ pub mod observations;
 pub mod orbits;
 pub mod pipeline;
 mod plot;
+mod ppk_report;
 pub mod ppp;
 mod ppp_report;
 pub mod simulate;
 pub mod survey;
+pub mod vector;
 
 pub use gnss;
 pub use photo;

@@ -1,4 +1,4 @@
-//! SVG plots for the HTML reports (adjustment, PPP): a titled plot in a string, axes with
+//! SVG plots for the HTML reports (adjustment, PPP, PPK): a titled plot in a string, axes with
 //! their descriptions, and a padded data range.
 
 use plotters::coord::types::RangedCoordf64;
@@ -11,9 +11,18 @@ pub(crate) fn svg(
     title: &str,
     draw: impl FnOnce(&DrawingArea<SVGBackend, plotters::coord::Shift>) -> Plot,
 ) -> String {
+    svg_sized(title, (900, 420), draw)
+}
+
+/// [`svg`] of a given size in pixels (width, height).
+pub(crate) fn svg_sized(
+    title: &str,
+    size: (u32, u32),
+    draw: impl FnOnce(&DrawingArea<SVGBackend, plotters::coord::Shift>) -> Plot,
+) -> String {
     let mut buf = String::new();
     let ok = {
-        let root = SVGBackend::with_string(&mut buf, (900, 420)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut buf, size).into_drawing_area();
         root.fill(&WHITE).is_ok() && draw(&root).is_ok() && root.present().is_ok()
     };
     if ok {
@@ -52,4 +61,11 @@ pub(crate) fn range(v: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
     } else {
         (-1.0, 1.0)
     }
+}
+
+/// Text safe inside HTML.
+pub(crate) fn html_escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
 }

@@ -84,7 +84,11 @@ pub fn ppp(job: &PppJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PppReport>
     // PPP needs neither broadcast ionosphere nor group delays (IF combination, precise clocks).
     warnings.retain(|w| !w.contains("Klobuchar"));
     warnings.extend(input.warnings);
-    check_overlap(&obs, &orbits, &crate::observations::nav_sources(&job.nav, log_nav))?;
+    check_overlap(
+        &obs,
+        &orbits,
+        &crate::observations::nav_sources(&job.nav, log_nav),
+    )?;
     let mut options = job.options.clone();
     options.antex = job
         .antex

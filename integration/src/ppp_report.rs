@@ -4,7 +4,7 @@
 //!
 //! Enters: a [`PppReport`] (after the run). Leaves: a self-contained HTML text.
 
-use crate::plot::{axes, range, svg};
+use crate::plot::{axes, html_escape, range, svg};
 use crate::ppp::PppReport;
 use gnss::frame::Ecef;
 use plotters::prelude::*;
@@ -119,11 +119,4 @@ fn mean(r: &PppReport) -> Ecef {
             .sum::<nalgebra::Vector3<f64>>()
             / n,
     )
-}
-
-/// Text safe inside HTML.
-fn html_escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
 }

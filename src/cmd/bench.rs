@@ -71,7 +71,12 @@ struct AdjustArgs {
     per_strip: usize,
     /// Output folder of the simulated project; the adjustment writes into DIR/out (created;
     /// files of the same names are replaced).
-    #[arg(long, value_name = "DIR", default_value = "ppkat-bench-adjust")]
+    #[arg(
+        short = 'o',
+        long,
+        value_name = "DIR",
+        default_value = "ppkat-bench-adjust"
+    )]
     out: PathBuf,
 }
 

@@ -14,7 +14,7 @@ use std::path::PathBuf;
 #[derive(clap::Args)]
 pub struct Args {
     /// Output folder (created; files of the same names are replaced).
-    #[arg(long, value_name = "DIR", default_value = "ppkat-demo")]
+    #[arg(short = 'o', long, value_name = "DIR", default_value = "ppkat-demo")]
     out: PathBuf,
 }
 

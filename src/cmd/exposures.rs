@@ -77,8 +77,14 @@ pub struct Args {
     #[arg(long, value_name = "OUTDIR", requires = "photos")]
     geotag: Option<PathBuf>,
     /// Horizontal coordinates of the output: geodetic, utm (zone of the first station),
-    /// utm:ZONE or gk:CENTRAL_MERIDIAN (Gauss–Krüger, degrees).
-    #[arg(long, value_name = "PROJECTION", default_value = "geodetic")]
+    /// utm:ZONE, gk:CENTRAL_MERIDIAN (Gauss–Krüger, degrees) or EPSG:CODE (any projected
+    /// system, e.g. EPSG:32632 or a national grid); heights stay ellipsoidal. Also --crs.
+    #[arg(
+        long,
+        alias = "crs",
+        value_name = "PROJECTION",
+        default_value = "geodetic"
+    )]
     projection: String,
     /// Output file (replaced if it exists).
     #[arg(short = 'o', long, value_name = "OUT")]
@@ -120,6 +126,12 @@ enum ExportArg {
     Pos,
     /// Antenna positions with full covariance and segments: the GNSS input of `adjust`
     Antenna,
+    /// KML of the projection centres for Google Earth, named by the station labels
+    Kml,
+    /// GeoJSON of the projection centres for QGIS (name, time, Q, σ per station)
+    Geojson,
+    /// GPX of the projection centres (a track point per station)
+    Gpx,
 }
 
 /// Convert the arguments into a [`pipeline::ExposureJob`], run it and print its report.
@@ -153,7 +165,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let projection = Projection::parse(&args.projection).with_context(|| {
         format!(
-            "--projection {}: use geodetic, utm, utm:ZONE or gk:CENTRAL_MERIDIAN",
+            "--projection {}: use geodetic, utm, utm:ZONE, gk:CENTRAL_MERIDIAN or EPSG:CODE",
             args.projection
         )
     })?;
@@ -173,6 +185,9 @@ pub fn run(args: Args) -> Result<()> {
             ExportArg::Csv => Format::Csv,
             ExportArg::Pos => Format::Pos,
             ExportArg::Antenna => Format::Antenna,
+            ExportArg::Kml => Format::Kml,
+            ExportArg::Geojson => Format::GeoJson,
+            ExportArg::Gpx => Format::Gpx,
         },
         projection,
         out: args.out,

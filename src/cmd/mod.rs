@@ -22,6 +22,7 @@ use integration::gnss::obs::ObsFormat;
 use integration::gnss::raw::RawFormat;
 use integration::gnss::solution::PosFormat;
 use integration::gnss::sv::Constellation;
+use integration::vector::TrajectoryFormat;
 
 /// A run that finished but left inputs out: `ppkat` exits with code 3 and prints this on
 /// standard error (the count, then each input named with the reason).
@@ -88,6 +89,33 @@ impl From<ObsFormatArg> for Option<ObsFormat> {
             ObsFormatArg::Auto => None,
             ObsFormatArg::Rinex => Some(ObsFormat::Rinex),
             ObsFormatArg::Ubx => Some(ObsFormat::Raw(RawFormat::Ubx)),
+        }
+    }
+}
+
+/// Layout of a trajectory file (`spp`, `ppk`).
+#[derive(Clone, Copy, ValueEnum)]
+pub enum TrajectoryFormatArg {
+    /// RTKLIB .pos: latitude, longitude (degrees), ellipsoidal height (m)
+    Llh,
+    /// RTKLIB .pos: Earth-centred, Earth-fixed X, Y, Z (m)
+    Xyz,
+    /// KML for Google Earth: the track and a placemark per epoch coloured by Q
+    Kml,
+    /// GeoJSON for QGIS: the track and a point per epoch with time, Q, σ
+    Geojson,
+    /// GPX 1.1: one track, a track point per epoch with time, Q, σ
+    Gpx,
+}
+
+impl From<TrajectoryFormatArg> for TrajectoryFormat {
+    fn from(f: TrajectoryFormatArg) -> TrajectoryFormat {
+        match f {
+            TrajectoryFormatArg::Llh => TrajectoryFormat::Pos(PosFormat::Llh),
+            TrajectoryFormatArg::Xyz => TrajectoryFormat::Pos(PosFormat::Xyz),
+            TrajectoryFormatArg::Kml => TrajectoryFormat::Kml,
+            TrajectoryFormatArg::Geojson => TrajectoryFormat::GeoJson,
+            TrajectoryFormatArg::Gpx => TrajectoryFormat::Gpx,
         }
     }
 }

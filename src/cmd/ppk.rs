@@ -1,6 +1,6 @@
 //! `ppkat ppk`: carrier-phase kinematic positioning of a rover against a base.
 
-use super::{elev_mask, systems, triple, ObsFormatArg, PosFormatArg};
+use super::{elev_mask, systems, triple, ObsFormatArg, TrajectoryFormatArg};
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use integration::gnss::frame::{Ecef, Geodetic};
@@ -128,12 +128,19 @@ pub struct Args {
     /// R GLONASS (float ambiguities only).
     #[arg(long, value_name = "LIST", default_value = "G,E,C,J")]
     systems: String,
-    /// Coordinates written into the .pos file.
+    /// Layout of the output: an RTKLIB .pos in llh or xyz, or KML, GeoJSON or GPX (WGS84,
+    /// ellipsoidal heights; times in UTC) with every epoch's time, Q, satellites and σ.
     #[arg(long, value_enum, default_value = "llh")]
-    format: PosFormatArg,
-    /// Output .pos file (replaced if it exists; not written on failure).
+    format: TrajectoryFormatArg,
+    /// Output file, a .pos or the --format chosen (replaced if it exists; not written on
+    /// failure).
     #[arg(short = 'o', long, value_name = "OUT.pos")]
     out: PathBuf,
+    /// Also write a quality report: a self-contained HTML page with the ground track
+    /// coloured by Q (exposure events circled), satellites, ratio, σ east/north/up and age
+    /// over time, the fix rate, the ambiguity segments and the settings used.
+    #[arg(long, value_name = "OUT.html")]
+    report: Option<PathBuf>,
 }
 
 /// Which filter passes run.
@@ -257,6 +264,7 @@ pub fn run_job(args: Args) -> Result<pipeline::PpkReport> {
         options,
         format: args.format.into(),
         out: args.out,
+        report: args.report,
     };
     let bar = indicatif::ProgressBar::new_spinner();
     bar.set_style(

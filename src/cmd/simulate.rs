@@ -30,7 +30,7 @@ pub struct Args {
     #[arg(long, value_name = "NAME")]
     builtin: Option<String>,
     /// Output folder (created; files of the same names are replaced).
-    #[arg(long, value_name = "DIR")]
+    #[arg(short = 'o', long, value_name = "DIR")]
     out: PathBuf,
     /// Also write the rover and base as raw receiver logs of this format (flights only).
     #[arg(long, value_enum, value_name = "FORMAT")]

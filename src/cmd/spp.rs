@@ -1,6 +1,6 @@
 //! `ppkat spp`: single-point positioning of every epoch.
 
-use super::{elev_mask, systems, ObsFormatArg, PosFormatArg};
+use super::{elev_mask, systems, ObsFormatArg, TrajectoryFormatArg};
 use anyhow::{Context, Result};
 use integration::gnss::spp::SppOptions;
 use integration::pipeline;
@@ -55,10 +55,12 @@ pub struct Args {
     /// R GLONASS.
     #[arg(long, value_name = "LIST", default_value = "G,E,C,J,R")]
     systems: String,
-    /// Coordinates written into the .pos file.
+    /// Layout of the output: an RTKLIB .pos in llh or xyz, or KML, GeoJSON or GPX (WGS84,
+    /// ellipsoidal heights; times in UTC) with every epoch's time, Q, satellites and σ.
     #[arg(long, value_enum, default_value = "llh")]
-    format: PosFormatArg,
-    /// Output .pos file (replaced if it exists; not written on failure).
+    format: TrajectoryFormatArg,
+    /// Output file, a .pos or the --format chosen (replaced if it exists; not written on
+    /// failure).
     #[arg(short = 'o', long, value_name = "OUT.pos")]
     out: PathBuf,
 }

@@ -5,7 +5,7 @@ use super::*;
 
 /// Simulate the built-in adjustment project `name` into `dir`.
 fn simulate_project(name: &str, dir: &Path) -> String {
-    succeeds(&ppkat(&["simulate", "--builtin", name, "--out", p(dir)]))
+    succeeds(&ppkat(&["simulate", "--builtin", name, "-o", p(dir)]))
 }
 
 /// The numbers of a report line, parentheses and commas ignored.

@@ -22,7 +22,7 @@ fn leverarm_from_tapes() {
 #[test]
 fn exposures_in_every_format() {
     let dir = tmp("exp-formats");
-    succeeds(&ppkat(&["demo", "--out", p(&dir)]));
+    succeeds(&ppkat(&["demo", "-o", p(&dir)]));
     let traj = dir.join("rover_ppk.pos");
     let rover = dir.join("rover.obs");
     for (fmt, needle) in [
@@ -31,6 +31,9 @@ fn exposures_in_every_format() {
         ("pix4d", "imagename,latitude"),
         ("odm", "EPSG:4326"),
         ("pos", "latitude(deg)"),
+        ("kml", "<kml xmlns"),
+        ("geojson", "\"FeatureCollection\""),
+        ("gpx", "<gpx version=\"1.1\""),
         (
             "antenna",
             "id,week,tow,lat,lon,h,c_ee,c_en,c_eu,c_nn,c_nu,c_uu,quality,segment,omega,phi,kappa,ve,vn,vu",
@@ -88,23 +91,15 @@ fn exposures_in_every_format() {
     let median = speeds[speeds.len() / 2];
     assert!((median - 55.0).abs() < 1.0, "median speed {median} m/s");
     let out = dir.join("stations-utm.csv");
-    succeeds(&ppkat(&[
-        "exposures",
-        "--trajectory",
-        p(&traj),
-        "--events",
-        p(&rover),
-        "--projection",
-        "utm",
-        "-o",
-        p(&out),
-    ]));
+    demo_exposures(&dir, &["--projection", "utm"], &out);
     let body = std::fs::read_to_string(&out).unwrap();
     assert!(
         body.contains("UTM zone 32N") && body.contains("easting,northing"),
         "{}",
         &body[..300]
     );
+    vector_stations(&dir);
+    odm_geo_txt_first_line(&dir);
     // An observation file without events is refused by name.
     let o = ppkat(&[
         "exposures",
@@ -116,4 +111,122 @@ fn exposures_in_every_format() {
         p(&dir.join("x.csv")),
     ]);
     fails_with(&o, &["base.obs", "no flag-5 event"]);
+}
+
+/// The SRS of a `geo.txt` first line as OpenDroneMap's `parse_srs_header` reads it: split at
+/// single spaces; `WGS84 UTM <zone><N|S>`; else a line holding `+proj`; else `epsg:CODE`
+/// (case-insensitive); anything else is refused.
+#[derive(Debug, PartialEq)]
+enum OdmSrs {
+    Utm { zone: u8, south: bool },
+    Proj(String),
+    Epsg(u32),
+}
+
+fn odm_parse_srs_header(header: &str) -> Option<OdmSrs> {
+    let header = header.trim();
+    let r: Vec<&str> = header.split(' ').collect();
+    if r.len() >= 3 && r[0] == "WGS84" && r[1] == "UTM" {
+        let (zone, pole) = r[2].split_at(r[2].len() - 1);
+        return Some(OdmSrs::Utm {
+            zone: zone.parse().ok()?,
+            south: pole.eq_ignore_ascii_case("S"),
+        });
+    }
+    if header.contains("+proj") {
+        return Some(OdmSrs::Proj(header.to_string()));
+    }
+    let l = header.to_lowercase();
+    l.strip_prefix("epsg:")
+        .and_then(|c| c.parse().ok())
+        .map(OdmSrs::Epsg)
+}
+
+/// ODM `geo.txt` for `utm`, `--crs EPSG:32632` and `gk:9`: first lines ODM parses, and the
+/// same easting/northing (to 1 mm) from our transverse Mercator and from proj4rs' EPSG:32632.
+fn odm_geo_txt_first_line(dir: &Path) {
+    let geo = |crs: &str, name: &str| -> Vec<String> {
+        let out = dir.join(name);
+        demo_exposures(dir, &["--format", "odm", "--crs", crs], &out);
+        std::fs::read_to_string(&out)
+            .unwrap()
+            .lines()
+            .map(String::from)
+            .collect()
+    };
+    let utm = geo("utm", "geo-utm.txt");
+    let epsg = geo("EPSG:32632", "geo-epsg.txt");
+    let gk = geo("gk:9", "geo-gk.txt");
+    assert_eq!(utm[0], "WGS84 UTM 32N");
+    assert_eq!(
+        odm_parse_srs_header(&utm[0]),
+        Some(OdmSrs::Utm {
+            zone: 32,
+            south: false
+        })
+    );
+    assert_eq!(epsg[0], "EPSG:32632");
+    assert_eq!(odm_parse_srs_header(&epsg[0]), Some(OdmSrs::Epsg(32632)));
+    assert!(
+        matches!(odm_parse_srs_header(&gk[0]), Some(OdmSrs::Proj(s)) if s.contains("+lon_0=9 "))
+    );
+    assert_eq!(utm.len(), epsg.len());
+    let nums = |l: &str| -> Vec<f64> {
+        l.split_whitespace()
+            .skip(1)
+            .map(|x| x.parse().unwrap())
+            .collect()
+    };
+    for (a, b) in utm[1..].iter().zip(&epsg[1..]) {
+        let (a, b) = (nums(a), nums(b));
+        assert!(
+            a[0] > 400_000.0 && a[1] > 4_000_000.0,
+            "easting, northing: {a:?}"
+        );
+        assert!((a[0] - b[0]).hypot(a[1] - b[1]) < 1e-3, "{a:?} vs {b:?}");
+        assert_eq!(a[2], b[2], "heights untouched");
+    }
+    // UTM zone 32 is Gauss–Krüger at 9° scaled by 0.9996 about the central meridian.
+    let (u, g) = (nums(&utm[1]), nums(&gk[1]));
+    assert!(((u[0] - 500_000.0) - 0.9996 * (g[0] - 500_000.0)).abs() < 1e-3);
+    assert!((u[1] - 0.9996 * g[1]).abs() < 1e-3);
+}
+
+/// `ppkat exposures` of the demo's rover events on its PPK trajectory in `dir`, with `extra`
+/// arguments, into `out`; it must succeed.
+fn demo_exposures(dir: &Path, extra: &[&str], out: &Path) {
+    let (traj, rover) = (dir.join("rover_ppk.pos"), dir.join("rover.obs"));
+    let mut args = vec!["exposures", "--trajectory", p(&traj), "--events", p(&rover)];
+    args.extend_from_slice(extra);
+    args.extend(["-o", p(out)]);
+    succeeds(&ppkat(&args));
+}
+
+/// KML, GeoJSON and GPX of the stations: one point per CSV station, named by its label, at
+/// the CSV's latitude and longitude.
+fn vector_stations(dir: &Path) {
+    let csv = std::fs::read_to_string(dir.join("stations.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(2)
+        .map(|l| l.split(',').collect())
+        .collect();
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("stations.geojson")).unwrap())
+            .unwrap();
+    let f = &v["features"].as_array().unwrap()[1..];
+    assert_eq!(f.len(), rows.len());
+    for (feat, r) in f.iter().zip(&rows) {
+        assert_eq!(feat["properties"]["name"], r[0]);
+        let c = &feat["geometry"]["coordinates"];
+        let lat: f64 = r[3].parse().unwrap();
+        let lon: f64 = r[4].parse().unwrap();
+        assert!((c[1].as_f64().unwrap() - lat).abs() < 2e-9, "{c} vs {lat}");
+        assert!((c[0].as_f64().unwrap() - lon).abs() < 2e-9, "{c} vs {lon}");
+    }
+    let kml = std::fs::read_to_string(dir.join("stations.kml")).unwrap();
+    assert_eq!(kml.matches("<Placemark>").count(), rows.len() + 1);
+    assert!(kml.contains(&format!("<Placemark><name>{}</name>", rows[0][0])));
+    let gpx = std::fs::read_to_string(dir.join("stations.gpx")).unwrap();
+    assert_eq!(gpx.matches("<trkpt ").count(), rows.len());
 }

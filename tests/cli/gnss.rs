@@ -37,18 +37,7 @@ fn spp_writes_an_rtklib_pos_file() {
     };
     for (fmt, cols) in [("llh", "latitude(deg)"), ("xyz", "x-ecef(m)")] {
         let out = tmp(&format!("geonet-{fmt}.pos"));
-        let o = ppkat(&[
-            "spp",
-            "--obs",
-            p(&obs),
-            "--nav",
-            p(&nav),
-            "--format",
-            fmt,
-            "-o",
-            p(&out),
-        ]);
-        succeeds(&o);
+        succeeds(&spp_to(&obs, &nav, fmt, &out));
         let pos = std::fs::read_to_string(&out).unwrap();
         assert!(pos.lines().any(|l| l.starts_with('%') && l.contains(cols)));
         let rows = pos_rows(&out);
@@ -82,6 +71,7 @@ fn ppk_geonet_writes_fixed_solutions_with_quality_columns() {
             && t15.contains("5 epochs unsolved: no single-point solution: poor geometry"),
         "unsolved epochs say why: {t15}"
     );
+    assert_base_read_back(&out);
     let rows = pos_rows(&out);
     assert_eq!(rows.len(), 120);
     for r in &rows {
@@ -91,6 +81,18 @@ fn ppk_geonet_writes_fixed_solutions_with_quality_columns() {
         let ratio: f64 = r[14].parse().unwrap();
         assert!(ratio >= 3.0);
     }
+}
+
+/// RTKLIB's solution reader gets the `--base-pos` we gave back from the `.pos` (llh or xyz).
+fn assert_base_read_back(out: &Path) {
+    let text = std::fs::read_to_string(out).unwrap();
+    let b = ::gnss::solution::rtklib_ref_pos(&text).expect("a ref pos line RTKLIB reads");
+    let given = [-3978241.958, 3382840.234, 3649900.853];
+    let err = (0..3)
+        .map(|i| (b.0[i] - given[i]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    assert!(err < 1e-4, "base read back {err} m off: {b:?}");
 }
 
 /// `--mode static`: one position accumulated over the hour, the last .pos line being the
@@ -107,6 +109,7 @@ fn ppk_static_writes_the_accumulated_position_and_a_summary() {
         t.contains("static arp: X") && t.contains("fixed (ratio"),
         "{t}"
     );
+    assert_base_read_back(&out);
     let pos = std::fs::read_to_string(&out).unwrap();
     assert!(
         pos.contains("% pos mode  : static, filter Forward"),

@@ -3,11 +3,12 @@
 use super::*;
 
 /// Every subcommand, as its words on the command line.
-const SUBCOMMANDS: [&[&str]; 18] = [
+const SUBCOMMANDS: [&[&str]; 19] = [
     &["info"],
     &["convert"],
     &["spp"],
     &["ppk"],
+    &["ppp"],
     &["exposures"],
     &["leverarm"],
     &["bal"],
@@ -62,10 +63,26 @@ fn every_argument_of_every_subcommand_is_described() {
         "--rover <FILE>\n          Observation file of the moving receiver: RINEX, or a u-blox UBX log",
         "--base <FILE>\n          Observation file of the base (reference) receiver: RINEX, or a u-blox UBX log",
         "--obs-format <FORMAT>\n          Format of both observation files",
-        "--format <FORMAT>\n          Coordinates",
-        "-o, --out <OUT.pos>\n          Output .pos file",
+        "--format <FORMAT>\n          Layout of the output",
+        "-o, --out <OUT.pos>\n          Output file",
+        "--report <OUT.html>\n          Also write a quality report",
     ] {
         assert!(t.contains(needle), "no '{needle}' in\n{t}");
+    }
+    // Every command writing an output folder takes -o.
+    for cmd in [
+        &["demo"][..],
+        &["simulate"],
+        &["adjust"],
+        &["bench", "adjust"],
+    ] {
+        let mut args = cmd.to_vec();
+        args.push("--help");
+        let t = succeeds(&ppkat(&args));
+        assert!(
+            t.contains("-o, --out <DIR>"),
+            "ppkat {cmd:?}: no -o in\n{t}"
+        );
     }
     // Precise orbits and clocks, repeatable, for both positioning commands.
     for cmd in ["spp", "ppk"] {

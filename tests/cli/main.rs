@@ -14,6 +14,7 @@ mod help;
 mod import;
 mod info;
 mod kill;
+mod outputs;
 mod precise;
 mod raw;
 mod reliability;
@@ -162,6 +163,21 @@ fn ppk_args<'a>(
     args.extend(["-o", p(out)]);
     args.extend_from_slice(extra);
     args
+}
+
+/// `ppkat spp` of `obs` with the navigation file `nav` in `format` into `out`.
+fn spp_to(obs: &Path, nav: &Path, format: &str, out: &Path) -> Output {
+    ppkat(&[
+        "spp",
+        "--obs",
+        p(obs),
+        "--nav",
+        p(nav),
+        "--format",
+        format,
+        "-o",
+        p(out),
+    ])
 }
 
 /// A path as a command-line argument.

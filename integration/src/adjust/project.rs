@@ -273,15 +273,17 @@ impl Project {
             std::fs::read_to_string(path).map_err(|e| perr(path, format!("cannot read: {e}")))?;
         let file: ProjectFile = toml::from_str(&text).map_err(|e| perr(path, e.to_string()))?;
         let dir = path.parent().unwrap_or(Path::new("."));
-        let output = Projection::parse(&file.output).ok_or_else(|| {
-            perr(
-                path,
-                format!(
-                    "output = \"{}\": use geodetic, utm, utm:ZONE or gk:CM",
-                    file.output
-                ),
-            )
-        })?;
+        let output = Projection::parse(&file.output)
+            .filter(|p| !matches!(p, Projection::Epsg(_)))
+            .ok_or_else(|| {
+                perr(
+                    path,
+                    format!(
+                        "output = \"{}\": use geodetic, utm, utm:ZONE or gk:CM",
+                        file.output
+                    ),
+                )
+            })?;
         if file.camera.is_empty() {
             return Err(perr(path, "no [[camera]]: describe at least one camera"));
         }

@@ -355,7 +355,7 @@ impl Coords {
                 let p = Projection::parse(c)
                     .ok_or_else(|| perr(path, format!("crs `{c}`: use utm:ZONE or gk:CM")))?;
                 match p {
-                    Projection::Utm(None) | Projection::Geodetic => {
+                    Projection::Utm(None) | Projection::Geodetic | Projection::Epsg(_) => {
                         Err(perr(path, "crs: give the UTM zone (utm:ZONE) or gk:CM"))
                     }
                     _ => {

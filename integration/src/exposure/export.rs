@@ -1,17 +1,20 @@
 //! Exports of camera stations: Metashape and Pix4D reference CSVs, OpenDroneMap `geo.txt`, a
 //! full CSV (time, coordinates, sigmas, quality, attitude, flags) and an RTKLIB `.pos`; in
-//! geodetic coordinates or projected (UTM, Gauss–Krüger).
+//! geodetic coordinates or projected (UTM, Gauss–Krüger, any projected EPSG code).
 //!
 //! Enters: camera stations ([`super::CameraStation`], ECEF with ECEF covariance). Leaves: files
 //! written atomically; times GPST, sigmas in the local ENU frame (m), angles degrees (R camera
 //! → ENU). Also the antenna table that [`crate::adjust`] reads ([`antenna_table`]), shared with
-//! the simulator. Uses `gnss::tmerc` for the projections and `gnss::solution` for `.pos`.
+//! the simulator. Uses `gnss::tmerc` for UTM and Gauss–Krüger, [`crate::crs`] for EPSG codes,
+//! and `gnss::solution` for `.pos`.
 
 use super::attitude::omega_phi_kappa;
 use super::CameraStation;
+use crate::crs::EpsgProjection;
+use crate::vector::TrajectoryFormat;
 use gnss::error::Result;
 use gnss::frame::enu_rotation;
-use gnss::solution::{write_atomic, write_pos, PosFormat, PosRecord};
+use gnss::solution::{write_atomic, PosFormat, PosRecord};
 use gnss::tmerc::{Projected, TransverseMercator};
 use std::io::Write;
 use std::path::Path;
@@ -29,6 +32,12 @@ pub enum Format {
     Csv,
     /// RTKLIB `.pos` of the projection centres (llh, with the ECEF covariance).
     Pos,
+    /// KML of the projection centres (a placemark per station, named by its label).
+    Kml,
+    /// GeoJSON of the projection centres (a point feature per station).
+    GeoJson,
+    /// GPX of the projection centres (a track point per station).
+    Gpx,
     /// Antenna positions with their full ENU covariance, ambiguity segment and attitude:
     /// the GNSS input of `ppkat adjust` (lever arm not applied).
     Antenna,
@@ -43,11 +52,16 @@ pub enum Projection {
     Utm(Option<u8>),
     /// Gauss–Krüger with a central meridian (degrees).
     GaussKruger(f64),
+    /// A projected system by its EPSG code (UTM on any datum, national grids).
+    Epsg(u16),
 }
 
 impl Projection {
-    /// `geodetic`, `utm`, `utm:ZONE` or `gk:CENTRAL_MERIDIAN` (degrees).
+    /// `geodetic`, `utm`, `utm:ZONE`, `gk:CENTRAL_MERIDIAN` (degrees) or `EPSG:CODE`.
     pub fn parse(s: &str) -> Option<Projection> {
+        if let Some(code) = s.get(..5).filter(|p| p.eq_ignore_ascii_case("epsg:")) {
+            return s[code.len()..].parse().ok().map(Projection::Epsg);
+        }
         match s {
             "geodetic" => Some(Projection::Geodetic),
             "utm" => Some(Projection::Utm(None)),
@@ -62,10 +76,11 @@ impl Projection {
         }
     }
 
-    /// The transverse Mercator of this projection near `near` (None for geodetic) and its name.
+    /// The transverse Mercator of this projection near `near` and its name; `None` for
+    /// geodetic and for EPSG codes (see [`Projection::projector`]).
     pub fn mercator(&self, near: &gnss::frame::Geodetic) -> Option<(TransverseMercator, String)> {
         match *self {
-            Projection::Geodetic => None,
+            Projection::Geodetic | Projection::Epsg(_) => None,
             Projection::Utm(z) => {
                 let zone = z.unwrap_or_else(|| TransverseMercator::utm_zone_of(near.lon));
                 let north = near.lat >= 0.0;
@@ -78,6 +93,67 @@ impl Projection {
                 TransverseMercator::gauss_kruger(cm),
                 format!("Gauss-Krueger CM {cm}"),
             )),
+        }
+    }
+
+    /// The projection near `near` (`None` for geodetic); an error naming the code when an
+    /// EPSG code is unknown or not projected.
+    pub fn projector(&self, near: &gnss::frame::Geodetic) -> Result<Option<Projector>> {
+        let odm = match *self {
+            Projection::Geodetic => return Ok(None),
+            Projection::Epsg(code) => {
+                let p = EpsgProjection::new(code).map_err(gnss::error::Error::NoData)?;
+                return Ok(Some(Projector {
+                    name: p.name(),
+                    odm: format!("EPSG:{code}"),
+                    kind: ProjectorKind::Epsg(Box::new(p)),
+                }));
+            }
+            Projection::Utm(z) => {
+                let zone = z.unwrap_or_else(|| TransverseMercator::utm_zone_of(near.lon));
+                format!("WGS84 UTM {zone}{}", if near.lat >= 0.0 { "N" } else { "S" })
+            }
+            Projection::GaussKruger(cm) => format!(
+                "+proj=tmerc +lat_0=0 +lon_0={cm} +k=1 +x_0=500000 +y_0=0 +datum=WGS84 +units=m +no_defs"
+            ),
+        };
+        let (tm, name) = self
+            .mercator(near)
+            .expect("a transverse Mercator projection");
+        Ok(Some(Projector {
+            kind: ProjectorKind::Tm(tm),
+            name,
+            odm,
+        }))
+    }
+}
+
+/// A projection ready to use, with its names.
+#[derive(Debug)]
+pub struct Projector {
+    kind: ProjectorKind,
+    /// The name people read in headers.
+    pub name: String,
+    /// The first line of an OpenDroneMap `geo.txt`, in a form ODM parses: `EPSG:CODE`,
+    /// `WGS84 UTM <zone><N|S>` or a PROJ string.
+    pub odm: String,
+}
+
+#[derive(Debug)]
+enum ProjectorKind {
+    Tm(TransverseMercator),
+    Epsg(Box<EpsgProjection>),
+}
+
+impl Projector {
+    /// Easting and northing (metres) of a WGS84 position.
+    pub fn forward(&self, g: &gnss::frame::Geodetic) -> Result<(f64, f64)> {
+        match &self.kind {
+            ProjectorKind::Tm(t) => {
+                let Projected { easting, northing } = t.forward(g);
+                Ok((easting, northing))
+            }
+            ProjectorKind::Epsg(p) => p.forward(g).map_err(gnss::error::Error::NoData),
         }
     }
 }
@@ -97,14 +173,27 @@ struct Row {
     flags: String,
 }
 
-fn rows(st: &[CameraStation], proj: Projection) -> (Vec<Row>, String) {
-    let tm = st
-        .first()
-        .and_then(|s| proj.mercator(&s.centre.to_geodetic()));
-    let crs = tm
-        .as_ref()
-        .map(|t| t.1.clone())
-        .unwrap_or_else(|| "WGS84 geodetic (EPSG:4326), ellipsoidal heights".into());
+/// The names of the output's coordinate system: for people, and for ODM's first line.
+struct CrsNames {
+    name: String,
+    odm: String,
+}
+
+fn rows(st: &[CameraStation], proj: Projection) -> Result<(Vec<Row>, CrsNames)> {
+    let tm = match st.first() {
+        Some(s) => proj.projector(&s.centre.to_geodetic())?,
+        None => None,
+    };
+    let names = match &tm {
+        Some(p) => CrsNames {
+            name: format!("{}, ellipsoidal heights (WGS84)", p.name),
+            odm: p.odm.clone(),
+        },
+        None => CrsNames {
+            name: "WGS84 geodetic (EPSG:4326), ellipsoidal heights".into(),
+            odm: "EPSG:4326".into(),
+        },
+    };
     let out = st
         .iter()
         .map(|s| {
@@ -112,10 +201,7 @@ fn rows(st: &[CameraStation], proj: Projection) -> (Vec<Row>, String) {
             let r = enu_rotation(&g);
             let c = r * s.cov * r.transpose();
             let (x, y) = match &tm {
-                Some((t, _)) => {
-                    let Projected { easting, northing } = t.forward(&g);
-                    (easting, northing)
-                }
+                Some(p) => p.forward(&g)?,
                 None => (g.lat.to_degrees(), g.lon.to_degrees()),
             };
             let photo::rotation::Angles::YawPitchRoll { yaw, pitch, roll } =
@@ -125,7 +211,7 @@ fn rows(st: &[CameraStation], proj: Projection) -> (Vec<Row>, String) {
             };
             let opk = omega_phi_kappa(&s.rotation);
             let (week, tow) = gnss::time::week_tow(s.time);
-            Row {
+            Ok(Row {
                 id: s.id.clone(),
                 week,
                 tow,
@@ -145,34 +231,38 @@ fn rows(st: &[CameraStation], proj: Projection) -> (Vec<Row>, String) {
                 ],
                 opk: opk.map(f64::to_degrees),
                 flags: s.flags.join("; "),
-            }
+            })
         })
-        .collect();
-    (out, crs)
+        .collect::<Result<_>>()?;
+    Ok((out, names))
 }
 
 /// Write stations in a format.
 pub fn write(path: &Path, st: &[CameraStation], format: Format, proj: Projection) -> Result<()> {
     let text_format: TextFormat = match format {
-        Format::Pos => return write_centres_pos(path, st),
+        Format::Pos => return write_centres(path, st, TrajectoryFormat::Pos(PosFormat::Llh)),
+        Format::Kml => return write_centres(path, st, TrajectoryFormat::Kml),
+        Format::GeoJson => return write_centres(path, st, TrajectoryFormat::GeoJson),
+        Format::Gpx => return write_centres(path, st, TrajectoryFormat::Gpx),
         Format::Antenna => return write_antenna(path, st),
         Format::Metashape => write_metashape,
         Format::Pix4d => write_pix4d,
         Format::Odm => write_odm,
         Format::Csv => write_csv,
     };
-    let (rows, crs) = rows(st, proj);
+    let (rows, crs) = rows(st, proj)?;
     let geo = proj == Projection::Geodetic;
     write_atomic(path, |w| text_format(w, &rows, &crs, geo))
 }
 
-/// A writer of one text layout: the rows, the name of their coordinate system, and whether
+/// A writer of one text layout: the rows, the names of their coordinate system, and whether
 /// they are geodetic (x = latitude, y = longitude, degrees) rather than projected (easting,
 /// northing, metres).
-type TextFormat = fn(&mut dyn Write, &[Row], &str, bool) -> std::io::Result<()>;
+type TextFormat = fn(&mut dyn Write, &[Row], &CrsNames, bool) -> std::io::Result<()>;
 
-/// The projection centres as an RTKLIB `.pos` (llh) with their ECEF covariance.
-fn write_centres_pos(path: &Path, st: &[CameraStation]) -> Result<()> {
+/// The projection centres as an RTKLIB `.pos` (llh) with their ECEF covariance, or as KML,
+/// GeoJSON or GPX named by the station labels.
+fn write_centres(path: &Path, st: &[CameraStation], format: TrajectoryFormat) -> Result<()> {
     let recs: Vec<PosRecord> = st
         .iter()
         .map(|s| PosRecord {
@@ -185,18 +275,20 @@ fn write_centres_pos(path: &Path, st: &[CameraStation]) -> Result<()> {
             ratio: 0.0,
         })
         .collect();
-    write_pos(
-        path,
-        &["program   : ppkat exposures (projection centres)".to_string()],
-        &recs,
-        PosFormat::Llh,
-    )
+    let names: Vec<String> = st.iter().map(|s| s.id.clone()).collect();
+    let header = ["program   : ppkat exposures (projection centres)".to_string()];
+    crate::vector::write_named(path, &header, &recs, &names, format)
 }
 
 /// Metashape reference CSV: label, longitude/latitude (or easting/northing), altitude,
 /// sigmas, yaw/pitch/roll.
-fn write_metashape(w: &mut dyn Write, rows: &[Row], crs: &str, geo: bool) -> std::io::Result<()> {
-    writeln!(w, "# ppkat camera stations; {crs}")?;
+fn write_metashape(
+    w: &mut dyn Write,
+    rows: &[Row],
+    crs: &CrsNames,
+    geo: bool,
+) -> std::io::Result<()> {
+    writeln!(w, "# ppkat camera stations; {}", crs.name)?;
     if geo {
         writeln!(
             w,
@@ -221,7 +313,7 @@ fn write_metashape(w: &mut dyn Write, rows: &[Row], crs: &str, geo: bool) -> std
 
 /// Pix4D image geolocation CSV: name, coordinates, altitude, ω-φ-κ, horizontal and vertical
 /// accuracy.
-fn write_pix4d(w: &mut dyn Write, rows: &[Row], _crs: &str, geo: bool) -> std::io::Result<()> {
+fn write_pix4d(w: &mut dyn Write, rows: &[Row], _crs: &CrsNames, geo: bool) -> std::io::Result<()> {
     writeln!(
         w,
         "imagename,{},altitude,omega,phi,kappa,accuracy_horz,accuracy_vert",
@@ -242,10 +334,11 @@ fn write_pix4d(w: &mut dyn Write, rows: &[Row], _crs: &str, geo: bool) -> std::i
     Ok(())
 }
 
-/// OpenDroneMap `geo.txt`: the projection line, then image geo_x geo_y geo_z omega phi kappa
-/// horizontal and vertical accuracy.
-fn write_odm(w: &mut dyn Write, rows: &[Row], crs: &str, geo: bool) -> std::io::Result<()> {
-    writeln!(w, "{}", if geo { "EPSG:4326" } else { crs })?;
+/// OpenDroneMap `geo.txt`: the projection line as ODM parses it (`EPSG:CODE`, `WGS84 UTM
+/// <zone><N|S>` or a PROJ string), then image geo_x geo_y geo_z omega phi kappa horizontal
+/// and vertical accuracy.
+fn write_odm(w: &mut dyn Write, rows: &[Row], crs: &CrsNames, geo: bool) -> std::io::Result<()> {
+    writeln!(w, "{}", crs.odm)?;
     for r in rows {
         let (a, b) = if geo { (r.y, r.x) } else { (r.x, r.y) };
         let sh = r.sigma_enu[0].hypot(r.sigma_enu[1]);
@@ -259,7 +352,8 @@ fn write_odm(w: &mut dyn Write, rows: &[Row], crs: &str, geo: bool) -> std::io::
 }
 
 /// The full CSV: time, coordinates, ENU sigmas, quality, both attitude conventions, flags.
-fn write_csv(w: &mut dyn Write, rows: &[Row], crs: &str, geo: bool) -> std::io::Result<()> {
+fn write_csv(w: &mut dyn Write, rows: &[Row], crs: &CrsNames, geo: bool) -> std::io::Result<()> {
+    let crs = &crs.name;
     writeln!(w, "# ppkat camera stations (projection centres), GPST; {crs}; sigmas ENU (m); Q as RTKLIB; angles degrees, R camera->ENU, omega/phi/kappa: R = Rw*Rp*Rk")?;
     writeln!(
         w,

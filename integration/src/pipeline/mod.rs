@@ -13,7 +13,7 @@ pub use crate::orbits::{check_overlap, load_orbits};
 use gnss::error::{Error, Result};
 use gnss::obs::ObsFormat;
 use gnss::rinex::ObsFile;
-use gnss::solution::{write_pos, PosFormat, PosRecord, Quality};
+use gnss::solution::{PosRecord, Quality};
 use gnss::spp::{SppOptions, SppRun};
 use gnss::time::format_ymdhms;
 use hifitime::Epoch;
@@ -38,8 +38,8 @@ pub struct SppJob {
     pub clk: Vec<PathBuf>,
     /// Processing options.
     pub options: SppOptions,
-    /// Coordinates of the `.pos` written.
-    pub format: PosFormat,
+    /// Layout of the trajectory written (`.pos` llh/xyz, KML, GeoJSON, GPX).
+    pub format: crate::vector::TrajectoryFormat,
     /// Output `.pos`.
     pub out: PathBuf,
 }
@@ -156,7 +156,7 @@ pub fn spp(job: &SppJob) -> Result<SppReport> {
     for n in job.nav.iter().chain(&job.sp3).chain(&job.clk).rev() {
         header.insert(2, format!("inp file  : {}", n.display()));
     }
-    write_pos(&job.out, &header, &records, job.format)?;
+    crate::vector::write(&job.out, &header, &records, job.format)?;
     Ok(SppReport {
         epochs: obs.epochs.len(),
         solved: records.len(),
@@ -226,10 +226,12 @@ pub struct PpkJob {
     pub base_from_ppp: bool,
     /// Processing options.
     pub options: gnss::ppk::PpkOptions,
-    /// Coordinates of the `.pos` written.
-    pub format: PosFormat,
+    /// Layout of the trajectory written (`.pos` llh/xyz, KML, GeoJSON, GPX).
+    pub format: crate::vector::TrajectoryFormat,
     /// Output `.pos`.
     pub out: PathBuf,
+    /// The quality report to write (HTML), if any.
+    pub report: Option<PathBuf>,
 }
 
 /// What a carrier-phase run did.
@@ -241,6 +243,8 @@ pub struct PpkReport {
     pub out: PathBuf,
     /// The static summary written beside it (`OUT.pos.json`; static runs only).
     pub summary: Option<PathBuf>,
+    /// The quality report written (HTML), when asked for.
+    pub report: Option<PathBuf>,
     /// The point of the rover the positions describe.
     pub refer: gnss::ppk::Reference,
     /// Problems with the inputs and the run.
@@ -349,10 +353,8 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
             "systems   : {}",
             o.systems.iter().map(|s| s.letter()).collect::<String>()
         ),
-        format!(
-            "ref pos   : {:.4} {:.4} {:.4} (ECEF, base marker)",
-            b.0.x, b.0.y, b.0.z
-        ),
+        gnss::solution::ref_pos_line(&b, job.format.pos_format()),
+        "ref point : base marker, in the coordinates of the body (RTKLIB's layout)".into(),
         base_line.unwrap_or_else(|| "base from : given position or the base header".into()),
         format!(
             "epochs    : {} rover, {} solved, {} fixed",
@@ -361,7 +363,8 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
             result.fixed()
         ),
     ];
-    result.trajectory.write_pos(&job.out, &header, job.format)?;
+    let records = result.trajectory.records();
+    crate::vector::write(&job.out, &header, &records, job.format)?;
     let mut summary = None;
     if let Some(st) = &result.static_solution {
         let path = summary_path(&job.out);
@@ -369,16 +372,29 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
         gnss::solution::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
         summary = Some(path);
     }
-    Ok(PpkReport {
+    let mut report = PpkReport {
         result,
         summary,
+        report: None,
         refer: o.refer,
         read_seconds,
         process_seconds,
         out: job.out.clone(),
         warnings,
         seconds: t0.elapsed().as_secs_f64(),
-    })
+    };
+    if let Some(path) = &job.report {
+        let events: Vec<Epoch> = rover
+            .events
+            .iter()
+            .filter(|e| e.flag == 5)
+            .filter_map(|e| e.time)
+            .collect();
+        report.report = Some(path.clone());
+        let page = crate::ppk_report::html(&report, &header, &events);
+        gnss::solution::write_atomic(path, |w| w.write_all(page.as_bytes()))?;
+    }
+    Ok(report)
 }
 
 impl fmt::Display for PpkReport {
@@ -452,6 +468,9 @@ impl fmt::Display for PpkReport {
             if let Some(p) = &self.summary {
                 writeln!(f, "  summary → {}", p.display())?;
             }
+        }
+        if let Some(p) = &self.report {
+            writeln!(f, "  report → {}", p.display())?;
         }
         for w in self.warnings.iter().take(20) {
             writeln!(f, "  warning: {w}")?;
