@@ -13,7 +13,7 @@ use gnss::orbit::{ClockSource, Orbits};
 use gnss::ppk::{Motion, Reference};
 use gnss::ppp::{PppOptions, PppResult};
 use gnss::rinex::ObsFile;
-use gnss::solution::{write_atomic, write_pos, PosFormat, PosRecord, Quality};
+use gnss::solution::{write_atomic, PosRecord, Quality};
 use gnss::spp::{solve_epoch, SppOptions};
 use gnss::time::format_ymdhms;
 use nalgebra::Matrix3;
@@ -36,8 +36,8 @@ pub struct PppJob {
     pub antex: Vec<PathBuf>,
     /// Options (the ANTEX files are filled in from `antex`).
     pub options: PppOptions,
-    /// Coordinates of the `.pos`.
-    pub format: PosFormat,
+    /// Layout of the trajectory file (`.pos` in llh or xyz, KML, GeoJSON, GPX).
+    pub format: crate::vector::TrajectoryFormat,
     /// Output `.pos`.
     pub out: PathBuf,
 }
@@ -130,7 +130,7 @@ pub fn ppp(job: &PppJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PppReport>
         seconds: 0.0,
         header_position: header_point(&obs, options.refer),
     };
-    write_pos(&job.out, &report.header(job), &report.records(), job.format)?;
+    crate::vector::write(&job.out, &report.header(job), &report.records(), job.format)?;
     let mut report = report;
     if let Some(json) = report.json() {
         let path = side_path(&job.out, ".json");

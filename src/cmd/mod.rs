@@ -53,24 +53,6 @@ pub fn complete(skipped: Vec<String>) -> Result<()> {
     }
 }
 
-/// Coordinates written into a `.pos` file.
-#[derive(Clone, Copy, ValueEnum)]
-pub enum PosFormatArg {
-    /// Latitude, longitude (degrees), ellipsoidal height (m)
-    Llh,
-    /// Earth-centred, Earth-fixed X, Y, Z (m)
-    Xyz,
-}
-
-impl From<PosFormatArg> for PosFormat {
-    fn from(f: PosFormatArg) -> PosFormat {
-        match f {
-            PosFormatArg::Llh => PosFormat::Llh,
-            PosFormatArg::Xyz => PosFormat::Xyz,
-        }
-    }
-}
-
 /// The format of an observation input.
 #[derive(Clone, Copy, ValueEnum)]
 pub enum ObsFormatArg {

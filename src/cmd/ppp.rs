@@ -1,6 +1,6 @@
 //! `ppkat ppp`: precise point positioning of one receiver.
 
-use super::{elev_mask, systems, PosFormatArg};
+use super::{elev_mask, systems, TrajectoryFormatArg};
 use anyhow::{Context, Result};
 use clap::ValueEnum;
 use integration::gnss::ppk::{Motion, Reference};
@@ -69,9 +69,10 @@ pub struct Args {
     /// Elevation mask, degrees (0 to 90).
     #[arg(long, value_name = "DEG", default_value_t = 10.0)]
     elev_mask: f64,
-    /// Coordinates written into the .pos file.
+    /// Layout of the output: RTKLIB .pos in ECEF (xyz) or geodetic (llh) coordinates, or a
+    /// trajectory for Google Earth (kml), QGIS (geojson) or GPS tools (gpx).
     #[arg(long, value_enum, default_value = "xyz")]
-    format: PosFormatArg,
+    format: TrajectoryFormatArg,
     /// Output .pos file (replaced if it exists; not written on failure).
     #[arg(short = 'o', long, value_name = "OUT.pos")]
     out: PathBuf,

@@ -242,6 +242,32 @@ fn ppp_static_and_ppk_base_from_ppp() {
         "the last line is the final one"
     );
 
+    // Kinematic PPP as GeoJSON: a point per epoch besides the track.
+    let gj = tmp("onsa_ppp_kin.geojson");
+    let mut args = vec![
+        "ppp",
+        "--obs",
+        p(&f[0]),
+        "--mode",
+        "kinematic",
+        "--format",
+        "geojson",
+        "-o",
+        p(&gj),
+    ];
+    args.extend(sp3_flags(&f));
+    args.extend(["--antex", p(&atx01), "--antex", p(&atx05)]);
+    succeeds(&ppkat(&args));
+    let g: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&gj).unwrap()).unwrap();
+    let points = g["features"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|f| f["geometry"]["type"] == "Point")
+        .count();
+    assert_eq!(points, 2880);
+
     let zb = tmp("onsa_zero_baseline.pos");
     let mut args = vec![
         "ppk",
