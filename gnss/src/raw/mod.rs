@@ -23,6 +23,7 @@ pub mod records;
 pub mod rtcm;
 pub mod rtcm_items;
 pub mod rtcm_msm;
+pub mod rtcm_write;
 pub mod source;
 pub mod ubx;
 pub mod ubx_nav;

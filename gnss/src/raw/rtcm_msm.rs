@@ -193,6 +193,41 @@ fn field_bits(kind: u8) -> (usize, usize, usize, usize, bool) {
     }
 }
 
+/// Satellite data of an MSM from bit `pos`: rough ranges (ms), extended information and rough
+/// phase range rates (m/s); `None` where flagged invalid. Returns the bit after them too.
+type SatData = (Vec<Option<f64>>, Vec<u8>, Vec<Option<f64>>, usize);
+
+fn sat_data(p: &[u8], mut pos: usize, ns: usize, rates: bool) -> SatData {
+    let mut rough = vec![None; ns];
+    let mut ext = vec![15u8; ns];
+    let mut rough_rate = vec![None; ns];
+    for (s, r) in rough.iter_mut().enumerate() {
+        let int = bits_u(p, pos + 8 * s, 8);
+        *r = (int != 255).then_some(int as f64);
+    }
+    pos += 8 * ns;
+    if rates {
+        for (s, e) in ext.iter_mut().enumerate() {
+            *e = bits_u(p, pos + 4 * s, 4) as u8;
+        }
+        pos += 4 * ns;
+    }
+    for (s, r) in rough.iter_mut().enumerate() {
+        if let Some(v) = r.as_mut() {
+            *v += bits_u(p, pos + 10 * s, 10) as f64 / 1024.0;
+        }
+    }
+    pos += 10 * ns;
+    if rates {
+        for (s, r) in rough_rate.iter_mut().enumerate() {
+            let v = bits_s(p, pos + 14 * s, 14);
+            *r = (v != -8192).then_some(v as f64);
+        }
+        pos += 14 * ns;
+    }
+    (rough, ext, rough_rate, pos)
+}
+
 /// Decode an MSM payload; `None` when it is not an MSM or is shorter than its masks announce.
 pub fn decode_msm(p: &[u8]) -> Option<Msm> {
     let (sys, kind) = msm_kind(super::rtcm::message_number(p))?;
@@ -228,33 +263,7 @@ pub fn decode_msm(p: &[u8]) -> Option<Msm> {
     if pos + ns * sat_bits + nc * cell_bits > p.len() * 8 {
         return None;
     }
-    let mut rough = vec![None; ns];
-    let mut ext = vec![15u8; ns];
-    let mut rough_rate = vec![None; ns];
-    for (s, r) in rough.iter_mut().enumerate() {
-        let int = bits_u(p, pos + 8 * s, 8);
-        *r = (int != 255).then_some(int as f64);
-    }
-    pos += 8 * ns;
-    if rates {
-        for (s, e) in ext.iter_mut().enumerate() {
-            *e = bits_u(p, pos + 4 * s, 4) as u8;
-        }
-        pos += 4 * ns;
-    }
-    for (s, r) in rough.iter_mut().enumerate() {
-        if let Some(v) = r.as_mut() {
-            *v += bits_u(p, pos + 10 * s, 10) as f64 / 1024.0;
-        }
-    }
-    pos += 10 * ns;
-    if rates {
-        for (s, r) in rough_rate.iter_mut().enumerate() {
-            let v = bits_s(p, pos + 14 * s, 14);
-            *r = (v != -8192).then_some(v as f64);
-        }
-        pos += 14 * ns;
-    }
+    let (rough, ext, rough_rate, pos) = sat_data(p, pos, ns, rates);
     let field = |base: usize, n: usize, k: usize, signed: bool| -> i64 {
         if signed {
             bits_s(p, base + n * k, n) as i64
