@@ -327,7 +327,7 @@ pub fn decode_msm(p: &[u8]) -> Option<Msm> {
 }
 
 /// GPS − UTC leap seconds at a GPST time (ms since the GPS epoch), from 2009 on.
-fn leap_seconds(t_ms: i64) -> i64 {
+pub(crate) fn leap_seconds(t_ms: i64) -> i64 {
     let week = t_ms / WEEK_MS;
     match week {
         w if w >= 1930 => 18,

@@ -11,8 +11,10 @@
 use super::bits::set_bits;
 use super::rtcm::frame;
 use super::rtcm_msm::{lock_ms, lock_ms_ext, msm_code, msm_number, RANGE_MS};
+use crate::rinex::ObsFile;
 use crate::signal::frequency;
-use crate::sv::Constellation;
+use crate::sv::{Constellation, Sv};
+use std::collections::HashMap;
 
 /// One signal to encode.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -244,4 +246,137 @@ pub fn station_1005(x: [f64; 3]) -> Vec<u8> {
     w.put(2, 0);
     w.put(38, c(x[2]));
     frame(&w.buf)
+}
+
+/// The 30-bit MSM epoch field of GPST `t_ms` (ms since the GPS epoch) for a system.
+pub fn epoch_field(sys: Constellation, t_ms: i64) -> u32 {
+    use super::rtcm_msm::{leap_seconds, WEEK_MS};
+    (match sys {
+        Constellation::Glonass => {
+            let utc = t_ms - leap_seconds(t_ms) * 1000;
+            (utc + 10_800_000).rem_euclid(86_400_000)
+        }
+        Constellation::BeiDou => (t_ms - 14_000).rem_euclid(WEEK_MS),
+        _ => t_ms.rem_euclid(WEEK_MS),
+    }) as u32
+}
+
+/// The observations of `obs` as an RTCM 3 log: 1005 (the header's approximate position),
+/// 1019 (the week), 1020 (GLONASS channels), then one MSM7 per system and epoch; and how many
+/// measurements RTCM could not carry (a code without an MSM signal id, no pseudorange).
+/// Lock times grow with the epochs and restart at an LLI slip; the half-cycle flag is LLI bit 1.
+/// Each lock arc's phase is shifted by the whole cycles that bring it near the pseudorange
+/// (a constant integer per arc, which ambiguity resolution absorbs).
+pub fn rtcm_from_obs(obs: &ObsFile) -> (Vec<u8>, u64) {
+    let mut out = Vec::new();
+    if let Some(p) = obs.header.approx_position {
+        out.extend(station_1005([p.0.x, p.0.y, p.0.z]));
+    }
+    let t_ms =
+        |e: &crate::rinex::ObsEpoch| (e.time.to_gpst_nanoseconds().unwrap_or(0) / 1_000_000) as i64;
+    if let Some(e) = obs.epochs.first() {
+        let t = t_ms(e);
+        let week = (t / super::rtcm_msm::WEEK_MS) as u16;
+        let tow = (t % super::rtcm_msm::WEEK_MS / 1000) as u32;
+        out.extend(week_1019(week, tow / 16 * 16));
+    }
+    for (&slot, &ch) in &obs.header.glonass_channels {
+        out.extend(channel_1020(slot, ch));
+    }
+    let mut locks: HashMap<(Sv, [u8; 2]), (u64, f64)> = HashMap::new();
+    let mut last_t: Option<i64> = None;
+    let mut dropped = 0u64;
+    let systems = [
+        Constellation::Gps,
+        Constellation::Glonass,
+        Constellation::Galileo,
+        Constellation::Qzss,
+        Constellation::BeiDou,
+    ];
+    for e in &obs.epochs {
+        let t = t_ms(e);
+        let dt = last_t.map_or(0, |l| (t - l).max(0) as u64);
+        last_t = Some(t);
+        let present: Vec<Constellation> = systems
+            .into_iter()
+            .filter(|s| e.sats.iter().any(|x| x.sv.sys == *s))
+            .collect();
+        for (n, &sys) in present.iter().enumerate() {
+            let types = obs
+                .header
+                .obs_types
+                .get(&sys)
+                .map_or(&[][..], |v| v.as_slice());
+            let mut sats = Vec::new();
+            for s in e.sats.iter().filter(|s| s.sv.sys == sys) {
+                let ch = obs.header.glonass_channels.get(&s.sv.prn).copied();
+                let mut sigs = Vec::new();
+                let mut codes: Vec<[u8; 2]> =
+                    types.iter().map(|t| [t.band(), t.attribute()]).collect();
+                codes.sort_unstable();
+                codes.dedup();
+                for code in codes {
+                    let col = |k: u8| {
+                        types
+                            .iter()
+                            .position(|t| t.0 == [k, code[0], code[1]])
+                            .and_then(|i| s.obs.get(i))
+                            .map_or((f64::NAN, 0), |o| (o.value, o.lli))
+                    };
+                    let (pr, _) = col(b'C');
+                    let (cp, lli) = col(b'L');
+                    if pr.is_nan() {
+                        dropped += u64::from(!cp.is_nan());
+                        continue;
+                    }
+                    let Some(id) =
+                        (1..=32).find(|&i| super::rtcm_msm::msm_code(sys, i) == Some(code))
+                    else {
+                        dropped += 1;
+                        continue;
+                    };
+                    // whole cycles taken off the phase (per lock arc, as encoders do) so that
+                    // it stays within the message's reach of the pseudorange
+                    let shift = (cp - pr / lambda(sys, id, ch)).round();
+                    let (lock, off) = locks.entry((s.sv, code)).or_insert((600_000, shift));
+                    if lli & 1 != 0 || !off.is_finite() {
+                        (*lock, *off) = (if lli & 1 != 0 { 0 } else { *lock }, shift);
+                    } else {
+                        *lock += dt;
+                    }
+                    let cp = if off.is_finite() { cp - *off } else { cp };
+                    sigs.push(MsmSignal {
+                        id,
+                        pr,
+                        cp,
+                        doppler: col(b'D').0,
+                        cno: col(b'S').0,
+                        lock_ms: *lock,
+                        half: lli & 2 != 0,
+                    });
+                }
+                if !sigs.is_empty() {
+                    sats.push(MsmSat {
+                        id: s.sv.prn,
+                        glo_channel: ch,
+                        sigs,
+                    });
+                }
+            }
+            let mut ids: Vec<u8> = sats
+                .iter()
+                .flat_map(|s: &MsmSat| s.sigs.iter().map(|g| g.id))
+                .collect();
+            ids.sort_unstable();
+            ids.dedup();
+            // at most 64 cells (satellites × signals) per message
+            let per = (64 / ids.len().max(1)).max(1);
+            let chunks: Vec<&[MsmSat]> = sats.chunks(per).collect();
+            for (k, c) in chunks.iter().enumerate() {
+                let more = n + 1 < present.len() || k + 1 < chunks.len();
+                out.extend(msm(sys, 7, epoch_field(sys, t), more, c));
+            }
+        }
+    }
+    (out, dropped)
 }
