@@ -62,3 +62,47 @@ fn ppk_from_ubx_logs_equals_ppk_from_rinex() {
     );
     assert!(worst <= 1e-3, "{worst} m");
 }
+
+#[test]
+fn ppk_from_rtcm_logs_equals_ppk_from_rinex() {
+    let mut s = simulate::builtin("demo").unwrap();
+    s.flight.strips = 1;
+    s.flight.strip_length = 1000.0;
+    let rep = simulate::run(&s, &tmp("flight-rtcm")).unwrap();
+    let (rover_rtcm, base_rtcm, dropped) = simulate::write_rtcm(&rep).unwrap();
+    assert_eq!(
+        dropped, 0,
+        "GPS L1/L2 and Galileo E1/E5a all have MSM signal ids"
+    );
+
+    let rinex = SimInputs::read(&rep).unwrap();
+    let rover = read_obs(&rover_rtcm, None).unwrap();
+    let base = read_obs(&base_rtcm, None).unwrap();
+    assert_eq!(rover.format, ObsFormat::Raw(RawFormat::Rtcm3));
+    let st = rover.raw.as_ref().unwrap();
+    assert_eq!((st.checksum_failures, st.dropped.len()), (0, 0), "{st}");
+    assert_eq!(rover.obs.epochs.len(), rinex.rover.epochs.len());
+    assert_eq!(base.obs.epochs.len(), rinex.base.epochs.len());
+
+    let from_rtcm = SimInputs {
+        rover: rover.obs,
+        base: base.obs,
+        orbits: rinex.orbits.clone(),
+    };
+    let opts = PpkOptions::default();
+    let a = rinex.ppk(&rep, &opts).unwrap();
+    let b = from_rtcm.ppk(&rep, &opts).unwrap();
+    let (ta, tb) = (&a.trajectory.epochs, &b.trajectory.epochs);
+    assert_eq!(ta.len(), tb.len());
+    let mut worst = 0.0f64;
+    for (x, y) in ta.iter().zip(tb) {
+        assert_eq!(x.time, y.time);
+        assert_eq!(x.quality, y.quality, "{:?}", x.time);
+        worst = worst.max((x.pos.0 - y.pos.0).norm());
+    }
+    eprintln!(
+        "PPK from RTCM 3 vs RINEX: {} epochs, worst {worst:.1e} m",
+        ta.len()
+    );
+    assert!(worst <= 1e-3, "{worst} m");
+}

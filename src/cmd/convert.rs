@@ -13,6 +13,8 @@ pub enum FormatArg {
     Auto,
     /// u-blox UBX (RXM-RAWX measurements, TIM-TM2 time marks)
     Ubx,
+    /// RTCM 3 (MSM4/5/6/7 observations, 1020 GLONASS channels, 1005/1006 station position)
+    Rtcm3,
 }
 
 /// Convert a raw receiver log to a RINEX 3.04 observation file with flag-5 event records.
@@ -51,6 +53,7 @@ pub fn run(a: Args) -> Result<()> {
     let format = match a.format {
         FormatArg::Auto => None,
         FormatArg::Ubx => Some(RawFormat::Ubx),
+        FormatArg::Rtcm3 => Some(RawFormat::Rtcm3),
     };
     let outs = Outputs {
         obs: &a.out,

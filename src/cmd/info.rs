@@ -2,7 +2,7 @@
 
 use super::ObsFormatArg;
 use anyhow::Result;
-use integration::gnss::obs::read_obs;
+use integration::gnss::obs::{read_obs, ObsFormat};
 use integration::gnss::rinex::summary::ObsSummary;
 use std::path::PathBuf;
 
@@ -30,8 +30,11 @@ pub struct Args {
 /// Read the file and print its summary.
 pub fn run(args: Args) -> Result<()> {
     let input = read_obs(&args.file, args.obs_format.into())?;
-    if input.raw.is_some() {
-        println!("u-blox UBX log, described as its RINEX 3.04 conversion (ppkat convert):");
+    if let ObsFormat::Raw(f) = input.format {
+        println!(
+            "{} log, described as its RINEX 3.04 conversion (ppkat convert):",
+            f.name()
+        );
     }
     print!("{}", ObsSummary::of(&input.obs));
     if let Some(st) = &input.raw {

@@ -63,6 +63,8 @@ pub enum ObsFormatArg {
     Rinex,
     /// u-blox UBX log (RXM-RAWX measurements, RXM-SFRBX ephemerides, TIM-TM2 time marks)
     Ubx,
+    /// RTCM 3 log (MSM4/5/6/7 observations), e.g. DJI PPKRAW.bin
+    Rtcm3,
 }
 
 impl From<ObsFormatArg> for Option<ObsFormat> {
@@ -71,6 +73,7 @@ impl From<ObsFormatArg> for Option<ObsFormat> {
             ObsFormatArg::Auto => None,
             ObsFormatArg::Rinex => Some(ObsFormat::Rinex),
             ObsFormatArg::Ubx => Some(ObsFormat::Raw(RawFormat::Ubx)),
+            ObsFormatArg::Rtcm3 => Some(ObsFormat::Raw(RawFormat::Rtcm3)),
         }
     }
 }

@@ -42,6 +42,8 @@ pub struct Args {
 pub enum RawArg {
     /// u-blox UBX: RXM-RAWX measurements, TIM-TM2 time marks
     Ubx,
+    /// RTCM 3: MSM7 per system and epoch, 1005, 1019 (week), 1020 (GLONASS channels); no events
+    Rtcm3,
 }
 
 /// Simulate the built-in project or the flight scenario named by the arguments and print the
@@ -65,6 +67,14 @@ pub fn run(args: Args) -> Result<()> {
     let s = scenario(args.scenario.as_deref(), args.builtin.as_deref())?;
     let rep = simulate::run(&s, &args.out)?;
     print!("{rep}");
+    if let Some(RawArg::Rtcm3) = args.raw {
+        let (rover, base, dropped) = simulate::write_rtcm(&rep)?;
+        println!(
+            "raw logs: {} and {} (RTCM 3; {dropped} measurements RTCM cannot carry)",
+            rover.display(),
+            base.display()
+        );
+    }
     if let Some(RawArg::Ubx) = args.raw {
         let (rover, base, dropped) = simulate::write_ubx(&rep)?;
         println!(

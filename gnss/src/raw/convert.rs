@@ -46,7 +46,10 @@ pub fn convert(input: &Path, format: Option<RawFormat>, outs: Outputs) -> Result
     let h = HeaderOut {
         program: "ppkat convert".into(),
         comments: vec![
-            "format: u-blox UBX".into(),
+            format!(
+                "format: {}",
+                format.map_or("raw log (detected)", RawFormat::name)
+            ),
             format!(
                 "log: {}",
                 input.file_name().unwrap_or_default().to_string_lossy()

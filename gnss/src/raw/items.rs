@@ -118,15 +118,18 @@ pub fn for_each_item(
             let fm = detect(&head).ok_or_else(|| {
                 Error::input(
                     path,
-                    "no UBX frame (B5 62 with a valid checksum) in the first 64 KiB: not a \
-                     u-blox log; give a UBX log, or --format ubx to read it anyway",
+                    "no UBX frame (B5 62 with a valid checksum) nor RTCM 3 frame (D3 with a \
+                     valid CRC) in the first 64 KiB: not a raw log ppkat reads; give a UBX or \
+                     RTCM 3 log, or --format ubx|rtcm3 to read it anyway",
                 )
             })?;
             file = BufReader::new(File::open(path).map_err(io)?);
             fm
         }
     };
-    let RawFormat::Ubx = format;
+    if format == RawFormat::Rtcm3 {
+        return super::rtcm_items::for_each_rtcm(path, f);
+    }
     let mut r = FrameReader::new(file);
     let mut st = RawStats::default();
     let mut conv = RawxConverter::new();

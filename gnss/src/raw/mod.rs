@@ -3,12 +3,16 @@
 //! What enters: the bytes of a receiver log. What leaves: observation epochs in the records of
 //! [`crate::rinex`] ([`ObsEpoch`](crate::rinex::ObsEpoch), [`SatObs`](crate::rinex::SatObs)) (so that the RINEX writer and every engine take them as they take a
 //! RINEX file), camera events, and [`RawStats`] counting everything that was dropped.
-//! Uses [`crate::rinex::write`] to write RINEX. Only u-blox UBX ([`ubx`]) for now.
+//! Uses [`crate::rinex::write`] to write RINEX. Formats: u-blox UBX ([`ubx`]) and RTCM 3
+//! MSM observations ([`rtcm`], [`rtcm_msm`], [`rtcm_items`]).
 //!
 //! The UBX decoder is our own rather than the `ublox` crate: the conversion must reproduce
 //! RTKLIB convbin bit for bit (its loss-of-lock rules need the raw `trkStat`, `locktime` and
 //! `cpStdev` fields), bad frames must be counted rather than skipped inside a crate, and the
 //! frame format (sync, class, id, length, payload, Fletcher checksum) is a few dozen lines.
+//! The RTCM 3 decoder is our own for the same reasons (CRC failures counted, lock-time
+//! indicators kept raw for the loss-of-lock rule) and because the frame and MSM layouts are
+//! short; it reuses [`bits`] (bit fields, CRC-24Q) already written for navigation messages.
 
 pub mod bits;
 pub mod convert;
@@ -16,6 +20,10 @@ pub mod inav;
 pub mod items;
 pub mod lnav;
 pub mod records;
+pub mod rtcm;
+pub mod rtcm_items;
+pub mod rtcm_msm;
+pub mod rtcm_write;
 pub mod source;
 pub mod ubx;
 pub mod ubx_nav;
@@ -30,10 +38,23 @@ use std::fmt;
 pub enum RawFormat {
     /// u-blox UBX binary protocol.
     Ubx,
+    /// RTCM 3 (MSM observations), e.g. DJI `PPKRAW.bin`.
+    Rtcm3,
 }
 
-/// The format of a log from its first bytes: UBX when a whole frame with a valid checksum
-/// starts within them. `None` when no known format is recognised.
+impl RawFormat {
+    /// The format's name for reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            RawFormat::Ubx => "u-blox UBX",
+            RawFormat::Rtcm3 => "RTCM 3",
+        }
+    }
+}
+
+/// The format of a log from its first bytes: the format of the first whole frame with a
+/// valid checksum (UBX Fletcher, RTCM 3 CRC-24Q) within them. `None` when no known format is
+/// recognised.
 pub fn detect(head: &[u8]) -> Option<RawFormat> {
     let mut i = 0;
     while i + 8 <= head.len() {
@@ -43,6 +64,9 @@ pub fn detect(head: &[u8]) -> Option<RawFormat> {
             if end <= head.len() && ubx::checksum_ok(&head[i..end]) {
                 return Some(RawFormat::Ubx);
             }
+        }
+        if rtcm::frame_at(head, i) {
+            return Some(RawFormat::Rtcm3);
         }
         i += 1;
     }
@@ -79,6 +103,8 @@ pub struct RawStats {
     pub events: u64,
     /// Navigation messages (subframes, pages) and what became of them.
     pub nav: NavStats,
+    /// The reference station's ECEF position (m) the log announces (RTCM 1005/1006).
+    pub station: Option<[f64; 3]>,
 }
 
 /// What became of the navigation messages of a log: every subframe or page that failed a
@@ -153,6 +179,12 @@ impl fmt::Display for RawStats {
                 n.inconsistent,
                 n.before_week_known,
                 n.incomplete
+            )?;
+        }
+        if let Some([x, y, z]) = self.station {
+            writeln!(
+                f,
+                "station position (RTCM 1005/1006): ECEF {x:.4} {y:.4} {z:.4} m"
             )?;
         }
         if !self.unused.is_empty() {

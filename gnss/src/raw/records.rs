@@ -129,8 +129,9 @@ pub fn span(scan: &Scan, input: &Path) -> Result<(Epoch, Epoch)> {
         (Some(a), Some(b)) => Ok((a, b)),
         _ => Err(Error::input(
             input,
-            "no RXM-RAWX measurement epoch with a known GPS week: enable UBX-RXM-RAWX output \
-             on the receiver, and log after it has acquired time",
+            "no measurement epoch with a known GPS week: for UBX enable RXM-RAWX output on \
+             the receiver and log after it has acquired time; for RTCM 3 log MSM4/5/6/7 \
+             together with an ephemeris message (1019, 1042, 1045 or 1046) that gives the week",
         )),
     }
 }
