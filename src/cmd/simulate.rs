@@ -10,8 +10,9 @@ use std::path::{Path, PathBuf};
 /// folder: rover.obs (10 Hz, flag-5 events at the exposures), base.obs, nav.rnx (a synthetic
 /// constellation), truth_trajectory.csv, truth_exposures.csv, ground_points.csv,
 /// image_observations.csv and truth_blunders.csv; with --raw ubx also rover.ubx and base.ubx,
-/// the same observations as u-blox logs (RXM-RAWX, and TIM-TM2 time marks at the exposures).
-/// The scenario keys are shown in
+/// the same observations as u-blox logs (RXM-RAWX, and TIM-TM2 time marks at the exposures);
+/// with --raw rtcm3 rover.rtcm3 and base.rtcm3, RTCM 3 logs (MSM7, station position 1005; no
+/// events: RTCM carries none). The scenario keys are shown in
 /// fixtures/scenario_small.toml; every error source can be switched under `[errors]`.
 ///
 /// An adjustment project (--builtin classic-block, close-range, block1000 or nav-block: the
