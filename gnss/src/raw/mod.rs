@@ -16,6 +16,7 @@
 
 pub mod bits;
 pub mod convert;
+pub mod frames;
 pub mod inav;
 pub mod items;
 pub mod lnav;

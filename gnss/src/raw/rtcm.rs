@@ -11,6 +11,7 @@
 //! so a corrupted length cannot swallow good frames.
 
 use super::bits::{bits_u, crc24q};
+use super::frames::{FrameScanner, Framing};
 use super::RawStats;
 use std::io::Read;
 
@@ -47,85 +48,33 @@ pub fn message_number(payload: &[u8]) -> u16 {
     bits_u(payload, 0, 12) as u16
 }
 
-/// Reads the frames of a stream in a bounded buffer.
-pub struct FrameReader<R: Read> {
-    src: R,
-    buf: Vec<u8>,
-    start: usize,
-    end: usize,
-    eof: bool,
+/// RTCM 3 framing: `D3`, six zero bits and a 10-bit payload length; CRC-24Q.
+pub struct Rtcm3;
+
+impl Framing for Rtcm3 {
+    const HEADER: usize = 3;
+    const SYNC: u8 = PREAMBLE;
+    fn frame_len(h: &[u8]) -> Option<usize> {
+        (h[0] == PREAMBLE && h[1] & 0xfc == 0).then(|| payload_len(h) + 6)
+    }
+    fn check(frame: &[u8]) -> bool {
+        crc_ok(frame)
+    }
 }
+
+/// Reads the frames of a stream in a bounded buffer.
+pub struct FrameReader<R: Read>(FrameScanner<R, Rtcm3>);
 
 impl<R: Read> FrameReader<R> {
     /// A reader of the frames in `src`.
     pub fn new(src: R) -> Self {
-        FrameReader {
-            src,
-            buf: vec![0; 1 << 16],
-            start: 0,
-            end: 0,
-            eof: false,
-        }
-    }
-
-    /// Make at least `n` bytes available from `start` unless the input ends; returns how many are.
-    fn fill(&mut self, n: usize, stats: &mut RawStats) -> std::io::Result<usize> {
-        while self.end - self.start < n && !self.eof {
-            if self.start > 0 {
-                self.buf.copy_within(self.start..self.end, 0);
-                self.end -= self.start;
-                self.start = 0;
-            }
-            let got = self.src.read(&mut self.buf[self.end..])?;
-            if got == 0 {
-                self.eof = true;
-            }
-            self.end += got;
-            stats.bytes += got as u64;
-        }
-        Ok(self.end - self.start)
+        FrameReader(FrameScanner::new(src, 1 << 16))
     }
 
     /// The payload of the next frame with a valid CRC, or `None` at the end of the input.
     /// Skipped bytes, CRC failures and a truncated last frame are counted in `stats`.
     pub fn next_frame(&mut self, stats: &mut RawStats) -> std::io::Result<Option<&[u8]>> {
-        loop {
-            let avail = self.fill(3, stats)?;
-            if avail < 3 {
-                if avail > 0 {
-                    if self.buf[self.start] == PREAMBLE {
-                        stats.truncated_frames += 1;
-                    }
-                    stats.skipped_bytes += avail as u64;
-                    self.start = self.end;
-                }
-                return Ok(None);
-            }
-            let h = &self.buf[self.start..self.start + 3];
-            if h[0] != PREAMBLE || h[1] & 0xfc != 0 {
-                self.start += 1;
-                stats.skipped_bytes += 1;
-                continue;
-            }
-            let len = payload_len(h);
-            let avail = self.fill(len + 6, stats)?;
-            if avail < len + 6 {
-                stats.truncated_frames += 1;
-                stats.skipped_bytes += avail as u64;
-                self.start = self.end;
-                return Ok(None);
-            }
-            let s = self.start;
-            if !crc_ok(&self.buf[s..s + len + 6]) {
-                stats.checksum_failures += 1;
-                stats.skipped_bytes += 1;
-                self.start += 1;
-                continue;
-            }
-            self.start += len + 6;
-            stats.frames += 1;
-            return Ok(Some(&self.buf[s + 3..s + 3 + len]));
-        }
+        Ok(self.0.next_frame(stats)?.map(|f| &f[3..f.len() - 3]))
     }
 }
 

@@ -10,6 +10,7 @@
 //! checksum over class..payload. A frame with a bad checksum is counted and the search for the
 //! next sync resumes one byte after its start, so a corrupted length cannot swallow good frames.
 
+use super::frames::{FrameScanner, Framing};
 use super::RawStats;
 use std::io::Read;
 
@@ -93,99 +94,38 @@ pub struct Frame<'a> {
     pub payload: &'a [u8],
 }
 
-/// Streams frames out of a reader with a bounded buffer.
-pub struct FrameReader<R: Read> {
-    src: R,
-    buf: Vec<u8>,
-    start: usize,
-    end: usize,
-    eof: bool,
+/// UBX framing: `B5 62`, class, id, a u16 LE payload length; Fletcher checksum.
+pub struct Ubx;
+
+impl Framing for Ubx {
+    const HEADER: usize = 6;
+    const SYNC: u8 = SYNC1;
+    fn frame_len(h: &[u8]) -> Option<usize> {
+        let len = u16::from_le_bytes([h[4], h[5]]) as usize;
+        (h[0] == SYNC1 && h[1] == SYNC2 && len <= MAX_PAYLOAD).then_some(len + 8)
+    }
+    fn check(frame: &[u8]) -> bool {
+        checksum_ok(frame)
+    }
 }
+
+/// Streams frames out of a reader with a bounded buffer.
+pub struct FrameReader<R: Read>(FrameScanner<R, Ubx>);
 
 impl<R: Read> FrameReader<R> {
     /// A reader of the frames in `src`.
     pub fn new(src: R) -> Self {
-        FrameReader {
-            src,
-            buf: vec![0; 1 << 17],
-            start: 0,
-            end: 0,
-            eof: false,
-        }
-    }
-
-    /// Make at least `n` bytes available from `start` unless the input ends; returns how many are.
-    fn fill(&mut self, n: usize, stats: &mut RawStats) -> std::io::Result<usize> {
-        while self.end - self.start < n && !self.eof {
-            if self.start > 0 {
-                self.buf.copy_within(self.start..self.end, 0);
-                self.end -= self.start;
-                self.start = 0;
-            }
-            let got = self.src.read(&mut self.buf[self.end..])?;
-            if got == 0 {
-                self.eof = true;
-            }
-            self.end += got;
-            stats.bytes += got as u64;
-        }
-        Ok(self.end - self.start)
+        FrameReader(FrameScanner::new(src, 1 << 17))
     }
 
     /// The next frame with a valid checksum, or `None` at the end of the input. Skipped bytes,
     /// checksum failures and a truncated last frame are counted in `stats`.
     pub fn next_frame(&mut self, stats: &mut RawStats) -> std::io::Result<Option<Frame<'_>>> {
-        loop {
-            let avail = self.fill(6, stats)?;
-            if avail < 6 {
-                self.finish_short(avail, stats);
-                return Ok(None);
-            }
-            let h = &self.buf[self.start..self.start + 6];
-            if h[0] != SYNC1 || h[1] != SYNC2 {
-                self.start += 1;
-                stats.skipped_bytes += 1;
-                continue;
-            }
-            let len = u16::from_le_bytes([h[4], h[5]]) as usize;
-            if len > MAX_PAYLOAD {
-                self.start += 1;
-                stats.skipped_bytes += 1;
-                continue;
-            }
-            let avail = self.fill(len + 8, stats)?;
-            if avail < len + 8 {
-                stats.truncated_frames += 1;
-                stats.skipped_bytes += avail as u64;
-                self.start = self.end;
-                return Ok(None);
-            }
-            let s = self.start;
-            if !checksum_ok(&self.buf[s..s + len + 8]) {
-                stats.checksum_failures += 1;
-                stats.skipped_bytes += 1;
-                self.start += 1;
-                continue;
-            }
-            self.start += len + 8;
-            stats.frames += 1;
-            return Ok(Some(Frame {
-                class: self.buf[s + 2],
-                id: self.buf[s + 3],
-                payload: &self.buf[s + 6..s + 6 + len],
-            }));
-        }
-    }
-
-    /// The input ended with fewer than a header's bytes: a cut frame if they start with sync.
-    fn finish_short(&mut self, avail: usize, stats: &mut RawStats) {
-        if avail > 0 {
-            if self.buf[self.start] == SYNC1 {
-                stats.truncated_frames += 1;
-            }
-            stats.skipped_bytes += avail as u64;
-            self.start = self.end;
-        }
+        Ok(self.0.next_frame(stats)?.map(|f| Frame {
+            class: f[2],
+            id: f[3],
+            payload: &f[6..f.len() - 2],
+        }))
     }
 }
 
