@@ -13,12 +13,39 @@ fn tmp(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("ppkat-rawrt-{}-{name}", std::process::id()))
 }
 
-#[test]
-fn ppk_from_ubx_logs_equals_ppk_from_rinex() {
+/// The demo flight cut to one 1-km strip, simulated into `dir`.
+fn short_flight(dir: &str) -> simulate::SimReport {
     let mut s = simulate::builtin("demo").unwrap();
     s.flight.strips = 1;
     s.flight.strip_length = 1000.0;
-    let rep = simulate::run(&s, &tmp("flight")).unwrap();
+    simulate::run(&s, &tmp(dir)).unwrap()
+}
+
+/// PPK of `rinex` and of `from_log` (the same flight read from logs) agree: same epochs and
+/// qualities, positions within 1 mm. Returns the epochs and the worst difference (m).
+fn assert_same_ppk(
+    rep: &simulate::SimReport,
+    rinex: &SimInputs,
+    from_log: &SimInputs,
+) -> (usize, f64) {
+    let opts = PpkOptions::default();
+    let a = rinex.ppk(rep, &opts).unwrap();
+    let b = from_log.ppk(rep, &opts).unwrap();
+    let (ta, tb) = (&a.trajectory.epochs, &b.trajectory.epochs);
+    assert_eq!(ta.len(), tb.len());
+    let mut worst = 0.0f64;
+    for (x, y) in ta.iter().zip(tb) {
+        assert_eq!(x.time, y.time);
+        assert_eq!(x.quality, y.quality, "{:?}", x.time);
+        worst = worst.max((x.pos.0 - y.pos.0).norm());
+    }
+    assert!(worst <= 1e-3, "{worst} m");
+    (ta.len(), worst)
+}
+
+#[test]
+fn ppk_from_ubx_logs_equals_ppk_from_rinex() {
+    let rep = short_flight("flight");
     let (rover_ubx, base_ubx, dropped) = simulate::write_ubx(&rep).unwrap();
     assert_eq!(
         dropped, 0,
@@ -44,31 +71,16 @@ fn ppk_from_ubx_logs_equals_ppk_from_rinex() {
         base: base.obs,
         orbits: rinex.orbits.clone(),
     };
-    let opts = PpkOptions::default();
-    let a = rinex.ppk(&rep, &opts).unwrap();
-    let b = from_ubx.ppk(&rep, &opts).unwrap();
-    let (ta, tb) = (&a.trajectory.epochs, &b.trajectory.epochs);
-    assert_eq!(ta.len(), tb.len());
-    let mut worst = 0.0f64;
-    for (x, y) in ta.iter().zip(tb) {
-        assert_eq!(x.time, y.time);
-        assert_eq!(x.quality, y.quality, "{:?}", x.time);
-        worst = worst.max((x.pos.0 - y.pos.0).norm());
-    }
+    let (n, worst) = assert_same_ppk(&rep, &rinex, &from_ubx);
     eprintln!(
-        "PPK from UBX vs RINEX: {} epochs, {} exposures, worst {worst:.1e} m",
-        ta.len(),
+        "PPK from UBX vs RINEX: {n} epochs, {} exposures, worst {worst:.1e} m",
         rep.exposures
     );
-    assert!(worst <= 1e-3, "{worst} m");
 }
 
 #[test]
 fn ppk_from_rtcm_logs_equals_ppk_from_rinex() {
-    let mut s = simulate::builtin("demo").unwrap();
-    s.flight.strips = 1;
-    s.flight.strip_length = 1000.0;
-    let rep = simulate::run(&s, &tmp("flight-rtcm")).unwrap();
+    let rep = short_flight("flight-rtcm");
     let (rover_rtcm, base_rtcm, dropped) = simulate::write_rtcm(&rep).unwrap();
     assert_eq!(
         dropped, 0,
@@ -89,20 +101,6 @@ fn ppk_from_rtcm_logs_equals_ppk_from_rinex() {
         base: base.obs,
         orbits: rinex.orbits.clone(),
     };
-    let opts = PpkOptions::default();
-    let a = rinex.ppk(&rep, &opts).unwrap();
-    let b = from_rtcm.ppk(&rep, &opts).unwrap();
-    let (ta, tb) = (&a.trajectory.epochs, &b.trajectory.epochs);
-    assert_eq!(ta.len(), tb.len());
-    let mut worst = 0.0f64;
-    for (x, y) in ta.iter().zip(tb) {
-        assert_eq!(x.time, y.time);
-        assert_eq!(x.quality, y.quality, "{:?}", x.time);
-        worst = worst.max((x.pos.0 - y.pos.0).norm());
-    }
-    eprintln!(
-        "PPK from RTCM 3 vs RINEX: {} epochs, worst {worst:.1e} m",
-        ta.len()
-    );
-    assert!(worst <= 1e-3, "{worst} m");
+    let (n, worst) = assert_same_ppk(&rep, &rinex, &from_rtcm);
+    eprintln!("PPK from RTCM 3 vs RINEX: {n} epochs, worst {worst:.1e} m");
 }
