@@ -255,6 +255,33 @@ impl Antex {
             .find(|a| a.sv.is_none() && norm(&a.block) == norm(name))
     }
 
+    /// The calibration of the antenna type `rinex_type` of the `role` receiver (rover, base,
+    /// receiver): a missing radome entry falls back to radome NONE, a missing type gives none;
+    /// each is told in `warnings`.
+    pub fn calibration(
+        &self,
+        rinex_type: &str,
+        role: &str,
+        warnings: &mut Vec<String>,
+    ) -> Option<&AntennaPcv> {
+        let name = rinex_type.trim();
+        match self.find(name) {
+            Some((a, fallback)) => {
+                if fallback {
+                    warnings.push(format!(
+                        "{role} antenna '{name}': no calibration with this radome, using '{}'",
+                        a.name
+                    ));
+                }
+                Some(a)
+            }
+            None => {
+                warnings.push(format!("{role} antenna '{name}' is not in the ANTEX file: no phase-centre correction for it"));
+                None
+            }
+        }
+    }
+
     /// The antenna of a RINEX header type (type + radome); a missing radome entry falls back
     /// to the same type with radome NONE. Returns the entry and whether it was a fallback.
     pub fn find(&self, rinex_type: &str) -> Option<(&AntennaPcv, bool)> {

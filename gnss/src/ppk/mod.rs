@@ -135,24 +135,8 @@ fn antenna_calibrations(
     let Some(atx) = &opts.antex else {
         return (None, None);
     };
-    let mut pick = |f: &ObsFile, role: &str| {
-        let name = f.header.antenna.trim().to_string();
-        match atx.find(&name) {
-            Some((a, fallback)) => {
-                if fallback {
-                    warnings.push(format!(
-                        "{role} antenna '{name}': no calibration with this radome, using '{}'",
-                        a.name
-                    ));
-                }
-                Some(a.clone())
-            }
-            None => {
-                warnings.push(format!("{role} antenna '{name}' is not in the ANTEX file: no phase-centre correction for it"));
-                None
-            }
-        }
-    };
+    let mut pick =
+        |f: &ObsFile, role: &str| atx.calibration(&f.header.antenna, role, warnings).cloned();
     (pick(rover, "rover"), pick(base, "base"))
 }
 

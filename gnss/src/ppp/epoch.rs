@@ -199,8 +199,16 @@ fn sat_var(orbits: &Orbits, sv: Sv, t: Epoch, o: &PppOptions) -> f64 {
 
 /// Code minus model without the receiver clock, for a receiver at marker `pos`.
 pub(super) fn code_minus_geometry(p: &Prepared, pos: &Vector3<f64>, st: &Station, zwd: f64) -> f64 {
-    let (rho, _) = p.view.range(&(pos + st.offset));
-    p.p_if - (rho + p.extra + p.wet_map * zwd)
+    p.p_if - p.model(pos, st, zwd).0
+}
+
+impl Prepared {
+    /// The modelled code range without the receiver clock, for a receiver at marker `pos`
+    /// with zenith wet delay correction `zwd`, and the unit vector receiver→satellite.
+    pub(super) fn model(&self, pos: &Vector3<f64>, st: &Station, zwd: f64) -> (f64, Vector3<f64>) {
+        let (rho, u) = self.view.range(&(pos + st.offset));
+        (rho + self.extra + self.wet_map * zwd, u)
+    }
 }
 
 /// The code and phase rows of the prepared satellites against state `s`.
@@ -208,8 +216,8 @@ pub(super) fn rows(prep: &[Prepared], s: &State, st: &Station, phase: bool) -> V
     let pos = s.pos();
     let mut out = Vec::with_capacity(2 * prep.len());
     for p in prep {
-        let (rho, u) = p.view.range(&(pos + st.offset));
-        let model = rho + s.x[super::filter::CLK] + p.extra + p.wet_map * s.x[ZWD];
+        let (geometry, u) = p.model(&pos, st, s.x[ZWD]);
+        let model = geometry + s.x[super::filter::CLK];
         out.push(Row {
             sv: p.sv,
             phase: false,

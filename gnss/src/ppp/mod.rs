@@ -285,17 +285,9 @@ fn receiver_antenna<'a>(
             vec!["no ANTEX file: no satellite or receiver antenna offsets applied (decimetres of error)".into()],
         );
     };
-    match model.find(name) {
-        Some((a, false)) => (Some(a), Vec::new()),
-        Some((a, true)) => (
-            Some(a),
-            vec![format!("no calibration of antenna '{}' with its radome: '{}' used", name.trim(), a.name)],
-        ),
-        None => (
-            None,
-            vec![format!("no calibration of antenna '{}' in the ANTEX file: no receiver phase-centre correction applied", name.trim())],
-        ),
-    }
+    let mut warnings = Vec::new();
+    let cal = model.calibration(name, "receiver", &mut warnings);
+    (cal, warnings)
 }
 
 /// One epoch: time update, observation model, outlier screening, measurement update.
@@ -381,8 +373,7 @@ fn epoch_step(
 
 /// Start a new ambiguity for `p` from its phase minus the code-based model.
 fn start_arc(s: &mut State, p: &Prepared, st: &Station) {
-    let (rho, _) = p.view.range(&(s.pos() + st.offset));
-    let model = rho + s.x[CLK] + p.extra + p.wet_map * s.x[ZWD] + p.windup_m;
+    let model = p.model(&s.pos(), st, s.x[ZWD]).0 + s.x[CLK] + p.windup_m;
     s.add_amb(p.sv, p.l_if - model, 10.0 * 10.0);
 }
 
