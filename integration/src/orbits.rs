@@ -66,11 +66,6 @@ pub fn load_orbits(
             eph.stats.unused
         ));
     }
-    if navs.is_empty() {
-        warnings.push("no navigation file: no Klobuchar ionosphere parameters (ionosphere not modelled, code weights lowered) and no broadcast group delays (TGD) applied to the precise clocks".into());
-    } else if eph.gps_iono.is_none() {
-        warnings.push("no Klobuchar ionosphere parameters in the navigation data: ionosphere not modelled, code weights lowered".into());
-    }
     let precise = if sp3.is_empty() {
         None
     } else {
@@ -100,6 +95,23 @@ pub fn load_orbits(
         },
         warnings,
     ))
+}
+
+/// What the code solutions (SPP, PPK start values) miss without broadcast ionosphere
+/// parameters or group delays, for the orbits [`load_orbits`] made of `nav` and `from_log`;
+/// `None` when nothing is missing. PPP needs neither (ionosphere-free, precise clocks).
+pub fn broadcast_warning(
+    nav: &[PathBuf],
+    from_log: Option<&NavFile>,
+    orbits: &Orbits,
+) -> Option<String> {
+    if nav.is_empty() && from_log.is_none() {
+        Some("no navigation file: no Klobuchar ionosphere parameters (ionosphere not modelled, code weights lowered) and no broadcast group delays (TGD) applied to the precise clocks".into())
+    } else if orbits.broadcast.gps_iono.is_none() {
+        Some("no Klobuchar ionosphere parameters in the navigation data: ionosphere not modelled, code weights lowered".into())
+    } else {
+        None
+    }
 }
 
 /// Check that observations and orbits (and precise clocks) overlap in time; error naming the

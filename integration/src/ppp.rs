@@ -6,6 +6,8 @@
 //! command prints.
 
 use crate::orbits::{check_overlap, load_orbits};
+use crate::pipeline::side_path;
+use crate::survey::{enu_sigmas, refer_name};
 use gnss::error::{Error, Result};
 use gnss::frame::{enu_rotation, Ecef};
 use gnss::model::antex::Antex;
@@ -81,8 +83,6 @@ pub fn ppp(job: &PppJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PppReport>
     gnss::ppk::require_phase(&obs, "observation")?;
     let log_nav = input.nav.as_ref();
     let (orbits, mut warnings) = load_orbits(&job.nav, log_nav, &job.sp3, &job.clk)?;
-    // PPP needs neither broadcast ionosphere nor group delays (IF combination, precise clocks).
-    warnings.retain(|w| !w.contains("Klobuchar"));
     warnings.extend(input.warnings);
     check_overlap(
         &obs,
@@ -188,7 +188,7 @@ pub fn base_from_ppp(
             "PPP on the base file solved no epoch: give the base position (--base-pos or --base-llh)",
         ));
     };
-    let sd = PppReport::sigmas(&last.pos, &last.cov);
+    let sd = enu_sigmas(&last.pos, &last.cov);
     let frame = orbits
         .precise
         .as_ref()
@@ -214,13 +214,6 @@ fn clock_warning(interval: f64) -> String {
     format!(
         "satellite clocks from the SP3 file ({interval:.0} s records, interpolated linearly): expect centimetres of clock error per epoch; 30-s clock files (--clk) do better"
     )
-}
-
-/// `OUT.pos` + `ext` (`.json`, `.html`) beside `OUT.pos`.
-fn side_path(out: &std::path::Path, ext: &str) -> PathBuf {
-    let mut name = out.as_os_str().to_owned();
-    name.push(ext);
-    PathBuf::from(name)
 }
 
 /// A start position: the first epoch a single-point solution passes its checks, else the
@@ -262,14 +255,6 @@ fn decimal_year(a: hifitime::Epoch, b: hifitime::Epoch) -> f64 {
     let start = hifitime::Epoch::from_gregorian_utc_at_midnight(y, 1, 1);
     let end = hifitime::Epoch::from_gregorian_utc_at_midnight(y + 1, 1, 1);
     y as f64 + (mid - start).to_seconds() / (end - start).to_seconds()
-}
-
-/// Name of a reference point.
-fn refer_name(r: Reference) -> &'static str {
-    match r {
-        Reference::Arp => "arp",
-        Reference::Marker => "marker",
-    }
 }
 
 impl PppReport {
@@ -315,18 +300,11 @@ impl PppReport {
             .collect()
     }
 
-    /// σ east, north, up (m) of a covariance at a position.
-    fn sigmas(pos: &Ecef, cov: &Matrix3<f64>) -> [f64; 3] {
-        let r = enu_rotation(&pos.to_geodetic());
-        let c = r * cov * r.transpose();
-        [0, 1, 2].map(|i| c[(i, i)].max(0.0).sqrt())
-    }
-
     /// The JSON summary of a static run.
     fn json(&self) -> Option<String> {
         let (pos, cov) = self.last?;
         let g = pos.to_geodetic();
-        let sd = Self::sigmas(&pos, &cov);
+        let sd = enu_sigmas(&pos, &cov);
         let first = self.result.epochs.first()?;
         let lastep = self.result.epochs.last()?;
         let v = json!({
@@ -383,7 +361,7 @@ impl fmt::Display for PppReport {
         )?;
         if let Some((pos, cov)) = self.last {
             let g = pos.to_geodetic();
-            let sd = Self::sigmas(&pos, &cov);
+            let sd = enu_sigmas(&pos, &cov);
             writeln!(
                 f,
                 "static {}: X {:.4} Y {:.4} Z {:.4} m (lat {:.9} lon {:.9} h {:.4} m), σ E/N/U {:.1}/{:.1}/{:.1} mm, frame {} at epoch {:.3}",

@@ -18,8 +18,14 @@ fn enu_cov(pos: &Ecef, cov: &Matrix3<f64>) -> Matrix3<f64> {
     r * cov * r.transpose()
 }
 
+/// σ east, north, up (m) of a position at `pos` with ECEF covariance `cov` (m²).
+pub(crate) fn enu_sigmas(pos: &Ecef, cov: &Matrix3<f64>) -> [f64; 3] {
+    let c = enu_cov(pos, cov);
+    [0, 1, 2].map(|i| c[(i, i)].max(0.0).sqrt())
+}
+
 /// Name of a reference point, as the CLI spells it.
-fn refer_name(refer: Reference) -> &'static str {
+pub(crate) fn refer_name(refer: Reference) -> &'static str {
     match refer {
         Reference::Arp => "arp",
         Reference::Marker => "marker",

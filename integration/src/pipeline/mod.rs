@@ -8,7 +8,7 @@
 //! nothing itself.
 
 use crate::observations::{nav_sources, read_observations};
-use crate::orbits::check_glonass_channels;
+use crate::orbits::{broadcast_warning, check_glonass_channels};
 pub use crate::orbits::{check_overlap, load_orbits};
 use gnss::error::{Error, Result};
 use gnss::obs::ObsFormat;
@@ -100,6 +100,7 @@ pub fn spp(job: &SppJob) -> Result<SppReport> {
     let input = read_observations(&job.obs, job.obs_format)?;
     let log_nav = input.nav.as_ref();
     let (orbits, mut warnings) = load_orbits(&job.nav, log_nav, &job.sp3, &job.clk)?;
+    warnings.extend(broadcast_warning(&job.nav, log_nav, &orbits));
     let obs = input.obs;
     check_overlap(&obs, &orbits, &nav_sources(&job.nav, log_nav))?;
     warnings.extend(input.warnings);
@@ -257,10 +258,10 @@ pub struct PpkReport {
     pub process_seconds: f64,
 }
 
-/// `OUT.pos` → `OUT.pos.json`.
-fn summary_path(out: &std::path::Path) -> PathBuf {
+/// A file beside an output: `OUT.pos` + `ext` (`.json`, `.html` …).
+pub(crate) fn side_path(out: &std::path::Path, ext: &str) -> PathBuf {
     let mut name = out.as_os_str().to_owned();
-    name.push(".json");
+    name.push(ext);
     PathBuf::from(name)
 }
 
@@ -276,6 +277,7 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
     gnss::ppk::require_phase(base, "base")?;
     let log_nav = rover_in.nav.as_ref().or(base_in.nav.as_ref());
     let (orbits, mut warnings) = load_orbits(&job.nav, log_nav, &job.sp3, &job.clk)?;
+    warnings.extend(broadcast_warning(&job.nav, log_nav, &orbits));
     check_overlap(rover, &orbits, &nav_sources(&job.nav, log_nav))?;
     warnings.extend(rover_in.warnings.iter().chain(&base_in.warnings).cloned());
     warnings.extend(check_glonass_channels(
@@ -367,7 +369,7 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
     crate::vector::write(&job.out, &header, &records, job.format)?;
     let mut summary = None;
     if let Some(st) = &result.static_solution {
-        let path = summary_path(&job.out);
+        let path = side_path(&job.out, ".json");
         let text = crate::survey::json(st, o.refer, &result.base_marker);
         gnss::solution::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
         summary = Some(path);
