@@ -25,6 +25,7 @@ pub mod bal;
 pub mod camera;
 pub mod camera_convert;
 pub mod factors;
+pub mod features;
 pub mod intersection;
 pub mod lever;
 pub mod lsq;
