@@ -7,6 +7,7 @@
 //! ellipsoidal height of the projection centre). Uses [`super::exif_io`].
 
 use super::{exif_io, CameraStation};
+use crate::height::Heights;
 use gnss::error::{Error, Result};
 use std::path::{Path, PathBuf};
 
@@ -139,7 +140,12 @@ pub struct Geotagged {
 /// that cannot be tagged (not a JPEG, damaged, EXIF unreadable) is named in
 /// [`Geotagged::skipped`] and the others are still written. `Err` only when nothing can be
 /// written (the folder) or the output would replace an original.
-pub fn geotag(photos: &[Photo], stations: &[CameraStation], out_dir: &Path) -> Result<Geotagged> {
+pub fn geotag(
+    photos: &[Photo],
+    stations: &[CameraStation],
+    out_dir: &Path,
+    heights: &Heights,
+) -> Result<Geotagged> {
     std::fs::create_dir_all(out_dir).map_err(Error::io(out_dir))?;
     let mut done = Geotagged::default();
     for (p, s) in photos.iter().zip(stations) {
@@ -151,9 +157,9 @@ pub fn geotag(photos: &[Photo], stations: &[CameraStation], out_dir: &Path) -> R
             ));
         }
         let g = s.centre.to_geodetic();
-        let tagged = read_limited(&p.path).and_then(|jpeg| {
-            exif_io::geotagged(&jpeg, g.lat.to_degrees(), g.lon.to_degrees(), g.h)
-        });
+        let h = heights.height(&g)?;
+        let tagged = read_limited(&p.path)
+            .and_then(|jpeg| exif_io::geotagged(&jpeg, g.lat.to_degrees(), g.lon.to_degrees(), h));
         match tagged {
             Ok(bytes) => {
                 gnss::solution::write_atomic(&dest, |w| w.write_all(&bytes))?;

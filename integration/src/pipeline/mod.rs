@@ -40,6 +40,8 @@ pub struct SppJob {
     pub options: SppOptions,
     /// Layout of the trajectory written (`.pos` llh/xyz, KML, GeoJSON, GPX).
     pub format: crate::vector::TrajectoryFormat,
+    /// Heights written: ellipsoidal or above a geoid.
+    pub heights: crate::height::Heights,
     /// Output `.pos`.
     pub out: PathBuf,
 }
@@ -157,7 +159,7 @@ pub fn spp(job: &SppJob) -> Result<SppReport> {
     for n in job.nav.iter().chain(&job.sp3).chain(&job.clk).rev() {
         header.insert(2, format!("inp file  : {}", n.display()));
     }
-    crate::vector::write(&job.out, &header, &records, job.format)?;
+    crate::vector::write(&job.out, &header, &records, job.format, &job.heights)?;
     Ok(SppReport {
         epochs: obs.epochs.len(),
         solved: records.len(),
@@ -229,6 +231,8 @@ pub struct PpkJob {
     pub options: gnss::ppk::PpkOptions,
     /// Layout of the trajectory written (`.pos` llh/xyz, KML, GeoJSON, GPX).
     pub format: crate::vector::TrajectoryFormat,
+    /// Heights written: ellipsoidal or above a geoid.
+    pub heights: crate::height::Heights,
     /// Output `.pos`.
     pub out: PathBuf,
     /// The quality report to write (HTML), if any.
@@ -366,7 +370,7 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
         ),
     ];
     let records = result.trajectory.records();
-    crate::vector::write(&job.out, &header, &records, job.format)?;
+    crate::vector::write(&job.out, &header, &records, job.format, &job.heights)?;
     let mut summary = None;
     if let Some(st) = &result.static_solution {
         let path = side_path(&job.out, ".json");
