@@ -21,6 +21,7 @@ use std::fmt;
 use std::path::PathBuf;
 
 mod exposures;
+mod swap;
 pub use exposures::{exposures, EventSource, ExposureJob, ExposureReport};
 
 /// Inputs of a single-point run.
@@ -308,6 +309,17 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
         base_line = Some(line);
         warnings.extend(w);
     }
+    let stated = match base_position {
+        gnss::ppk::BasePosition::Given(p) => Some(p),
+        gnss::ppk::BasePosition::Header => base.header.approx_position,
+    };
+    swap::check(
+        (&job.rover, rover),
+        (&job.base, base),
+        stated,
+        &orbits,
+        &job.options.systems,
+    )?;
     let read_seconds = t0.elapsed().as_secs_f64();
     let t1 = std::time::Instant::now();
     let result = gnss::ppk::process(rover, base, base_position, &orbits, &job.options, progress)?;
