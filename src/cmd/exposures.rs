@@ -202,6 +202,9 @@ pub fn run(args: Args) -> Result<()> {
         photos: args.photos,
         geotag: args.geotag,
     };
+    if job.geotag.is_some() && !job.heights.orthometric() {
+        eprintln!("note: geotags with ellipsoidal heights: EXIF GPSAltitude means above sea level, so the copies carry no EXIF altitude; the ellipsoidal height is in their XMP (ppkat:Height, drone-dji:AbsoluteAltitude). Give --height egm96 or geoid:FILE for a sea-level EXIF altitude.");
+    }
     let report = pipeline::exposures(&job).context("exposures failed")?;
     print!("{report}");
     super::complete(report.skipped())
