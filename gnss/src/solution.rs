@@ -214,14 +214,27 @@ pub fn write_pos(
     records: &[PosRecord],
     format: PosFormat,
 ) -> Result<()> {
+    let frame = match format {
+        PosFormat::Llh => "lat/lon/height=WGS84/ellipsoidal",
+        PosFormat::Xyz => "x/y/z-ecef=WGS84",
+    };
+    write_pos_framed(path, header, records, format, frame)
+}
+
+/// [`write_pos`] with the frame words of the legend line given, e.g.
+/// `lat/lon/height=WGS84/geodetic(EGM96)` when the records' heights are above a geoid (as
+/// RTKLIB calls orthometric heights).
+pub fn write_pos_framed(
+    path: &Path,
+    header: &[String],
+    records: &[PosRecord],
+    format: PosFormat,
+    frame: &str,
+) -> Result<()> {
     write_atomic(path, |w| {
         for h in header {
             writeln!(w, "% {h}")?;
         }
-        let frame = match format {
-            PosFormat::Llh => "lat/lon/height=WGS84/ellipsoidal",
-            PosFormat::Xyz => "x/y/z-ecef=WGS84",
-        };
         writeln!(
             w,
             "% ({frame}, Q=1:fix,2:float,4:dgps,5:single,6:ppp, ns=# of satellites)"

@@ -398,6 +398,7 @@ fn write_stations(
         stations,
         format,
         Projection::Geodetic,
+        &crate::height::Heights::Ellipsoidal,
     )?)
 }
 

@@ -17,6 +17,8 @@
 //! - [`import`]: MicMac and COLMAP projects turned into ppkat project folders.
 //! - [`crs`]: projected systems by EPSG code (`--crs EPSG:CODE`), pure-Rust `proj4rs`.
 //! - [`vector`]: trajectories as `.pos`, KML, GeoJSON or GPX.
+//! - [`height`]: ellipsoidal or orthometric output heights (EGM96 built in, geoid grids from
+//!   [`geoid_grid`] files: GeographicLib PGM, PROJ GTX, text).
 //! - [`survey`]: the summary of a static run (`OUT.pos.json` and report lines).
 //! - [`simulate`]: a flight simulator (scenario → RINEX, navigation and truth files) and
 //!   simulated adjustment projects with truth (aerial block, close-range pair).
@@ -32,6 +34,8 @@ pub mod bench;
 pub mod crs;
 pub mod demo;
 pub mod exposure;
+pub mod geoid_grid;
+pub mod height;
 pub mod import;
 pub mod observations;
 pub mod orbits;

@@ -130,7 +130,13 @@ pub fn ppp(job: &PppJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PppReport>
         seconds: 0.0,
         header_position: header_point(&obs, options.refer),
     };
-    crate::vector::write(&job.out, &report.header(job), &report.records(), job.format)?;
+    crate::vector::write(
+        &job.out,
+        &report.header(job),
+        &report.records(),
+        job.format,
+        &crate::height::Heights::Ellipsoidal,
+    )?;
     let mut report = report;
     if let Some(json) = report.json() {
         let path = side_path(&job.out, ".json");

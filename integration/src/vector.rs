@@ -5,13 +5,15 @@
 //! Enters: the `.pos` records of a run (GPST, ECEF, ECEF covariance) and its header lines.
 //! Leaves: one file written atomically. In the vector files times are UTC (ISO 8601, as the
 //! formats require) with the GPST beside them where the format has room, coordinates WGS84
-//! longitude/latitude (degrees, 9 decimals) and ellipsoidal height (m) — not above sea level,
-//! which KML and GPX viewers assume: KML points are therefore clamped to the ground and the
-//! height is given as data.
+//! longitude/latitude (degrees, 9 decimals) and the height of [`Heights`] (m): ellipsoidal by
+//! default — not above sea level, which KML and GPX viewers assume — or orthometric above a
+//! geoid; every file says which. KML points are clamped to the ground and the height is given
+//! as data.
 
+use crate::height::Heights;
 use gnss::error::Result;
-use gnss::frame::enu_rotation;
-use gnss::solution::{write_atomic, write_pos, PosFormat, PosRecord, Quality};
+use gnss::frame::{enu_rotation, Geodetic};
+use gnss::solution::{write_atomic, write_pos, write_pos_framed, PosFormat, PosRecord, Quality};
 use gnss::time::format_ymdhms_us;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -39,36 +41,63 @@ impl TrajectoryFormat {
     }
 }
 
-/// Write `records` to `path` in `format`; `header` are the `.pos` header lines (for the
-/// vector formats they become the description). Epochs are named by their GPST.
+/// Write `records` to `path` in `format` with `heights` (ellipsoidal or above a geoid; the
+/// header says which); `header` are the `.pos` header lines (for the vector formats they
+/// become the description). Epochs are named by their GPST.
 pub fn write(
     path: &Path,
     header: &[String],
     records: &[PosRecord],
     format: TrajectoryFormat,
+    heights: &Heights,
 ) -> Result<()> {
-    write_named(path, header, records, &[], format)
+    write_named(path, header, records, &[], format, heights)
 }
 
 /// [`write`] with a name per record (photo labels; records beyond `names` are named by their
-/// GPST). A `.pos` has no room for names.
+/// GPST). A `.pos` has no room for names. Orthometric heights need llh coordinates: an ECEF
+/// `.pos` with them is refused.
 pub fn write_named(
     path: &Path,
     header: &[String],
     records: &[PosRecord],
     names: &[String],
     format: TrajectoryFormat,
+    heights: &Heights,
 ) -> Result<()> {
     let pts: Vec<Point> = records
         .iter()
         .enumerate()
-        .map(|(i, r)| point(r, names.get(i)))
-        .collect();
+        .map(|(i, r)| point(r, names.get(i), heights))
+        .collect::<Result<_>>()?;
     let text = match format {
-        TrajectoryFormat::Pos(f) => return write_pos(path, header, records, f),
-        TrajectoryFormat::Kml => kml(header, &pts),
-        TrajectoryFormat::GeoJson => geojson(header, &pts),
-        TrajectoryFormat::Gpx => gpx(header, &pts),
+        TrajectoryFormat::Pos(PosFormat::Xyz) if heights.orthometric() => {
+            return Err(gnss::error::Error::input(
+                path,
+                "ECEF x/y/z has no orthometric height: use --format llh with --height, or ellipsoidal heights",
+            ))
+        }
+        TrajectoryFormat::Pos(f) if !heights.orthometric() => {
+            return write_pos(path, header, records, f)
+        }
+        TrajectoryFormat::Pos(f) => {
+            // The geoid heights as the records' heights: each point moved along its normal.
+            let moved: Vec<PosRecord> = records
+                .iter()
+                .zip(&pts)
+                .map(|(r, p)| PosRecord {
+                    pos: Geodetic::from_degrees(p.lat, p.lon, p.h).to_ecef(),
+                    ..r.clone()
+                })
+                .collect();
+            let frame = format!("lat/lon/height=WGS84/geodetic({})", heights.short());
+            let mut header = header.to_vec();
+            header.push(format!("heights   : {}", heights.describe()));
+            return write_pos_framed(path, &header, &moved, f, &frame);
+        }
+        TrajectoryFormat::Kml => kml(header, &pts, heights),
+        TrajectoryFormat::GeoJson => geojson(header, &pts, heights),
+        TrajectoryFormat::Gpx => gpx(header, &pts, heights),
     };
     write_atomic(path, |w| w.write_all(text.as_bytes()))
 }
@@ -89,16 +118,16 @@ struct Point {
     age: f64,
 }
 
-fn point(r: &PosRecord, name: Option<&String>) -> Point {
+fn point(r: &PosRecord, name: Option<&String>, heights: &Heights) -> Result<Point> {
     let g = r.pos.to_geodetic();
     let rot = enu_rotation(&g);
     let c = rot * r.cov * rot.transpose();
     let gpst = format_ymdhms_us(r.time);
-    Point {
+    Ok(Point {
         name: name.cloned().unwrap_or_else(|| gpst.clone()),
         lat: g.lat.to_degrees(),
         lon: g.lon.to_degrees(),
-        h: g.h,
+        h: heights.height(&g)?,
         sigma: [0, 1, 2].map(|k| c[(k, k)].max(0.0).sqrt()),
         utc: iso_utc(r.time),
         gpst,
@@ -106,7 +135,7 @@ fn point(r: &PosRecord, name: Option<&String>) -> Point {
         ns: r.nsat,
         ratio: r.ratio,
         age: r.age,
-    }
+    })
 }
 
 /// `YYYY-MM-DDThh:mm:ss.sssZ` of a GPST epoch.
@@ -148,13 +177,19 @@ fn kml_colour(q: u8) -> &'static str {
     }
 }
 
-fn kml(header: &[String], pts: &[Point]) -> String {
+fn kml(header: &[String], pts: &[Point], heights: &Heights) -> String {
     let mut s = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<kml xmlns=\"http://www.opengis.net/kml/2.2\">\n<Document>\n<name>ppkat trajectory</name>\n");
     let _ = writeln!(
         s,
-        "<description>{}\nHeights are ellipsoidal (WGS84): points are clamped to the ground, h is in the data.</description>",
-        xml(&header.join("\n"))
+        "<description>{}\nHeights are {}: points are clamped to the ground, h is in the data.</description>",
+        xml(&header.join("\n")),
+        heights.describe()
     );
+    let h_key = if heights.orthometric() {
+        "h_orthometric_m"
+    } else {
+        "h_ellipsoidal_m"
+    };
     for q in 1..=6u8 {
         let _ = writeln!(s, "<Style id=\"q{q}\"><IconStyle><color>{}</color><scale>0.5</scale><Icon><href>http://maps.google.com/mapfiles/kml/shapes/shaded_dot.png</href></Icon></IconStyle><LabelStyle><scale>0</scale></LabelStyle></Style>", kml_colour(q));
     }
@@ -175,7 +210,7 @@ fn kml(header: &[String], pts: &[Point]) -> String {
                 ("gpst", p.gpst.clone()),
                 ("Q", format!("{} ({})", p.q, q_name(p.q))),
                 ("ns", p.ns.to_string()),
-                ("h_ellipsoidal_m", format!("{:.4}", p.h)),
+                (h_key, format!("{:.4}", p.h)),
                 ("sigma_e_m", format!("{:.4}", p.sigma[0])),
                 ("sigma_n_m", format!("{:.4}", p.sigma[1])),
                 ("sigma_u_m", format!("{:.4}", p.sigma[2])),
@@ -193,7 +228,7 @@ fn kml(header: &[String], pts: &[Point]) -> String {
     s + "</Folder>\n</Document>\n</kml>\n"
 }
 
-fn geojson(header: &[String], pts: &[Point]) -> String {
+fn geojson(header: &[String], pts: &[Point], heights: &Heights) -> String {
     use serde_json::json;
     let mut features = vec![json!({
         "type": "Feature",
@@ -201,7 +236,7 @@ fn geojson(header: &[String], pts: &[Point]) -> String {
             "name": "track",
             "epochs": pts.len(),
             "header": header,
-            "heights": "ellipsoidal (WGS84), m",
+            "heights": format!("{}, m", heights.describe()),
         },
         "geometry": {
             "type": "LineString",
@@ -231,12 +266,13 @@ fn geojson(header: &[String], pts: &[Point]) -> String {
     serde_json::to_string_pretty(&v).unwrap_or_default() + "\n"
 }
 
-fn gpx(header: &[String], pts: &[Point]) -> String {
+fn gpx(header: &[String], pts: &[Point], heights: &Heights) -> String {
     let mut s = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<gpx version=\"1.1\" creator=\"ppkat\" xmlns=\"http://www.topografix.com/GPX/1/1\" xmlns:ppkat=\"https://ppkat.invalid/gpx/1\">\n");
     let _ = writeln!(
         s,
-        "<metadata><desc>{}\nele is the ellipsoidal (WGS84) height.</desc></metadata>\n<trk><name>ppkat trajectory</name><trkseg>",
-        xml(&header.join("\n"))
+        "<metadata><desc>{}\nele is the height: {}.</desc></metadata>\n<trk><name>ppkat trajectory</name><trkseg>",
+        xml(&header.join("\n")),
+        heights.describe()
     );
     for p in pts {
         // GPX fix: carrier-phase and code differential → dgps, single point → 3d.
@@ -264,7 +300,7 @@ mod tests {
         records()
             .iter()
             .enumerate()
-            .map(|(i, r)| point(r, names.get(i)))
+            .map(|(i, r)| point(r, names.get(i), &Heights::Ellipsoidal).unwrap())
             .collect()
     }
 
@@ -293,7 +329,8 @@ mod tests {
     /// (GPST − 13 s in 2005).
     #[test]
     fn geojson_holds_every_epoch() {
-        let v: serde_json::Value = serde_json::from_str(&geojson(&[], &points(&[]))).unwrap();
+        let v: serde_json::Value =
+            serde_json::from_str(&geojson(&[], &points(&[]), &Heights::Ellipsoidal)).unwrap();
         let f = v["features"].as_array().unwrap();
         assert_eq!(f.len(), 6);
         assert_eq!(f[0]["geometry"]["coordinates"].as_array().unwrap().len(), 5);
@@ -314,13 +351,17 @@ mod tests {
 
     #[test]
     fn kml_and_gpx_hold_every_epoch() {
-        let k = kml(&["a <b>".into()], &points(&["DJI_0001".into()]));
+        let k = kml(
+            &["a <b>".into()],
+            &points(&["DJI_0001".into()]),
+            &Heights::Ellipsoidal,
+        );
         assert!(k.contains("<Placemark><name>DJI_0001</name>"));
         assert_eq!(k.matches("<Placemark>").count(), 6);
         assert_eq!(k.matches("<styleUrl>#q2</styleUrl>").count(), 2);
         assert!(k.contains("a &lt;b&gt;"));
         assert!(k.contains("<coordinates>139.610000000,35.160040000,124.0000</coordinates>"));
-        let g = gpx(&[], &points(&[]));
+        let g = gpx(&[], &points(&[]), &Heights::Ellipsoidal);
         assert_eq!(g.matches("<trkpt ").count(), 5);
         assert!(g.contains("<trkpt lat=\"35.160040000\" lon=\"139.610000000\"><ele>124.0000</ele><time>2005-04-02T00:01:47.000Z</time>"));
     }

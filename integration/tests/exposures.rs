@@ -345,7 +345,9 @@ fn photos_are_matched_and_geotagged_copies_written() {
     assert!(list.iter().all(|p| p.taken.is_some()), "capture times read");
     photos::check(&list, &stations).unwrap();
     let out = tmp("geotagged");
-    let written = photos::geotag(&list, &stations, &out).unwrap().written;
+    let written = photos::geotag(&list, &stations, &out, &Default::default())
+        .unwrap()
+        .written;
     assert_eq!(written.len(), 6);
     for (k, w) in written.iter().enumerate() {
         let (lat, lon, h) = photos::read_position(w).expect("GPS tags written");
@@ -368,7 +370,7 @@ fn photos_are_matched_and_geotagged_copies_written() {
         .zip(&list)
         .all(|(c, o)| c.taken.is_some() && c.taken == o.taken));
     // Writing into the photos' own folder is refused.
-    assert!(photos::geotag(&list, &stations, &dir).is_err());
+    assert!(photos::geotag(&list, &stations, &dir, &Default::default()).is_err());
     // A photo missing in the middle.
     std::fs::remove_file(dir.join("IMG_0003.jpg")).unwrap();
     let list = photos::list(&dir).unwrap();

@@ -91,7 +91,7 @@ fn one_bad_photo_is_one_message_and_the_rest_are_geotagged() {
     assert_eq!(list.len(), names.len());
     let stations: Vec<CameraStation> = (0..list.len()).map(station).collect();
     let out = tmp("mixed-out");
-    let done = photos::geotag(&list, &stations, &out).unwrap();
+    let done = photos::geotag(&list, &stations, &out, &Default::default()).unwrap();
     assert_eq!(done.written.len(), 6, "the good ones: {:?}", done.skipped);
     assert_eq!(done.skipped.len(), 6, "{:?}", done.skipped);
     for (p, why) in &done.skipped {

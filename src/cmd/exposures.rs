@@ -78,7 +78,7 @@ pub struct Args {
     geotag: Option<PathBuf>,
     /// Horizontal coordinates of the output: geodetic, utm (zone of the first station),
     /// utm:ZONE, gk:CENTRAL_MERIDIAN (Gauss–Krüger, degrees) or EPSG:CODE (any projected
-    /// system, e.g. EPSG:32632 or a national grid); heights stay ellipsoidal. Also --crs.
+    /// system, e.g. EPSG:32632 or a national grid); heights: see --height. Also --crs.
     #[arg(
         long,
         alias = "crs",
@@ -86,6 +86,13 @@ pub struct Args {
         default_value = "geodetic"
     )]
     projection: String,
+    /// Heights written: ellipsoidal (WGS84, GNSS's own), egm96 (orthometric above the EGM96
+    /// geoid, built in: NGA's spherical harmonics to degree 360) or geoid:FILE (orthometric
+    /// above a grid: a GeographicLib .pgm such as egm2008-1.pgm for EGM2008, a PROJ .gtx, or
+    /// text lines LAT LON N, bilinear). Every output's header says which;
+    /// geotags write a sea-level GPSAltitude only for orthometric heights.
+    #[arg(long, value_name = "HEIGHT", default_value = "ellipsoidal", value_parser = super::height_arg)]
+    height: String,
     /// Output file (replaced if it exists).
     #[arg(short = 'o', long, value_name = "OUT")]
     out: PathBuf,
@@ -190,10 +197,14 @@ pub fn run(args: Args) -> Result<()> {
             ExportArg::Gpx => Format::Gpx,
         },
         projection,
+        heights: super::heights(&args.height)?,
         out: args.out,
         photos: args.photos,
         geotag: args.geotag,
     };
+    if job.geotag.is_some() && !job.heights.orthometric() {
+        eprintln!("note: geotags with ellipsoidal heights: EXIF GPSAltitude means above sea level, so the copies carry no EXIF altitude; the ellipsoidal height is in their XMP (ppkat:Height, drone-dji:AbsoluteAltitude). Give --height egm96 or geoid:FILE for a sea-level EXIF altitude.");
+    }
     let report = pipeline::exposures(&job).context("exposures failed")?;
     print!("{report}");
     super::complete(report.skipped())

@@ -105,6 +105,23 @@ impl From<TrajectoryFormatArg> for TrajectoryFormat {
     }
 }
 
+/// The `--height` value checked for its form (bad usage, exit code 2): `ellipsoidal`, `egm96`
+/// or `geoid:FILE`; `egm2008` says how to give its grid. The grid is read by [`heights`].
+pub fn height_arg(s: &str) -> std::result::Result<String, String> {
+    match s {
+        "ellipsoidal" | "egm96" => Ok(s.into()),
+        "egm2008" => Err(integration::height::EGM2008_NOT_BUILT_IN.into()),
+        g if g.starts_with("geoid:") && g.len() > 6 => Ok(s.into()),
+        _ => Err("use ellipsoidal, egm96 or geoid:FILE (a GeographicLib .pgm such as egm2008-1.pgm, a PROJ .gtx, or a text grid of LAT LON N lines)".into()),
+    }
+}
+
+/// The heights of a checked `--height` value, its grid read (a grid that cannot be read is a
+/// failure naming the file, exit code 1).
+pub fn heights(s: &str) -> Result<integration::height::Heights> {
+    integration::height::Heights::parse(s).map_err(|e| anyhow::anyhow!("--height {s}: {e}"))
+}
+
 /// A flag's number: finite (NaN and infinities are refused as bad usage, exit code 2).
 pub fn finite_number(s: &str) -> std::result::Result<f64, String> {
     match s.trim().parse::<f64>() {

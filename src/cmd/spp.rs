@@ -56,9 +56,15 @@ pub struct Args {
     #[arg(long, value_name = "LIST", default_value = "G,E,C,J,R")]
     systems: String,
     /// Layout of the output: an RTKLIB .pos in llh or xyz, or KML, GeoJSON or GPX (WGS84,
-    /// ellipsoidal heights; times in UTC) with every epoch's time, Q, satellites and σ.
+    /// heights as --height; times in UTC) with every epoch's time, Q, satellites and σ.
     #[arg(long, value_enum, default_value = "llh")]
     format: TrajectoryFormatArg,
+    /// Heights written: ellipsoidal (WGS84, GNSS's own), egm96 (orthometric above the EGM96
+    /// geoid, built in: NGA's spherical harmonics to degree 360) or geoid:FILE (orthometric
+    /// above a grid: a GeographicLib .pgm such as egm2008-1.pgm for EGM2008, a PROJ .gtx, or
+    /// text lines LAT LON N, bilinear). Every output's header says which.
+    #[arg(long, value_name = "HEIGHT", default_value = "ellipsoidal", value_parser = super::height_arg)]
+    height: String,
     /// Output file, a .pos or the --format chosen (replaced if it exists; not written on
     /// failure).
     #[arg(short = 'o', long, value_name = "OUT.pos")]
@@ -80,6 +86,7 @@ pub fn run(args: Args) -> Result<()> {
             ..SppOptions::default()
         },
         format: args.format.into(),
+        heights: super::heights(&args.height)?,
         out: args.out,
     };
     let report = pipeline::spp(&job).context("single-point positioning failed")?;

@@ -230,3 +230,80 @@ fn vector_stations(dir: &Path) {
     let gpx = std::fs::read_to_string(dir.join("stations.gpx")).unwrap();
     assert_eq!(gpx.matches("<trkpt ").count(), rows.len());
 }
+
+/// `--height`: ellipsoidal by default, EGM96 built in, a text geoid grid given by the user;
+/// every header says which height it holds, and the heights differ by the undulation N.
+/// `egm2008` is bad usage (exit code 2) that says how to give its grid.
+#[test]
+fn exposure_heights_ellipsoidal_egm96_and_grid() {
+    let dir = demo_dir();
+    let csv = |extra: &[&str], name: &str| -> (String, Vec<f64>) {
+        let out = tmp(name);
+        demo_exposures(dir, extra, &out);
+        let body = std::fs::read_to_string(&out).unwrap();
+        let h = body
+            .lines()
+            .skip(2)
+            .map(|l| l.split(',').nth(5).unwrap().parse().unwrap())
+            .collect();
+        (body.lines().next().unwrap().to_string(), h)
+    };
+    let (head_e, h_e) = csv(&[], "h-ell.csv");
+    assert!(head_e.contains("ellipsoidal heights (WGS84)"), "{head_e}");
+    let (head_96, h_96) = csv(&["--height", "egm96"], "h-egm96.csv");
+    assert!(
+        head_96.contains("orthometric heights H = h - N, EGM96 geoid"),
+        "{head_96}"
+    );
+    // The demo flies near 48° N, 11° E, where EGM96 puts the geoid ~47 m above the ellipsoid.
+    let d = h_e[0] - h_96[0];
+    assert!((40.0..55.0).contains(&d), "N = {d}");
+    // A user's grid: N = 30 m + 0.5 m per degree of latitude around the demo area.
+    let grid = tmp("geoid.txt");
+    let mut lines = String::from("# LAT LON N\n");
+    for lat in [40, 60] {
+        for lon in [0, 20] {
+            lines += &format!("{lat} {lon} {}\n", 30.0 + 0.5 * (lat - 40) as f64);
+        }
+    }
+    std::fs::write(&grid, lines).unwrap();
+    let spec = format!("geoid:{}", p(&grid));
+    let (head_g, h_g) = csv(&["--height", &spec], "h-grid.csv");
+    assert!(head_g.contains("geoid grid geoid.txt"), "{head_g}");
+    let d = h_e[0] - h_g[0];
+    assert!((30.0..40.0).contains(&d), "N = {d}");
+    let pos = tmp("h-egm96.pos");
+    demo_exposures(dir, &["--height", "egm96", "--format", "pos"], &pos);
+    let body = std::fs::read_to_string(&pos).unwrap();
+    assert!(body.contains("height=WGS84/geodetic(EGM96)"), "{body:.600}");
+    // Bad usage and unreadable grids.
+    let o = ppkat(&[
+        "exposures",
+        "--height",
+        "egm2008",
+        "--trajectory",
+        "x",
+        "--times",
+        "y",
+        "-o",
+        "z",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("geoid:egm2008-2_5.pgm"), "{}", text(&o));
+    let bad = tmp("bad-geoid.txt");
+    std::fs::write(&bad, "48 11 47\n48 12 x\n").unwrap();
+    let spec = format!("geoid:{}", p(&bad));
+    let (traj, rover) = (dir.join("rover_ppk.pos"), dir.join("rover.obs"));
+    let o = ppkat(&[
+        "exposures",
+        "--trajectory",
+        p(&traj),
+        "--events",
+        p(&rover),
+        "--height",
+        &spec,
+        "-o",
+        p(&tmp("never.csv")),
+    ]);
+    fails_with(&o, &["bad-geoid.txt:2", "LAT LON N"]);
+}

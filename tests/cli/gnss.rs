@@ -343,3 +343,25 @@ fn output_into_a_missing_folder() {
     let o = ppkat(&["spp", "--obs", p(&obs), "--nav", p(&nav), "-o", p(&out)]);
     fails_with(&o, &["no-such-folder", "cannot write"]);
 }
+
+/// Base and rover given the wrong way round: the simulated flight's rover file as `--base`
+/// moves, so `ppk` fails (exit code 1) saying so and writes nothing; the right order works.
+#[test]
+fn ppk_refuses_swapped_base_and_rover() {
+    let d = demo_dir();
+    let (rover, base, nav) = (d.join("rover.obs"), d.join("base.obs"), d.join("nav.rnx"));
+    let out = tmp("swapped.pos");
+    let o = ppkat(&ppk_args(&base, &rover, &[&nav], &out, &[]));
+    fails_with(
+        &o,
+        &[
+            "rover.obs",
+            "the base moves",
+            "were --rover and --base swapped?",
+        ],
+    );
+    assert!(!out.exists(), "nothing written");
+    let out = tmp("right-order.pos");
+    succeeds(&ppkat(&ppk_args(&rover, &base, &[&nav], &out, &[])));
+    assert!(out.exists());
+}

@@ -7,8 +7,10 @@
 //! than a small multiple of the file's size.
 //!
 //! Enters: a photo's path or bytes. Leaves: its EXIF fields, or why they cannot be read; the
-//! bytes of a geotagged copy. Used by [`super::photos`].
+//! bytes of a geotagged copy (EXIF GPS, and the XMP packet of [`super::xmp`] in its own APP1
+//! segment). Used by [`super::photos`].
 
+use super::xmp::{self, PositionTag, XMP_ID};
 use exif::experimental::Writer;
 use exif::{Exif, Field, In, Rational, Reader, Tag, Value};
 use std::io::Cursor;
@@ -47,8 +49,9 @@ pub fn rationals(x: &Exif, tag: Tag) -> Option<Vec<f64>> {
     }
 }
 
-/// Latitude, longitude (degrees) and height (m) of the photo's GPS directory.
-pub fn gps_position(x: &Exif) -> Option<(f64, f64, f64)> {
+/// Latitude, longitude (degrees) and height (m) of the photo's GPS directory; the height is
+/// `None` when it has no GPSAltitude (ppkat's copies with ellipsoidal heights).
+pub fn gps_position(x: &Exif) -> Option<(f64, f64, Option<f64>)> {
     let dms = |tag| {
         let v = rationals(x, tag)?;
         let d = v
@@ -64,7 +67,6 @@ pub fn gps_position(x: &Exif) -> Option<(f64, f64, f64)> {
     };
     let lat = dms(Tag::GPSLatitude)? * sign(Tag::GPSLatitudeRef, 'S');
     let lon = dms(Tag::GPSLongitude)? * sign(Tag::GPSLongitudeRef, 'W');
-    let h = *rationals(x, Tag::GPSAltitude)?.first()?;
     let below = match &x
         .get_field(Tag::GPSAltitudeRef, In::PRIMARY)
         .map(|f| &f.value)
@@ -72,7 +74,10 @@ pub fn gps_position(x: &Exif) -> Option<(f64, f64, f64)> {
         Some(Value::Byte(b)) => b.first() == Some(&1),
         _ => false,
     };
-    Some((lat, lon, if below { -h } else { h }))
+    let h = rationals(x, Tag::GPSAltitude)
+        .and_then(|v| v.first().copied())
+        .map(|h| if below { -h } else { h });
+    Some((lat, lon, h))
 }
 
 fn rational(num: u32, denom: u32) -> Rational {
@@ -92,15 +97,18 @@ fn dms(v: f64) -> Value {
     ])
 }
 
-/// The GPS fields of a position: WGS84 latitude, longitude (degrees), ellipsoidal height (m).
-fn gps_fields(lat: f64, lon: f64, h: f64) -> Vec<Field> {
+/// The GPS fields of a position: WGS84 latitude, longitude (degrees) and, only when the height
+/// is orthometric, GPSAltitude with GPSAltitudeRef (above or below sea level): EXIF has no
+/// way to say "above the ellipsoid", so an ellipsoidal height goes to the XMP packet only.
+fn gps_fields(tag: &PositionTag) -> Vec<Field> {
+    let (lat, lon, h) = (tag.lat, tag.lon, tag.height);
     let f = |tag, value| Field {
         tag,
         ifd_num: In::PRIMARY,
         value,
     };
     let text = |s: &str| Value::Ascii(vec![s.as_bytes().to_vec()]);
-    vec![
+    let mut out = vec![
         f(Tag::GPSVersionID, Value::Byte(vec![2, 3, 0, 0])),
         f(
             Tag::GPSLatitudeRef,
@@ -112,13 +120,16 @@ fn gps_fields(lat: f64, lon: f64, h: f64) -> Vec<Field> {
             text(if lon >= 0.0 { "E" } else { "W" }),
         ),
         f(Tag::GPSLongitude, dms(lon)),
-        f(Tag::GPSAltitudeRef, Value::Byte(vec![u8::from(h < 0.0)])),
-        f(
+        f(Tag::GPSMapDatum, text("WGS-84")),
+    ];
+    if tag.orthometric {
+        out.push(f(Tag::GPSAltitudeRef, Value::Byte(vec![u8::from(h < 0.0)])));
+        out.push(f(
             Tag::GPSAltitude,
             Value::Rational(vec![rational((h.abs() * 1000.0).round() as u32, 1000)]),
-        ),
-        f(Tag::GPSMapDatum, text("WGS-84")),
-    ]
+        ));
+    }
+    out
 }
 
 /// One segment of a JPEG before its image data: marker and the byte range of the whole
@@ -184,11 +195,24 @@ fn is_exif(jpeg: &[u8], s: &Segment) -> bool {
     s.marker == 0xE1 && jpeg[s.start + 4..s.end].starts_with(b"Exif\0\0")
 }
 
-/// A copy of the JPEG `jpeg` whose EXIF carries the position (WGS84 latitude, longitude in
-/// degrees, ellipsoidal height in m): the fields the photo had are kept (the thumbnail too
-/// while it fits), its GPS directory replaced. `Err` says why the photo cannot be tagged
-/// (not a JPEG, damaged, EXIF unreadable); the input is never changed.
-pub fn geotagged(jpeg: &[u8], lat: f64, lon: f64, h: f64) -> Result<Vec<u8>, String> {
+/// Whether a segment is an XMP APP1.
+fn is_xmp(jpeg: &[u8], s: &Segment) -> bool {
+    s.marker == 0xE1 && jpeg[s.start + 4..s.end].starts_with(XMP_ID)
+}
+
+/// The XMP packet of a JPEG, when it has one (as text; invalid UTF-8 replaced).
+pub fn xmp_packet(jpeg: &[u8]) -> Option<String> {
+    let (segs, _) = segments(jpeg).ok()?;
+    let s = segs.iter().find(|s| is_xmp(jpeg, s))?;
+    Some(String::from_utf8_lossy(&jpeg[s.start + 4 + XMP_ID.len()..s.end]).into_owned())
+}
+
+/// A copy of the JPEG `jpeg` whose EXIF and XMP carry the position of `tag`: the EXIF fields
+/// the photo had are kept (the thumbnail too while it fits), its GPS directory replaced (an
+/// altitude only for orthometric heights, see [`gps_fields`]); its XMP packet edited (or one
+/// added) by [`xmp::packet`]. `Err` says why the photo cannot be tagged (not a JPEG, damaged,
+/// EXIF unreadable, XMP too large); the input is never changed.
+pub fn geotagged(jpeg: &[u8], tag: &PositionTag) -> Result<Vec<u8>, String> {
     let (segs, data) = segments(jpeg)?;
     let old = match segs.iter().find(|s| is_exif(jpeg, s)) {
         Some(s) => Some(
@@ -198,7 +222,7 @@ pub fn geotagged(jpeg: &[u8], lat: f64, lon: f64, h: f64) -> Result<Vec<u8>, Str
         ),
         None => None,
     };
-    let gps = gps_fields(lat, lon, h);
+    let gps = gps_fields(tag);
     let tiff = encode(old.as_ref(), &gps, true)
         .or_else(|_| encode(old.as_ref(), &gps, false))
         .map_err(|e| format!("its EXIF cannot be rewritten ({e})"))?;
@@ -212,12 +236,25 @@ pub fn geotagged(jpeg: &[u8], lat: f64, lon: f64, h: f64) -> Result<Vec<u8>, Str
         Some(s) if s.marker == 0xE0 => s.end,
         _ => 2,
     };
-    let mut out = Vec::with_capacity(jpeg.len() + app1.len());
+    let old_xmp = xmp_packet(jpeg);
+    let packet = xmp::packet(old_xmp.as_deref(), tag);
+    let len = 2 + XMP_ID.len() + packet.len();
+    if len > u16::MAX as usize {
+        return Err(format!(
+            "its XMP packet would be {len} bytes, more than a JPEG segment holds"
+        ));
+    }
+    let mut xmp_seg = vec![0xFF, 0xE1];
+    xmp_seg.extend_from_slice(&(len as u16).to_be_bytes());
+    xmp_seg.extend_from_slice(XMP_ID);
+    xmp_seg.extend_from_slice(packet.as_bytes());
+    let mut out = Vec::with_capacity(jpeg.len() + app1.len() + xmp_seg.len());
     out.extend_from_slice(&jpeg[..after]);
     out.extend_from_slice(&app1);
+    out.extend_from_slice(&xmp_seg);
     for s in segs
         .iter()
-        .filter(|s| s.start >= after && !is_exif(jpeg, s))
+        .filter(|s| s.start >= after && !is_exif(jpeg, s) && !is_xmp(jpeg, s))
     {
         out.extend_from_slice(&jpeg[s.start..s.end]);
     }

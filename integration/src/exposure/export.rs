@@ -1,6 +1,7 @@
 //! Exports of camera stations: Metashape and Pix4D reference CSVs, OpenDroneMap `geo.txt`, a
 //! full CSV (time, coordinates, sigmas, quality, attitude, flags) and an RTKLIB `.pos`; in
-//! geodetic coordinates or projected (UTM, Gauss–Krüger, any projected EPSG code).
+//! geodetic coordinates or projected (UTM, Gauss–Krüger, any projected EPSG code), with
+//! ellipsoidal or orthometric heights ([`crate::height`]).
 //!
 //! Enters: camera stations ([`super::CameraStation`], ECEF with ECEF covariance). Leaves: files
 //! written atomically; times GPST, sigmas in the local ENU frame (m), angles degrees (R camera
@@ -11,6 +12,7 @@
 use super::attitude::omega_phi_kappa;
 use super::CameraStation;
 use crate::crs::EpsgProjection;
+use crate::height::Heights;
 use crate::vector::TrajectoryFormat;
 use gnss::error::Result;
 use gnss::frame::enu_rotation;
@@ -179,18 +181,18 @@ struct CrsNames {
     odm: String,
 }
 
-fn rows(st: &[CameraStation], proj: Projection) -> Result<(Vec<Row>, CrsNames)> {
+fn rows(st: &[CameraStation], proj: Projection, heights: &Heights) -> Result<(Vec<Row>, CrsNames)> {
     let tm = match st.first() {
         Some(s) => proj.projector(&s.centre.to_geodetic())?,
         None => None,
     };
     let names = match &tm {
         Some(p) => CrsNames {
-            name: format!("{}, ellipsoidal heights (WGS84)", p.name),
+            name: format!("{}, {}", p.name, heights.describe()),
             odm: p.odm.clone(),
         },
         None => CrsNames {
-            name: "WGS84 geodetic (EPSG:4326), ellipsoidal heights".into(),
+            name: format!("WGS84 geodetic (EPSG:4326), {}", heights.describe()),
             odm: "EPSG:4326".into(),
         },
     };
@@ -217,7 +219,7 @@ fn rows(st: &[CameraStation], proj: Projection) -> Result<(Vec<Row>, CrsNames)> 
                 tow,
                 x,
                 y,
-                h: g.h,
+                h: heights.height(&g)?,
                 sigma_enu: [
                     c[(0, 0)].max(0.0).sqrt(),
                     c[(1, 1)].max(0.0).sqrt(),
@@ -237,20 +239,35 @@ fn rows(st: &[CameraStation], proj: Projection) -> Result<(Vec<Row>, CrsNames)> 
     Ok((out, names))
 }
 
-/// Write stations in a format.
-pub fn write(path: &Path, st: &[CameraStation], format: Format, proj: Projection) -> Result<()> {
+/// Write stations in a format with `heights` (ellipsoidal or above a geoid; every header says
+/// which). The antenna table, the input of `ppkat adjust`, is always ellipsoidal: asking it
+/// for orthometric heights is an error.
+pub fn write(
+    path: &Path,
+    st: &[CameraStation],
+    format: Format,
+    proj: Projection,
+    heights: &Heights,
+) -> Result<()> {
+    let centres = |f| write_centres(path, st, f, heights);
     let text_format: TextFormat = match format {
-        Format::Pos => return write_centres(path, st, TrajectoryFormat::Pos(PosFormat::Llh)),
-        Format::Kml => return write_centres(path, st, TrajectoryFormat::Kml),
-        Format::GeoJson => return write_centres(path, st, TrajectoryFormat::GeoJson),
-        Format::Gpx => return write_centres(path, st, TrajectoryFormat::Gpx),
+        Format::Pos => return centres(TrajectoryFormat::Pos(PosFormat::Llh)),
+        Format::Kml => return centres(TrajectoryFormat::Kml),
+        Format::GeoJson => return centres(TrajectoryFormat::GeoJson),
+        Format::Gpx => return centres(TrajectoryFormat::Gpx),
+        Format::Antenna if heights.orthometric() => {
+            return Err(gnss::error::Error::input(
+                path,
+                "the antenna table (the input of ppkat adjust) holds ellipsoidal heights only: leave out --height",
+            ))
+        }
         Format::Antenna => return write_antenna(path, st),
         Format::Metashape => write_metashape,
         Format::Pix4d => write_pix4d,
         Format::Odm => write_odm,
         Format::Csv => write_csv,
     };
-    let (rows, crs) = rows(st, proj)?;
+    let (rows, crs) = rows(st, proj, heights)?;
     let geo = proj == Projection::Geodetic;
     write_atomic(path, |w| text_format(w, &rows, &crs, geo))
 }
@@ -262,7 +279,12 @@ type TextFormat = fn(&mut dyn Write, &[Row], &CrsNames, bool) -> std::io::Result
 
 /// The projection centres as an RTKLIB `.pos` (llh) with their ECEF covariance, or as KML,
 /// GeoJSON or GPX named by the station labels.
-fn write_centres(path: &Path, st: &[CameraStation], format: TrajectoryFormat) -> Result<()> {
+fn write_centres(
+    path: &Path,
+    st: &[CameraStation],
+    format: TrajectoryFormat,
+    heights: &Heights,
+) -> Result<()> {
     let recs: Vec<PosRecord> = st
         .iter()
         .map(|s| PosRecord {
@@ -277,7 +299,7 @@ fn write_centres(path: &Path, st: &[CameraStation], format: TrajectoryFormat) ->
         .collect();
     let names: Vec<String> = st.iter().map(|s| s.id.clone()).collect();
     let header = ["program   : ppkat exposures (projection centres)".to_string()];
-    crate::vector::write_named(path, &header, &recs, &names, format)
+    crate::vector::write_named(path, &header, &recs, &names, format, heights)
 }
 
 /// Metashape reference CSV: label, longitude/latitude (or easting/northing), altitude,

@@ -20,6 +20,7 @@ pub mod exif_io;
 pub mod export;
 pub mod leverarm;
 pub mod photos;
+pub mod xmp;
 
 use attitude::{from_yaw_pitch_roll, AttitudeTable};
 use events::ExposureEvent;

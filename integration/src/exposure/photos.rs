@@ -6,7 +6,9 @@
 //! why it does not match) and geotagged copies in another folder (WGS84 latitude, longitude,
 //! ellipsoidal height of the projection centre). Uses [`super::exif_io`].
 
+use super::xmp::PositionTag;
 use super::{exif_io, CameraStation};
+use crate::height::Heights;
 use gnss::error::{Error, Result};
 use std::path::{Path, PathBuf};
 
@@ -139,7 +141,12 @@ pub struct Geotagged {
 /// that cannot be tagged (not a JPEG, damaged, EXIF unreadable) is named in
 /// [`Geotagged::skipped`] and the others are still written. `Err` only when nothing can be
 /// written (the folder) or the output would replace an original.
-pub fn geotag(photos: &[Photo], stations: &[CameraStation], out_dir: &Path) -> Result<Geotagged> {
+pub fn geotag(
+    photos: &[Photo],
+    stations: &[CameraStation],
+    out_dir: &Path,
+    heights: &Heights,
+) -> Result<Geotagged> {
     std::fs::create_dir_all(out_dir).map_err(Error::io(out_dir))?;
     let mut done = Geotagged::default();
     for (p, s) in photos.iter().zip(stations) {
@@ -151,9 +158,18 @@ pub fn geotag(photos: &[Photo], stations: &[CameraStation], out_dir: &Path) -> R
             ));
         }
         let g = s.centre.to_geodetic();
-        let tagged = read_limited(&p.path).and_then(|jpeg| {
-            exif_io::geotagged(&jpeg, g.lat.to_degrees(), g.lon.to_degrees(), g.h)
-        });
+        let r = gnss::frame::enu_rotation(&g);
+        let c = r * s.cov * r.transpose();
+        let tag = PositionTag {
+            lat: g.lat.to_degrees(),
+            lon: g.lon.to_degrees(),
+            height: heights.height(&g)?,
+            reference: heights.describe(),
+            orthometric: heights.orthometric(),
+            sigma_enu: [0, 1, 2].map(|k| c[(k, k)].max(0.0).sqrt()),
+            quality: s.quality as u8,
+        };
+        let tagged = read_limited(&p.path).and_then(|jpeg| exif_io::geotagged(&jpeg, &tag));
         match tagged {
             Ok(bytes) => {
                 gnss::solution::write_atomic(&dest, |w| w.write_all(&bytes))?;
@@ -185,7 +201,17 @@ fn read_limited(path: &Path) -> std::result::Result<Vec<u8>, String> {
 }
 
 /// Latitude, longitude (degrees) and height read back from a geotagged photo (`None` when it
-/// has no GPS position or its EXIF cannot be read).
+/// has no GPS position or its EXIF cannot be read). The height is the EXIF GPSAltitude, or
+/// for ppkat's copies with ellipsoidal heights (which leave it out) the XMP `ppkat:Height`.
 pub fn read_position(path: &Path) -> Option<(f64, f64, f64)> {
-    exif_io::gps_position(&exif_io::read(path).ok()??)
+    let (lat, lon, h) = exif_io::gps_position(&exif_io::read(path).ok()??)?;
+    let h = match h {
+        Some(h) => h,
+        None => {
+            let jpeg = read_limited(path).ok()?;
+            let packet = exif_io::xmp_packet(&jpeg)?;
+            super::xmp::value(&packet, "ppkat:Height")?.parse().ok()?
+        }
+    };
+    Some((lat, lon, h))
 }

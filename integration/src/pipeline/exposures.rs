@@ -31,6 +31,8 @@ pub struct ExposureJob {
     pub format: crate::exposure::export::Format,
     /// Horizontal coordinates of the output.
     pub projection: crate::exposure::export::Projection,
+    /// Heights of the output and of the geotags: ellipsoidal or above a geoid.
+    pub heights: crate::height::Heights,
     /// Output file.
     pub out: PathBuf,
     /// Photographs to match to the exposures (their names become the station labels).
@@ -107,7 +109,7 @@ pub fn exposures(job: &ExposureJob) -> Result<ExposureReport> {
                     s.id = p.name.clone();
                 }
                 if let Some(g) = &job.geotag {
-                    let done = photos::geotag(&list, &result.stations, g)?;
+                    let done = photos::geotag(&list, &result.stations, g, &job.heights)?;
                     geotagged = done.written.len();
                     photo_problems.retain(|(p, _)| !done.skipped.iter().any(|(q, _)| p == q));
                     photo_problems.extend(done.skipped);
@@ -125,7 +127,13 @@ pub fn exposures(job: &ExposureJob) -> Result<ExposureReport> {
             }
         }
     }
-    export::write(&job.out, &result.stations, job.format, job.projection)?;
+    export::write(
+        &job.out,
+        &result.stations,
+        job.format,
+        job.projection,
+        &job.heights,
+    )?;
     Ok(ExposureReport {
         result,
         events: n,

@@ -21,6 +21,7 @@ use std::fmt;
 use std::path::PathBuf;
 
 mod exposures;
+mod swap;
 pub use exposures::{exposures, EventSource, ExposureJob, ExposureReport};
 
 /// Inputs of a single-point run.
@@ -40,6 +41,8 @@ pub struct SppJob {
     pub options: SppOptions,
     /// Layout of the trajectory written (`.pos` llh/xyz, KML, GeoJSON, GPX).
     pub format: crate::vector::TrajectoryFormat,
+    /// Heights written: ellipsoidal or above a geoid.
+    pub heights: crate::height::Heights,
     /// Output `.pos`.
     pub out: PathBuf,
 }
@@ -157,7 +160,7 @@ pub fn spp(job: &SppJob) -> Result<SppReport> {
     for n in job.nav.iter().chain(&job.sp3).chain(&job.clk).rev() {
         header.insert(2, format!("inp file  : {}", n.display()));
     }
-    crate::vector::write(&job.out, &header, &records, job.format)?;
+    crate::vector::write(&job.out, &header, &records, job.format, &job.heights)?;
     Ok(SppReport {
         epochs: obs.epochs.len(),
         solved: records.len(),
@@ -229,6 +232,8 @@ pub struct PpkJob {
     pub options: gnss::ppk::PpkOptions,
     /// Layout of the trajectory written (`.pos` llh/xyz, KML, GeoJSON, GPX).
     pub format: crate::vector::TrajectoryFormat,
+    /// Heights written: ellipsoidal or above a geoid.
+    pub heights: crate::height::Heights,
     /// Output `.pos`.
     pub out: PathBuf,
     /// The quality report to write (HTML), if any.
@@ -304,6 +309,17 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
         base_line = Some(line);
         warnings.extend(w);
     }
+    let stated = match base_position {
+        gnss::ppk::BasePosition::Given(p) => Some(p),
+        gnss::ppk::BasePosition::Header => base.header.approx_position,
+    };
+    swap::check(
+        (&job.rover, rover),
+        (&job.base, base),
+        stated,
+        &orbits,
+        &job.options.systems,
+    )?;
     let read_seconds = t0.elapsed().as_secs_f64();
     let t1 = std::time::Instant::now();
     let result = gnss::ppk::process(rover, base, base_position, &orbits, &job.options, progress)?;
@@ -366,7 +382,7 @@ pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport>
         ),
     ];
     let records = result.trajectory.records();
-    crate::vector::write(&job.out, &header, &records, job.format)?;
+    crate::vector::write(&job.out, &header, &records, job.format, &job.heights)?;
     let mut summary = None;
     if let Some(st) = &result.static_solution {
         let path = side_path(&job.out, ".json");
