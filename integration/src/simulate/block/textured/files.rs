@@ -7,7 +7,6 @@
 
 use super::TexturedSpec;
 use crate::simulate::ground_points::Point;
-use nalgebra::Vector2;
 use std::fmt::Write as _;
 
 /// σ written with each exact image measurement, pixels (they are exact to 1e-6 px).
@@ -25,7 +24,7 @@ pub(super) fn camera_toml(spec: &TexturedSpec) -> String {
 
 /// `image_observations.csv`: the exact pixel of every point in every image measuring it.
 pub(super) fn measurements_csv(
-    meas: &[(usize, usize, Vector2<f64>)],
+    meas: &[super::Measurement],
     ids: &[String],
     points: &[Point],
 ) -> String {

@@ -62,6 +62,9 @@ use truth::{exposures_csv, parse_camera, pose_of, Exposure, TruthToml};
 pub const LEVER_ARM: [f64; 3] = [0.03, -0.02, 0.15];
 /// σ of the GNSS antenna positions (E, N, U), metres.
 pub const GNSS_SIGMA: [f64; 3] = [0.02, 0.02, 0.035];
+/// An exact image measurement: image index, point index, pixel.
+type Measurement = (usize, usize, Vector2<f64>);
+
 /// Ground speed, m/s.
 const SPEED: f64 = 8.0;
 /// Pixels kept free at the image border when measuring points.
@@ -327,7 +330,7 @@ fn fly(spec: &TexturedSpec, rng: &mut Rng) -> Vec<Exposure> {
     out
 }
 
-/// Control points near the block's corners and at its centre, check and tie points at
+/// Control points at the block's corners and centre, check and tie points at
 /// random over it; all on the terrain.
 fn place_points(spec: &TexturedSpec, terrain: &Terrain, rng: &mut Rng) -> Vec<Point> {
     let (along, across, base, spacing) = spec.layout();
@@ -335,12 +338,14 @@ fn place_points(spec: &TexturedSpec, terrain: &Terrain, rng: &mut Rng) -> Vec<Po
     let yl = (spec.strips - 1) as f64 * spacing;
     let on = |x: f64, y: f64| Vector3::new(x, y, terrain.height(Vector2::new(x, y)));
     let mut points: Vec<Point> = Vec::new();
-    let (gx, gy) = (0.3 * along, 0.3 * across);
+    // Half an air base in from the ends of the outer strips, a quarter footprint outside
+    // them: each seen by two photos of its strip.
+    let (gx, gy) = (0.5 * base, 0.25 * across);
     let corners = [
-        (-gx, -gy),
-        (xl + gx, -gy),
-        (-gx, yl + gy),
-        (xl + gx, yl + gy),
+        (gx, -gy),
+        (xl - gx, -gy),
+        (gx, yl + gy),
+        (xl - gx, yl + gy),
         (xl / 2.0, yl / 2.0),
     ];
     for (k, (x, y)) in corners.into_iter().enumerate() {
@@ -360,11 +365,7 @@ fn place_points(spec: &TexturedSpec, terrain: &Terrain, rng: &mut Rng) -> Vec<Po
 
 /// The exact pixel of every point in every image that sees it away from the border, for
 /// points seen at least twice; also how many images see each point.
-fn measure(
-    cam: &Camera,
-    images: &[Image],
-    points: &[Point],
-) -> (Vec<(usize, usize, Vector2<f64>)>, Vec<usize>) {
+fn measure(cam: &Camera, images: &[Image], points: &[Point]) -> (Vec<Measurement>, Vec<usize>) {
     let (w, h) = (cam.width_px as f64, cam.height_px as f64);
     let mut meas = Vec::new();
     for (i, im) in images.iter().enumerate() {
