@@ -15,19 +15,30 @@ use std::path::{Path, PathBuf};
 /// events: RTCM carries none). The scenario keys are shown in
 /// fixtures/scenario_small.toml; every error source can be switched under `[errors]`.
 ///
-/// An adjustment project (--builtin classic-block, close-range, block1000 or nav-block: the
-/// classic 2-strip 1:8000 block, a close-range pair, a 1000-image block, a block with
-/// navigation-grade GPS, a 0.8 s latency and sparse control) writes project.toml and its
-/// tables, ready for `ppkat adjust --project OUT/project.toml` (nav-block also writes
-/// project_gcp_only.toml and its truth). Prints a summary of what was
-/// simulated. The results are the same for the same scenario on every run.
+/// An adjustment project (--builtin classic-block, close-range, block1000, nav-block or
+/// textured-block: the classic 2-strip 1:8000 block, a close-range pair, a 1000-image block,
+/// a block with navigation-grade GPS, a 0.8 s latency and sparse control, a small block with
+/// rendered photos) writes project.toml and its tables, ready for `ppkat adjust --project
+/// OUT/project.toml` (nav-block also writes project_gcp_only.toml and its truth).
+///
+/// textured-block renders its 3 × 8 photos (1600 × 1200 px, 5 cm on the ground, 8-bit grey
+/// PNG in OUT/photos/<image id>.png) of a textured terrain through the exact camera, for
+/// checking feature matchers: camera.toml holds the exact camera as a [[camera]] table,
+/// antennas.csv the GNSS antenna positions, image_observations.csv the exact pixels of the
+/// tie, control and check points, and truth.toml, truth_exposures.csv and truth_points.csv
+/// the truth (terrain seed, exact poses, points). Pixels: column right, row down, origin at
+/// the top-left corner of the top-left pixel (pixel centres at i + 0.5). About 20 s on two
+/// cores.
+///
+/// Prints a summary of what was simulated. The results are the same for the same scenario
+/// on every run.
 #[derive(clap::Args)]
 pub struct Args {
     /// Flight scenario file (TOML; keys as in fixtures/scenario_small.toml).
     #[arg(long, value_name = "FILE.toml", conflicts_with = "builtin")]
     scenario: Option<PathBuf>,
     /// Built-in scenario: demo, block20 or long (flights), or classic-block, close-range,
-    /// block1000 or nav-block (adjustment projects).
+    /// block1000, nav-block or textured-block (adjustment projects).
     #[arg(long, value_name = "NAME")]
     builtin: Option<String>,
     /// Output folder (created; files of the same names are replaced).

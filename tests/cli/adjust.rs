@@ -112,6 +112,30 @@ fn adjust_a_simulated_block_end_to_end() {
     assert!(!dir.join("out2/report.json").exists());
 }
 
+/// The textured block (reduced: 2 × 4 rendered photos of 400 × 300 px) adjusts with its
+/// exact image measurements: every image and point in, nothing removed, check points given.
+#[test]
+fn adjust_the_textured_block_with_exact_points() {
+    use integration::simulate::textured::{textured_block, TexturedSpec};
+    let dir = tmp("textured");
+    let rep = textured_block(&TexturedSpec::reduced(), &dir).unwrap();
+    assert_eq!(rep.images, 8);
+    let project = dir.join("project.toml");
+    let t = succeeds(&ppkat(&[
+        "adjust",
+        "--project",
+        p(&project),
+        "-o",
+        p(&dir.join("out")),
+    ]));
+    assert!(
+        t.contains(&format!("8 images, {} points", rep.points))
+            && t.contains("removed by data snooping: 0")
+            && t.contains("check points: 4"),
+        "{t}"
+    );
+}
+
 /// `--threads` changes the speed, never the results: the classic block adjusted on one and
 /// on two threads gives the same bytes in every output (the flag is global: before or after
 /// the subcommand).

@@ -127,3 +127,16 @@ fn threads_is_accepted_before_and_after_any_subcommand() {
         assert!(t.contains("RINEX 3.04 observation"), "{t}");
     }
 }
+
+/// `simulate --help` names every built-in adjustment project, the textured block among them.
+#[test]
+fn simulate_help_names_every_builtin_project() {
+    let t = succeeds(&ppkat(&["simulate", "--help"]));
+    for b in integration::simulate::block::BUILTINS {
+        assert!(t.contains(b), "no {b} in\n{t}");
+    }
+    assert!(
+        t.contains("photos/<image id>.png") && t.contains("camera.toml"),
+        "{t}"
+    );
+}

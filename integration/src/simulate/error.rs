@@ -21,4 +21,13 @@ pub enum SimError {
     /// Writing or reading back a file failed.
     #[error(transparent)]
     Gnss(#[from] gnss::Error),
+    /// A simulated file (a truth file read back, a rendered photo) could not be read, parsed
+    /// or encoded.
+    #[error("{path}: {what}")]
+    File {
+        /// The file.
+        path: String,
+        /// What went wrong, and what to do.
+        what: String,
+    },
 }

@@ -20,6 +20,7 @@
 mod builtin;
 pub use builtin::{builtin, BUILTINS};
 pub mod block;
+pub use block::textured;
 pub mod camera;
 pub mod closerange;
 pub mod constellation;

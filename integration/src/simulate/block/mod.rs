@@ -1,7 +1,8 @@
 //! Simulated photogrammetric blocks with known truth, written as a ready-to-run `ppkat adjust`
 //! project: an aerial block flown in strips (the classic 2-strip test block, or a large one
 //! for benchmarks) with GNSS antenna positions carrying a lever arm, a drift and correlated
-//! noise; the close-range pair of terrestrial stations is in [`super::closerange`].
+//! noise; the close-range pair of terrestrial stations is in [`super::closerange`]; blocks
+//! with awkward GNSS in [`nav`]; a small block with rendered photos in [`textured`].
 //! Deterministic per seed.
 //!
 //! Enters: a [`BlockSpec`] and a folder. Leaves: `project.toml`, `images.csv`,
@@ -18,6 +19,7 @@
 mod files;
 pub mod nav;
 mod spec;
+pub mod textured;
 
 pub use nav::{nav_block, NavSpec, NavTruth};
 pub use spec::{BlockSpec, BlockTruth};
@@ -286,8 +288,10 @@ pub fn gnss_section(spec: &BlockSpec, tape_error: [f64; 3], group: &str, model: 
 
 /// Built-in simulated adjustment projects: `classic-block` (the 2-strip block, 4 corner GCPs,
 /// tape-measured lever arm, linear drift), `close-range` (two stations), `block1000`
-/// (20 strips × 50 photos for benchmarks) and `nav-block` (navigation-grade GPS with a
-/// latency, control only in a few images each; see [`nav`]). Returns a one-line summary.
+/// (20 strips × 50 photos for benchmarks), `nav-block` (navigation-grade GPS with a
+/// latency, control only in a few images each; see [`nav`]) and `textured-block` (3 × 8
+/// rendered photos with exact truth, for feature matchers; see [`textured`]). Returns a
+/// one-line summary.
 pub fn builtin(name: &str, dir: &Path) -> Option<Result<String, SimError>> {
     let classic_gnss = |spec: &BlockSpec| gnss_section(spec, TAPE_ERROR, "block", "linear");
     let aerial_summary = |spec: BlockSpec| {
@@ -336,9 +340,28 @@ pub fn builtin(name: &str, dir: &Path) -> Option<Result<String, SimError>> {
                 dir.join("project.toml").display()
             )
         })),
+        "textured-block" => Some(textured::textured_block(&textured::TexturedSpec::builtin(), dir).map(|r| {
+            format!(
+                "textured-block: {} images of {} × {} px rendered in {:.1} s into {}, {} points, {} exact image measurements → {}",
+                r.images,
+                r.size_px.0,
+                r.size_px.1,
+                r.render_seconds,
+                dir.join("photos").display(),
+                r.points,
+                r.measurements,
+                dir.join("project.toml").display()
+            )
+        })),
         _ => None,
     }
 }
 
 /// Names of the built-in adjustment projects.
-pub const BUILTINS: [&str; 4] = ["classic-block", "close-range", "block1000", "nav-block"];
+pub const BUILTINS: [&str; 5] = [
+    "classic-block",
+    "close-range",
+    "block1000",
+    "nav-block",
+    "textured-block",
+];
