@@ -48,6 +48,7 @@ enum Cmd {
     Simulate(cmd::simulate::Args),
     Adjust(cmd::adjust::Args),
     Import(cmd::import::Args),
+    Match(cmd::tiepoints::Args),
     Demo(cmd::demo::Args),
     Bench(cmd::bench::Args),
 }
@@ -108,6 +109,7 @@ fn dispatch(cmd: Cmd, threads: Option<usize>) -> Result<()> {
         Cmd::Simulate(a) => cmd::simulate::run(a),
         Cmd::Adjust(a) => cmd::adjust::run(a, threads),
         Cmd::Import(a) => cmd::import::run(a),
+        Cmd::Match(a) => cmd::tiepoints::run(a),
         Cmd::Demo(a) => cmd::demo::run(a, threads),
         Cmd::Bench(a) => cmd::bench::run(a, threads),
     }

@@ -46,6 +46,7 @@ pub mod ppp;
 mod ppp_report;
 pub mod simulate;
 pub mod survey;
+pub mod tiepoints;
 pub mod vector;
 
 pub use gnss;

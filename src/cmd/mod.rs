@@ -15,6 +15,7 @@ pub mod ppk;
 pub mod ppp;
 pub mod simulate;
 pub mod spp;
+pub mod tiepoints;
 
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;

@@ -40,6 +40,7 @@ mod tables;
 pub use error::AdjustError;
 use project::Project;
 pub use solve::{solve, RunOptions, Solved};
+pub use start::compass_rotation;
 use std::path::Path;
 
 /// Load, adjust and write every output into `out`; returns the report.

@@ -305,47 +305,51 @@ fn cameras(source: &CameraSource) -> Result<Vec<CameraOut>, ImportError> {
                 self_calibrate: Vec::new(),
             }])
         }
-        CameraSource::File(path) => {
-            #[derive(serde::Deserialize)]
-            struct CameraFile {
-                #[serde(default)]
-                camera: Vec<CameraSection>,
-            }
-            let text = std::fs::read_to_string(path)
-                .map_err(|e| ferr(path, None, format!("cannot read: {e}")))?;
-            let file: CameraFile = toml::from_str(&text).map_err(|e| {
-                let line = e.span().map(|s| text[..s.start].matches('\n').count() + 1);
-                ferr(
-                    path,
-                    line,
-                    format!("not a ppkat camera file: {}", e.message()),
-                )
-            })?;
-            if file.camera.is_empty() {
-                return Err(ferr(
-                    path,
-                    None,
-                    "no [[camera]] table: add one (id, focal_mm, pixel_um, width_px, height_px)",
-                ));
-            }
-            file.camera
-                .iter()
-                .map(|c| {
-                    let d = camera_def(c, path).map_err(|e| ferr(path, None, e.to_string()))?;
-                    Ok(CameraOut {
-                        id: d.id,
-                        camera: d.camera,
-                        sigma_px: d.sigma_px,
-                        self_calibrate: d
-                            .calibrate
-                            .iter()
-                            .map(|&i| INTERIOR_NAMES[i].to_string())
-                            .collect(),
-                    })
-                })
-                .collect()
-        }
+        CameraSource::File(path) => camera_file(path),
     }
+}
+
+/// The `[[camera]]` tables of a ppkat camera file (the format of `project.toml`'s cameras);
+/// also `ppkat match --camera`.
+pub(crate) fn camera_file(path: &Path) -> Result<Vec<CameraOut>, ImportError> {
+    #[derive(serde::Deserialize)]
+    struct CameraFile {
+        #[serde(default)]
+        camera: Vec<CameraSection>,
+    }
+    let text =
+        std::fs::read_to_string(path).map_err(|e| ferr(path, None, format!("cannot read: {e}")))?;
+    let file: CameraFile = toml::from_str(&text).map_err(|e| {
+        let line = e.span().map(|s| text[..s.start].matches('\n').count() + 1);
+        ferr(
+            path,
+            line,
+            format!("not a ppkat camera file: {}", e.message()),
+        )
+    })?;
+    if file.camera.is_empty() {
+        return Err(ferr(
+            path,
+            None,
+            "no [[camera]] table: add one (id, focal_mm, pixel_um, width_px, height_px)",
+        ));
+    }
+    file.camera
+        .iter()
+        .map(|c| {
+            let d = camera_def(c, path).map_err(|e| ferr(path, None, e.to_string()))?;
+            Ok(CameraOut {
+                id: d.id,
+                camera: d.camera,
+                sigma_px: d.sigma_px,
+                self_calibrate: d
+                    .calibrate
+                    .iter()
+                    .map(|&i| INTERIOR_NAMES[i].to_string())
+                    .collect(),
+            })
+        })
+        .collect()
 }
 
 /// The index of a photo's camera, or an error naming the photo's line.

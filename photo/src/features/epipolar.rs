@@ -219,6 +219,35 @@ pub fn verify(
     (best.len() >= opts.min_inliers).then_some(Verified { f, inliers: best })
 }
 
+/// Motion coherence: which correspondences move like their `k` nearest neighbours (in the
+/// first image) do — their displacement within `tol_px` of the neighbours' median
+/// displacement. A wrong match that happens to lie near its epipolar line still lands far
+/// from where its neighbours go; relief changes displacements smoothly, so true matches pass.
+pub fn coherent(a: &[Vector2<f64>], b: &[Vector2<f64>], k: usize, tol_px: f64) -> Vec<bool> {
+    let n = a.len();
+    if n <= k {
+        return vec![true; n];
+    }
+    let disp: Vec<Vector2<f64>> = a.iter().zip(b).map(|(p, q)| q - p).collect();
+    (0..n)
+        .map(|i| {
+            let mut d: Vec<(f64, usize)> = (0..n)
+                .filter(|&j| j != i)
+                .map(|j| ((a[j] - a[i]).norm_squared(), j))
+                .collect();
+            d.select_nth_unstable_by(k - 1, |x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+            let near = &d[..k];
+            let med = |f: &dyn Fn(&Vector2<f64>) -> f64| {
+                let mut v: Vec<f64> = near.iter().map(|&(_, j)| f(&disp[j])).collect();
+                v.sort_by(f64::total_cmp);
+                (v[(k - 1) / 2] + v[k / 2]) / 2.0
+            };
+            let m = Vector2::new(med(&|v| v.x), med(&|v| v.y));
+            (disp[i] - m).norm() <= tol_px
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -271,6 +300,22 @@ mod tests {
         // Deterministic.
         let w = verify(&a, &b, &RansacOptions::default(), 1).unwrap();
         assert_eq!(v.inliers, w.inliers);
+    }
+
+    #[test]
+    fn a_match_that_leaves_its_neighbours_is_not_coherent() {
+        let mut a = Vec::new();
+        let mut b = Vec::new();
+        for i in 0..100 {
+            let p = Vector2::new((i % 10) as f64 * 50.0, (i / 10) as f64 * 50.0);
+            a.push(p);
+            // Smooth motion (a shift growing across the image, like relief).
+            b.push(p + Vector2::new(300.0 + p.x * 0.05, -20.0));
+        }
+        b[55] += Vector2::new(0.0, 200.0);
+        let c = coherent(&a, &b, 8, 30.0);
+        assert!(!c[55]);
+        assert_eq!(c.iter().filter(|&&x| x).count(), 99);
     }
 
     #[test]

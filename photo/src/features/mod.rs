@@ -119,6 +119,21 @@ pub fn extract(img: &GrayImage, scale: f64, opts: &FeatureOptions) -> Features {
     out
 }
 
+/// For every keypoint, the first keypoint at exactly the same position (SIFT gives a point one
+/// keypoint per dominant orientation): matches are joined on these, so one image position is
+/// one measurement.
+pub fn same_position(kps: &[Keypoint]) -> Vec<u32> {
+    let mut first: std::collections::HashMap<(u64, u64), u32> = Default::default();
+    kps.iter()
+        .enumerate()
+        .map(|(i, k)| {
+            *first
+                .entry((k.x.to_bits(), k.y.to_bits()))
+                .or_insert(i as u32)
+        })
+        .collect()
+}
+
 /// Indices of the keypoints kept: per grid cell the strongest up to an equal share of the
 /// cap, then the strongest of the rest; in order of index.
 fn spread(kps: &[Keypoint], width: f64, height: f64, opts: &FeatureOptions) -> Vec<usize> {

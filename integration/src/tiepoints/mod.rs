@@ -1,0 +1,356 @@
+//! `ppkat match`: automatic tie points from a folder of photographs, written as a ppkat
+//! project that `ppkat adjust` runs as it is.
+//!
+//! Stages: metadata of every photo ([`meta`]; EXIF and DJI XMP), cameras ([`camera`]),
+//! positions (an exposures table from [`positions`] before EXIF GPS), features of every photo
+//! decoded at a reduced size ([`decode`], `photo::features`; one photo per thread at a time,
+//! only keypoints and descriptors kept), pairs ([`pairs`]), matching and RANSAC per pair,
+//! tracks, the connected block, and the project ([`project`]) with a report ([`report`]).
+//!
+//! Every photo left out is named with its reason; images not connected to the main block are
+//! named too. Deterministic: parallel stages collect in input order.
+
+pub mod camera;
+pub mod decode;
+pub mod meta;
+pub mod pairs;
+pub mod positions;
+pub mod project;
+pub mod report;
+
+use photo::features::epipolar::{coherent, verify, RansacOptions};
+use photo::features::matching::{match_descriptors, Match};
+use photo::features::{extract, tracks, FeatureOptions, Features};
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+
+pub use pairs::PairMode;
+
+/// What `ppkat match` is asked to do.
+#[derive(Clone, Debug)]
+pub struct MatchJob {
+    /// The folder of photographs.
+    pub photos: PathBuf,
+    /// An exposures table whose positions replace the photos' EXIF GPS.
+    pub exposures: Option<PathBuf>,
+    /// A camera file (`[[camera]]` tables) replacing the metadata's camera.
+    pub camera: Option<PathBuf>,
+    /// Features per photo.
+    pub max_features: usize,
+    /// Longer side of the images features are extracted from, pixels.
+    pub max_image_size: u32,
+    /// How pairs are chosen.
+    pub pairs: PairMode,
+    /// σ of positions without their own, horizontal and vertical (m).
+    pub gnss_sigma: [f64; 2],
+    /// Ratio test threshold.
+    pub ratio: f64,
+    /// RANSAC threshold, photograph pixels.
+    pub ransac_px: f64,
+    /// Fewest verified matches for a pair.
+    pub min_matches: usize,
+}
+
+impl MatchJob {
+    /// A job on `photos` with the default settings.
+    pub fn new(photos: PathBuf) -> MatchJob {
+        MatchJob {
+            photos,
+            exposures: None,
+            camera: None,
+            max_features: 8000,
+            max_image_size: 2000,
+            pairs: PairMode::Auto,
+            gnss_sigma: [3.0, 5.0],
+            ratio: 0.8,
+            ransac_px: 4.0,
+            min_matches: 20,
+        }
+    }
+}
+
+/// Neighbours a match's displacement is compared with (motion coherence).
+pub const COHERENCE_NEIGHBOURS: usize = 8;
+
+/// A photo that takes part: its metadata, its features, the reduced size's factor.
+#[derive(Clone, Debug)]
+pub struct Image {
+    /// Metadata.
+    pub meta: meta::PhotoMeta,
+    /// Photograph width and height, pixels.
+    pub size: (u32, u32),
+    /// Photograph pixels per pixel of the image features were extracted from.
+    pub scale: f64,
+    /// Keypoints (photograph pixels) and descriptors.
+    pub features: Features,
+}
+
+/// A matched pair: image indices, putative matches, verified matches.
+#[derive(Clone, Debug)]
+pub struct PairResult {
+    /// First image.
+    pub a: usize,
+    /// Second image.
+    pub b: usize,
+    /// Matches after the ratio and mutual tests.
+    pub putative: usize,
+    /// Matches RANSAC kept (empty when the pair failed).
+    pub verified: Vec<Match>,
+}
+
+/// Everything a match run found.
+#[derive(Clone, Debug)]
+pub struct Matched {
+    /// The photos that were read, in name order.
+    pub images: Vec<Image>,
+    /// Every pair tried.
+    pub pairs: Vec<PairResult>,
+    /// How pairs were chosen.
+    pub pair_note: String,
+    /// Tracks (image index, keypoint index).
+    pub tracks: tracks::Tracks,
+    /// Component number of every image (0 = the largest block).
+    pub component: Vec<usize>,
+    /// Photos left out: (file name, reason).
+    pub skipped: Vec<(String, String)>,
+    /// Other files in the folder that are not photographs.
+    pub other_files: usize,
+    /// Seconds per stage: (stage, seconds).
+    pub timing: Vec<(String, f64)>,
+}
+
+/// Why a match run failed as a whole.
+#[derive(Debug, thiserror::Error)]
+pub enum MatchError {
+    /// A problem with a file given by the user.
+    #[error("{0}")]
+    Input(String),
+    /// Nothing usable came out.
+    #[error("{0}")]
+    Nothing(String),
+}
+
+/// The photographs of a folder (JPEG, PNG by extension), sorted by name; other files counted.
+fn list(dir: &Path) -> Result<(Vec<PathBuf>, usize), MatchError> {
+    let rd = std::fs::read_dir(dir).map_err(|e| {
+        MatchError::Input(format!("{}: cannot read the folder: {e}", dir.display()))
+    })?;
+    let mut photos = Vec::new();
+    let mut other = 0;
+    for e in rd.flatten() {
+        let p = e.path();
+        if !p.is_file() {
+            continue;
+        }
+        let ext = p
+            .extension()
+            .map(|x| x.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
+        if matches!(ext.as_str(), "jpg" | "jpeg" | "png") {
+            photos.push(p);
+        } else {
+            other += 1;
+        }
+    }
+    photos.sort();
+    Ok((photos, other))
+}
+
+/// Metadata and features of one photo, or why it is left out.
+fn read_one(path: &Path, job: &MatchJob, opts: &FeatureOptions) -> Result<Image, String> {
+    let meta = meta::read(path)?;
+    let d = decode::decode(path, job.max_image_size)?;
+    let features = extract(&d.gray, d.scale, opts);
+    Ok(Image {
+        meta,
+        size: d.full,
+        scale: d.scale,
+        features,
+    })
+}
+
+/// Match one pair: ratio/mutual test, then RANSAC (seeded by the pair).
+fn match_pair(images: &[Image], a: usize, b: usize, job: &MatchJob) -> PairResult {
+    let (fa, fb) = (&images[a].features, &images[b].features);
+    let m = match_descriptors(fa, fb, job.ratio);
+    let pa: Vec<_> = m
+        .iter()
+        .map(|&(i, _)| {
+            let k = fa.keypoints[i as usize];
+            nalgebra::Vector2::new(k.x, k.y)
+        })
+        .collect();
+    let pb: Vec<_> = m
+        .iter()
+        .map(|&(_, j)| {
+            let k = fb.keypoints[j as usize];
+            nalgebra::Vector2::new(k.x, k.y)
+        })
+        .collect();
+    let opts = RansacOptions {
+        threshold_px: job.ransac_px,
+        min_inliers: job.min_matches,
+        ..RansacOptions::default()
+    };
+    let verified = verify(&pa, &pb, &opts, (a as u64) << 32 | b as u64)
+        .map(|v| {
+            // Then motion coherence: each inlier moves as its nearest neighbours do.
+            let (ia, ib): (Vec<_>, Vec<_>) = v.inliers.iter().map(|&k| (pa[k], pb[k])).unzip();
+            let (w, h) = images[a].size;
+            let tol = (0.02 * (w as f64).hypot(h as f64)).max(20.0);
+            let ok = coherent(&ia, &ib, COHERENCE_NEIGHBOURS, tol);
+            let kept: Vec<Match> = v
+                .inliers
+                .iter()
+                .zip(ok)
+                .filter(|(_, ok)| *ok)
+                .map(|(&k, _)| m[k])
+                .collect();
+            if kept.len() >= job.min_matches {
+                kept
+            } else {
+                Vec::new()
+            }
+        })
+        .unwrap_or_default();
+    PairResult {
+        a,
+        b,
+        putative: m.len(),
+        verified,
+    }
+}
+
+/// Connected components of the images by verified pairs, numbered by size (0 largest).
+fn components(n: usize, pairs: &[PairResult]) -> Vec<usize> {
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn root(p: &mut [usize], mut x: usize) -> usize {
+        while p[x] != x {
+            p[x] = p[p[x]];
+            x = p[x];
+        }
+        x
+    }
+    for p in pairs.iter().filter(|p| !p.verified.is_empty()) {
+        let (x, y) = (root(&mut parent, p.a), root(&mut parent, p.b));
+        parent[x.max(y)] = x.min(y);
+    }
+    let roots: Vec<usize> = (0..n).map(|i| root(&mut parent, i)).collect();
+    let mut size = vec![0usize; n];
+    roots.iter().for_each(|&r| size[r] += 1);
+    let mut order: Vec<usize> = (0..n).filter(|&r| size[r] > 0).collect();
+    order.sort_by(|&a, &b| size[b].cmp(&size[a]).then(a.cmp(&b)));
+    let mut number = vec![0usize; n];
+    for (k, &r) in order.iter().enumerate() {
+        number[r] = k;
+    }
+    roots.iter().map(|&r| number[r]).collect()
+}
+
+/// Run the matching stages; `progress(stage, done, total)` is called as work completes.
+pub fn run(
+    job: &MatchJob,
+    progress: &(dyn Fn(&str, usize, usize) + Sync),
+) -> Result<Matched, MatchError> {
+    let (files, other_files) = list(&job.photos)?;
+    if files.is_empty() {
+        return Err(MatchError::Nothing(format!(
+            "{}: no JPEG or PNG photographs in the folder",
+            job.photos.display()
+        )));
+    }
+    let opts = FeatureOptions {
+        max_features: job.max_features,
+        ..FeatureOptions::default()
+    };
+    let t = std::time::Instant::now();
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let read: Vec<Result<Image, String>> = files
+        .par_iter()
+        .map(|p| {
+            let r = read_one(p, job, &opts);
+            let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress("features", k, files.len());
+            r
+        })
+        .collect();
+    let mut timing = vec![("features".to_string(), t.elapsed().as_secs_f64())];
+    let mut images = Vec::new();
+    let mut skipped = Vec::new();
+    for (p, r) in files.iter().zip(read) {
+        let name = p
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned();
+        match r {
+            Ok(im) if im.features.keypoints.len() < job.min_matches => skipped.push((
+                name,
+                format!(
+                    "only {} features found (texture too weak or image too small)",
+                    im.features.keypoints.len()
+                ),
+            )),
+            Ok(im) => images.push(im),
+            Err(e) => skipped.push((name, e)),
+        }
+    }
+    if images.len() < 2 {
+        return Err(MatchError::Nothing(format!(
+            "{}: {} usable photograph(s); matching needs at least two{}",
+            job.photos.display(),
+            images.len(),
+            skipped
+                .iter()
+                .map(|(n, r)| format!("\n  {n}: {r}"))
+                .collect::<String>()
+        )));
+    }
+    let (pos, radius) = project::positions_for_pairs(job, &images)?;
+    let (list, pair_note) = pairs::choose(job.pairs, &pos, &radius).map_err(MatchError::Input)?;
+    let t = std::time::Instant::now();
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let results: Vec<PairResult> = list
+        .par_iter()
+        .map(|&(a, b)| {
+            let r = match_pair(&images, a, b, job);
+            let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress("pairs", k, list.len());
+            r
+        })
+        .collect();
+    timing.push(("matching".into(), t.elapsed().as_secs_f64()));
+    let counts: Vec<usize> = images.iter().map(|i| i.features.keypoints.len()).collect();
+    // One measurement per image position: keypoints of other orientations at the same place
+    // join their first.
+    let canon: Vec<Vec<u32>> = images
+        .iter()
+        .map(|i| photo::features::same_position(&i.features.keypoints))
+        .collect();
+    let verified: Vec<(usize, usize, Vec<Match>)> = results
+        .iter()
+        .filter(|p| !p.verified.is_empty())
+        .map(|p| {
+            let mut v: Vec<Match> = p
+                .verified
+                .iter()
+                .map(|&(i, j)| (canon[p.a][i as usize], canon[p.b][j as usize]))
+                .collect();
+            v.sort_unstable();
+            v.dedup();
+            (p.a, p.b, v)
+        })
+        .collect();
+    let tracks = tracks::build(&counts, &verified);
+    let component = components(images.len(), &results);
+    Ok(Matched {
+        images,
+        pairs: results,
+        pair_note,
+        tracks,
+        component,
+        skipped,
+        other_files,
+        timing,
+    })
+}

@@ -1,0 +1,184 @@
+//! `ppkat match`: automatic tie points from a folder of photographs, as a ppkat project.
+
+use anyhow::{Context, Result};
+use integration::tiepoints::{self, project, report, MatchJob, PairMode};
+use std::path::PathBuf;
+
+/// Find tie points in a folder of photographs and write a ppkat project that `ppkat adjust`
+/// runs as it is.
+///
+/// Reads every JPEG or PNG of the folder: EXIF (GPS, focal length, 35 mm equivalent, size,
+/// model) and DJI XMP (altitudes, gimbal angles, calibrated focal length, RTK σ). Extracts
+/// SIFT features from each photo reduced to --max-image-size, matches the pairs (nearest
+/// neighbours with the ratio test and a mutual check), verifies each pair by RANSAC on the
+/// fundamental matrix, joins matches into tracks across photos, and writes the main connected
+/// block: project.toml (cameras from the metadata, self-calibrated with 5 or more photos),
+/// images.csv, image_observations.csv (pixels, column right, row down, origin at the top-left
+/// corner), antennas.csv (camera positions with σ), start.csv (start attitudes from DJI gimbal
+/// angles), match.json and match_report.html (per photo: features, verified pairs,
+/// measurements; the pair graph). Photos that cannot be read, have no focal length or are not
+/// connected to the block are named with the reason, and the exit code is 3.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Folder of photographs (JPEG or PNG; other files are counted and ignored).
+    #[arg(long, value_name = "DIR")]
+    photos: PathBuf,
+    /// Exposure positions replacing the photos' EXIF GPS: a ppkat exposures CSV or antenna
+    /// table (columns id, lat, lon, h and optionally sigma_e/n/u or c_ee/c_nn/c_uu), rows
+    /// named as the photo files (with or without the extension).
+    #[arg(long, value_name = "FILE")]
+    exposures: Option<PathBuf>,
+    /// Camera file with [[camera]] tables as in project.toml (chosen by image size); default:
+    /// from each photo's metadata.
+    #[arg(long, value_name = "FILE.toml")]
+    camera: Option<PathBuf>,
+    /// Most features kept per photo (spread over the image by a grid).
+    #[arg(long, value_name = "N", default_value_t = 8000)]
+    max_features: usize,
+    /// Longer side of the reduced image features are extracted from, pixels (photos are
+    /// reduced by 2, 4 or 8 to fit; positions are written in the photo's own pixels).
+    #[arg(long, value_name = "PX", default_value_t = 2000)]
+    max_image_size: u32,
+    /// Pairs to match: auto (every pair up to 40 photos or without positions, else by
+    /// overlapping footprints), exhaustive, or gnss (by footprints; positions required).
+    #[arg(long, value_name = "MODE", default_value = "auto",
+          value_parser = ["auto", "exhaustive", "gnss"])]
+    pairs: String,
+    /// σ of positions that carry none, horizontal,vertical (m): consumer GPS by default.
+    #[arg(long, value_name = "H,V", default_value = "3,5", value_parser = sigma_pair)]
+    gnss_sigma: SigmaPair,
+    /// Output project folder (written whole, or not at all).
+    #[arg(short = 'o', long = "out", value_name = "DIR")]
+    out: PathBuf,
+}
+
+/// `--gnss-sigma H,V`.
+#[derive(Clone, Copy, Debug)]
+struct SigmaPair([f64; 2]);
+
+fn sigma_pair(s: &str) -> std::result::Result<SigmaPair, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| {
+            x.trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite() && *v > 0.0)
+        })
+        .collect::<Option<_>>()
+        .ok_or("give two positive numbers H,V in metres")?;
+    match v[..] {
+        [h, u] => Ok(SigmaPair([h, u])),
+        _ => Err("give two positive numbers H,V in metres".into()),
+    }
+}
+
+/// The files a match run writes (an earlier run's folder may be replaced).
+const OUTPUTS: [&str; 7] = [
+    "project.toml",
+    "images.csv",
+    "image_observations.csv",
+    "antennas.csv",
+    "start.csv",
+    "match.json",
+    "match_report.html",
+];
+
+/// Run `ppkat match`.
+pub fn run(args: Args) -> Result<()> {
+    let mut job = MatchJob::new(args.photos);
+    job.exposures = args.exposures;
+    job.camera = args.camera;
+    job.max_features = args.max_features.max(100);
+    job.max_image_size = args.max_image_size.max(200);
+    job.pairs = match args.pairs.as_str() {
+        "exhaustive" => PairMode::Exhaustive,
+        "gnss" => PairMode::Gnss,
+        _ => PairMode::Auto,
+    };
+    job.gnss_sigma = args.gnss_sigma.0;
+    let bar = indicatif::ProgressBar::new(0);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{msg:9} {bar:30} {pos}/{len} (ETA {eta})")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let m = tiepoints::run(&job, &|stage, done, total| {
+        bar.set_message(stage.to_string());
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    });
+    bar.finish_and_clear();
+    let m = m?;
+    let w = project::build(&job, &m)?;
+    let (pos, _) = project::positions_for_pairs(&job, &m.images)?;
+    let staged = gnss::atomic::StagedDir::new(&args.out, &OUTPUTS)?;
+    w.project
+        .write(staged.path())
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let json = report::json_text(&m, &w);
+    std::fs::write(staged.path().join("match.json"), json)
+        .with_context(|| format!("cannot write {}", args.out.display()))?;
+    std::fs::write(
+        staged.path().join("match_report.html"),
+        report::html(&m, &w, &pos),
+    )
+    .with_context(|| format!("cannot write {}", args.out.display()))?;
+    staged.commit()?;
+    print_summary(&m, &w);
+    let skipped: Vec<String> = m
+        .skipped
+        .iter()
+        .chain(&w.no_camera)
+        .map(|(n, r)| format!("{n}: {r}"))
+        .chain(
+            w.not_connected
+                .iter()
+                .map(|n| format!("{n}: not connected to the block (no verified pair with it)")),
+        )
+        .collect();
+    super::complete(skipped)
+}
+
+fn print_summary(m: &tiepoints::Matched, w: &project::Written) {
+    println!(
+        "photos: {} read, {} in the block, {} not connected, {} left out{}",
+        m.images.len() + m.skipped.len(),
+        w.project.images.len(),
+        w.not_connected.len(),
+        m.skipped.len() + w.no_camera.len(),
+        if m.other_files > 0 {
+            format!(" ({} other files ignored)", m.other_files)
+        } else {
+            String::new()
+        }
+    );
+    for (c, s, n) in &w.cameras {
+        println!("camera {c}: {n} photos, focal length from {s}");
+    }
+    println!("pairs: {}", m.pair_note);
+    println!(
+        "pairs verified: {} of {}",
+        m.pairs.iter().filter(|p| !p.verified.is_empty()).count(),
+        m.pairs.len()
+    );
+    println!(
+        "tracks: {} ({} in 3 or more photos), {} measurements, {} conflicting keypoints cut",
+        w.tracks, w.tracks_3plus, w.observations, m.tracks.conflicts
+    );
+    if w.implausible_depth > 0 {
+        println!(
+            "tracks left out: {} (their points would lie at an implausible depth: wrong matches)",
+            w.implausible_depth
+        );
+    }
+    println!(
+        "positions: {} photos, start attitudes: {}",
+        w.with_position, w.with_attitude
+    );
+    for (n, d) in &w.heading_disagrees {
+        println!("note: {n}: the gimbal yaw differs by {d:.0}° from the heading its overlaps give; the overlaps' is used");
+    }
+    for (s, t) in &m.timing {
+        println!("time {s}: {t:.1} s");
+    }
+}
