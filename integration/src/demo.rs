@@ -143,7 +143,7 @@ impl SimInputs {
             BasePosition::Given(sim.base_position),
             &self.orbits,
             opts,
-            &|_| {},
+            &gnss::progress::NoProgress,
         )?)
     }
 }

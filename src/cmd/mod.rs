@@ -13,6 +13,7 @@ pub mod info;
 pub mod leverarm;
 pub mod ppk;
 pub mod ppp;
+pub mod progress;
 pub mod simulate;
 pub mod spp;
 
