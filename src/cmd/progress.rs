@@ -38,7 +38,7 @@ impl Progress for Bar {
             let (bar, template) = if len == 0 {
                 (
                     indicatif::ProgressBar::new_spinner(),
-                    "{spinner} {msg}: {pos} ({per_sec}, {elapsed})",
+                    "{spinner} {msg} {pos} ({elapsed})",
                 )
             } else {
                 (

@@ -45,7 +45,7 @@ pub fn convert_with_progress(
     let mut scan = Scan::default();
     let mut lognav = LogNav::default();
     let mut epochs = 0u64;
-    progress.set_len("reading the log", 0);
+    progress.set_len("reading the log, epoch", 0);
     let st1 = for_each_item(input, format, |it| {
         lognav.add(&it);
         if let RawItem::Epoch(e) = it {

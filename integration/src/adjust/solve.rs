@@ -48,9 +48,10 @@ pub fn solve_with_progress(
         built
             .problem
             .set_observer(Some(std::sync::Arc::new(move |step| match step {
-                photo::lsq::SolveStep::SnoopingRound(k) => {
-                    p.set_len(&format!("adjustment: data snooping, round {k}"), 0)
-                }
+                photo::lsq::SolveStep::SnoopingRound(k) => p.set_len(
+                    &format!("adjustment: data snooping round {k}, iteration"),
+                    0,
+                ),
                 photo::lsq::SolveStep::Iteration(..) => p.inc(1),
             })));
     }
@@ -153,7 +154,7 @@ fn solve_built(
         if opts.snooping {
             removed.extend(pr.data_snooping(critical)?.1);
         } else {
-            stage("adjustment: solve");
+            stage("adjustment: solve, iteration");
             pr.solve()?;
         }
         Ok(())
@@ -161,12 +162,12 @@ fn solve_built(
     snoop(pr, &mut removed)?;
     let mut components = vec![1.0; GROUPS];
     if opts.variance_components {
-        stage("adjustment: variance components");
+        stage("adjustment: variance components, iteration");
         components = pr.variance_components(10)?;
         // Snoop again with the estimated weights.
         snoop(pr, &mut removed)?;
     }
-    stage("adjustment: final solve");
+    stage("adjustment: final solve, iteration");
     let stats = pr.solve()?;
     Ok((stats, removed, components, critical))
 }
