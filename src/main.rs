@@ -31,6 +31,11 @@ struct Cli {
         value_parser = thread_count
     )]
     threads: Option<usize>,
+    /// No progress bars and no notes on standard error; warnings about skipped inputs and
+    /// errors are still printed. (Progress bars appear only when standard error is a
+    /// terminal.)
+    #[arg(long, short = 'q', global = true, help_heading = "Global options")]
+    quiet: bool,
     #[command(subcommand)]
     cmd: Cmd,
 }
@@ -84,6 +89,7 @@ fn main() {
 /// parallel call).
 fn run(cli: Cli) -> Result<()> {
     let threads = cli.threads;
+    cmd::set_quiet(cli.quiet);
     if let Some(n) = threads {
         rayon::ThreadPoolBuilder::new()
             .num_threads(n)

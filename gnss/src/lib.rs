@@ -25,6 +25,7 @@ pub mod obs;
 pub mod orbit;
 pub mod ppk;
 pub mod ppp;
+pub mod progress;
 pub mod raw;
 pub mod rinex;
 pub mod signal;

@@ -61,5 +61,13 @@ pub fn ppk_on(
         .map(|f| NavFile::read(&dir.join(f)).unwrap())
         .collect();
     let orbits = Orbits::broadcast(Ephemerides::from_nav(&n));
-    ppk::process(r, b, BasePosition::Given(base_pos), &orbits, opts, &|_| {}).unwrap()
+    ppk::process(
+        r,
+        b,
+        BasePosition::Given(base_pos),
+        &orbits,
+        opts,
+        &gnss::progress::NoProgress,
+    )
+    .unwrap()
 }

@@ -143,7 +143,7 @@ impl SimInputs {
             BasePosition::Given(sim.base_position),
             &self.orbits,
             opts,
-            &|_| {},
+            &gnss::progress::NoProgress,
         )?)
     }
 }
@@ -364,7 +364,12 @@ fn exposures(
     rover: &ObsFile,
     traj: &Trajectory,
 ) -> Result<ExposureResult, ChainError> {
-    let (events, _) = crate::exposure::events::from_rinex(rover, traj);
+    let (mut events, _) = crate::exposure::events::from_rinex(rover, traj);
+    // The simulator names its images 1, 2, 3 … in exposure order: the adjustment project's
+    // image ids, which the antenna table must carry.
+    for (k, e) in events.iter_mut().enumerate() {
+        e.id = (k + 1).to_string();
+    }
     let att_path = out.join("imu_attitude.csv");
     let mut att = String::from("# simulated IMU attitude: week,tow,yaw,pitch,roll (degrees)\n");
     for l in truth_text(out, "truth_trajectory.csv")?.lines() {

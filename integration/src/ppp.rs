@@ -72,7 +72,7 @@ pub struct PppReport {
 }
 
 /// Run PPP as the job says.
-pub fn ppp(job: &PppJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PppReport> {
+pub fn ppp(job: &PppJob, progress: &dyn gnss::progress::Progress) -> Result<PppReport> {
     let t0 = std::time::Instant::now();
     for ext in ["", ".json", ".ztd.csv", ".html"] {
         gnss::atomic::clean_stale(&side_path(&job.out, ext));
@@ -187,7 +187,7 @@ pub fn base_from_ppp(
         ..PppOptions::default()
     };
     let start = start_position(base, orbits)?;
-    let r = gnss::ppp::process(base, orbits, &options, start, &|_| {})?;
+    let r = gnss::ppp::process(base, orbits, &options, start, &gnss::progress::NoProgress)?;
     let Some(last) = r.epochs.last() else {
         return Err(Error::input(
             &base.path,

@@ -29,7 +29,15 @@ pub struct Args {
 
 /// Run the adjustment on `threads` threads and print its summary.
 pub fn run(args: Args, threads: Option<usize>) -> Result<()> {
-    let r = adjust::run(&args.project, &args.out, &RunOptions { threads })?;
+    let bar = std::sync::Arc::new(super::progress::Bar::new());
+    let r = adjust::run_with_progress(
+        &args.project,
+        &args.out,
+        &RunOptions { threads },
+        Some(bar.clone()),
+    );
+    drop(bar);
+    let r = r?;
     print!("{}", r.summary());
     println!("outputs in {}", args.out.display());
     Ok(())

@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::ValueEnum;
-use integration::gnss::raw::convert::{convert, Outputs};
+use integration::gnss::raw::convert::{convert_with_progress, Outputs};
 use integration::gnss::raw::RawFormat;
 use std::path::PathBuf;
 
@@ -60,7 +60,10 @@ pub fn run(a: Args) -> Result<()> {
         nav: a.nav.as_deref(),
         events: a.events.as_deref(),
     };
-    let st = convert(&a.input, format, outs)?;
+    let bar = super::progress::Bar::new();
+    let st = convert_with_progress(&a.input, format, outs, &bar);
+    drop(bar);
+    let st = st?;
     print!("{st}");
     for p in [Some(&a.out), a.nav.as_ref(), a.events.as_ref()]
         .into_iter()

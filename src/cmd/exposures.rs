@@ -19,10 +19,16 @@ use std::path::PathBuf;
 /// exposure, subtracts the lever arm rotated by the camera attitude (from --attitude, else the
 /// trajectory's heading with zero pitch and roll, flagged) and writes one camera station per
 /// exposure, with accuracy and flags, in the chosen format. The lever arm (u, v, w) is the
-/// antenna in the camera frame: X_antenna = X_camera + R·(u, v, w). Optionally matches the
-/// photographs of a folder to the exposures and writes geotagged copies (originals are never
-/// modified). Prints how many stations were written, what was refused and why, and warnings;
-/// exits with code 3 when exposures were refused or photos left out (each named on stderr).
+/// antenna in the camera frame: X_antenna = X_camera + R·(u, v, w).
+///
+/// Names (the labels Metashape, Pix4D and ODM join to the images): the photographs' file names
+/// with --photos DIR (the photos in EXIF capture-time order, or file-name order when not all
+/// have one; with --mrk each photo goes to the MRK line whose index is its DJI_NNNN number);
+/// else the lines of --names FILE; else DJI_NNNN from the MRK index (as DJI names the
+/// photos), a --times file's id column, or E0001, E0002 … (with a note). With --photos,
+/// --geotag writes geotagged copies (originals are never modified). Prints how many stations
+/// were written, what was refused and why, and warnings; exits with code 3 when exposures
+/// were refused or photos left out (each named on stderr).
 #[derive(clap::Args)]
 pub struct Args {
     /// Antenna trajectory (.pos from ppkat or RTKLIB, llh or xyz).
@@ -69,10 +75,16 @@ pub struct Args {
     /// Output layout.
     #[arg(long, value_enum, default_value = "csv")]
     format: ExportArg,
-    /// Folder of the photographs (JPEG), matched in name order to the exposures; their names
-    /// become the station labels.
+    /// Folder of the photographs (JPEG); their file names become the exposure names. Paired
+    /// in time order, the photos sorted by EXIF capture time (by file name when not every
+    /// photo has one) and the rhythm of the capture times checked; with --mrk by number: MRK
+    /// index = the DJI_NNNN number of the file name.
     #[arg(long, value_name = "DIR")]
     photos: Option<PathBuf>,
+    /// Exposure names: a text file with one name per line in exposure order (blank lines and
+    /// lines starting with # skipped); as many names as exposures.
+    #[arg(long, value_name = "FILE", conflicts_with = "photos")]
+    names: Option<PathBuf>,
     /// Write geotagged copies of the --photos into this folder (originals are never touched).
     #[arg(long, value_name = "OUTDIR", requires = "photos")]
     geotag: Option<PathBuf>,
@@ -200,12 +212,16 @@ pub fn run(args: Args) -> Result<()> {
         heights: super::heights(&args.height)?,
         out: args.out,
         photos: args.photos,
+        names: args.names,
         geotag: args.geotag,
     };
     if job.geotag.is_some() && !job.heights.orthometric() {
-        eprintln!("note: geotags with ellipsoidal heights: EXIF GPSAltitude means above sea level, so the copies carry no EXIF altitude; the ellipsoidal height is in their XMP (ppkat:Height, drone-dji:AbsoluteAltitude). Give --height egm96 or geoid:FILE for a sea-level EXIF altitude.");
+        super::note("geotags with ellipsoidal heights: EXIF GPSAltitude means above sea level, so the copies carry no EXIF altitude; the ellipsoidal height is in their XMP (ppkat:Height, drone-dji:AbsoluteAltitude). Give --height egm96 or geoid:FILE for a sea-level EXIF altitude.");
     }
     let report = pipeline::exposures(&job).context("exposures failed")?;
     print!("{report}");
+    if let Some(n) = &report.names_note {
+        super::note(n);
+    }
     super::complete(report.skipped())
 }

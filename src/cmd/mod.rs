@@ -13,6 +13,7 @@ pub mod info;
 pub mod leverarm;
 pub mod ppk;
 pub mod ppp;
+pub mod progress;
 pub mod simulate;
 pub mod spp;
 pub mod tiepoints;
@@ -24,6 +25,26 @@ use integration::gnss::raw::RawFormat;
 use integration::gnss::solution::PosFormat;
 use integration::gnss::sv::Constellation;
 use integration::vector::TrajectoryFormat;
+
+static QUIET: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// `--quiet`: no progress bars and no notes on standard error (warnings about skipped inputs
+/// and errors are still printed).
+pub fn set_quiet(quiet: bool) {
+    QUIET.store(quiet, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// Whether `--quiet` was given.
+pub fn quiet() -> bool {
+    QUIET.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// A non-essential remark on standard error (`note: …`), left out with `--quiet`.
+pub fn note(text: &str) {
+    if !quiet() {
+        eprintln!("note: {text}");
+    }
+}
 
 /// A run that finished but left inputs out: `ppkat` exits with code 3 and prints this on
 /// standard error (the count, then each input named with the reason).

@@ -273,15 +273,9 @@ pub fn run_job(args: Args) -> Result<pipeline::PpkReport> {
         out: args.out,
         report: args.report,
     };
-    let bar = indicatif::ProgressBar::new_spinner();
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{spinner} {pos} epoch-passes processed ({per_sec})",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
-    );
-    let report = pipeline::ppk(&job, &|n| bar.inc(n as u64));
-    bar.finish_and_clear();
+    let bar = super::progress::Bar::new();
+    let report = pipeline::ppk(&job, &bar);
+    drop(bar);
     report.context("carrier-phase positioning failed")
 }
 

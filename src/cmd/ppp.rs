@@ -122,13 +122,9 @@ pub fn run(args: Args) -> Result<()> {
         format: args.format.into(),
         out: args.out,
     };
-    let bar = indicatif::ProgressBar::new_spinner();
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("{spinner} {pos} epochs processed ({per_sec})")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
-    );
-    let report = ppp::ppp(&job, &|n| bar.inc(n as u64));
-    bar.finish_and_clear();
+    let bar = super::progress::Bar::new();
+    let report = ppp::ppp(&job, &bar);
+    drop(bar);
     print!("{}", report.context("precise point positioning failed")?);
     Ok(())
 }

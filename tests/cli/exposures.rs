@@ -307,3 +307,112 @@ fn exposure_heights_ellipsoidal_egm96_and_grid() {
     ]);
     fails_with(&o, &["bad-geoid.txt:2", "LAT LON N"]);
 }
+
+/// The demo's exposures as `ppkat exposures` writes them (CSV) into `out` with `extra`
+/// arguments: the process output and the data rows split at commas.
+fn exposure_rows(extra: &[&str], out: &Path) -> (Output, Vec<Vec<String>>) {
+    let dir = demo_dir();
+    let (traj, rover) = (dir.join("rover_ppk.pos"), dir.join("rover.obs"));
+    let mut args = vec!["exposures", "--trajectory", p(&traj), "--events", p(&rover)];
+    args.extend_from_slice(extra);
+    args.extend(["-o", p(out)]);
+    let o = ppkat(&args);
+    let rows = std::fs::read_to_string(out)
+        .map(|b| {
+            b.lines()
+                .skip(2)
+                .map(|l| l.split(',').map(str::to_string).collect())
+                .collect()
+        })
+        .unwrap_or_default();
+    (o, rows)
+}
+
+/// Exposure names: RINEX events without photos or names are E0001 … with a note on stderr
+/// (silenced by --quiet, the outputs identical); --names gives them in order (a count
+/// mismatch names both counts and the file); DJI MRK lines are DJI_NNNN and, with the real
+/// Brighton Beach photos, pair by number with DJI_0018.JPG ….
+#[test]
+fn exposure_names() {
+    let (o, rows) = exposure_rows(&[], &tmp("names-generic.csv"));
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert_eq!(rows[0][0], "E0001");
+    assert!(
+        rows.iter().all(|r| r[0].starts_with('E')),
+        "never bare numbers"
+    );
+    assert!(err.contains("--photos") && err.contains("--names"), "{err}");
+    let (q, _) = exposure_rows(&["--quiet"], &tmp("names-quiet.csv"));
+    assert_eq!(q.status.code(), Some(0), "{}", text(&q));
+    assert!(
+        q.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&q.stderr)
+    );
+    assert_eq!(
+        std::fs::read(tmp("names-generic.csv")).unwrap(),
+        std::fs::read(tmp("names-quiet.csv")).unwrap(),
+        "--quiet changes no output"
+    );
+    // A names file.
+    let n = rows.len();
+    let names = tmp("names.txt");
+    let mut text_ = String::from("# one name per exposure\n");
+    for k in 0..n {
+        text_ += &format!("strip1-{k:03}.tif\n");
+    }
+    std::fs::write(&names, &text_).unwrap();
+    let (o, named) = exposure_rows(&["--names", p(&names)], &tmp("names-file.csv"));
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(o.stderr.is_empty(), "no note: {}", text(&o));
+    assert_eq!(named[0][0], "strip1-000.tif");
+    assert_eq!(named[n - 1][0], format!("strip1-{:03}.tif", n - 1));
+    std::fs::write(&names, "a\nb\n").unwrap();
+    let (o, _) = exposure_rows(&["--names", p(&names)], &tmp("names-bad.csv"));
+    fails_with(&o, &["names.txt", &format!("2 names for {n} exposures")]);
+    mrk_names_and_photos(&rows);
+}
+
+/// An MRK of 18 exposures (indices 18–35) at the times and places of the demo's first
+/// stations: named DJI_0018 … without photos; with the Brighton Beach photos (DJI_0018.JPG …
+/// DJI_0035.JPG, whose own capture times are years away) paired by number.
+fn mrk_names_and_photos(rows: &[Vec<String>]) {
+    let dir = demo_dir();
+    let mrk = tmp("names.MRK");
+    let mut body = String::new();
+    for (k, r) in rows.iter().take(18).enumerate() {
+        body += &format!(
+            "{}\t{}\t[{}]\t0,N\t0,E\t0,V\t{},Lat\t{},Lon\t{},Ellh\t0.01, 0.01, 0.02\t50,Q\n",
+            18 + k,
+            r[2],
+            r[1],
+            r[3],
+            r[4],
+            r[5]
+        );
+    }
+    std::fs::write(&mrk, body).unwrap();
+    let traj = dir.join("rover_ppk.pos");
+    let run = |extra: &[&str], out: &Path| {
+        let mut args = vec!["exposures", "--trajectory", p(&traj), "--mrk", p(&mrk)];
+        args.extend_from_slice(extra);
+        args.extend(["-o", p(out)]);
+        let o = ppkat(&args);
+        let first = std::fs::read_to_string(out)
+            .map(|b| b.lines().nth(2).unwrap_or("").to_string())
+            .unwrap_or_default();
+        (o, first)
+    };
+    let (o, first) = run(&[], &tmp("names-mrk.csv"));
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(first.starts_with("DJI_0018,"), "{first}");
+    let Some(photos) = shared("photo/brighton-beach") else {
+        return;
+    };
+    let (o, first) = run(&["--photos", p(&photos)], &tmp("names-mrk-photos.csv"));
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(first.starts_with("DJI_0018.JPG,"), "{first}");
+    assert!(t.contains("18 paired by MRK index"), "{t}");
+}

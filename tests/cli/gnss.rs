@@ -365,3 +365,35 @@ fn ppk_refuses_swapped_base_and_rover() {
     succeeds(&ppkat(&ppk_args(&rover, &base, &[&nav], &out, &[])));
     assert!(out.exists());
 }
+
+/// `--quiet` (before or after the command): a clean PPK run prints nothing on standard error,
+/// and the `.pos` is byte for byte the one written without it (progress never changes
+/// outputs).
+#[test]
+fn quiet_ppk_prints_nothing_and_changes_nothing() {
+    let Some([rover, base, nav]) = geonet() else {
+        return;
+    };
+    let (loud, quiet) = (tmp("quiet-loud.pos"), tmp("quiet-quiet.pos"));
+    let o = ppkat(&ppk_args(&rover, &base, &[&nav], &loud, &[GEONET_BASE_POS]));
+    succeeds(&o);
+    for (k, at_end) in [false, true].into_iter().enumerate() {
+        let mut args = ppk_args(&rover, &base, &[&nav], &quiet, &[GEONET_BASE_POS]);
+        if at_end {
+            args.push("--quiet");
+        } else {
+            args.insert(0, "-q");
+        }
+        let o = ppkat(&args);
+        succeeds(&o);
+        assert!(
+            o.stderr.is_empty(),
+            "{k}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert_eq!(
+            std::fs::read(&loud).unwrap(),
+            std::fs::read(&quiet).unwrap()
+        );
+    }
+}

@@ -219,7 +219,7 @@ fn run_pass(
     mut f: filter::Filter,
     backward: bool,
     priors: Option<&[Option<smooth::Prior>]>,
-    progress: &(dyn Fn(usize) + Sync),
+    progress: &dyn crate::progress::Progress,
 ) -> PassOutput {
     let n = inputs.rover.epochs.len();
     let mut out = PassOutput {
@@ -235,7 +235,7 @@ fn run_pass(
     let (mut prev_i, mut prev_j) = (None, None);
     for (count, i) in order.enumerate() {
         if count % 500 == 0 {
-            progress(500.min(n - count));
+            progress.inc(500.min(n - count) as u64);
         }
         let (Some(j), Ok((start, _))) = (inputs.matched[i], &inputs.starts[i]) else {
             continue;
@@ -390,7 +390,7 @@ pub fn process(
     base_pos: BasePosition,
     orbits: &Orbits,
     opts: &PpkOptions,
-    progress: &(dyn Fn(usize) + Sync),
+    progress: &dyn crate::progress::Progress,
 ) -> Result<PpkResult> {
     let mut warnings = Vec::new();
     require_phase(rover, "rover")?;
@@ -430,6 +430,17 @@ pub fn process(
         run_pass(&inputs, f, backward, priors, progress)
     };
     let mut smoothed = false;
+    let passes = if opts.filter == FilterMode::Combined {
+        2
+    } else {
+        1
+    };
+    let stage = match opts.filter {
+        FilterMode::Forward => "PPK forward pass",
+        FilterMode::Backward => "PPK backward pass",
+        FilterMode::Combined => "PPK forward and backward passes",
+    };
+    progress.set_len(stage, (passes * rover.epochs.len()) as u64);
     let (fw, bw) = match opts.filter {
         FilterMode::Forward => (Some(run(false, &opts, None)), None),
         FilterMode::Backward => (None, Some(run(true, &opts, None))),
@@ -464,6 +475,7 @@ pub fn process(
             (Some(a), Some(b))
         }
     };
+    progress.finish();
     let merged = merge_passes(fw.as_ref(), bw.as_ref(), smoothed);
     let (epochs, unsolved) = output_epochs(merged, &inputs, &opts, antenna_sigma, &base_arp);
     let static_solution = match (opts.motion, &fw) {

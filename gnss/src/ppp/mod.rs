@@ -169,13 +169,13 @@ impl PppResult {
 }
 
 /// Run PPP over an observation file. `start` is a position within some metres (a code
-/// solution or the header's); `progress` is called with the epochs done.
+/// solution or the header's); `progress` counts the epochs done.
 pub fn process(
     obs: &ObsFile,
     orbits: &Orbits,
     opts: &PppOptions,
     start: Ecef,
-    progress: &(dyn Fn(usize) + Sync),
+    progress: &dyn crate::progress::Progress,
 ) -> Result<PppResult> {
     if orbits.precise.is_none() {
         return Err(Error::input(
@@ -217,6 +217,7 @@ pub fn process(
     let mut mem = Memory::default();
     let mut state = State::new(start.0, 30.0, 0.0, 0.3);
     let mut last_t: Option<Epoch> = None;
+    progress.set_len("PPP epochs", times.len() as u64);
     for (i, t) in times.iter().enumerate() {
         let dt = last_t.map(|l| (*t - l).to_seconds().abs()).unwrap_or(0.0);
         match epoch_step(
@@ -228,10 +229,11 @@ pub fn process(
             }
             None => out.unsolved += 1,
         }
-        if i % 100 == 99 {
-            progress(100);
+        if i % 100 == 99 || i + 1 == times.len() {
+            progress.inc((i % 100 + 1) as u64);
         }
     }
+    progress.finish();
     if !mem.no_antenna.is_empty() && !opts.antex.is_empty() {
         let list: Vec<String> = mem.no_antenna.iter().map(|s| s.to_string()).collect();
         warnings.push(format!(

@@ -30,15 +30,31 @@ pub struct Outputs<'a> {
 
 /// Convert `input` to the RINEX 3.04 files and the event CSV of `outs`.
 pub fn convert(input: &Path, format: Option<RawFormat>, outs: Outputs) -> Result<RawStats> {
+    convert_with_progress(input, format, outs, &crate::progress::NoProgress)
+}
+
+/// [`convert`], counting the epochs of each pass on `progress` (the first pass's length is
+/// not known beforehand; the second's is the first's count).
+pub fn convert_with_progress(
+    input: &Path,
+    format: Option<RawFormat>,
+    outs: Outputs,
+    progress: &dyn crate::progress::Progress,
+) -> Result<RawStats> {
     let (out, events) = (outs.obs, outs.events);
     let mut scan = Scan::default();
     let mut lognav = LogNav::default();
+    let mut epochs = 0u64;
+    progress.set_len("reading the log, epoch", 0);
     let st1 = for_each_item(input, format, |it| {
         lognav.add(&it);
         if let RawItem::Epoch(e) = it {
-            scan.add(&e)
+            scan.add(&e);
+            epochs += 1;
+            progress.inc(1);
         }
     })?;
+    progress.set_len("writing RINEX", epochs);
     if let Some(p) = outs.nav {
         write_nav_file(input, p, &lognav, &st1)?;
     }
@@ -71,6 +87,9 @@ pub fn convert(input: &Path, format: Option<RawFormat>, outs: Outputs) -> Result
         let mut res = Ok(());
         let mut put = |o: RinexOut| write_record(w, o);
         let st = for_each_item(input, format, |it| {
+            if matches!(it, RawItem::Epoch(_)) {
+                progress.inc(1);
+            }
             if res.is_ok() {
                 res = order.item(it, &mut put);
             }
@@ -85,6 +104,7 @@ pub fn convert(input: &Path, format: Option<RawFormat>, outs: Outputs) -> Result
         }
         order.finish(&mut put)
     });
+    progress.finish();
     if let Some(Err(e)) = pass2 {
         return Err(e);
     }

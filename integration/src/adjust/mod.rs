@@ -39,7 +39,7 @@ mod tables;
 
 pub use error::AdjustError;
 use project::Project;
-pub use solve::{solve, RunOptions, Solved};
+pub use solve::{solve, solve_with_progress, RunOptions, SharedProgress, Solved};
 pub use start::compass_rotation;
 use std::path::Path;
 
@@ -49,8 +49,18 @@ pub fn run(
     out: &Path,
     opts: &RunOptions,
 ) -> Result<results::Results, AdjustError> {
+    run_with_progress(project_path, out, opts, None)
+}
+
+/// [`run`], the solves and snooping rounds told to `progress` ([`solve_with_progress`]).
+pub fn run_with_progress(
+    project_path: &Path,
+    out: &Path,
+    opts: &RunOptions,
+    progress: Option<SharedProgress>,
+) -> Result<results::Results, AdjustError> {
     let project = Project::load(project_path)?;
-    let solved = solve(&project, opts)?;
+    let solved = solve_with_progress(&project, opts, progress)?;
     let res = results::collect(&project, &solved)?;
     report::write_all(&project, &res, out)?;
     Ok(res)

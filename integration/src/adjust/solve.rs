@@ -29,9 +29,42 @@ pub struct RunOptions {
 
 /// Adjust a loaded project.
 pub fn solve(project: &Project, opts: &RunOptions) -> Result<Solved, AdjustError> {
+    solve_with_progress(project, opts, None)
+}
+
+/// Progress shared with the solver (it outlives the call, so it is shared, not borrowed).
+pub type SharedProgress = std::sync::Arc<dyn gnss::progress::Progress + Send>;
+
+/// [`solve`], telling `progress` each solve and snooping round as a stage whose steps (the
+/// Levenberg–Marquardt iterations) are not known beforehand.
+pub fn solve_with_progress(
+    project: &Project,
+    opts: &RunOptions,
+    progress: Option<SharedProgress>,
+) -> Result<Solved, AdjustError> {
     let mut built = build::build(project)?;
     built.problem.options.threads = opts.threads;
-    let result = solve_built(project, &mut built);
+    if let Some(p) = progress.clone() {
+        built
+            .problem
+            .set_observer(Some(std::sync::Arc::new(move |step| match step {
+                photo::lsq::SolveStep::SnoopingRound(k) => p.set_len(
+                    &format!("adjustment: data snooping round {k}, iteration"),
+                    0,
+                ),
+                photo::lsq::SolveStep::Iteration(..) => p.inc(1),
+            })));
+    }
+    let stage = |name: &str| {
+        if let Some(p) = &progress {
+            p.set_len(name, 0);
+        }
+    };
+    let result = solve_built(project, &mut built, &stage);
+    if let Some(p) = &progress {
+        p.finish();
+    }
+    built.problem.set_observer(None);
     let name = |e: photo::lsq::SolveError| {
         use photo::lsq::SolveError;
         match e {
@@ -100,6 +133,7 @@ fn block_name(p: &Project, b: &Built, key: photo::lsq::Key) -> String {
 fn solve_built(
     project: &Project,
     built: &mut Built,
+    stage: &dyn Fn(&str),
 ) -> Result<
     (
         photo::lsq::Summary,
@@ -120,6 +154,7 @@ fn solve_built(
         if opts.snooping {
             removed.extend(pr.data_snooping(critical)?.1);
         } else {
+            stage("adjustment: solve, iteration");
             pr.solve()?;
         }
         Ok(())
@@ -127,10 +162,12 @@ fn solve_built(
     snoop(pr, &mut removed)?;
     let mut components = vec![1.0; GROUPS];
     if opts.variance_components {
+        stage("adjustment: variance components, iteration");
         components = pr.variance_components(10)?;
         // Snoop again with the estimated weights.
         snoop(pr, &mut removed)?;
     }
+    stage("adjustment: final solve, iteration");
     let stats = pr.solve()?;
     Ok((stats, removed, components, critical))
 }

@@ -29,7 +29,9 @@ pub struct MrkInfo {
 /// One exposure time.
 #[derive(Clone, Debug)]
 pub struct ExposureEvent {
-    /// Label (event number or MRK index).
+    /// Name: `E0001`-style for RINEX events ([`super::names::generic`]), `DJI_NNNN` from an
+    /// MRK index ([`super::names::dji`]), a CSV's `id` column; replaced by the photo's file
+    /// name or a names file's line by [`super::names`].
     pub id: String,
     /// GPST.
     pub time: Epoch,
@@ -92,7 +94,7 @@ pub fn from_rinex(obs: &ObsFile, traj: &Trajectory) -> (Vec<ExposureEvent>, f64)
             let c = offset_at(t);
             max_corr = max_corr.max(c.abs());
             Some(ExposureEvent {
-                id: format!("{}", k + 1),
+                id: super::names::generic(k),
                 time: t - Duration::from_seconds(c),
                 line: e.line,
                 mrk: None,
@@ -106,7 +108,8 @@ fn num_before_comma(s: &str) -> Option<f64> {
     s.split(',').next()?.trim().parse().ok()
 }
 
-/// Read a DJI `Timestamp.MRK`.
+/// Read a DJI `Timestamp.MRK`. Each exposure is named after the photograph DJI writes for
+/// its index (`DJI_0001` for index 1).
 pub fn read_mrk(path: &Path) -> Result<Vec<ExposureEvent>> {
     let text = std::fs::read_to_string(path).map_err(Error::io(path))?;
     let mut out = Vec::new();
@@ -162,8 +165,12 @@ pub fn read_mrk(path: &Path) -> Result<Vec<ExposureEvent>> {
                 "columns 4–10: offsets, position or sigmas not finite or out of range",
             ));
         }
+        let index = f[0].trim();
         out.push(ExposureEvent {
-            id: f[0].trim().to_string(),
+            id: index
+                .parse::<u32>()
+                .map(super::names::dji)
+                .unwrap_or_else(|_| index.to_string()),
             time,
             line: i + 1,
             mrk: Some(MrkInfo {
@@ -180,8 +187,9 @@ pub fn read_mrk(path: &Path) -> Result<Vec<ExposureEvent>> {
     Ok(out)
 }
 
-/// Read a CSV of times: a header naming `id` and either `week`,`tow` or `time` (ISO
-/// `YYYY-MM-DDTHH:MM:SS.sss`), in the declared time system.
+/// Read a CSV of times: a header naming `id` (optional: without it the rows are named
+/// `E0001` …) and either `week`,`tow` or `time` (ISO `YYYY-MM-DDTHH:MM:SS.sss`), in the
+/// declared time system.
 pub fn read_times_csv(path: &Path, system: TimeSystem) -> Result<Vec<ExposureEvent>> {
     let text = std::fs::read_to_string(path).map_err(Error::io(path))?;
     let mut lines = text
@@ -232,7 +240,7 @@ pub fn read_times_csv(path: &Path, system: TimeSystem) -> Result<Vec<ExposureEve
         let name = id
             .and_then(|k| f.get(k))
             .map(|s| s.to_string())
-            .unwrap_or_else(|| format!("{}", out.len() + 1));
+            .unwrap_or_else(|| super::names::generic(out.len()));
         out.push(ExposureEvent {
             id: name,
             time: gnss::time::to_gpst(t),
@@ -353,7 +361,7 @@ mod tests {
         let ev = read_mrk(&p).unwrap();
         assert_eq!(ev.len(), 1);
         let e = &ev[0];
-        assert_eq!(e.id, "1");
+        assert_eq!(e.id, "DJI_0001", "named as DJI names the photo");
         let (w, tow) = gnss::time::week_tow(e.time);
         assert_eq!(w, 2024);
         assert!((tow - 275295.301059).abs() < 1e-8, "{tow}");

@@ -7,7 +7,8 @@
 //! [`ExposureOptions`] (lever arm, [`attitude::AttitudeTable`], delay, gap limit). Leaves: an
 //! [`ExposureResult`] — [`CameraStation`]s (antenna and centre in ECEF, ECEF covariance in m²,
 //! quality, ambiguity segment, rotation camera → ENU) and the exposures refused — which
-//! [`export`] writes and [`photos`] matches to photographs. [`leverarm`] solves a lever arm
+//! [`export`] writes and [`photos`] geotags; [`names`] names the exposures beforehand (photos,
+//! a names file, DJI numbers, `E0001`). [`leverarm`] solves a lever arm
 //! from tape measurements. Uses `gnss` (trajectory, frames, time) and `photo` (rotations,
 //! lever arm); used by [`crate::pipeline`] and [`crate::demo`].
 //!
@@ -19,6 +20,7 @@ pub mod events;
 pub mod exif_io;
 pub mod export;
 pub mod leverarm;
+pub mod names;
 pub mod photos;
 pub mod xmp;
 
@@ -42,7 +44,8 @@ pub enum AttitudeSource {
 /// A camera station: the projection centre of one exposure.
 #[derive(Clone, Debug)]
 pub struct CameraStation {
-    /// Label (event number, or photo name once matched).
+    /// Name: the photo's file name, a names file's line, `DJI_NNNN`, a CSV id or `E0001`
+    /// (see [`names`]).
     pub id: String,
     /// Exposure time (event time plus delay), GPST.
     pub time: Epoch,
@@ -84,7 +87,7 @@ pub struct ExposureOptions {
 /// An exposure that got no station, and why.
 #[derive(Clone, Debug)]
 pub struct Refused {
-    /// Exposure label.
+    /// Exposure name.
     pub id: String,
     /// Exposure time, GPST.
     pub time: Epoch,

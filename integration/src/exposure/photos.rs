@@ -1,6 +1,7 @@
-//! Photographs beside the exposures: the photo list is matched to the events (counts and, where
-//! the images carry `DateTimeOriginal`, the rhythm of their intervals), and geotagged copies are
-//! written with the projection centres — originals are never modified.
+//! Photographs beside the exposures: the photo list is checked against the exposure times
+//! (counts and, where the images carry `DateTimeOriginal`, the rhythm of their intervals; the
+//! pairing itself is [`super::names::match_photos`]), and geotagged copies are written with
+//! the projection centres — originals are never modified.
 //!
 //! Enters: a folder of JPEG files and the camera stations. Leaves: the matched photo list (or
 //! why it does not match) and geotagged copies in another folder (WGS84 latitude, longitude,
@@ -93,21 +94,28 @@ pub fn list(dir: &Path) -> Result<Vec<Photo>> {
     Ok(out)
 }
 
-/// Check that the photos match the stations one to one. `Err` says how many of each and where
-/// the mismatch starts: the first photo whose interval to its predecessor disagrees with the
-/// exposures' by more than 1.1 s, when the photos carry capture times (EXIF seconds: a
-/// missing photo shows when exposures are at least about two seconds apart).
+/// Check that the photos match the stations one to one (see [`check_times`]).
 pub fn check(photos: &[Photo], stations: &[CameraStation]) -> std::result::Result<(), String> {
-    let n = photos.len().min(stations.len());
+    let times: Vec<hifitime::Epoch> = stations.iter().map(|s| s.time).collect();
+    check_times(photos, &times)
+}
+
+/// Check that the photos match the exposure times (in time order) one to one. `Err` says how
+/// many of each and where the mismatch starts: the first photo whose interval to its
+/// predecessor disagrees with the exposures' by more than 1.1 s, when the photos carry capture
+/// times (EXIF seconds: a missing photo shows when exposures are at least about two seconds
+/// apart).
+pub fn check_times(photos: &[Photo], times: &[hifitime::Epoch]) -> std::result::Result<(), String> {
+    let n = photos.len().min(times.len());
     for k in 1..n {
         if let (Some(a), Some(b)) = (photos[k - 1].taken, photos[k].taken) {
             let dp = b - a;
-            let de = (stations[k].time - stations[k - 1].time).to_seconds();
+            let de = (times[k] - times[k - 1]).to_seconds();
             if (dp - de).abs() > 1.1 {
                 return Err(format!(
                     "{} photos, {} exposures; the mismatch starts at photo {} (#{}): {:.1} s after its predecessor, the exposures {:.1} s",
                     photos.len(),
-                    stations.len(),
+                    times.len(),
                     photos[k].name,
                     k + 1,
                     dp,
@@ -116,12 +124,12 @@ pub fn check(photos: &[Photo], stations: &[CameraStation]) -> std::result::Resul
             }
         }
     }
-    if photos.len() != stations.len() {
+    if photos.len() != times.len() {
         return Err(format!(
             "{} photos, {} exposures; the intervals agree up to #{n}, so the extra {} are at the end",
             photos.len(),
-            stations.len(),
-            if photos.len() > stations.len() { "photos" } else { "exposures" }
+            times.len(),
+            if photos.len() > times.len() { "photos" } else { "exposures" }
         ));
     }
     Ok(())

@@ -270,9 +270,9 @@ pub(crate) fn side_path(out: &std::path::Path, ext: &str) -> PathBuf {
     PathBuf::from(name)
 }
 
-/// Run PPK and write the `.pos` output. `progress(n)` is called as epochs are processed.
+/// Run PPK and write the `.pos` output; `progress` counts the epochs of each pass.
 /// `Err` when no epoch is solved.
-pub fn ppk(job: &PpkJob, progress: &(dyn Fn(usize) + Sync)) -> Result<PpkReport> {
+pub fn ppk(job: &PpkJob, progress: &dyn gnss::progress::Progress) -> Result<PpkReport> {
     let t0 = std::time::Instant::now();
     gnss::atomic::clean_stale(&job.out);
     let rover_in = read_observations(&job.rover, job.obs_format)?;

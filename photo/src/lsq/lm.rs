@@ -60,6 +60,10 @@ impl Problem {
         let (mut radius, mut nu) = (self.options.initial_radius, 2.0);
         while s.iterations < self.options.max_iterations {
             s.iterations += 1;
+            self.notify(super::problem::SolveStep::Iteration(
+                s.iterations,
+                self.options.max_iterations,
+            ));
             let step = Model::reduce(&st, &lins, 1.0 / radius, true, &mut red)
                 .then(|| linear.solve_reduced(&st, &red))
                 .flatten()

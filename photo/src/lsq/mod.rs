@@ -50,7 +50,7 @@ pub use factor::{Factor, FactorId, Group, Loss, Noise, Params};
 pub use key::{CameraId, DriftId, ImageId, Key, KeyKind, LatencyId, PointId};
 pub use lm::Summary;
 pub use options::Options;
-pub use problem::{BuildError, Problem, Timing, MAX_FACTOR_KEYS};
+pub use problem::{BuildError, Observer, Problem, SolveStep, Timing, MAX_FACTOR_KEYS};
 pub use snoop::{normal_quantile, snooping_critical, MIN_VCE_REDUNDANCY};
 pub use stats::Covariances;
 pub use value::Value;

@@ -55,12 +55,25 @@ pub(crate) struct Caches {
     pub timings: Mutex<Vec<Timing>>,
 }
 
+/// A step of the solver, told to an [`Observer`] as it happens (for a progress display).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SolveStep {
+    /// A Levenberg–Marquardt iteration begins: its number (from 1) and the most allowed.
+    Iteration(usize, usize),
+    /// A round of data snooping begins (from 1): one solve, then the worst residual tested.
+    SnoopingRound(usize),
+}
+
+/// Told every [`SolveStep`]; it must not panic. Results do not depend on it.
+pub type Observer = std::sync::Arc<dyn Fn(SolveStep) + Send + Sync>;
+
 /// A least-squares problem over typed parameter blocks.
 pub struct Problem {
     /// Solver settings.
     pub options: Options,
     pub(crate) model: Model,
     pub(crate) caches: Caches,
+    observer: Option<Observer>,
 }
 
 impl Problem {
@@ -73,6 +86,19 @@ impl Problem {
                 ..Model::default()
             },
             caches: Caches::default(),
+            observer: None,
+        }
+    }
+
+    /// Watch the solver's iterations and snooping rounds (`None`: nobody watches).
+    pub fn set_observer(&mut self, observer: Option<Observer>) {
+        self.observer = observer;
+    }
+
+    /// Tell the observer, if any, of a step.
+    pub(crate) fn notify(&self, step: SolveStep) {
+        if let Some(o) = &self.observer {
+            o(step);
         }
     }
 

@@ -25,7 +25,10 @@ impl Problem {
         critical: f64,
     ) -> Result<(Summary, Vec<(FactorId, f64)>), SolveError> {
         let mut removed = Vec::new();
+        let mut round = 0;
         loop {
+            round += 1;
+            self.notify(super::problem::SolveStep::SnoopingRound(round));
             let summary = self.solve()?;
             let rel = self.reliability()?;
             let kept: Vec<FactorId> = self.model.kept.iter().map(|k| k.0).collect();
