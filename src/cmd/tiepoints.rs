@@ -98,6 +98,9 @@ pub fn run(args: Args) -> Result<()> {
     };
     job.gnss_sigma = args.gnss_sigma.0;
     let bar = indicatif::ProgressBar::new(0);
+    if super::quiet() {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
     bar.set_style(
         indicatif::ProgressStyle::with_template("{msg:9} {bar:30} {pos}/{len} (ETA {eta})")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
@@ -162,8 +165,8 @@ fn print_summary(m: &tiepoints::Matched, w: &project::Written) {
         m.pairs.len()
     );
     println!(
-        "tracks: {} ({} in 3 or more photos), {} measurements, {} conflicting keypoints cut",
-        w.tracks, w.tracks_3plus, w.observations, m.tracks.conflicts
+        "tracks: {} ({} in 3 or more photos), {} measurements; cut: {} conflicting keypoints, {} measurements off the epipolar lines of their track",
+        w.tracks, w.tracks_3plus, w.observations, m.tracks.conflicts, m.inconsistent
     );
     if w.implausible_depth > 0 {
         println!(

@@ -45,7 +45,8 @@ pub struct MatchJob {
     pub gnss_sigma: [f64; 2],
     /// Ratio test threshold.
     pub ratio: f64,
-    /// RANSAC threshold, photograph pixels.
+    /// RANSAC threshold (Sampson distance) in the pixels features were extracted from; scaled
+    /// to the photograph by the reduction factor.
     pub ransac_px: f64,
     /// Fewest verified matches for a pair.
     pub min_matches: usize,
@@ -63,7 +64,7 @@ impl MatchJob {
             pairs: PairMode::Auto,
             gnss_sigma: [3.0, 5.0],
             ratio: 0.8,
-            ransac_px: 4.0,
+            ransac_px: 1.5,
             min_matches: 20,
         }
     }
@@ -96,6 +97,8 @@ pub struct PairResult {
     pub putative: usize,
     /// Matches RANSAC kept (empty when the pair failed).
     pub verified: Vec<Match>,
+    /// The fundamental matrix of a verified pair (x_bᵀ·F·x_a = 0).
+    pub f: Option<nalgebra::Matrix3<f64>>,
 }
 
 /// Everything a match run found.
@@ -109,6 +112,9 @@ pub struct Matched {
     pub pair_note: String,
     /// Tracks (image index, keypoint index).
     pub tracks: tracks::Tracks,
+    /// Measurements cut from tracks for disagreeing with the epipolar geometry of the track's
+    /// other photos.
+    pub inconsistent: usize,
     /// Component number of every image (0 = the largest block).
     pub component: Vec<usize>,
     /// Photos left out: (file name, reason).
@@ -188,11 +194,13 @@ fn match_pair(images: &[Image], a: usize, b: usize, job: &MatchJob) -> PairResul
         })
         .collect();
     let opts = RansacOptions {
-        threshold_px: job.ransac_px,
+        threshold_px: job.ransac_px * images[a].scale.max(images[b].scale),
         min_inliers: job.min_matches,
         ..RansacOptions::default()
     };
-    let verified = verify(&pa, &pb, &opts, (a as u64) << 32 | b as u64)
+    let model = verify(&pa, &pb, &opts, (a as u64) << 32 | b as u64);
+    let f = model.as_ref().map(|v| v.f);
+    let verified = model
         .map(|v| {
             // Then motion coherence: each inlier moves as its nearest neighbours do.
             let (ia, ib): (Vec<_>, Vec<_>) = v.inliers.iter().map(|&k| (pa[k], pb[k])).unzip();
@@ -213,12 +221,66 @@ fn match_pair(images: &[Image], a: usize, b: usize, job: &MatchJob) -> PairResul
             }
         })
         .unwrap_or_default();
+    let f = f.filter(|_| !verified.is_empty());
     PairResult {
         a,
         b,
         putative: m.len(),
         verified,
+        f,
     }
+}
+
+/// Cut from every track of three or more photos the measurements that disagree with the
+/// epipolar geometry of its other photos (each verified pair of the track's photos checks its
+/// two measurements, not only the pairs that made the track): the measurement with the most
+/// disagreements goes first, until none disagree. Returns the measurements cut.
+fn consistent_tracks(
+    tracks: &mut tracks::Tracks,
+    images: &[Image],
+    pairs: &[PairResult],
+    job: &MatchJob,
+) -> usize {
+    use photo::features::epipolar::sampson;
+    let fs: std::collections::HashMap<(usize, usize), nalgebra::Matrix3<f64>> = pairs
+        .iter()
+        .filter_map(|p| p.f.map(|f| ((p.a, p.b), f)))
+        .collect();
+    let px = |(i, k): (usize, u32)| {
+        let q = images[i].features.keypoints[k as usize];
+        nalgebra::Vector2::new(q.x, q.y)
+    };
+    let mut cut = 0;
+    for t in tracks.tracks.iter_mut().filter(|t| t.len() >= 3) {
+        loop {
+            let mut bad = vec![0usize; t.len()];
+            for x in 0..t.len() {
+                for y in x + 1..t.len() {
+                    let (a, b) = (t[x], t[y]);
+                    let Some(f) = fs.get(&(a.0, b.0)) else {
+                        continue;
+                    };
+                    let tol = job.ransac_px * images[a.0].scale.max(images[b.0].scale);
+                    if sampson(f, &px(a), &px(b)) > tol {
+                        bad[x] += 1;
+                        bad[y] += 1;
+                    }
+                }
+            }
+            let (worst, &n) = bad
+                .iter()
+                .enumerate()
+                .max_by(|p, q| p.1.cmp(q.1).then(q.0.cmp(&p.0)))
+                .unwrap_or((0, &0));
+            if n == 0 {
+                break;
+            }
+            t.remove(worst);
+            cut += 1;
+        }
+    }
+    tracks.tracks.retain(|t| t.len() >= 2);
+    cut
 }
 
 /// Connected components of the images by verified pairs, numbered by size (0 largest).
@@ -341,13 +403,15 @@ pub fn run(
             (p.a, p.b, v)
         })
         .collect();
-    let tracks = tracks::build(&counts, &verified);
+    let mut tracks = tracks::build(&counts, &verified);
+    let inconsistent = consistent_tracks(&mut tracks, &images, &results, job);
     let component = components(images.len(), &results);
     Ok(Matched {
         images,
         pairs: results,
         pair_note,
         tracks,
+        inconsistent,
         component,
         skipped,
         other_files,

@@ -1,0 +1,101 @@
+//! `ppkat match` against exact truth: the photos of the textured block are rendered from a
+//! known terrain and known poses, so every matched track can be checked — the ground point of
+//! its measurements (rays ∩ terrain, averaged) projected into its photos must fall on their
+//! measurements. The full builtin block (24 photos of 1600 × 1200 px) runs when
+//! `PPKAT_FULL_TEXTURED=1` (about a minute); the reduced block always.
+
+use gnss::frame::Enu;
+use integration::simulate::textured::{textured_block, TexturedSpec, Truth};
+use integration::tiepoints::{self, project, MatchJob, PairMode};
+use nalgebra::Vector2;
+use std::path::PathBuf;
+
+fn tmp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("ppkat-match-{}-{name}", std::process::id()))
+}
+
+/// (tracks, tracks with every measurement within 2 px, RMS of the measurements' errors in px,
+/// images in the block).
+fn check(spec: &TexturedSpec, name: &str) -> (usize, usize, f64, usize) {
+    let dir = tmp(name);
+    textured_block(spec, &dir).unwrap();
+    let mut job = MatchJob::new(dir.join("photos"));
+    job.exposures = Some(dir.join("antennas.csv"));
+    job.camera = Some(dir.join("camera.toml"));
+    job.pairs = PairMode::Auto;
+    let m = tiepoints::run(&job, &|_, _, _| {}).unwrap();
+    let w = project::build(&job, &m).unwrap();
+    let truth = Truth::load(&dir).unwrap();
+    let mut by_point: std::collections::BTreeMap<&str, Vec<(&str, Vector2<f64>)>> =
+        Default::default();
+    for (img, pt, x, y) in &w.project.measurements {
+        by_point
+            .entry(pt.as_str())
+            .or_default()
+            .push((img.as_str(), Vector2::new(*x, *y)));
+    }
+    let (mut good, mut sum, mut n) = (0, 0.0, 0usize);
+    for obs in by_point.values() {
+        // The track's ground point: the mean of its measurements' ground points (rays ∩
+        // terrain), then every measurement against its projection.
+        let gs: Vec<_> = obs
+            .iter()
+            .filter_map(|(i, xy)| truth.ground_of(i, *xy))
+            .collect();
+        if gs.len() != obs.len() {
+            continue;
+        }
+        let g = Enu(gs.iter().map(|g| g.0).sum::<nalgebra::Vector3<f64>>() / gs.len() as f64);
+        let mut ok = true;
+        for (img, xy) in obs {
+            let Some(p) = truth.project(img, &g) else {
+                ok = false;
+                continue;
+            };
+            let e = (p - xy).norm();
+            ok &= e <= 2.0;
+            if e <= 2.0 {
+                sum += e * e;
+                n += 1;
+            }
+        }
+        good += ok as usize;
+        if !ok && std::env::var("PPKAT_DEBUG").is_ok() {
+            let errs: Vec<f64> = obs
+                .iter()
+                .map(|(img, xy)| truth.project(img, &g).map_or(-1.0, |p| (p - xy).norm()))
+                .collect();
+            eprintln!("bad track len {}: {errs:.1?}", obs.len());
+        }
+    }
+    let rms = (sum / n.max(1) as f64).sqrt();
+    let _ = std::fs::remove_dir_all(&dir);
+    (by_point.len(), good, rms, w.project.images.len())
+}
+
+fn assert_figures(spec: &TexturedSpec, name: &str, images: usize, min_tracks: usize) {
+    let (tracks, good, rms, block) = check(spec, name);
+    let frac = good as f64 / tracks.max(1) as f64;
+    eprintln!(
+        "{name}: {block} photos in the block, {tracks} tracks, {:.2} % correct, measurement RMS {rms:.3} px",
+        100.0 * frac
+    );
+    assert_eq!(block, images, "every photo in one block");
+    assert!(tracks >= min_tracks, "{tracks} tracks");
+    assert!(frac >= 0.99, "{:.2} % of the tracks correct", 100.0 * frac);
+    assert!(rms <= 0.3, "measurement RMS {rms} px against truth");
+}
+
+#[test]
+fn matched_tracks_on_the_reduced_textured_block_are_right_to_the_subpixel() {
+    assert_figures(&TexturedSpec::reduced(), "reduced", 8, 100);
+}
+
+#[test]
+fn matched_tracks_on_the_full_textured_block_are_right_to_the_subpixel() {
+    if std::env::var("PPKAT_FULL_TEXTURED").is_err() {
+        eprintln!("skipped: set PPKAT_FULL_TEXTURED=1 to match the full textured block");
+        return;
+    }
+    assert_figures(&TexturedSpec::builtin(), "full", 24, 2000);
+}
