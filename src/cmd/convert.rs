@@ -46,6 +46,8 @@ pub struct Args {
     /// navigation subframes (RXM-SFRBX: GPS/QZSS LNAV, Galileo I/NAV).
     #[arg(long, value_name = "OUT.nav")]
     nav: Option<PathBuf>,
+    #[command(flatten)]
+    time: super::TimeHintArgs,
 }
 
 /// Convert and print the report.
@@ -60,7 +62,7 @@ pub fn run(a: Args) -> Result<()> {
         nav: a.nav.as_deref(),
         events: a.events.as_deref(),
     };
-    let st = convert(&a.input, format, outs)?;
+    let st = convert(&a.input, format, a.time.hint(), outs)?;
     print!("{st}");
     for p in [Some(&a.out), a.nav.as_ref(), a.events.as_ref()]
         .into_iter()
