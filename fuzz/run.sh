@@ -6,7 +6,7 @@ set -u
 cd "$(dirname "$0")"
 SECS=${SECS:-60}
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(rinex_obs rinex_nav sp3 clk antex mrk times_csv attitude_csv project_toml patb bal exif pos ubx)
+[ ${#targets[@]} -eq 0 ] && targets=(rinex_obs rinex_nav sp3 clk antex mrk times_csv attitude_csv project_toml patb bal exif pos ubx rtcm)
 mkdir -p logs
 for t in "${targets[@]}"; do
     mkdir -p "corpus/$t"

@@ -8,7 +8,7 @@
 
 use crate::error::{Error, Result};
 use crate::raw::source::read_log;
-use crate::raw::{self, RawFormat, RawStats};
+use crate::raw::{self, RawFormat, RawStats, TimeHint};
 use crate::rinex::nav::NavFile;
 use crate::rinex::ObsFile;
 use std::io::Read;
@@ -68,7 +68,12 @@ pub fn detect_format(path: &Path) -> Result<ObsFormat> {
 }
 
 /// Read an observation source; its format is detected from content unless `format` says it.
-pub fn read_obs(path: &Path, format: Option<ObsFormat>) -> Result<ObsInput> {
+/// `hint` settles the week of an RTCM 3 log (see [`TimeHint`]; ignored for other formats).
+pub fn read_obs(
+    path: &Path,
+    format: Option<ObsFormat>,
+    hint: Option<TimeHint>,
+) -> Result<ObsInput> {
     let format = match format {
         Some(f) => f,
         None => detect_format(path)?,
@@ -81,7 +86,7 @@ pub fn read_obs(path: &Path, format: Option<ObsFormat>) -> Result<ObsInput> {
             raw: None,
         }),
         ObsFormat::Raw(rf) => {
-            let log = read_log(path, Some(rf))?;
+            let log = read_log(path, Some(rf), hint)?;
             let nav = (!log.nav.records.is_empty()).then(|| log.nav.to_nav_file(path));
             Ok(ObsInput {
                 obs: log.obs,

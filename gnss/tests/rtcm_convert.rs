@@ -9,7 +9,7 @@ use gnss::obs::{read_obs, ObsFormat};
 use gnss::raw::convert::{convert, Outputs};
 use gnss::raw::rtcm_msm::WEEK_MS;
 use gnss::raw::rtcm_write::{channel_1020, msm, station_1005, week_1019, MsmSat, MsmSignal};
-use gnss::raw::RawFormat;
+use gnss::raw::{RawFormat, TimeHint};
 use gnss::rinex::{ObsCode, ObsFile};
 use gnss::signal::frequency;
 use gnss::sv::{Constellation, Sv};
@@ -194,13 +194,13 @@ fn check(f: &ObsFile, exp: &[Expect]) {
 #[test]
 fn msm_round_trip_through_the_observation_seam_and_convert() {
     let (log, exp) = write_log();
-    let input = read_obs(&log, None).unwrap();
+    let input = read_obs(&log, None, None).unwrap();
     assert_eq!(input.format, ObsFormat::Raw(RawFormat::Rtcm3));
     let st = input.raw.as_ref().unwrap();
     assert_eq!(st.checksum_failures, 1, "{st}");
     assert_eq!(st.epochs, 3, "{st}");
     assert!(st.dropped.is_empty(), "{st}");
-    let pos = st.station.unwrap();
+    let pos = st.station.arp.unwrap();
     for i in 0..3 {
         assert!((pos[i] - STATION[i]).abs() < 1e-6);
     }
@@ -213,19 +213,41 @@ fn msm_round_trip_through_the_observation_seam_and_convert() {
         nav: None,
         events: None,
     };
-    let st2 = convert(&log, None, outs).unwrap();
+    let st2 = convert(&log, None, None, outs).unwrap();
     assert_eq!(st2.epochs, 3);
     let f = ObsFile::read(&out).unwrap();
     check(&f, &exp);
 }
 
 #[test]
-fn msm_without_a_week_is_counted_and_refused() {
+fn msm_without_a_week_is_refused_unless_a_date_is_given() {
     let sats = [sat(Constellation::Gps, 5, None, &[(2, b'1')], 0)];
     let p = tmp("noweek.rtcm3");
     std::fs::write(&p, msm(Constellation::Gps, 7, 1000, false, &sats)).unwrap();
-    let e = read_obs(&p, Some(ObsFormat::Raw(RawFormat::Rtcm3)))
+    let rtcm = Some(ObsFormat::Raw(RawFormat::Rtcm3));
+    let e = read_obs(&p, rtcm, None).unwrap_err().to_string();
+    assert!(e.contains("1019") && e.contains("--date-hint"), "{e}");
+    let e = read_obs(&p, rtcm, Some(TimeHint::Year(2024)))
         .unwrap_err()
         .to_string();
-    assert!(e.contains("1019"), "{e}");
+    assert!(e.contains("a year alone"), "{e}");
+    // Monday 2024-02-26 is in GPS week 2303: the epoch is its Sunday 00:00:01
+    let ok = read_obs(&p, rtcm, Some(TimeHint::Date(2024, 2, 26))).unwrap();
+    let t = ok.obs.epochs[0].time;
+    assert_eq!(gnss::time::week_tow(t), (2303, 1.0));
+    let st = ok.raw.unwrap();
+    assert!(st.time_source.unwrap().contains("--date-hint 2024-02-26"));
+}
+
+#[test]
+fn a_date_hint_contradicting_the_log_is_refused() {
+    let (log, _) = write_log();
+    let e = read_obs(&log, None, Some(TimeHint::Date(2020, 1, 1)))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("contradicts"), "{e}");
+    // the log's own week agrees with a hint of its own day
+    let day = gnss::time::from_week_tow(WEEK as u32, TOW0_MS as f64 / 1000.0);
+    let (y, m, d, ..) = day.to_gregorian(hifitime::TimeScale::GPST);
+    assert!(read_obs(&log, None, Some(TimeHint::Date(y, m, d))).is_ok());
 }

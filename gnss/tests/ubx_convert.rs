@@ -106,7 +106,7 @@ fn f9t_l1_l2_log_matches_convbin_exactly() {
         return;
     };
     let out = tmp("f9t.obs");
-    let st = convert(&dir.join("F9T-L2-5min.ubx"), None, obs_only(&out)).unwrap();
+    let st = convert(&dir.join("F9T-L2-5min.ubx"), None, None, obs_only(&out)).unwrap();
     assert_eq!(st.epochs, 299);
     assert_eq!(st.checksum_failures, 0);
     // BeiDou B1C has no RINEX slot in convbin: dropped, and counted.
@@ -132,6 +132,7 @@ fn coldstart_log_matches_convbin_over_the_common_span() {
     let out = tmp("cold.obs");
     let st = convert(
         &dir.join("16dBatt_no_interference_coldstart.ubx"),
+        None,
         None,
         obs_only(&out),
     )
@@ -210,7 +211,7 @@ fn time_marks_become_flag5_records_and_csv() {
         nav: None,
         events: Some(&csv),
     };
-    let st = convert(&input, None, outs).unwrap();
+    let st = convert(&input, None, None, outs).unwrap();
     assert_eq!((st.epochs, st.events, st.truncated_frames), (2, 2, 1));
     assert_eq!(st.unused.get("NAV-PVT"), Some(&1));
     let f = ObsFile::read(&out).unwrap();

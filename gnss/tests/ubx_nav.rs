@@ -39,6 +39,7 @@ fn sfrbx_ephemerides_match_convbin_nav() {
     let st = convert(
         &dir.join("16dBatt_no_interference_coldstart.ubx"),
         None,
+        None,
         outs,
     )
     .unwrap();
@@ -147,7 +148,7 @@ fn failed_parity_and_crc_are_counted_not_fatal() {
         nav: Some(&nav),
         events: None,
     };
-    let st = convert(&input, None, outs).unwrap();
+    let st = convert(&input, None, None, outs).unwrap();
     assert_eq!(st.checksum_failures, 0);
     assert_eq!((st.nav.parity_failures, st.nav.crc_failures), (7, 7));
     assert_eq!(st.nav.messages, 3843);

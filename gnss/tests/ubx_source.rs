@@ -28,8 +28,8 @@ fn both(log: &Path, name: &str) -> (ObsFile, ObsFile) {
         nav: None,
         events: None,
     };
-    convert(log, None, outs).unwrap();
-    let direct = read_obs(log, None).unwrap();
+    convert(log, None, None, outs).unwrap();
+    let direct = read_obs(log, None, None).unwrap();
     assert_eq!(direct.format, ObsFormat::Raw(RawFormat::Ubx));
     assert_eq!(detect_format(&out).unwrap(), ObsFormat::Rinex);
     (direct.obs, ObsFile::read(&out).unwrap())
@@ -110,7 +110,7 @@ fn spp_on_the_log_equals_spp_on_its_conversion() {
     // as well horizontally as with convbin's file (5.0 m against 5.4 m RMS on this attenuated
     // L1 log); vertically worse (11.3 m against 6.2 m): this part of the log has no Klobuchar
     // parameters, so the ionosphere is not modelled.
-    let own = read_obs(&log, None).unwrap().nav.unwrap();
+    let own = read_obs(&log, None, None).unwrap().nav.unwrap();
     let orbits = Orbits::broadcast(Ephemerides::from_nav(&[own]));
     let rc = spp::run(&a.epochs, &a.header, &orbits, &opts);
     assert_eq!(rc.solutions.len(), 562);

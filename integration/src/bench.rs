@@ -104,6 +104,7 @@ fn convert_bench(path: &Path, format: Option<gnss::raw::RawFormat>) -> Result<Co
     let first = convert(
         path,
         format,
+        None,
         Outputs {
             obs: &obs,
             nav: None,
@@ -120,7 +121,7 @@ fn convert_bench(path: &Path, format: Option<gnss::raw::RawFormat>) -> Result<Co
     let mut runs = 0;
     let mut last = first;
     while last.is_ok() && (runs == 0 || (t.elapsed().as_secs_f64() < 1.0 && runs < 1000)) {
-        last = convert(path, format, outs);
+        last = convert(path, format, None, outs);
         runs += 1;
     }
     let seconds = t.elapsed().as_secs_f64();

@@ -7,7 +7,8 @@
 
 use gnss::error::Result;
 use gnss::obs::{read_obs, ObsFormat};
-use gnss::raw::RawStats;
+use gnss::raw::rtcm_station::Station;
+use gnss::raw::{RawStats, TimeHint};
 use gnss::rinex::nav::NavFile;
 use gnss::rinex::ObsFile;
 use std::path::{Path, PathBuf};
@@ -21,13 +22,16 @@ pub struct RunObs {
     pub nav: Option<NavFile>,
     /// What decoding a raw log read and dropped, for the report.
     pub warnings: Vec<String>,
+    /// The reference station a raw log describes (RTCM 1005/1006, 1007/1008/1033), when it
+    /// does; its marker is the header's approximate position.
+    pub station: Option<Station>,
 }
 
 /// One line on what decoding a raw log counted.
-fn raw_note(path: &Path, s: &RawStats) -> String {
+fn raw_note(path: &Path, format: &str, s: &RawStats) -> String {
     let dropped: u64 = s.dropped.values().sum();
     format!(
-        "{}: read as a u-blox UBX log: {} epochs ({} before the receiver knew the time, \
+        "{}: read as a {format} log: {} epochs ({} before the receiver knew the time, \
          skipped), {} checksum failures, {} truncated frames, {} measurements dropped; \
          navigation messages: {} parity and {} CRC failures, {} ephemerides",
         path.display(),
@@ -42,14 +46,32 @@ fn raw_note(path: &Path, s: &RawStats) -> String {
     )
 }
 
-/// Read the observations at `path` (RINEX or raw log; `format` `None`: told from content).
-pub fn read_observations(path: &Path, format: Option<ObsFormat>) -> Result<RunObs> {
-    let input = read_obs(path, format)?;
-    let warnings = input.raw.iter().map(|s| raw_note(path, s)).collect();
+/// Read the observations at `path` (RINEX or raw log; `format` `None`: told from content;
+/// `hint` for an RTCM 3 log's week).
+pub fn read_observations(
+    path: &Path,
+    format: Option<ObsFormat>,
+    hint: Option<TimeHint>,
+) -> Result<RunObs> {
+    let input = read_obs(path, format, hint)?;
+    let name = match input.format {
+        ObsFormat::Raw(f) => f.name(),
+        ObsFormat::Rinex => "RINEX",
+    };
+    let mut warnings: Vec<String> = input.raw.iter().map(|s| raw_note(path, name, s)).collect();
+    warnings.extend(
+        input
+            .raw
+            .iter()
+            .filter_map(|s| s.time_source.as_ref())
+            .map(|t| format!("{}: GPS week of the observations: {t}", path.display())),
+    );
+    let station = input.raw.map(|s| s.station).filter(|s| s.is_known());
     Ok(RunObs {
         obs: input.obs,
         nav: input.nav,
         warnings,
+        station,
     })
 }
 

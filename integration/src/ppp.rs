@@ -78,7 +78,7 @@ pub fn ppp(job: &PppJob, progress: &dyn gnss::progress::Progress) -> Result<PppR
         gnss::atomic::clean_stale(&side_path(&job.out, ext));
     }
     // RINEX or a raw receiver log, told from the content.
-    let input = crate::observations::read_observations(&job.obs, None)?;
+    let input = crate::observations::read_observations(&job.obs, None, None)?;
     let obs = input.obs;
     gnss::ppk::require_phase(&obs, "observation")?;
     let log_nav = input.nav.as_ref();

@@ -46,6 +46,8 @@ pub struct Args {
     /// navigation subframes (RXM-SFRBX: GPS/QZSS LNAV, Galileo I/NAV).
     #[arg(long, value_name = "OUT.nav")]
     nav: Option<PathBuf>,
+    #[command(flatten)]
+    time: super::TimeHintArgs,
 }
 
 /// Convert and print the report.
@@ -61,7 +63,7 @@ pub fn run(a: Args) -> Result<()> {
         events: a.events.as_deref(),
     };
     let bar = super::progress::Bar::new();
-    let st = convert_with_progress(&a.input, format, outs, &bar);
+    let st = convert_with_progress(&a.input, format, a.time.hint(), outs, &bar);
     drop(bar);
     let st = st?;
     print!("{st}");

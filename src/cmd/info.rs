@@ -1,6 +1,6 @@
 //! `ppkat info`: what an observation file holds.
 
-use super::ObsFormatArg;
+use super::{ObsFormatArg, TimeHintArgs};
 use anyhow::Result;
 use integration::gnss::obs::{read_obs, ObsFormat};
 use integration::gnss::rinex::summary::ObsSummary;
@@ -25,11 +25,13 @@ pub struct Args {
     /// Format of the file; auto tells it from the content.
     #[arg(long, value_enum, value_name = "FORMAT", default_value = "auto")]
     obs_format: ObsFormatArg,
+    #[command(flatten)]
+    time: TimeHintArgs,
 }
 
 /// Read the file and print its summary.
 pub fn run(args: Args) -> Result<()> {
-    let input = read_obs(&args.file, args.obs_format.into())?;
+    let input = read_obs(&args.file, args.obs_format.into(), args.time.hint())?;
     if let ObsFormat::Raw(f) = input.format {
         println!(
             "{} log, described as its RINEX 3.04 conversion (ppkat convert):",

@@ -21,7 +21,7 @@ pub mod tiepoints;
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use integration::gnss::obs::ObsFormat;
-use integration::gnss::raw::RawFormat;
+use integration::gnss::raw::{RawFormat, TimeHint};
 use integration::gnss::solution::PosFormat;
 use integration::gnss::sv::Constellation;
 use integration::vector::TrajectoryFormat;
@@ -97,6 +97,39 @@ impl From<ObsFormatArg> for Option<ObsFormat> {
             ObsFormatArg::Ubx => Some(ObsFormat::Raw(RawFormat::Ubx)),
             ObsFormatArg::Rtcm3 => Some(ObsFormat::Raw(RawFormat::Rtcm3)),
         }
+    }
+}
+
+/// When an RTCM 3 log was recorded: its observations carry the time of week only, and its
+/// GPS ephemerides the week modulo 1024.
+#[derive(clap::Args, Clone, Copy)]
+pub struct TimeHintArgs {
+    /// Year an RTCM 3 log was recorded: picks the 1024-week cycle of its GPS and QZSS
+    /// ephemeris weeks (without it: the cycle from 2019-04-07 to 2038-11-20). Not enough when
+    /// the log carries no ephemeris: then give --date-hint.
+    #[arg(long, value_name = "YYYY", value_parser = clap::value_parser!(i32).range(1980..=2200), conflicts_with = "date_hint")]
+    year_hint: Option<i32>,
+    /// Day (GPST) an RTCM 3 log begins, within 3 days: places its observations in their GPS
+    /// week. Needed when the log carries no ephemeris message giving the week (1019, 1042,
+    /// 1044, 1045, 1046); checked against them otherwise (a contradiction is an error).
+    #[arg(long, value_name = "YYYY-MM-DD", value_parser = date_hint)]
+    date_hint: Option<TimeHint>,
+}
+
+impl TimeHintArgs {
+    /// The hint given, if any.
+    pub fn hint(self) -> Option<TimeHint> {
+        self.date_hint.or(self.year_hint.map(TimeHint::Year))
+    }
+}
+
+/// A `--date-hint` value: a calendar date `YYYY-MM-DD`.
+fn date_hint(s: &str) -> std::result::Result<TimeHint, String> {
+    match TimeHint::parse(s)? {
+        d @ TimeHint::Date(..) => Ok(d),
+        TimeHint::Year(_) => Err(format!(
+            "'{s}' is a year: give the day as YYYY-MM-DD (or use --year-hint)"
+        )),
     }
 }
 

@@ -1,6 +1,6 @@
 //! `ppkat ppk`: carrier-phase kinematic positioning of a rover against a base.
 
-use super::{elev_mask, systems, triple, ObsFormatArg, TrajectoryFormatArg};
+use super::{elev_mask, systems, triple, ObsFormatArg, TimeHintArgs, TrajectoryFormatArg};
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use integration::gnss::frame::{Ecef, Geodetic};
@@ -50,6 +50,8 @@ pub struct Args {
     /// and a RINEX base mix).
     #[arg(long, value_enum, value_name = "FORMAT", default_value = "auto")]
     obs_format: ObsFormatArg,
+    #[command(flatten)]
+    time: TimeHintArgs,
     /// Navigation file (RINEX 2/3/4 broadcast ephemerides); give the flag once per file
     /// (e.g. one per constellation). Required unless --sp3 is given or a UBX log carries
     /// ephemerides (the rover's are used, else the base's); with --sp3 it still
@@ -217,6 +219,9 @@ enum ArArg {
 /// print its report.
 pub fn run(args: Args) -> Result<()> {
     let report = run_job(args)?;
+    for n in &report.notes {
+        eprintln!("note: {n}");
+    }
     print!("{report}");
     Ok(())
 }
@@ -262,6 +267,7 @@ pub fn run_job(args: Args) -> Result<pipeline::PpkReport> {
         rover: args.rover,
         base: args.base,
         obs_format: args.obs_format.into(),
+        time_hint: args.time.hint(),
         nav: args.nav,
         sp3: args.sp3,
         clk: args.clk,

@@ -1,6 +1,6 @@
 //! `ppkat spp`: single-point positioning of every epoch.
 
-use super::{elev_mask, systems, ObsFormatArg, TrajectoryFormatArg};
+use super::{elev_mask, systems, ObsFormatArg, TimeHintArgs, TrajectoryFormatArg};
 use anyhow::{Context, Result};
 use integration::gnss::spp::SppOptions;
 use integration::pipeline;
@@ -29,6 +29,8 @@ pub struct Args {
     /// Format of the observation file; auto tells it from the content.
     #[arg(long, value_enum, value_name = "FORMAT", default_value = "auto")]
     obs_format: ObsFormatArg,
+    #[command(flatten)]
+    time: TimeHintArgs,
     /// Navigation file (RINEX 2/3/4 broadcast ephemerides); give the flag once per file
     /// (e.g. one per constellation). Required unless --sp3 is given or the UBX log carries
     /// ephemerides (then those are used); with --sp3 it still
@@ -77,6 +79,7 @@ pub fn run(args: Args) -> Result<()> {
     let job = pipeline::SppJob {
         obs: args.obs,
         obs_format: args.obs_format.into(),
+        time_hint: args.time.hint(),
         nav: args.nav,
         sp3: args.sp3,
         clk: args.clk,
@@ -90,6 +93,9 @@ pub fn run(args: Args) -> Result<()> {
         out: args.out,
     };
     let report = pipeline::spp(&job).context("single-point positioning failed")?;
+    for n in &report.notes {
+        eprintln!("note: {n}");
+    }
     print!("{report}");
     Ok(())
 }

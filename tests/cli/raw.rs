@@ -190,3 +190,64 @@ fn simulate_writes_the_rover_and_base_also_as_ubx() {
         }
     }
 }
+
+/// `simulate --raw rtcm3` logs carry their ephemerides and the base station: `info` shows the
+/// station and where the week came from, `convert --nav` writes the ephemerides, and `ppk`
+/// runs on the logs alone (no --nav, no base position), saying on standard error what it took
+/// from them and naming the base's origin in the `.pos` header.
+#[test]
+fn rtcm_logs_carry_their_orbits_and_base_station() {
+    let dir = tmp("sim-rtcm");
+    let scen = fixture("scenario_small.toml");
+    succeeds(&ppkat(&[
+        "simulate",
+        "--scenario",
+        p(&scen),
+        "--out",
+        p(&dir),
+        "--raw",
+        "rtcm3",
+    ]));
+    let base = dir.join("base.rtcm3");
+    let i = succeeds(&ppkat(&["info", p(&base)]));
+    assert!(i.contains("station ARP (RTCM 1005/1006)"), "{i}");
+    assert!(i.contains("GPS week: "), "{i}");
+    let nav = dir.join("rtcm.nav");
+    let c = succeeds(&ppkat(&[
+        "convert",
+        "--in",
+        p(&base),
+        "-o",
+        p(&dir.join("base.obs")),
+        "--nav",
+        p(&nav),
+        "--year-hint",
+        "2024",
+    ]));
+    assert!(c.contains("ephemerides"), "{c}");
+    let n = std::fs::read_to_string(&nav).unwrap();
+    assert!(n.contains("N: GNSS NAV DATA") && n.contains("\nG01 ") && n.contains("\nE01 "));
+    let o = dir.join("rtcm.pos");
+    let out = ppkat(&[
+        "ppk",
+        "--rover",
+        p(&dir.join("rover.rtcm3")),
+        "--base",
+        p(&base),
+        "-o",
+        p(&o),
+    ]);
+    let t = succeeds(&out);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("no --nav given: using the"), "{err}");
+    assert!(
+        err.contains("no --base-pos/--base-llh given: the base is the station position"),
+        "{err}"
+    );
+    let pos = std::fs::read_to_string(&o).unwrap();
+    assert!(pos.contains("base from : the station position of"), "{t}");
+    fails_with(
+        &ppkat(&["info", p(&base), "--date-hint", "2001-01-01"]),
+        &["contradicts the log"],
+    );
+}

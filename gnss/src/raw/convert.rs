@@ -9,7 +9,7 @@
 
 use super::items::{for_each_item, Edge, LogNav, RawItem};
 use super::records::{span, RinexOrder, RinexOut, Scan};
-use super::{RawFormat, RawStats};
+use super::{RawFormat, RawStats, TimeHint};
 use crate::error::{Error, Result};
 use crate::rinex::write::{self, HeaderOut};
 use crate::rinex::write_nav::{write_nav, NavHeaderOut};
@@ -28,9 +28,15 @@ pub struct Outputs<'a> {
     pub events: Option<&'a Path>,
 }
 
-/// Convert `input` to the RINEX 3.04 files and the event CSV of `outs`.
-pub fn convert(input: &Path, format: Option<RawFormat>, outs: Outputs) -> Result<RawStats> {
-    convert_with_progress(input, format, outs, &crate::progress::NoProgress)
+/// Convert `input` to the RINEX 3.04 files and the event CSV of `outs`; `hint` settles RTCM 3
+/// weeks (see [`TimeHint`]).
+pub fn convert(
+    input: &Path,
+    format: Option<RawFormat>,
+    hint: Option<TimeHint>,
+    outs: Outputs,
+) -> Result<RawStats> {
+    convert_with_progress(input, format, hint, outs, &crate::progress::NoProgress)
 }
 
 /// [`convert`], counting the epochs of each pass on `progress` (the first pass's length is
@@ -38,6 +44,7 @@ pub fn convert(input: &Path, format: Option<RawFormat>, outs: Outputs) -> Result
 pub fn convert_with_progress(
     input: &Path,
     format: Option<RawFormat>,
+    hint: Option<TimeHint>,
     outs: Outputs,
     progress: &dyn crate::progress::Progress,
 ) -> Result<RawStats> {
@@ -46,7 +53,7 @@ pub fn convert_with_progress(
     let mut lognav = LogNav::default();
     let mut epochs = 0u64;
     progress.set_len("reading the log, epoch", 0);
-    let st1 = for_each_item(input, format, |it| {
+    let st1 = for_each_item(input, format, hint, |it| {
         lognav.add(&it);
         if let RawItem::Epoch(e) = it {
             scan.add(&e);
@@ -59,6 +66,7 @@ pub fn convert_with_progress(
         write_nav_file(input, p, &lognav, &st1)?;
     }
     let (first, last) = span(&scan, input)?;
+    let station = st1.station.rinex();
     let h = HeaderOut {
         program: "ppkat convert".into(),
         comments: vec![
@@ -72,7 +80,10 @@ pub fn convert_with_progress(
             ),
         ],
         marker: String::new(),
-        approx: [0.0; 3],
+        approx: station.approx.unwrap_or([0.0; 3]),
+        delta_h: station.height,
+        receiver: station.receiver.clone(),
+        antenna: station.antenna.clone(),
         types: scan.types(),
         first,
         last,
@@ -86,7 +97,7 @@ pub fn convert_with_progress(
         write::write_header(w, &h)?;
         let mut res = Ok(());
         let mut put = |o: RinexOut| write_record(w, o);
-        let st = for_each_item(input, format, |it| {
+        let st = for_each_item(input, format, hint, |it| {
             if matches!(it, RawItem::Epoch(_)) {
                 progress.inc(1);
             }
@@ -137,7 +148,8 @@ fn write_nav_file(input: &Path, path: &Path, nav: &LogNav, st: &RawStats) -> Res
             input,
             format!(
                 "no complete ephemeris in the log's navigation messages ({} read): enable \
-                 UBX-RXM-SFRBX on the receiver, or leave out --nav",
+                 UBX-RXM-SFRBX (u-blox) or RTCM 1019/1020/1042/1044/1045/1046 on the \
+                 receiver, or leave out --nav",
                 st.nav.messages
             ),
         ));

@@ -70,7 +70,7 @@ fn p2(e: i32) -> f64 {
 }
 
 /// SISA in metres of its index (ICD §5.1.12); −1 for "no accuracy prediction" (NAPA).
-fn sisa_metres(n: u32) -> f64 {
+pub(crate) fn sisa_metres(n: u32) -> f64 {
     match n {
         0..=49 => n as f64 * 0.01,
         50..=74 => 0.5 + (n - 50) as f64 * 0.02,

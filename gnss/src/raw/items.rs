@@ -9,7 +9,7 @@
 use super::ubx::{self, FrameReader, Tm2};
 use super::ubx_nav::{NavDecoder, NavOut};
 use super::ubx_obs::{RawEpoch, RawxConverter};
-use super::{detect, RawFormat, RawStats};
+use super::{detect, RawFormat, RawStats, TimeHint};
 use crate::error::{Error, Result};
 use crate::rinex::nav::{Klobuchar, NavFile, NavRecord};
 use hifitime::Epoch;
@@ -99,10 +99,12 @@ pub fn gpst(week: u16, tow: f64) -> Epoch {
     Epoch::from_gpst_nanoseconds(ns.max(0) as u64)
 }
 
-/// Read every item of a log, calling `f` on each; returns what was read and dropped.
+/// Read every item of a log, calling `f` on each; returns what was read and dropped. `hint`
+/// settles the week where the format leaves it open (RTCM 3; see [`TimeHint`]).
 pub fn for_each_item(
     path: &Path,
     format: Option<RawFormat>,
+    hint: Option<TimeHint>,
     mut f: impl FnMut(RawItem),
 ) -> Result<RawStats> {
     let io = Error::io(path);
@@ -128,7 +130,7 @@ pub fn for_each_item(
         }
     };
     if format == RawFormat::Rtcm3 {
-        return super::rtcm_items::for_each_rtcm(path, f);
+        return super::rtcm_items::for_each_rtcm(path, hint, f);
     }
     let mut r = FrameReader::new(file);
     let mut st = RawStats::default();

@@ -82,7 +82,7 @@ fn p2(e: i32) -> f64 {
 }
 
 /// Nominal URA in metres of a URA index (IS-GPS-200 §20.3.3.3.1.1; 15: no prediction).
-fn ura_metres(n: u32) -> f64 {
+pub(crate) fn ura_metres(n: u32) -> f64 {
     match n {
         0..=6 => [2.0, 2.8, 4.0, 5.7, 8.0, 11.3, 16.0][n as usize],
         7..=14 => p2(n as i32 - 2),

@@ -22,8 +22,11 @@ pub mod items;
 pub mod lnav;
 pub mod records;
 pub mod rtcm;
+pub mod rtcm_eph;
+pub mod rtcm_eph_write;
 pub mod rtcm_items;
 pub mod rtcm_msm;
+pub mod rtcm_station;
 pub mod rtcm_write;
 pub mod source;
 pub mod ubx;
@@ -74,6 +77,82 @@ pub fn detect(head: &[u8]) -> Option<RawFormat> {
     None
 }
 
+/// When a log was recorded, as far as the user knows. RTCM 3 observations carry the time of
+/// week only (of day for GLONASS) and the GPS ephemeris its week modulo 1024; a hint settles
+/// what the log cannot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TimeHint {
+    /// The year: the 1024-week cycle of the GPS and QZSS ephemerides' weeks (not enough to
+    /// place observations when no ephemeris gives the week).
+    Year(i32),
+    /// The day (GPST) the log begins, within a few days: places the observations whatever
+    /// the log carries.
+    Date(i32, u8, u8),
+}
+
+impl TimeHint {
+    /// The hint as GPST ms since the GPS epoch: the date's noon, or the year's 2 July.
+    pub fn gpst_ms(self) -> i64 {
+        let (y, m, d) = match self {
+            TimeHint::Year(y) => (y, 7, 2),
+            TimeHint::Date(y, m, d) => (y, m, d),
+        };
+        let e = crate::time::gpst(y.clamp(1980, 2200), m, d, 12, 0, 0, 0);
+        (e.to_gpst_seconds() * 1000.0).round() as i64
+    }
+
+    /// The full GPS week the hint points at.
+    pub fn week(self) -> i64 {
+        self.gpst_ms().div_euclid(rtcm_msm::WEEK_MS)
+    }
+
+    /// Parse `YYYY` or `YYYY-MM-DD` (years 1980–2200, a real calendar date).
+    pub fn parse(s: &str) -> std::result::Result<TimeHint, String> {
+        let bad = || format!("'{s}' is not a year (YYYY) or a date (YYYY-MM-DD) from 1980 to 2200");
+        let parts: Vec<&str> = s.trim().split('-').collect();
+        let num = |t: &str| t.parse::<i32>().map_err(|_| bad());
+        let y = num(parts[0])?;
+        if !(1980..=2200).contains(&y) {
+            return Err(bad());
+        }
+        match parts.len() {
+            1 => Ok(TimeHint::Year(y)),
+            3 => {
+                let (m, d) = (num(parts[1])?, num(parts[2])?);
+                let leap = y % 4 == 0 && (y % 100 != 0 || y % 400 == 0);
+                let days = [
+                    31,
+                    if leap { 29 } else { 28 },
+                    31,
+                    30,
+                    31,
+                    30,
+                    31,
+                    31,
+                    30,
+                    31,
+                    30,
+                    31,
+                ];
+                if !(1..=12).contains(&m) || d < 1 || d > days[(m - 1) as usize] {
+                    return Err(bad());
+                }
+                Ok(TimeHint::Date(y, m as u8, d as u8))
+            }
+            _ => Err(bad()),
+        }
+    }
+}
+
+impl fmt::Display for TimeHint {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            TimeHint::Year(y) => write!(f, "{y}"),
+            TimeHint::Date(y, m, d) => write!(f, "{y:04}-{m:02}-{d:02}"),
+        }
+    }
+}
+
 /// What a conversion read and what it dropped (nothing is dropped silently).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RawStats {
@@ -104,8 +183,10 @@ pub struct RawStats {
     pub events: u64,
     /// Navigation messages (subframes, pages) and what became of them.
     pub nav: NavStats,
-    /// The reference station's ECEF position (m) the log announces (RTCM 1005/1006).
-    pub station: Option<[f64; 3]>,
+    /// The reference station the log describes (RTCM 1005/1006, 1007/1008/1033).
+    pub station: rtcm_station::Station,
+    /// Where the GPS week of the observations came from (RTCM 3: a message or a hint).
+    pub time_source: Option<String>,
 }
 
 /// What became of the navigation messages of a log: every subframe or page that failed a
@@ -182,11 +263,9 @@ impl fmt::Display for RawStats {
                 n.incomplete
             )?;
         }
-        if let Some([x, y, z]) = self.station {
-            writeln!(
-                f,
-                "station position (RTCM 1005/1006): ECEF {x:.4} {y:.4} {z:.4} m"
-            )?;
+        write!(f, "{}", self.station)?;
+        if let Some(t) = &self.time_source {
+            writeln!(f, "GPS week: {t}")?;
         }
         if !self.unused.is_empty() {
             writeln!(f, "not used: {}", list(&self.unused))?;
@@ -214,5 +293,19 @@ mod tests {
         head[n - 1] ^= 0xff;
         assert_eq!(detect(&head), None);
         assert_eq!(detect(b"     3.04           OBSERVATION DATA"), None);
+    }
+
+    #[test]
+    fn time_hints_parse() {
+        assert_eq!(TimeHint::parse("2024"), Ok(TimeHint::Year(2024)));
+        assert_eq!(
+            TimeHint::parse("2024-02-29"),
+            Ok(TimeHint::Date(2024, 2, 29))
+        );
+        for bad in ["2023-02-29", "1979", "2024-13-01", "24-1-1-1", "x", ""] {
+            assert!(TimeHint::parse(bad).is_err(), "{bad}");
+        }
+        // 2024-02-29 is in GPS week 2303
+        assert_eq!(TimeHint::Date(2024, 2, 29).week(), 2303);
     }
 }

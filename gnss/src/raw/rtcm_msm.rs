@@ -472,6 +472,11 @@ impl MsmDecoder {
         done
     }
 
+    /// The time the log has reached (GPST ms): the last epoch's, or the start hint.
+    pub fn time(&self) -> Option<i64> {
+        self.hint
+    }
+
     /// Set a GLONASS slot's frequency channel (from 1020).
     pub fn set_glonass_channel(&mut self, slot: u8, channel: i8) {
         self.glonass.insert(slot, channel);

@@ -11,6 +11,7 @@
 use super::bits::set_bits;
 use super::rtcm::frame;
 use super::rtcm_msm::{lock_ms, lock_ms_ext, msm_code, msm_number, RANGE_MS};
+use crate::rinex::nav::NavRecord;
 use crate::rinex::ObsFile;
 use crate::signal::frequency;
 use crate::sv::{Constellation, Sv};
@@ -46,13 +47,23 @@ pub struct MsmSat {
     pub sigs: Vec<MsmSignal>,
 }
 
-struct Writer {
-    buf: Vec<u8>,
-    pos: usize,
+/// A payload written field by field, most significant bit first.
+pub(crate) struct Writer {
+    pub(crate) buf: Vec<u8>,
+    pub(crate) pos: usize,
 }
 
 impl Writer {
-    fn put(&mut self, n: usize, v: i64) {
+    /// An empty payload.
+    pub(crate) fn new() -> Self {
+        Writer {
+            buf: Vec::new(),
+            pos: 0,
+        }
+    }
+
+    /// Append the low `n` (≤ 64) bits of `v` (two's complement for negative values).
+    pub(crate) fn put(&mut self, n: usize, v: i64) {
         if self.buf.len() * 8 < self.pos + n {
             self.buf.resize((self.pos + n).div_ceil(8), 0);
         }
@@ -248,6 +259,17 @@ pub fn station_1005(x: [f64; 3]) -> Vec<u8> {
     frame(&w.buf)
 }
 
+/// A station position frame with antenna height (1006): the ARP, ECEF metres, and its height
+/// above the marker, metres.
+pub fn station_1006(arp: [f64; 3], height: f64) -> Vec<u8> {
+    let mut f = station_1005(arp);
+    let mut p = f[3..f.len() - 3].to_vec();
+    super::bits::set_bits(&mut p, 0, 12, 1006);
+    p.extend_from_slice(&((height * 1e4).round() as u16).to_be_bytes());
+    f = frame(&p);
+    f
+}
+
 /// The 30-bit MSM epoch field of GPST `t_ms` (ms since the GPS epoch) for a system.
 pub fn epoch_field(sys: Constellation, t_ms: i64) -> u32 {
     use super::rtcm_msm::{leap_seconds, WEEK_MS};
@@ -261,27 +283,41 @@ pub fn epoch_field(sys: Constellation, t_ms: i64) -> u32 {
     }) as u32
 }
 
-/// The observations of `obs` as an RTCM 3 log: 1005 (the header's approximate position),
-/// 1019 (the week), 1020 (GLONASS channels), then one MSM7 per system and epoch; and how many
+/// The observations of `obs` as an RTCM 3 log: 1005 (the header's approximate position), the
+/// ephemerides `nav` (1019, 1020, 1042, 1044, 1045/1046; a week-only 1019 when there are
+/// none), 1020 channel messages for GLONASS slots without an ephemeris, then one MSM7 per
+/// system and epoch; and how many
 /// measurements RTCM could not carry (a code without an MSM signal id, no pseudorange).
 /// Lock times grow with the epochs and restart at an LLI slip; the half-cycle flag is LLI bit 1.
 /// Each lock arc's phase is shifted by the whole cycles that bring it near the pseudorange
 /// (a constant integer per arc, which ambiguity resolution absorbs).
-pub fn rtcm_from_obs(obs: &ObsFile) -> (Vec<u8>, u64) {
+pub fn rtcm_from_obs(obs: &ObsFile, nav: &[NavRecord]) -> (Vec<u8>, u64) {
     let mut out = Vec::new();
     if let Some(p) = obs.header.approx_position {
-        out.extend(station_1005([p.0.x, p.0.y, p.0.z]));
+        // the ARP above the marker (RTCM carries no horizontal antenna offset)
+        let h = obs.header.antenna_delta.up;
+        let arp = crate::frame::Enu(nalgebra::Vector3::new(0.0, 0.0, h)).to_ecef(&p);
+        out.extend(station_1006([arp.0.x, arp.0.y, arp.0.z], h));
+    }
+    let mut with_eph = std::collections::BTreeSet::new();
+    for r in nav {
+        if let Some(f) = super::rtcm_eph_write::ephemeris_frame(r) {
+            out.extend(f);
+            with_eph.insert(r.sv);
+        }
     }
     let t_ms =
         |e: &crate::rinex::ObsEpoch| (e.time.to_gpst_nanoseconds().unwrap_or(0) / 1_000_000) as i64;
-    if let Some(e) = obs.epochs.first() {
+    if let Some(e) = obs.epochs.first().filter(|_| with_eph.is_empty()) {
         let t = t_ms(e);
         let week = (t / super::rtcm_msm::WEEK_MS) as u16;
         let tow = (t % super::rtcm_msm::WEEK_MS / 1000) as u32;
         out.extend(week_1019(week, tow / 16 * 16));
     }
     for (&slot, &ch) in &obs.header.glonass_channels {
-        out.extend(channel_1020(slot, ch));
+        if !with_eph.contains(&Sv::new(Constellation::Glonass, slot)) {
+            out.extend(channel_1020(slot, ch));
+        }
     }
     let mut locks: HashMap<(Sv, [u8; 2]), (u64, f64)> = HashMap::new();
     let mut last_t: Option<i64> = None;

@@ -8,11 +8,12 @@
 
 use super::items::{for_each_item, LogNav, RawItem};
 use super::records::{span, RinexOrder, RinexOut, Scan};
-use super::{RawFormat, RawStats};
+use super::{RawFormat, RawStats, TimeHint};
 use crate::error::Result;
+use crate::frame::Ecef;
 use crate::rinex::lines::parse_real;
 use crate::rinex::write::f14_3;
-use crate::rinex::{Event, IngestStats, ObsEpoch, ObsFile, ObsHeader, SatObs};
+use crate::rinex::{AntennaDelta, Event, IngestStats, ObsEpoch, ObsFile, ObsHeader, SatObs};
 use std::path::Path;
 
 /// A raw log read into memory.
@@ -40,12 +41,13 @@ fn printed(mut sats: Vec<SatObs>) -> Vec<SatObs> {
     sats
 }
 
-/// Read a whole log (format detected from content when `format` is `None`).
-pub fn read_log(path: &Path, format: Option<RawFormat>) -> Result<RawLog> {
+/// Read a whole log (format detected from content when `format` is `None`; `hint` for RTCM 3
+/// weeks).
+pub fn read_log(path: &Path, format: Option<RawFormat>, hint: Option<TimeHint>) -> Result<RawLog> {
     let mut scan = Scan::default();
     let mut nav = LogNav::default();
     let mut items = Vec::new();
-    let stats = for_each_item(path, format, |it| {
+    let stats = for_each_item(path, format, hint, |it| {
         nav.add(&it);
         match it {
             RawItem::Epoch(e) => {
@@ -82,9 +84,19 @@ pub fn read_log(path: &Path, format: Option<RawFormat>) -> Result<RawLog> {
         let _ = order.item(it, &mut put);
     }
     let _ = order.finish(&mut put);
+    // the station fields as the RINEX header `convert` writes has them, read back
+    let station = stats.station.rinex();
+    let [_, rec_type, rec_version] = &station.receiver;
     let header = ObsHeader {
         obs_types: types.into_iter().collect(),
         glonass_channels: scan.glonass.clone(),
+        approx_position: station.approx.map(|[x, y, z]| Ecef::new(x, y, z)),
+        antenna_delta: AntennaDelta {
+            up: station.height,
+            ..AntennaDelta::default()
+        },
+        antenna: station.antenna[1].clone(),
+        receiver: format!("{rec_type} {rec_version}").trim().to_string(),
         ..ObsHeader::new(3.04)
     };
     let obs = ObsFile {

@@ -21,6 +21,12 @@ pub struct HeaderOut {
     pub marker: String,
     /// APPROX POSITION XYZ, metres (zeros when unknown).
     pub approx: [f64; 3],
+    /// ANTENNA: DELTA H, metres.
+    pub delta_h: f64,
+    /// REC # / TYPE / VERS: serial number, type, version.
+    pub receiver: [String; 3],
+    /// ANT # / TYPE: serial number, type.
+    pub antenna: [String; 2],
     /// Observation types of each system, in this order.
     pub types: Vec<(Constellation, Vec<ObsCode>)>,
     /// TIME OF FIRST OBS and TIME OF LAST OBS (GPST).
@@ -77,8 +83,14 @@ pub fn write_header(w: &mut dyn Write, h: &HeaderOut) -> Result<()> {
     opening(w, "OBSERVATION DATA", &h.program, &h.comments)?;
     line(w, &h.marker, "MARKER NAME")?;
     line(w, "", "OBSERVER / AGENCY")?;
-    line(w, "", "REC # / TYPE / VERS")?;
-    line(w, "", "ANT # / TYPE")?;
+    let [rn, rt, rv] = &h.receiver;
+    line(
+        w,
+        &format!("{rn:<20}{rt:<20}{rv:<20}"),
+        "REC # / TYPE / VERS",
+    )?;
+    let [an, at] = &h.antenna;
+    line(w, &format!("{an:<20}{at:<20}"), "ANT # / TYPE")?;
     let [x, y, z] = h.approx;
     line(
         w,
@@ -87,7 +99,7 @@ pub fn write_header(w: &mut dyn Write, h: &HeaderOut) -> Result<()> {
     )?;
     line(
         w,
-        &format!("{:14.4}{:14.4}{:14.4}", 0.0, 0.0, 0.0),
+        &format!("{:14.4}{:14.4}{:14.4}", h.delta_h, 0.0, 0.0),
         "ANTENNA: DELTA H/E/N",
     )?;
     for (sys, types) in &h.types {

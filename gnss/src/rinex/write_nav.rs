@@ -1,4 +1,5 @@
-//! RINEX 3.04 mixed navigation writer for Keplerian ephemerides (GPS, QZSS, Galileo).
+//! RINEX 3.04 mixed navigation writer for Keplerian ephemerides (GPS, QZSS, Galileo,
+//! BeiDou) and GLONASS state vectors.
 //!
 //! What enters: [`NavRecord`]s laid out as RINEX 3 records (as [`super::nav`] reads them and
 //! the raw-log decoders of [`crate::raw`] make them) and the header's ionosphere parameters.
@@ -50,12 +51,16 @@ pub fn write_nav_header(w: &mut dyn Write, h: &NavHeaderOut) -> Result<()> {
 
 /// Write one record: the satellite, time of clock and clock terms, then the orbit values
 /// four to a line. The time of clock is written in the system's time (GPST for GPS, QZSS and
-/// Galileo; BDT for BeiDou).
+/// Galileo; BDT for BeiDou; UTC for GLONASS).
 pub fn write_nav_record(w: &mut dyn Write, r: &NavRecord) -> Result<()> {
-    let toc = if r.sv.sys == Constellation::BeiDou {
-        r.toc - hifitime::Duration::from_seconds(14.0)
-    } else {
-        r.toc
+    let toc = match r.sv.sys {
+        Constellation::BeiDou => r.toc - hifitime::Duration::from_seconds(14.0),
+        // GPST − UTC = (TAI − UTC) − 19 s
+        Constellation::Glonass => {
+            let leap = r.toc.leap_seconds(true).unwrap_or(37.0) - 19.0;
+            r.toc - hifitime::Duration::from_seconds(leap)
+        }
+        _ => r.toc,
     };
     let f = epoch_fields(toc);
     // epoch_fields gives seconds as F11.7; navigation records take whole seconds (I2.2).

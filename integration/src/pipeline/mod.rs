@@ -12,6 +12,7 @@ use crate::orbits::{broadcast_warning, check_glonass_channels};
 pub use crate::orbits::{check_overlap, load_orbits};
 use gnss::error::{Error, Result};
 use gnss::obs::ObsFormat;
+use gnss::raw::TimeHint;
 use gnss::rinex::ObsFile;
 use gnss::solution::{PosRecord, Quality};
 use gnss::spp::{SppOptions, SppRun};
@@ -31,6 +32,8 @@ pub struct SppJob {
     pub obs: PathBuf,
     /// Its format (`None`: told from the content).
     pub obs_format: Option<ObsFormat>,
+    /// When an RTCM 3 log was recorded (its week), if the user said.
+    pub time_hint: Option<TimeHint>,
     /// Navigation files (optional with SP3 files, or with a raw log carrying ephemerides).
     pub nav: Vec<PathBuf>,
     /// Precise orbits (SP3; any number, merged), used instead of the broadcast ones when given.
@@ -58,6 +61,9 @@ pub struct SppReport {
     pub run: SppRun,
     /// Problems with the inputs (reading went on).
     pub warnings: Vec<String>,
+    /// What the run took from raw logs themselves (their ephemerides, their GPS week), for
+    /// standard error.
+    pub notes: Vec<String>,
     /// The `.pos` written.
     pub out: PathBuf,
 }
@@ -100,8 +106,9 @@ fn nothing_solved(what: &str, epochs: usize, reasons: Vec<String>, details: &[St
 /// epoch is solved.
 pub fn spp(job: &SppJob) -> Result<SppReport> {
     gnss::atomic::clean_stale(&job.out);
-    let input = read_observations(&job.obs, job.obs_format)?;
+    let input = read_observations(&job.obs, job.obs_format, job.time_hint)?;
     let log_nav = input.nav.as_ref();
+    let notes = log_notes(&[&input], &job.nav);
     let (orbits, mut warnings) = load_orbits(&job.nav, log_nav, &job.sp3, &job.clk)?;
     warnings.extend(broadcast_warning(&job.nav, log_nav, &orbits));
     let obs = input.obs;
@@ -166,8 +173,58 @@ pub fn spp(job: &SppJob) -> Result<SppReport> {
         solved: records.len(),
         run,
         warnings,
+        notes,
         out: job.out.clone(),
     })
+}
+
+/// What a run takes from its raw logs themselves: their GPS week and, without navigation
+/// files, their ephemerides.
+fn log_notes(inputs: &[&crate::observations::RunObs], nav: &[PathBuf]) -> Vec<String> {
+    let mut notes: Vec<String> = inputs
+        .iter()
+        .flat_map(|i| {
+            i.warnings
+                .iter()
+                .filter(|w| w.contains("GPS week of"))
+                .cloned()
+        })
+        .collect();
+    if nav.is_empty() {
+        if let Some(n) = inputs.iter().find_map(|i| i.nav.as_ref()) {
+            notes.push(format!(
+                "no --nav given: using the {} ephemerides of {} itself",
+                n.records.len(),
+                n.path.display()
+            ));
+        }
+    }
+    notes
+}
+
+/// The `.pos` header line and the note of a base position taken from the station an RTCM
+/// log announces (1005/1006), when the user gave none; `None` otherwise.
+fn base_from_station(job: &PpkJob, base: &crate::observations::RunObs) -> Option<(String, String)> {
+    if job.base_from_ppp || !matches!(job.base_position, gnss::ppk::BasePosition::Header) {
+        return None;
+    }
+    let st = base.station.as_ref()?;
+    let [x, y, z] = st.arp?;
+    let m = base.obs.header.approx_position?;
+    let h = st.height.unwrap_or(0.0);
+    let what = format!(
+        "the station position of {} (RTCM {}): ARP {x:.4} {y:.4} {z:.4}, antenna height \
+         {h:.4} m, marker {:.4} {:.4} {:.4}",
+        job.base.display(),
+        if st.height.is_some() { 1006 } else { 1005 },
+        m.0.x,
+        m.0.y,
+        m.0.z
+    );
+    Some((
+        format!("base from : {what}"),
+        format!("no --base-pos/--base-llh given: the base is {what}"),
+    ))
 }
 
 impl fmt::Display for SppReport {
@@ -216,6 +273,8 @@ pub struct PpkJob {
     pub base: PathBuf,
     /// Format of both (`None`: each told from its content).
     pub obs_format: Option<ObsFormat>,
+    /// When RTCM 3 logs were recorded (their week), if the user said.
+    pub time_hint: Option<TimeHint>,
     /// Navigation files (optional with SP3 files, or with raw logs carrying ephemerides:
     /// the rover's are used, else the base's).
     pub nav: Vec<PathBuf>,
@@ -255,6 +314,9 @@ pub struct PpkReport {
     pub refer: gnss::ppk::Reference,
     /// Problems with the inputs and the run.
     pub warnings: Vec<String>,
+    /// What the run took from raw logs themselves (ephemerides, GPS week, base position),
+    /// for standard error.
+    pub notes: Vec<String>,
     /// Wall time, seconds.
     pub seconds: f64,
     /// Of it, reading and checking the inputs, seconds.
@@ -275,8 +337,8 @@ pub(crate) fn side_path(out: &std::path::Path, ext: &str) -> PathBuf {
 pub fn ppk(job: &PpkJob, progress: &dyn gnss::progress::Progress) -> Result<PpkReport> {
     let t0 = std::time::Instant::now();
     gnss::atomic::clean_stale(&job.out);
-    let rover_in = read_observations(&job.rover, job.obs_format)?;
-    let base_in = read_observations(&job.base, job.obs_format)?;
+    let rover_in = read_observations(&job.rover, job.obs_format, job.time_hint)?;
+    let base_in = read_observations(&job.base, job.obs_format, job.time_hint)?;
     let (rover, base) = (&rover_in.obs, &base_in.obs);
     gnss::ppk::require_phase(rover, "rover")?;
     gnss::ppk::require_phase(base, "base")?;
@@ -291,8 +353,13 @@ pub fn ppk(job: &PpkJob, progress: &dyn gnss::progress::Progress) -> Result<PpkR
         &job.options.systems,
     )?);
     warnings.extend(file_warnings(rover).chain(file_warnings(base)));
+    let mut notes = log_notes(&[&rover_in, &base_in], &job.nav);
     let mut base_position = job.base_position;
     let mut base_line = None;
+    if let Some((line, note)) = base_from_station(job, &base_in) {
+        base_line = Some(line);
+        notes.push(note);
+    }
     if job.base_from_ppp {
         if orbits.precise.is_none() {
             return Err(Error::NoData(
@@ -399,6 +466,7 @@ pub fn ppk(job: &PpkJob, progress: &dyn gnss::progress::Progress) -> Result<PpkR
         process_seconds,
         out: job.out.clone(),
         warnings,
+        notes,
         seconds: t0.elapsed().as_secs_f64(),
     };
     if let Some(path) = &job.report {

@@ -4,7 +4,10 @@
 //! perturbation terms, broadcast every two hours, plus Klobuchar parameters.
 //!
 //! The simulator computes every satellite position from this file as read back by our own
-//! reader, so simulated observations and processing use the very same numbers.
+//! reader, so simulated observations and processing use the very same numbers. Every value
+//! lies on the grid of the broadcast messages (semicircles 2^-31, e 2^-33, √A 2^-19, clock
+//! terms at GPS or Galileo resolution), as a satellite's would: encoding the file as RTCM 3
+//! (`simulate --raw rtcm3`) or navigation words then loses nothing.
 //!
 //! Enters: the GPST span of the flight and a seed. Leaves: the text of the navigation file
 //! (times of ephemeris every 2 h, GPST; angles radians; lengths metres as RINEX has them).
@@ -35,6 +38,30 @@ struct Sat {
     af1: f64,
 }
 
+/// `x` on the grid of a field of scale 2^e.
+fn grid(x: f64, e: i32) -> f64 {
+    (x * 2f64.powi(-e)).round() * 2f64.powi(e)
+}
+
+/// An angle (radians) on the grid of a semicircle field of scale 2^e.
+fn grid_angle(x: f64, e: i32) -> f64 {
+    grid(x / PI, e) * PI
+}
+
+/// An angle in [−π, π], as the two's-complement semicircle fields carry them.
+fn wrap(x: f64) -> f64 {
+    x - 2.0 * PI * (x / (2.0 * PI)).round()
+}
+
+/// Scale exponents of af0 and af1: GPS LNAV, Galileo.
+fn clock_exp(sys: char) -> (i32, i32) {
+    if sys == 'E' {
+        (-34, -46)
+    } else {
+        (-31, -43)
+    }
+}
+
 fn d19(v: f64) -> String {
     format!("{:>19}", format!("{v:.12E}"))
 }
@@ -49,17 +76,17 @@ fn sats(rng: &mut Rng) -> Vec<Sat> {
                     out.push(Sat {
                         sys,
                         prn,
-                        sqrt_a: a.sqrt(),
-                        e: rng.range(0.001, 0.01),
-                        i0: inc.to_radians() + rng.range(-0.01, 0.01),
+                        sqrt_a: grid(a.sqrt(), -19),
+                        e: grid(rng.range(0.001, 0.01), -33),
+                        i0: grid_angle(inc.to_radians() + rng.range(-0.01, 0.01), -31),
                         raan: 2.0 * PI * p as f64 / planes as f64,
-                        omega: rng.range(0.0, 2.0 * PI),
+                        omega: grid_angle(wrap(rng.range(0.0, 2.0 * PI)), -31),
                         m_ref: 2.0
                             * PI
                             * (k as f64 / per as f64 + p as f64 / (planes * per) as f64),
                         mu,
                         af0: rng.range(-2e-4, 2e-4),
-                        af1: rng.range(-5e-12, 5e-12),
+                        af1: grid(rng.range(-5e-12, 5e-12), clock_exp(sys).1),
                     });
                     prn += 1;
                 }
@@ -117,10 +144,10 @@ pub fn navigation_text(start: Epoch, end: Epoch, seed: u64) -> String {
         let (y, mo, d, h, mi, sec, _) = toe.to_gregorian(hifitime::TimeScale::GPST);
         for sat in &sats {
             let n = (sat.mu / sat.sqrt_a.powi(6)).sqrt();
-            let m0 = (sat.m_ref + n * dt_ref).rem_euclid(2.0 * PI);
+            let m0 = grid_angle(wrap(sat.m_ref + n * dt_ref), -31);
             // Ω(t) = RAAN − ωe·(t − t_ref): broadcast Ω0 refers to the record's week start.
-            let omega0 = (sat.raan - gnss::frame::OMEGA_E * dweek).rem_euclid(2.0 * PI);
-            let af0 = sat.af0 + sat.af1 * dt_ref;
+            let omega0 = grid_angle(wrap(sat.raan - gnss::frame::OMEGA_E * dweek), -31);
+            let af0 = grid(sat.af0 + sat.af1 * dt_ref, clock_exp(sat.sys).0);
             let _ = writeln!(
                 s,
                 "{}{:02} {y:04} {mo:02} {d:02} {h:02} {mi:02} {sec:02}{}{}{}",

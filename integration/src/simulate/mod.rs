@@ -214,15 +214,16 @@ pub fn write_ubx(rep: &SimReport) -> Result<(PathBuf, PathBuf, u64), SimError> {
     Ok((rover, base, dropped))
 }
 
-/// The rover and base of a simulation also as RTCM 3 logs (`rover.rtcm3`, `base.rtcm3`: MSM7
-/// per system and epoch, with 1005, 1019 and 1020), made from the RINEX files it wrote: their
-/// paths and how many measurements RTCM could not carry. RTCM has no camera events (DJI
-/// writes them to a separate `.MRK` file).
+/// The rover and base of a simulation also as RTCM 3 logs (`rover.rtcm3`, `base.rtcm3`: 1005,
+/// the constellation's ephemerides as 1019 and 1046, then MSM7 per system and epoch), made
+/// from the RINEX files it wrote: their paths and how many measurements RTCM could not carry.
+/// RTCM has no camera events (DJI writes them to a separate `.MRK` file).
 pub fn write_rtcm(rep: &SimReport) -> Result<(PathBuf, PathBuf, u64), SimError> {
     let mut paths = Vec::new();
     let mut dropped = 0;
+    let nav = NavFile::read(&rep.nav)?;
     for (src, name) in [(&rep.rover, "rover.rtcm3"), (&rep.base, "base.rtcm3")] {
-        let (bytes, d) = gnss::raw::rtcm_write::rtcm_from_obs(&ObsFile::read(src)?);
+        let (bytes, d) = gnss::raw::rtcm_write::rtcm_from_obs(&ObsFile::read(src)?, &nav.records);
         dropped += d;
         paths.push(io::write_bytes(&rep.dir, name, &bytes)?);
     }

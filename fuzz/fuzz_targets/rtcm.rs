@@ -1,0 +1,24 @@
+#![no_main]
+//! RTCM 3 logs: frames, MSM observations, ephemerides (1019, 1020, 1042, 1044, 1045, 1046),
+//! station messages (1005–1008, 1033) and the week's resolution with and without a hint.
+
+use libfuzzer_sys::fuzz_target;
+use ppkat_fuzz::with_file;
+
+fuzz_target!(|data: &[u8]| {
+    use gnss::raw::{items::for_each_item, RawFormat, TimeHint};
+    with_file("f.rtcm3", data, |p| {
+        for hint in [None, Some(TimeHint::Year(2024)), Some(TimeHint::Date(2024, 3, 5))] {
+            let _ = for_each_item(p, Some(RawFormat::Rtcm3), hint, |_| {});
+        }
+    });
+    // a payload on its own, as every decoder sees it
+    let _ = gnss::raw::rtcm_msm::decode_msm(data);
+    let now = Some(2303 * gnss::raw::rtcm_msm::WEEK_MS);
+    if let Ok(r) = gnss::raw::rtcm_eph::decode_ephemeris(data, now, None) {
+        let _ = gnss::raw::rtcm_eph_write::ephemeris_frame(&r);
+    }
+    let mut st = gnss::raw::rtcm_station::Station::default();
+    let _ = st.add(data);
+    let _ = st.rinex();
+});
