@@ -74,7 +74,8 @@ fn sat(sys: Constellation, id: u8, ch: Option<i8>, sigs: &[(u8, u8)], k: usize) 
     }
 }
 
-fn write_log() -> (PathBuf, Vec<Expect>) {
+/// The log, written to a file of its own per test (tests run in parallel).
+fn write_log(name: &str) -> (PathBuf, Vec<Expect>) {
     use Constellation::*;
     let mut bytes = b"\r\n$GPGGA,noise*00\r\n".to_vec();
     bytes.extend(station_1005(STATION));
@@ -127,7 +128,7 @@ fn write_log() -> (PathBuf, Vec<Expect>) {
             }
         }
     }
-    let p = tmp("log.rtcm3");
+    let p = tmp(name);
     std::fs::write(&p, bytes).unwrap();
     (p, exp)
 }
@@ -193,7 +194,7 @@ fn check(f: &ObsFile, exp: &[Expect]) {
 
 #[test]
 fn msm_round_trip_through_the_observation_seam_and_convert() {
-    let (log, exp) = write_log();
+    let (log, exp) = write_log("seam.rtcm3");
     let input = read_obs(&log, None, None).unwrap();
     assert_eq!(input.format, ObsFormat::Raw(RawFormat::Rtcm3));
     let st = input.raw.as_ref().unwrap();
@@ -241,7 +242,7 @@ fn msm_without_a_week_is_refused_unless_a_date_is_given() {
 
 #[test]
 fn a_date_hint_contradicting_the_log_is_refused() {
-    let (log, _) = write_log();
+    let (log, _) = write_log("other.rtcm3");
     let e = read_obs(&log, None, Some(TimeHint::Date(2020, 1, 1)))
         .unwrap_err()
         .to_string();

@@ -18,6 +18,7 @@ mod outputs;
 mod precise;
 mod raw;
 mod reliability;
+mod tiepoints;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
