@@ -69,8 +69,58 @@ fn check(spec: &TexturedSpec, name: &str) -> (usize, usize, f64, usize) {
         }
     }
     let rms = (sum / n.max(1) as f64).sqrt();
+    if spec.width_px >= 1000 {
+        adjust_with_matched_points(&dir, &w.project.measurements);
+    }
     let _ = std::fs::remove_dir_all(&dir);
     (by_point.len(), good, rms, w.project.images.len())
+}
+
+/// The block adjusted with the simulator's exact tie points and with the matched ones (σ
+/// 0.3 px; control and check measurements exact in both): check-point RMS within 1.5×.
+fn adjust_with_matched_points(dir: &std::path::Path, matched: &[(String, String, f64, f64)]) {
+    use integration::adjust::{run, RunOptions};
+    let ground: std::collections::BTreeSet<String> =
+        std::fs::read_to_string(dir.join("ground_points.csv"))
+            .unwrap()
+            .lines()
+            .skip(1)
+            .filter_map(|l| l.split(',').next().map(str::to_string))
+            .collect();
+    let exact = std::fs::read_to_string(dir.join("image_observations.csv")).unwrap();
+    let mut lines = exact.lines();
+    let mut text = format!("{}\n", lines.next().unwrap());
+    for l in lines.filter(|l| l.split(',').nth(1).is_some_and(|p| ground.contains(p))) {
+        text += &format!("{l}\n");
+    }
+    for (img, pt, x, y) in matched {
+        text += &format!("{img},{pt},{x:.4},{y:.4},0.3\n");
+    }
+    let mdir = dir.join("with-matched");
+    std::fs::create_dir_all(&mdir).unwrap();
+    for f in [
+        "project.toml",
+        "images.csv",
+        "ground_points.csv",
+        "antennas.csv",
+    ] {
+        std::fs::copy(dir.join(f), mdir.join(f)).unwrap();
+    }
+    std::fs::write(mdir.join("image_observations.csv"), text).unwrap();
+    let opts = RunOptions::default();
+    let a = run(&dir.join("project.toml"), &dir.join("adj-exact"), &opts).unwrap();
+    let b = run(&mdir.join("project.toml"), &dir.join("adj-matched"), &opts).unwrap();
+    let norm = |r: [f64; 3]| (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
+    let (ea, eb) = (norm(a.checks.rms), norm(b.checks.rms));
+    eprintln!(
+        "check points 3D RMS: exact ties {:.3} m ({:.3?}), matched ties {:.3} m ({:.3?}): {:.2}×",
+        ea,
+        a.checks.rms,
+        eb,
+        b.checks.rms,
+        eb / ea
+    );
+    assert!(eb <= 1.5 * ea, "matched {eb} m vs exact {ea} m");
 }
 
 fn assert_figures(spec: &TexturedSpec, name: &str, images: usize, min_tracks: usize) {
