@@ -113,7 +113,6 @@ pub fn run(args: Args) -> Result<()> {
     bar.finish_and_clear();
     let m = m?;
     let w = project::build(&job, &m)?;
-    let (pos, _) = project::positions_for_pairs(&job, &m.images)?;
     let staged = gnss::atomic::StagedDir::new(&args.out, &OUTPUTS)?;
     w.project
         .write(staged.path())
@@ -123,7 +122,7 @@ pub fn run(args: Args) -> Result<()> {
         .with_context(|| format!("cannot write {}", args.out.display()))?;
     std::fs::write(
         staged.path().join("match_report.html"),
-        report::html(&m, &w, &pos),
+        report::html(&m, &w),
     )
     .with_context(|| format!("cannot write {}", args.out.display()))?;
     staged.commit()?;

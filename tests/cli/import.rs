@@ -20,16 +20,6 @@ fn count(out: &str, what: &str) -> usize {
         .unwrap_or_else(|| panic!("no count of {what} in\n{out}"))
 }
 
-/// Column `name` of a CSV written by `ppkat adjust` (comment lines skipped).
-fn column(path: &Path, name: &str) -> Vec<String> {
-    let t = std::fs::read_to_string(path).unwrap();
-    let mut rows = t.lines().filter(|l| !l.starts_with('#'));
-    let head: Vec<&str> = rows.next().unwrap().split(',').collect();
-    let c = head.iter().position(|h| *h == name).unwrap();
-    rows.map(|r| r.split(',').nth(c).unwrap().to_string())
-        .collect()
-}
-
 #[test]
 fn micmac_samples_import_with_the_files_counts() {
     let Some([dico, mes, cal]) = shared_all([

@@ -182,6 +182,16 @@ fn spp_to(obs: &Path, nav: &Path, format: &str, out: &Path) -> Output {
 }
 
 /// A path as a command-line argument.
+/// Column `name` of a CSV written by `ppkat adjust` (comment lines skipped).
+fn column(path: &Path, name: &str) -> Vec<String> {
+    let t = std::fs::read_to_string(path).unwrap();
+    let mut rows = t.lines().filter(|l| !l.starts_with('#'));
+    let head: Vec<&str> = rows.next().unwrap().split(',').collect();
+    let c = head.iter().position(|h| *h == name).unwrap();
+    rows.map(|r| r.split(',').nth(c).unwrap().to_string())
+        .collect()
+}
+
 fn p(x: &Path) -> &str {
     x.to_str().unwrap()
 }

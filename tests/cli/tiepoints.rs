@@ -3,16 +3,6 @@
 
 use super::*;
 
-/// Column `name` of a CSV written by `ppkat adjust` (comment lines skipped).
-fn column(path: &Path, name: &str) -> Vec<f64> {
-    let t = std::fs::read_to_string(path).unwrap();
-    let mut rows = t.lines().filter(|l| !l.starts_with('#'));
-    let head: Vec<&str> = rows.next().unwrap().split(',').collect();
-    let c = head.iter().position(|h| *h == name).unwrap();
-    rows.map(|r| r.split(',').nth(c).unwrap().parse().unwrap())
-        .collect()
-}
-
 #[test]
 fn brighton_beach_photos_match_into_one_block_that_adjusts() {
     let Some(dir) = shared("photo/brighton-beach") else {
@@ -50,10 +40,13 @@ fn brighton_beach_photos_match_into_one_block_that_adjusts() {
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(adj.join("report.json")).unwrap()).unwrap();
     let s0 = r["sigma0"].as_f64().unwrap();
-    let (vx, vy) = (
-        column(&adj.join("image_residuals.csv"), "vx_px"),
-        column(&adj.join("image_residuals.csv"), "vy_px"),
-    );
+    let num = |c: &str| -> Vec<f64> {
+        column(&adj.join("image_residuals.csv"), c)
+            .iter()
+            .map(|x| x.parse().unwrap())
+            .collect()
+    };
+    let (vx, vy) = (num("vx_px"), num("vy_px"));
     let rms = (vx.iter().chain(&vy).map(|v| v * v).sum::<f64>() / vx.len() as f64).sqrt();
     eprintln!(
         "σ0 {s0:.3}, image-point RMS {rms:.3} px over {} points",

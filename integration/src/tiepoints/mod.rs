@@ -106,6 +106,10 @@ pub struct PairResult {
 pub struct Matched {
     /// The photos that were read, in name order.
     pub images: Vec<Image>,
+    /// The position of every photo (exposures table, else EXIF GPS).
+    pub positions: Vec<Option<positions::Position>>,
+    /// The same in a local east/north/up frame at the first position (m).
+    pub enu: Vec<Option<nalgebra::Vector3<f64>>>,
     /// Every pair tried.
     pub pairs: Vec<PairResult>,
     /// How pairs were chosen.
@@ -321,6 +325,11 @@ pub fn run(
             job.photos.display()
         )));
     }
+    // The exposures table is read before the long stages, so a bad one fails at once.
+    let table = match &job.exposures {
+        Some(p) => Some(positions::read(p).map_err(MatchError::Input)?),
+        None => None,
+    };
     let opts = FeatureOptions {
         max_features: job.max_features,
         ..FeatureOptions::default()
@@ -368,8 +377,10 @@ pub fn run(
                 .collect::<String>()
         )));
     }
-    let (pos, radius) = project::positions_for_pairs(job, &images)?;
-    let (list, pair_note) = pairs::choose(job.pairs, &pos, &radius).map_err(MatchError::Input)?;
+    let positions = project::image_positions(table.as_ref(), &images);
+    let enu = project::local_enu(&positions);
+    let radius = project::footprint_radii(&images);
+    let (list, pair_note) = pairs::choose(job.pairs, &enu, &radius).map_err(MatchError::Input)?;
     let t = std::time::Instant::now();
     let done = std::sync::atomic::AtomicUsize::new(0);
     let results: Vec<PairResult> = list
@@ -408,6 +419,8 @@ pub fn run(
     let component = components(images.len(), &results);
     Ok(Matched {
         images,
+        positions,
+        enu,
         pairs: results,
         pair_note,
         tracks,

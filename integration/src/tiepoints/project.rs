@@ -4,7 +4,7 @@
 //! start orientations from DJI gimbal angles where present.
 
 use super::camera::from_meta;
-use super::positions::{self, Position};
+use super::positions::Position;
 use super::{MatchError, MatchJob, Matched};
 use crate::adjust::compass_rotation;
 use crate::import::{CameraOut, ProjectOut, StartOut};
@@ -52,18 +52,15 @@ pub struct Written {
     pub cameras: Vec<(String, String, usize)>,
 }
 
-/// The position of every image (exposures table first, then EXIF GPS).
-fn image_positions(
-    job: &MatchJob,
+/// The position of every image: from the exposures `table` when one was given, else EXIF GPS
+/// (with the DJI RTK σ of fixed solutions).
+pub fn image_positions(
+    table: Option<&BTreeMap<String, Position>>,
     m: &[super::Image],
-) -> Result<Vec<Option<Position>>, MatchError> {
-    let table = match &job.exposures {
-        Some(p) => Some(positions::read(p).map_err(MatchError::Input)?),
-        None => None,
-    };
-    Ok(m.iter()
+) -> Vec<Option<Position>> {
+    m.iter()
         .map(|im| {
-            if let Some(t) = &table {
+            if let Some(t) = table {
                 let name = im
                     .meta
                     .path
@@ -86,30 +83,29 @@ fn image_positions(
                     .map(|s| [s[0], s[1], s[2]]),
             })
         })
-        .collect())
+        .collect()
 }
 
-/// Local ENU positions (at the first position) and footprint radii, for choosing pairs.
-#[allow(clippy::type_complexity)]
-pub fn positions_for_pairs(
-    job: &MatchJob,
-    images: &[super::Image],
-) -> Result<(Vec<Option<Vector3<f64>>>, Vec<Option<f64>>), MatchError> {
-    let pos = image_positions(job, images)?;
+/// Local east/north/up positions at the first position.
+pub fn local_enu(pos: &[Option<Position>]) -> Vec<Option<Vector3<f64>>> {
     let origin = pos
         .iter()
         .flatten()
         .next()
         .map(|p| Geodetic::from_degrees(p.lat, p.lon, p.h));
-    let enu: Vec<Option<Vector3<f64>>> = pos
-        .iter()
+    pos.iter()
         .map(|p| {
             let (o, p) = (origin.as_ref()?, p.as_ref()?);
             let e = Geodetic::from_degrees(p.lat, p.lon, p.h).to_ecef().0 - o.to_ecef().0;
             Some(enu_rotation(o) * e)
         })
-        .collect();
-    let radius = images
+        .collect()
+}
+
+/// Footprint radius of each image (m) from its height above take-off and its field of view,
+/// when the metadata give both.
+pub fn footprint_radii(images: &[super::Image]) -> Vec<Option<f64>> {
+    images
         .iter()
         .map(|im| {
             let agl = im.meta.dji.relative_altitude.filter(|h| *h > 1.0)?;
@@ -117,8 +113,7 @@ pub fn positions_for_pairs(
             let half_diag = (im.size.0 as f64).hypot(im.size.1 as f64) / 2.0;
             Some(agl * half_diag / (c.camera.f / c.camera.pixel))
         })
-        .collect();
-    Ok((enu, radius))
+        .collect()
 }
 
 /// Cameras of the block's images: (index of each image's camera or why none, the cameras).
@@ -382,9 +377,8 @@ pub fn build(job: &MatchJob, m: &Matched) -> Result<Written, MatchError> {
         .map(|i| m.images[i].meta.id.clone())
         .collect();
     let (cam_of, cams) = cameras(job, m, &block)?;
-    let pos = image_positions(job, &m.images)?;
-    let (enu, _) = positions_for_pairs(job, &m.images)?;
-    let heading = headings_from_overlap(m, &enu, 5.0);
+    let (pos, enu) = (&m.positions, &m.enu);
+    let heading = headings_from_overlap(m, enu, 5.0);
     let mut in_project = vec![false; m.images.len()];
     let mut pose_of: Vec<Option<(Pose, usize)>> = vec![None; m.images.len()];
     let mut p = ProjectOut {

@@ -75,9 +75,9 @@ fn layout(pos: &[Option<nalgebra::Vector3<f64>>]) -> Vec<(f64, f64)> {
 }
 
 /// The HTML report.
-pub fn html(m: &Matched, w: &Written, pos: &[Option<nalgebra::Vector3<f64>>]) -> String {
+pub fn html(m: &Matched, w: &Written) -> String {
     let per = per_image(m, w);
-    let xy = layout(pos);
+    let xy = layout(&m.enu);
     let mut svg = String::from(
         r#"<svg xmlns="http://www.w3.org/2000/svg" width="600" height="460" style="border:1px solid #ccc">"#,
     );
