@@ -85,7 +85,9 @@ pub struct Args {
     /// lines starting with # skipped); as many names as exposures.
     #[arg(long, value_name = "FILE", conflicts_with = "photos")]
     names: Option<PathBuf>,
-    /// Write geotagged copies of the --photos into this folder (originals are never touched).
+    /// Write geotagged copies of the --photos into this folder (originals are never touched;
+    /// the folder is written whole, or not at all; an existing folder holding other files than
+    /// the photos' names is refused).
     #[arg(long, value_name = "OUTDIR", requires = "photos")]
     geotag: Option<PathBuf>,
     /// Horizontal coordinates of the output: geodetic, utm (zone of the first station),

@@ -73,7 +73,8 @@ struct MicmacArgs {
     /// Image measurement σ, pixels.
     #[arg(long, value_name = "PX", default_value_t = 1.0)]
     sigma_px: f64,
-    /// Output folder for project.toml and its tables (created).
+    /// Output folder for project.toml and its tables (written whole, or not at all; an
+    /// existing folder holding other files is refused).
     #[arg(short, long, value_name = "DIR")]
     out: PathBuf,
 }
@@ -105,7 +106,8 @@ struct ColmapArgs {
     /// Image measurement σ, pixels.
     #[arg(long, value_name = "PX", default_value_t = 1.0)]
     sigma_px: f64,
-    /// Output folder for project.toml and its tables (created).
+    /// Output folder for project.toml and its tables (written whole, or not at all; an
+    /// existing folder holding other files is refused).
     #[arg(short, long, value_name = "DIR")]
     out: PathBuf,
 }
@@ -159,7 +161,8 @@ struct PatbArgs {
     /// (default: a local Cartesian frame).
     #[arg(long, value_name = "CRS")]
     crs: Option<String>,
-    /// Output folder for project.toml and its tables (created).
+    /// Output folder for project.toml and its tables (written whole, or not at all; an
+    /// existing folder holding other files is refused).
     #[arg(short, long, value_name = "DIR")]
     out: PathBuf,
 }
@@ -180,9 +183,9 @@ fn positive(flag: &str, v: f64) -> Result<f64> {
     Ok(v)
 }
 
-/// Write the project and print the summary.
+/// Write the project folder (whole, see [`ProjectOut::write_folder`]) and print the summary.
 fn finish(p: &ProjectOut, s: &Summary, out: &std::path::Path) -> Result<()> {
-    p.write(out)?;
+    p.write_folder(out)?;
     for l in s.lines() {
         println!("{l}");
     }

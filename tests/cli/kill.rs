@@ -1,6 +1,6 @@
-//! `kill -9` of `ppk` and `adjust` at several moments, over the outputs of an earlier run:
-//! the earlier outputs stay whole or the new ones appear whole, never a mix or a partial file,
-//! and the next run leaves no temporary behind.
+//! `kill -9` of `ppk`, `adjust`, `import` and `exposures --geotag` at several moments, over
+//! the outputs of an earlier run: the earlier outputs stay whole or the new ones appear whole,
+//! never a mix or a partial file, and the next run leaves no temporary behind.
 
 use super::*;
 use std::time::Duration;
@@ -90,35 +90,33 @@ fn killed_ppk_leaves_the_earlier_pos_whole() {
     );
 }
 
-#[test]
-fn killed_adjust_leaves_the_earlier_folder_whole() {
-    let demo = demo_dir();
-    let work = tmp("kill-adjust");
-    std::fs::create_dir_all(&work).unwrap();
-    let out = work.join("adj");
-    let project = demo.join("project.toml");
-    let args = ["adjust", "--project", p(&project), "-o", p(&out)];
-    succeeds(&ppkat(&args));
-    let new = contents(&out);
-    assert!(new.len() >= 6, "{:?}", names(&out));
-    for n in names(&out) {
+/// Run `args` (whose output is the folder `out`, alone in `work`) once, mark its files as
+/// old, then kill reruns at each of [`MOMENTS_MS`]: `out` holds the old files or the new
+/// ones, never a mix; a last run writes the first run's files bit for bit and leaves no
+/// temporary behind.
+fn killed_runs_leave_the_folder_whole(args: &[&str], work: &Path, out: &Path, min_files: usize) {
+    let name = out.file_name().unwrap().to_string_lossy().into_owned();
+    succeeds_or_skips(&ppkat(args));
+    let new = contents(out);
+    assert!(new.len() >= min_files, "{:?}", names(out));
+    for n in names(out) {
         mark_old(&out.join(n));
     }
-    let old = contents(&out);
+    let old = contents(out);
     for ms in MOMENTS_MS {
-        kill_after(&args, Duration::from_millis(ms));
+        kill_after(args, Duration::from_millis(ms));
         if !out.exists() {
             // Killed between the two renames of the swap: the old folder is beside it, whole,
             // and the next run puts it back.
-            let parked: Vec<String> = names(&work)
+            let parked: Vec<String> = names(work)
                 .into_iter()
                 .filter(|n| n.ends_with(".old"))
                 .collect();
-            assert_eq!(parked.len(), 1, "{:?}", names(&work));
+            assert_eq!(parked.len(), 1, "{:?}", names(work));
             assert_eq!(contents(&work.join(&parked[0])), old, "killed at {ms} ms");
-            succeeds(&ppkat(&args));
+            succeeds_or_skips(&ppkat(args));
         }
-        let now = contents(&out);
+        let now = contents(out);
         assert!(
             now == old || now == new,
             "killed at {ms} ms: a mix of old and new files: {:?}",
@@ -126,20 +124,92 @@ fn killed_adjust_leaves_the_earlier_folder_whole() {
                 .map(|(n, b)| (n, old.iter().any(|o| &o.1 == b)))
                 .collect::<Vec<_>>()
         );
-        for n in names(&work) {
-            assert!(n == "adj" || n.starts_with(".adj."), "{n}");
+        for n in names(work) {
+            assert!(n == name || n.starts_with(&format!(".{name}.")), "{n}");
         }
-        std::fs::remove_dir_all(&out).unwrap();
-        std::fs::create_dir_all(&out).unwrap();
+        std::fs::remove_dir_all(out).unwrap();
+        std::fs::create_dir_all(out).unwrap();
         for (n, b) in &old {
             std::fs::write(out.join(n), b).unwrap();
         }
     }
-    succeeds(&ppkat(&args));
-    assert_eq!(contents(&out), new, "reruns are bit-identical");
-    assert_eq!(
-        names(&work),
-        ["adj"],
-        "the next run removed the temporaries"
-    );
+    succeeds_or_skips(&ppkat(args));
+    assert_eq!(contents(out), new, "reruns are bit-identical");
+    assert_eq!(names(work), [name], "the next run removed the temporaries");
+}
+
+/// Assert exit code 0, or 3 (finished, some inputs skipped).
+fn succeeds_or_skips(o: &Output) {
+    assert!(matches!(o.status.code(), Some(0 | 3)), "{}", text(o));
+}
+
+#[test]
+fn killed_adjust_leaves_the_earlier_folder_whole() {
+    let work = tmp("kill-adjust");
+    std::fs::create_dir_all(&work).unwrap();
+    let out = work.join("adj");
+    let project = demo_dir().join("project.toml");
+    let args = ["adjust", "--project", p(&project), "-o", p(&out)];
+    killed_runs_leave_the_folder_whole(&args, &work, &out, 6);
+}
+
+#[test]
+fn killed_import_leaves_the_earlier_folder_whole() {
+    let Some(photos) = shared("photo/brighton-beach") else {
+        return;
+    };
+    let work = tmp("kill-import");
+    std::fs::create_dir_all(&work).unwrap();
+    let out = work.join("project");
+    let model = photos.join("colmap-3.8");
+    let args = [
+        "import",
+        "colmap",
+        p(&model),
+        "--gnss-exif",
+        p(&photos),
+        "-o",
+        p(&out),
+    ];
+    killed_runs_leave_the_folder_whole(&args, &work, &out, 5);
+}
+
+/// A DJI Timestamp.MRK of the 18 Brighton Beach photos (DJI_0018 … DJI_0035), 3 s apart inside
+/// the demo's flight.
+fn brighton_mrk(path: &Path) {
+    let mut body = String::new();
+    for k in 0..18 {
+        body += &format!(
+            "{}\t{}\t[2318]\t0,N\t0,E\t0,V\t47.29,Lat\t8.555,Lon\t600,Ellh\t0.01, 0.01, 0.02\t50,Q\n",
+            18 + k,
+            291700 + 3 * k
+        );
+    }
+    std::fs::write(path, body).unwrap();
+}
+
+#[test]
+fn killed_geotag_leaves_the_earlier_folder_whole() {
+    let Some(photos) = shared("photo/brighton-beach") else {
+        return;
+    };
+    let work = tmp("kill-geotag");
+    std::fs::create_dir_all(&work).unwrap();
+    let (mrk, csv, out) = (tmp("kill-geotag.MRK"), tmp("kill-geotag.csv"), work.join("tagged"));
+    brighton_mrk(&mrk);
+    let traj = demo_dir().join("rover_ppk.pos");
+    let args = [
+        "exposures",
+        "--trajectory",
+        p(&traj),
+        "--mrk",
+        p(&mrk),
+        "--photos",
+        p(&photos),
+        "--geotag",
+        p(&out),
+        "-o",
+        p(&csv),
+    ];
+    killed_runs_leave_the_folder_whole(&args, &work, &out, 18);
 }

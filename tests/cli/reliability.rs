@@ -174,3 +174,55 @@ fn error_texts_say_what_is_wrong_once() {
     let bal = file("huge.bal", b"1 1 1e11\n0 0 1.0 2.0\n");
     fails_with(&ppkat(&["bal", p(&bal)]), &["huge.bal:2", "ends before"]);
 }
+
+/// Output folders are replaced whole, so one holding files the command does not write is
+/// refused and left as it was (import, geotag); geotagging into the photos' own folder too.
+#[test]
+fn output_folders_holding_other_files_are_refused_untouched() {
+    let im = file("refuse.im", b"1\nT1 0.1 0.2\nT2 0.3 0.4\n-99\n");
+    let out = tmp("refuse-import");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    let import = [
+        "import",
+        "patb",
+        "--images",
+        p(&im),
+        "--focal-mm",
+        "35",
+        "--pixel-um",
+        "10",
+        "--width-px",
+        "1000",
+        "--height-px",
+        "800",
+        "-o",
+        p(&out),
+    ];
+    fails_with(&ppkat(&import), &["refuse-import", "holds `notes.txt`"]);
+    std::fs::remove_file(out.join("notes.txt")).unwrap();
+    succeeds(&ppkat(&import));
+    succeeds(&ppkat(&import));
+    let photos = tmp("refuse-photos");
+    std::fs::create_dir_all(&photos).unwrap();
+    std::fs::copy(fixture("photo_16x16.jpg"), photos.join("a.jpg")).unwrap();
+    let original = std::fs::read(photos.join("a.jpg")).unwrap();
+    let times = file("refuse-times.csv", b"id,week,tow\nA,2318,291700\n");
+    let tagged = tmp("refuse-tagged");
+    std::fs::create_dir_all(&tagged).unwrap();
+    std::fs::write(tagged.join("notes.txt"), "mine").unwrap();
+    let csv = tmp("refuse.csv");
+    let geotag = |dir: &Path| {
+        exposures(
+            &csv,
+            &["--times", p(&times), "--photos", p(&photos), "--geotag", p(dir)],
+        )
+    };
+    fails_with(&geotag(&tagged), &["refuse-tagged", "holds `notes.txt`"]);
+    assert_eq!(std::fs::read(tagged.join("notes.txt")).unwrap(), b"mine");
+    fails_with(&geotag(&photos), &["overwrite an original"]);
+    assert_eq!(std::fs::read(photos.join("a.jpg")).unwrap(), original);
+    std::fs::remove_file(tagged.join("notes.txt")).unwrap();
+    succeeds(&geotag(&tagged));
+    assert!(tagged.join("a.jpg").exists());
+}

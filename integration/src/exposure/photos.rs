@@ -144,9 +144,11 @@ pub struct Geotagged {
     pub skipped: Vec<(PathBuf, String)>,
 }
 
-/// Write geotagged copies of the photos into `out_dir` (created), the originals untouched.
-/// Photo k gets station k's projection centre. Each copy appears whole or not at all; a photo
-/// that cannot be tagged (not a JPEG, damaged, EXIF unreadable) is named in
+/// Write geotagged copies of the photos into the folder `out_dir`, the originals untouched.
+/// Photo k gets station k's projection centre. The folder is written whole
+/// ([`gnss::atomic::StagedDir`]): it holds the previous run's copies or this run's, never a
+/// mix, and an existing folder holding other files than these photos' names is refused. A
+/// photo that cannot be tagged (not a JPEG, damaged, EXIF unreadable) is named in
 /// [`Geotagged::skipped`] and the others are still written. `Err` only when nothing can be
 /// written (the folder) or the output would replace an original.
 pub fn geotag(
@@ -155,16 +157,20 @@ pub fn geotag(
     out_dir: &Path,
     heights: &Heights,
 ) -> Result<Geotagged> {
-    std::fs::create_dir_all(out_dir).map_err(Error::io(out_dir))?;
-    let mut done = Geotagged::default();
-    for (p, s) in photos.iter().zip(stations) {
+    for p in photos {
         let dest = out_dir.join(&p.name);
-        if dest == p.path || same_file(&dest, &p.path) {
+        let folder = p.path.parent().filter(|d| !d.as_os_str().is_empty());
+        if dest == p.path || same_file(&dest, &p.path) || folder.is_some_and(|d| same_file(d, out_dir)) {
             return Err(Error::input(
                 &dest,
                 "refusing to overwrite an original photograph: choose another output folder",
             ));
         }
+    }
+    let owned: Vec<&str> = photos.iter().map(|p| p.name.as_str()).collect();
+    let staged = gnss::atomic::StagedDir::new(out_dir, &owned)?;
+    let mut done = Geotagged::default();
+    for (p, s) in photos.iter().zip(stations) {
         let g = s.centre.to_geodetic();
         let r = gnss::frame::enu_rotation(&g);
         let c = r * s.cov * r.transpose();
@@ -180,12 +186,14 @@ pub fn geotag(
         let tagged = read_limited(&p.path).and_then(|jpeg| exif_io::geotagged(&jpeg, &tag));
         match tagged {
             Ok(bytes) => {
-                gnss::solution::write_atomic(&dest, |w| w.write_all(&bytes))?;
-                done.written.push(dest);
+                let staged_copy = staged.path().join(&p.name);
+                gnss::solution::write_atomic(&staged_copy, |w| w.write_all(&bytes))?;
+                done.written.push(out_dir.join(&p.name));
             }
             Err(why) => done.skipped.push((p.path.clone(), why)),
         }
     }
+    staged.commit()?;
     Ok(done)
 }
 

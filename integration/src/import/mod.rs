@@ -21,7 +21,7 @@ pub mod micmac;
 pub mod patb;
 mod write;
 
-pub use write::{CameraOut, GroundOut, ProjectOut, StartOut};
+pub use write::{CameraOut, GroundOut, ProjectOut, StartOut, FILES};
 
 use gnss::frame::{Ecef, Geodetic};
 use gnss::tmerc::{Projected, TransverseMercator};

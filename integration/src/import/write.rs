@@ -1,6 +1,7 @@
 //! The project folder an import writes: `project.toml`, `images.csv`,
 //! `image_observations.csv`, and when there are any `ground_points.csv`, `antennas.csv`
-//! (GNSS) and `start.csv` (start orientations) — each file atomically.
+//! (GNSS) and `start.csv` (start orientations) — each file atomically, and with
+//! [`ProjectOut::write_folder`] the folder as a whole.
 
 use super::{ferr, ImportError};
 use gnss::frame::Ecef;
@@ -10,6 +11,16 @@ use photo::camera::Camera;
 use photo::rotation::Angles;
 use std::fmt::Write as _;
 use std::path::Path;
+
+/// The files of a project folder [`ProjectOut::write`] may write.
+pub const FILES: [&str; 6] = [
+    "project.toml",
+    "images.csv",
+    "image_observations.csv",
+    "ground_points.csv",
+    "antennas.csv",
+    "start.csv",
+];
 
 /// A camera to write.
 #[derive(Clone, Debug)]
@@ -110,7 +121,18 @@ impl ProjectOut {
         s
     }
 
-    /// Write the folder (created); every file atomically.
+    /// Write the folder `dir` as a whole ([`gnss::atomic::StagedDir`]): into a staging folder
+    /// beside it, swapped in at the end, so that `dir` holds an earlier run's project or this
+    /// one, never a mix. An existing `dir` holding other files than [`FILES`] is refused.
+    pub fn write_folder(&self, dir: &Path) -> Result<(), ImportError> {
+        // Its messages name the folder already.
+        let named = |e: gnss::Error| ImportError::Usage(e.to_string());
+        let staged = gnss::atomic::StagedDir::new(dir, &FILES).map_err(named)?;
+        self.write(staged.path())?;
+        staged.commit().map_err(named)
+    }
+
+    /// Write the files into the folder `dir` (created); every file atomically.
     pub fn write(&self, dir: &Path) -> Result<(), ImportError> {
         std::fs::create_dir_all(dir)
             .map_err(|e| ferr(dir, None, format!("cannot create the folder: {e}")))?;
