@@ -195,7 +195,11 @@ fn killed_geotag_leaves_the_earlier_folder_whole() {
     };
     let work = tmp("kill-geotag");
     std::fs::create_dir_all(&work).unwrap();
-    let (mrk, csv, out) = (tmp("kill-geotag.MRK"), tmp("kill-geotag.csv"), work.join("tagged"));
+    let (mrk, csv, out) = (
+        tmp("kill-geotag.MRK"),
+        tmp("kill-geotag.csv"),
+        work.join("tagged"),
+    );
     brighton_mrk(&mrk);
     let traj = demo_dir().join("rover_ppk.pos");
     let args = [

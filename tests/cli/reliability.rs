@@ -215,7 +215,14 @@ fn output_folders_holding_other_files_are_refused_untouched() {
     let geotag = |dir: &Path| {
         exposures(
             &csv,
-            &["--times", p(&times), "--photos", p(&photos), "--geotag", p(dir)],
+            &[
+                "--times",
+                p(&times),
+                "--photos",
+                p(&photos),
+                "--geotag",
+                p(dir),
+            ],
         )
     };
     fails_with(&geotag(&tagged), &["refuse-tagged", "holds `notes.txt`"]);

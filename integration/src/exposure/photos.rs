@@ -160,7 +160,10 @@ pub fn geotag(
     for p in photos {
         let dest = out_dir.join(&p.name);
         let folder = p.path.parent().filter(|d| !d.as_os_str().is_empty());
-        if dest == p.path || same_file(&dest, &p.path) || folder.is_some_and(|d| same_file(d, out_dir)) {
+        if dest == p.path
+            || same_file(&dest, &p.path)
+            || folder.is_some_and(|d| same_file(d, out_dir))
+        {
             return Err(Error::input(
                 &dest,
                 "refusing to overwrite an original photograph: choose another output folder",
