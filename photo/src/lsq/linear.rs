@@ -1,8 +1,9 @@
 //! The reduced system's linear algebra: dense faer Cholesky when small, faer's sparse
 //! Cholesky (symbolic factorisation kept while the structure holds) when large; pivots that
 //! betray a datum defect; the inverse for statistics. This is the one place that sets faer's
-//! parallelism. faer's factorisations give the same bits whatever their thread count
-//! (checked for 1–8), so `Options::threads` changes speed, never results.
+//! parallelism. faer's results depend on the degree of parallelism it is given (its matrix
+//! products block the sums by it), not on the rayon pool that runs the work, so it is always
+//! given [`FAER_DEGREE`]: `Options::threads` (the pool) changes speed, never results.
 
 use super::options::Options;
 use super::reduced::Reduced;
@@ -10,6 +11,12 @@ use super::structure::Structure;
 use faer::linalg::solvers::{DenseSolveCore, Solve};
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMat, Triplet};
+
+/// The degree of parallelism faer is always given, whatever the thread count: a degree
+/// that followed the threads (sequential on one) gave other bits on 1, 2, 3 and 8 threads
+/// (the demo block's σ0 differed in the 13th digit). The pool that runs the work is the
+/// current rayon pool (`--threads`).
+pub(crate) const FAER_DEGREE: usize = 8;
 
 /// A symbolic sparse factorisation and the structure hash it was computed for.
 pub(crate) type SymbolicCache = (u64, SymbolicLlt<usize>);
@@ -39,18 +46,11 @@ impl<'a> Linear<'a> {
         }
     }
 
-    /// Set faer's parallelism from the options (process-wide: set before each factorisation).
+    /// Set faer's parallelism (process-wide: set before each factorisation): always the
+    /// degree [`FAER_DEGREE`], run by the current rayon pool, whose size (`--threads`) sets
+    /// the speed. Not [`faer::Par::Seq`] on one thread either: that sums in another order.
     pub(crate) fn set_parallelism(&self) {
-        let n = self
-            .options
-            .threads
-            .unwrap_or_else(rayon::current_num_threads)
-            .max(1);
-        faer::set_global_parallelism(if n == 1 {
-            faer::Par::Seq
-        } else {
-            faer::Par::rayon(n)
-        });
+        faer::set_global_parallelism(faer::Par::rayon(FAER_DEGREE));
     }
 
     /// Solve S·δ = −b: dense when small, sparse when large. `None` when S is not positive

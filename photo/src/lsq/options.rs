@@ -16,8 +16,9 @@ pub struct Options {
     pub dense_limit: usize,
     /// Kinds of blocks eliminated by the Schur complement (object points by default).
     pub eliminate: Vec<KeyKind>,
-    /// Threads for faer's factorisations (`None`: rayon's pool). Results are bit-identical
-    /// whatever the number.
+    /// Threads the solver runs on (`None`: rayon's pool), as reported; the work runs on the
+    /// current rayon pool, which the caller sizes. Results are bit-identical whatever the
+    /// number (faer is always given one degree of parallelism).
     pub threads: Option<usize>,
     /// Require a unique solution: every free block determined by its own observations and
     /// the normals regular (a datum). Off for problems with a gauge freedom, such as BAL.
