@@ -1,5 +1,5 @@
-//! The match report: `match.json` (counts per image and pair, tracks, timing, the photos left
-//! out) and `match_report.html`, self-contained: a table per image and the pair graph drawn
+//! The match report: `match.json` (counts per image and pair, tracks, the photos left out;
+//! no timings, which standard output prints, so that the file is the same on every run) and `match_report.html`, self-contained: a table per image and the pair graph drawn
 //! at the photos' positions (or on a circle without them), each verified pair a line whose
 //! width grows with its matches, photos outside the main block in red.
 
@@ -45,7 +45,6 @@ pub fn json(m: &Matched, w: &Written) -> serde_json::Value {
         "not_connected": w.not_connected,
         "skipped": m.skipped.iter().chain(&w.no_camera).map(|(n, r)| json!({"file": n, "reason": r})).collect::<Vec<_>>(),
         "cameras": w.cameras.iter().map(|(c, s, n)| json!({"id": c, "focal_from": s, "photos": n})).collect::<Vec<_>>(),
-        "timing_s": m.timing.iter().map(|(s, t)| json!({"stage": s, "seconds": t})).collect::<Vec<_>>(),
     })
 }
 
