@@ -22,7 +22,7 @@ fn without_timing(report: &str) -> String {
 
 /// A small BAL problem: 4 cameras (no rotation, f = 500, no distortion) 20 m above a grid of
 /// 20 points, exact observations, the points' start values displaced by a few centimetres.
-fn small_problem() -> String {
+pub(crate) fn small_problem() -> String {
     let cams: Vec<[f64; 3]> = (0..4).map(|i| [2.0 - 1.5 * i as f64, 0.3, -20.0]).collect();
     let pts: Vec<[f64; 3]> = (0..20)
         .map(|j| {

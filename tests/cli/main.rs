@@ -13,11 +13,13 @@ mod gnss;
 mod help;
 mod import;
 mod info;
+mod inputs;
 mod kill;
 mod outputs;
 mod precise;
 mod raw;
 mod reliability;
+mod threads;
 mod tiepoints;
 
 use std::path::{Path, PathBuf};
