@@ -80,7 +80,15 @@ impl std::fmt::Display for ConvertBench {
                 self.bytes as f64 * self.runs as f64 / 1e6 / c
             )?;
         }
-        writeln!(f, "peak RSS: {}", mib(self.peak_rss_kib))
+        writeln!(f, "peak RSS: {}", mib(self.peak_rss_kib))?;
+        if let Some(k) = self.peak_rss_kib {
+            writeln!(
+                f,
+                "memory factor: peak RSS = {:.2} × the log",
+                k as f64 * 1024.0 / self.bytes.max(1) as f64
+            )?;
+        }
+        Ok(())
     }
 }
 
@@ -142,7 +150,9 @@ fn convert_bench(path: &Path, format: Option<gnss::raw::RawFormat>) -> Result<Co
 /// Result of an ingest benchmark.
 #[derive(Clone, Debug)]
 pub struct IngestBench {
-    /// Bytes of plain RINEX text parsed.
+    /// Bytes of the file given (compressed or not).
+    pub input_bytes: u64,
+    /// Bytes of plain RINEX text parsed (the file expanded).
     pub bytes: u64,
     /// Wall time of the parse, seconds.
     pub seconds: f64,
@@ -165,7 +175,20 @@ impl std::fmt::Display for IngestBench {
             self.seconds,
             self.bytes as f64 / 1e6 / self.seconds
         )?;
-        writeln!(f, "peak RSS: {}", mib(self.peak_rss_kib))
+        writeln!(f, "peak RSS: {}", mib(self.peak_rss_kib))?;
+        if let Some(k) = self.peak_rss_kib {
+            let rss = k as f64 * 1024.0;
+            writeln!(
+                f,
+                "memory factor: peak RSS = {:.2} × the input file ({:.1} MB), {:.2} × the RINEX \
+                 text ({:.1} MB)",
+                rss / self.input_bytes.max(1) as f64,
+                self.input_bytes as f64 / 1e6,
+                rss / self.bytes.max(1) as f64,
+                self.bytes as f64 / 1e6
+            )?;
+        }
+        Ok(())
     }
 }
 
@@ -207,7 +230,10 @@ pub fn rinex_ingest(path: &Path) -> Result<IngestBench> {
     drop(f);
     let r = ingest_plain(&plain);
     let _ = std::fs::remove_file(&plain);
-    r
+    let input_bytes = std::fs::metadata(path)
+        .map_err(gnss::Error::io(path))?
+        .len();
+    r.map(|b| IngestBench { input_bytes, ..b })
 }
 
 fn ingest_plain(path: &Path) -> Result<IngestBench> {
@@ -223,6 +249,7 @@ fn ingest_plain(path: &Path) -> Result<IngestBench> {
     }
     let seconds = t.elapsed().as_secs_f64();
     Ok(IngestBench {
+        input_bytes: r.stats().bytes,
         bytes: r.stats().bytes,
         seconds,
         epochs,

@@ -34,9 +34,11 @@ enum BenchCmd {
 /// A RINEX file is read keeping nothing (the pure parse cost); a compressed file (gzip,
 /// Hatanaka) is first expanded to a temporary plain RINEX file, so the figure is the parser's
 /// speed on plain text. Prints the megabytes of RINEX text, epochs and satellite records, the
-/// time, MB/s and the peak resident memory (Linux). A raw log (told from its content) is
-/// converted as `ppkat convert --nav` does, to temporary files, repeatedly for at least a
-/// second; prints megabytes of log, epochs, ephemerides, runs, MB/s and the peak memory.
+/// time, MB/s, the peak resident memory (Linux) and the memory factor: peak RSS over the
+/// file's size and over the RINEX text's. A raw log (told from its content) is converted as
+/// `ppkat convert --nav` does, to temporary files, repeatedly for at least a second; prints
+/// megabytes of log, epochs, ephemerides, runs, MB/s, the peak memory and its factor over the
+/// log's size.
 /// Writes only those temporary files, removed after.
 #[derive(clap::Args)]
 struct IngestArgs {

@@ -116,6 +116,24 @@ fn bench_ingest_times_the_conversion_of_a_log() {
         t.contains("MB/s per CPU second") && t.contains("peak RSS"),
         "{t}"
     );
+    assert!(t.contains("memory factor: peak RSS = "), "{t}");
+}
+
+/// A Hatanaka file: the memory factor over the file and over its RINEX text.
+#[test]
+fn bench_ingest_states_the_memory_factor() {
+    let t = succeeds(&ppkat(&["bench", "ingest", p(&fixture("events_v211.crx"))]));
+    let line = t
+        .lines()
+        .find(|l| l.starts_with("memory factor: peak RSS = "))
+        .unwrap_or_else(|| panic!("{t}"));
+    // The number before each ×: over the file, over the text.
+    let parts: Vec<&str> = line.split('×').collect();
+    let f: Vec<f64> = parts[..parts.len() - 1]
+        .iter()
+        .filter_map(|w| w.split_whitespace().last()?.parse().ok())
+        .collect();
+    assert!(f.len() == 2 && f.iter().all(|x| *x > 1.0), "{line}");
 }
 
 #[test]
