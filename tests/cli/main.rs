@@ -183,7 +183,6 @@ fn spp_to(obs: &Path, nav: &Path, format: &str, out: &Path) -> Output {
     ])
 }
 
-/// A path as a command-line argument.
 /// Column `name` of a CSV written by `ppkat adjust` (comment lines skipped).
 fn column(path: &Path, name: &str) -> Vec<String> {
     let t = std::fs::read_to_string(path).unwrap();
@@ -194,6 +193,7 @@ fn column(path: &Path, name: &str) -> Vec<String> {
         .collect()
 }
 
+/// A path as a command-line argument.
 fn p(x: &Path) -> &str {
     x.to_str().unwrap()
 }
