@@ -6,11 +6,39 @@ set -u
 cd "$(dirname "$0")"
 SECS=${SECS:-60}
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(rinex_obs rinex_nav sp3 clk antex mrk times_csv attitude_csv project_toml patb bal exif pos ubx rtcm)
+[ ${#targets[@]} -eq 0 ] && targets=(rinex_obs rinex_nav sp3 clk antex mrk times_csv attitude_csv project_toml patb bal exif pos ubx rtcm xmp photo_meta project_tables micmac colmap)
+# Real files of ../shared/data (beside the repository) seed the newer targets when present;
+# they are copied into corpus/ only (cut to the 64 KiB inputs are limited to), never into seeds/.
+SHARED=../../shared/data/photo
+shared_seeds() {
+    local t=$1 c=corpus/$1 f k
+    case $t in
+    xmp)
+        for f in "$SHARED"/brighton-beach/DJI_001[89].JPG; do
+            [ -f "$f" ] && python3 -c 'import sys; d=open(sys.argv[1],"rb").read(); a=d.find(b"<x:xmpmeta"); b=d.find(b"</x:xmpmeta>"); sys.stdout.buffer.write(d[a:b+12] if a>=0<b else b"")' "$f" >"$c/shared-$(basename "$f").xmp"
+        done ;;
+    photo_meta)
+        for f in "$SHARED"/brighton-beach/DJI_001[89].JPG; do
+            [ -f "$f" ] && head -c 65536 "$f" >"$c/shared-$(basename "$f")"
+        done ;;
+    micmac)
+        for f in "$SHARED"/micmac-formats/*.xml "$SHARED"/micmac-formats/Saisies-MMV1/*.xml "$SHARED"/micmac-formats/Saisies-MMV1/Ori-Ground_mm3d/*.xml; do
+            [ -f "$f" ] && cp "$f" "$c/shared-$(basename "$f")"
+        done ;;
+    colmap)
+        k=0
+        for f in cameras.txt images.txt points3D.txt; do
+            f=$SHARED/brighton-beach/colmap-3.8/$f
+            [ -f "$f" ] && { printf "\\x0$k"; head -c 65000 "$f"; } >"$c/shared-$(basename "$f")"
+            k=$((k + 1))
+        done ;;
+    esac
+}
 mkdir -p logs
 for t in "${targets[@]}"; do
     mkdir -p "corpus/$t"
     cp -n seeds/"$t"/* "corpus/$t/" 2>/dev/null
+    [ -d "$SHARED" ] && shared_seeds "$t"
     cargo +nightly fuzz run -O "$t" "corpus/$t" -- \
         -max_total_time="$SECS" -rss_limit_mb=2048 -timeout=10 -max_len=65536 \
         >"logs/$t.log" 2>&1

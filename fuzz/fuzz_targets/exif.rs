@@ -11,5 +11,14 @@ fuzz_target!(|data: &[u8]| {
             let _ = exif_io::gps_position(&x);
         }
     });
-    let _ = exif_io::geotagged(data, 47.3, 8.5, 830.0);
+    let tag = integration::exposure::xmp::PositionTag {
+        lat: 47.3,
+        lon: 8.5,
+        height: 830.0,
+        reference: "ellipsoidal (WGS84)".into(),
+        orthometric: false,
+        sigma_enu: [0.01, 0.01, 0.02],
+        quality: 1,
+    };
+    let _ = exif_io::geotagged(data, &tag);
 });
