@@ -11,6 +11,7 @@ use super::linear::Linear;
 use super::model::Model;
 use super::problem::Problem;
 use super::reduced::Reduced;
+use super::selinv::FactorFailure;
 use super::structure::Structure;
 use nalgebra::DMatrix;
 
@@ -128,7 +129,8 @@ impl Problem {
     }
 
     /// The undamped normals must be regular, otherwise there is a datum defect (no control,
-    /// nothing fixed). Checked once per structure (a dense factorisation of the reduced system).
+    /// nothing fixed). Checked once per structure (a dense factorisation of the reduced system
+    /// when small, a sparse one when large).
     fn check_regular(
         &self,
         st: &Structure,
@@ -154,13 +156,14 @@ impl Problem {
             return Err(singular());
         }
         if st.nr > 0 {
-            match linear.dense_factor(st, red, false) {
-                Some((None, _)) => {}
-                Some((Some(col), _)) => {
-                    let c = st.coff.partition_point(|&o| o <= col) - 1;
-                    return Err(SolveError::Dependent(self.model.keys[st.cblocks[c]]));
-                }
-                None => return Err(singular()),
+            let dependent = |col: usize| {
+                let c = st.coff.partition_point(|&o| o <= col) - 1;
+                SolveError::Dependent(self.model.keys[st.cblocks[c]])
+            };
+            match linear.regularity(st, red) {
+                Ok(None) => {}
+                Ok(Some(col)) | Err(FactorFailure::Pivot(col)) => return Err(dependent(col)),
+                Err(FactorFailure::Resources(what)) => return Err(SolveError::TooLarge(what)),
             }
         }
         if let Ok(mut r) = self.caches.regular_for.lock() {

@@ -38,6 +38,7 @@ mod options;
 mod pattern;
 mod problem;
 mod reduced;
+mod selinv;
 mod slots;
 mod snoop;
 mod stats;

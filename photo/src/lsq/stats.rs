@@ -102,7 +102,7 @@ impl Problem {
         for &(a, da) in &blocks {
             let mut rb = 0;
             for &(b, db) in &blocks {
-                let Some(m) = q.cross(a, b, da, db) else {
+                let Some(m) = q.cross(a, b).filter(|m| m.shape() == (da, db)) else {
                     return Ok(None);
                 };
                 out.view_mut((ra, rb), (da, db)).copy_from(&m);
