@@ -28,7 +28,9 @@ struct EQ {
 pub(crate) struct Cofactors {
     pub(crate) st: Arc<Structure>,
     pub(crate) lin: Linearisation,
-    qcc: Qcc,
+    /// The reduced system it was computed from (V⁻¹ and W are read again for correlations).
+    pub(crate) red: Reduced,
+    pub(crate) qcc: Qcc,
     qe: Vec<EQ>,
 }
 
@@ -152,7 +154,13 @@ impl Model {
             })
             .collect::<Option<Vec<EQ>>>()
             .ok_or_else(|| SolveError::TooLarge("a cofactor block".into()))?;
-        Ok(Cofactors { st, lin, qcc, qe })
+        Ok(Cofactors {
+            st,
+            lin,
+            red,
+            qcc,
+            qe,
+        })
     }
 }
 

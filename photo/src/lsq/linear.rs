@@ -204,6 +204,15 @@ impl Qcc {
             Qcc::Sparse(s) => s.block(ca, cb, da, db),
         }
     }
+
+    /// S⁻¹·`rhs`; `None` when a workspace cannot be had.
+    pub(crate) fn solve(&self, st: &Structure, rhs: faer::Mat<f64>) -> Option<faer::Mat<f64>> {
+        match self {
+            Qcc::Dense(m) if m.nrows() == st.nr => Some(m * rhs),
+            Qcc::Dense(_) => None,
+            Qcc::Sparse(s) => s.solve(rhs),
+        }
+    }
 }
 
 impl Linear<'_> {

@@ -59,7 +59,12 @@ impl Problem {
         // second evaluation of its factors.
         let (mut cand, mut cand_lin) = (Vec::new(), Linearisation::default());
         let (mut radius, mut nu) = (self.options.initial_radius, 2.0);
+        let mut t_it = std::time::Instant::now();
         while s.iterations < self.options.max_iterations {
+            if s.iterations > 0 {
+                self.time("iteration", t_it);
+            }
+            t_it = std::time::Instant::now();
             s.iterations += 1;
             self.notify(super::problem::SolveStep::Iteration(
                 s.iterations,
@@ -106,6 +111,9 @@ impl Problem {
                     break;
                 }
             }
+        }
+        if s.iterations > 0 {
+            self.time("iteration", t_it);
         }
         let m = st.nres;
         if m < st.n {

@@ -26,6 +26,7 @@
 //! Units: whatever the factors use; σ0 is dimensionless. Cost = ½Σρ(‖L⁻¹r‖²).
 
 mod cofactor;
+mod correl;
 mod elim;
 mod error;
 mod factor;

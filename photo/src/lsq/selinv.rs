@@ -414,20 +414,26 @@ impl Selected {
     /// The block by solving S·X = E_b with the factor (a block outside the pattern).
     fn solved(&self, ca: usize, cb: usize, da: usize, db: usize) -> Option<DMatrix<f64>> {
         let f = &self.factor;
-        let n = f.fwd.len();
         // Original offsets of the two blocks: where their first permuted columns came from.
         let (oa, ob) = (f.fwd[f.poff[ca]], f.fwd[f.poff[cb]]);
-        let mut x = Mat::<f64>::from_fn(n, db, |i, j| if i == ob + j { 1.0 } else { 0.0 });
+        let x = Mat::<f64>::from_fn(f.fwd.len(), db, |i, j| if i == ob + j { 1.0 } else { 0.0 });
+        let x = self.solve(x)?;
+        Some(DMatrix::from_fn(da, db, |i, j| x[(oa + i, j)]))
+    }
+
+    /// S⁻¹·`rhs` (original order) with the factor; `None` when its workspace cannot be had.
+    pub(crate) fn solve(&self, mut rhs: Mat<f64>) -> Option<Mat<f64>> {
+        let f = &self.factor;
         let par = Par::Seq;
-        let req = f.sym.solve_in_place_scratch::<f64>(db, par);
+        let req = f.sym.solve_in_place_scratch::<f64>(rhs.ncols(), par);
         let mut mem = MemBuffer::try_new(req).ok()?;
         LltRef::new(&f.sym, &f.l).solve_in_place_with_conj(
             faer::Conj::No,
-            x.as_mut(),
+            rhs.as_mut(),
             par,
             MemStack::new(&mut mem),
         );
-        Some(DMatrix::from_fn(da, db, |i, j| x[(oa + i, j)]))
+        Some(rhs)
     }
 }
 

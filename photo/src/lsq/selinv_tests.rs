@@ -4,7 +4,8 @@
 use crate::camera::{Camera, Pose};
 use crate::factors::{ImagePoint, Prior};
 use crate::lsq::{
-    CameraId, Factor, Group, ImageId, Key, Loss, Noise, Options, Params, PointId, Problem, Value,
+    CameraId, Factor, Group, ImageId, Key, Loss, Noise, Options, Params, PointId, Problem,
+    SolveError, Value,
 };
 use crate::rotation::Angles;
 use nalgebra::{DMatrix, DMatrixViewMut, Vector2, Vector3};
@@ -47,8 +48,9 @@ impl Factor for Centre {
     }
 }
 
-/// The block, adjusted with the given dense limit.
-fn block(dense_limit: usize) -> Problem {
+/// The block, adjusted with the given dense limit, with control points or without (a datum
+/// defect: the common offset and the centres cannot be told apart).
+fn block(dense_limit: usize, control: bool) -> Problem {
     let cam = Camera::ideal(0.035, 3.9e-6, 6000, 4000);
     let mut p = Problem::new(Options {
         dense_limit,
@@ -104,7 +106,7 @@ fn block(dense_limit: usize) -> Problem {
                 p.add_factor(f, Noise::isotropic(2, 3.9e-6), Loss::Trivial, Group(0))
                     .ok();
             }
-            if k % 97 == 0 {
+            if control && k % 97 == 0 {
                 let f = Prior::point(id, x);
                 p.add_factor(f, Noise::isotropic(3, 0.02), Loss::Trivial, Group(1))
                     .ok();
@@ -136,7 +138,7 @@ fn close(x: &DMatrix<f64>, y: &DMatrix<f64>, da: &[f64], db: &[f64], tol: f64) -
 /// inverse (sparse path forced) equals the dense inverse to 1e-9 of each entry's scale.
 #[test]
 fn selected_inverse_equals_the_dense_inverse() {
-    let (mut dense, mut sparse) = (block(usize::MAX), block(100));
+    let (mut dense, mut sparse) = (block(usize::MAX, true), block(100, true));
     let (a, b) = (dense.solve(), sparse.solve());
     let (Ok(a), Ok(b)) = (a, b) else {
         panic!("the block does not solve");
@@ -191,4 +193,50 @@ fn selected_inverse_equals_the_dense_inverse() {
         let (x, y) = (qs.hat_diag(k), qd.hat_diag(k));
         assert!((x - y).amax() < 1e-9, "factor {k}");
     }
+}
+
+/// A datum defect on the sparse path is an error value naming a block, never a panic.
+#[test]
+fn sparse_datum_defect_is_an_error() {
+    match block(100, false).solve() {
+        Err(SolveError::Dependent(_)) => {}
+        other => panic!("{other:?}"),
+    }
+}
+
+/// The residual correlations of data snooping (`correl`): on the diagonal they give back
+/// the hat matrix's diagonal (1 − r), and the sparse path gives the dense path's values.
+#[test]
+fn residual_correlations_agree() {
+    let (mut dense, mut sparse) = (block(usize::MAX, true), block(100, true));
+    let (Ok(_), Ok(_)) = (dense.solve(), sparse.solve()) else {
+        panic!("the block does not solve");
+    };
+    let (Ok(qd), Ok(qs)) = (dense.cofactors(), sparse.cofactors()) else {
+        panic!("no cofactors");
+    };
+    let (Ok(rd), Ok(rs)) = (dense.reliability(), sparse.reliability()) else {
+        panic!("no reliability");
+    };
+    let n = qd.st.active.len();
+    // Image points here and there, and GNSS centres (the last factors).
+    let ks: Vec<usize> = (0..12)
+        .map(|i| i * 97 % (n - 200))
+        .chain([n - 1, n - 50])
+        .collect();
+    let r: Vec<_> = ks.iter().map(|&k| &rd[k].redundancy).collect();
+    let (Some(cd), Some(cs)) = (qd.correlations(&ks, &r), qs.correlations(&ks, &r)) else {
+        panic!("no correlations");
+    };
+    for (j, &k) in ks.iter().enumerate() {
+        let h = qd.hat_diag(k);
+        for a in 0..h.len() {
+            let back = cd[j][j][(a, a)] * r[j][a];
+            assert!((back - h[a].abs()).abs() < 1e-9, "{k} {a}: {back} {}", h[a]);
+        }
+        for i in 0..ks.len() {
+            assert!((&cd[j][i] - &cs[j][i]).amax() < 1e-7, "{i} {j}");
+        }
+    }
+    assert!((&rd[5].normalised - &rs[5].normalised).amax() < 1e-7);
 }

@@ -126,11 +126,14 @@ impl Problem {
         keys: &[Key],
         sigma0: f64,
     ) -> Result<(Covariances, Vec<Reliability>), SolveError> {
+        let t = std::time::Instant::now();
         let q = self.cofactors()?;
-        Ok((
+        let out = (
             self.block_covariances(&q, keys, sigma0),
             reliability_with(&q),
-        ))
+        );
+        self.time("statistics", t);
+        Ok(out)
     }
 
     /// Per group: Σ of squared whitened residuals and of redundancy numbers (variance
