@@ -70,10 +70,14 @@ impl Problem {
                 s.iterations,
                 self.options.max_iterations,
             ));
-            let step = Model::reduce(&st, &lins, 1.0 / radius, true, &mut red)
+            let reduced = Model::reduce(&st, &lins, 1.0 / radius, true, &mut red);
+            self.time("reduce", t_it);
+            let t_f = std::time::Instant::now();
+            let step = reduced
                 .then(|| linear.solve_reduced(&st, &red))
                 .flatten()
                 .map(|dc| Model::back_substitute(&st, &red, dc));
+            self.time("factorise", t_f);
             let Some(step) = step else {
                 (radius, nu) = (radius / nu, nu * 2.0);
                 if radius < 1e-32 {
