@@ -240,3 +240,21 @@ fn residual_correlations_agree() {
     }
     assert!((&rd[5].normalised - &rs[5].normalised).amax() < 1e-7);
 }
+
+/// The sparse statistics are the same bits whatever the thread count.
+#[test]
+fn selected_inverse_ignores_the_thread_count() {
+    let run = |threads: usize| {
+        let mut p = block(100, true);
+        p.options.threads = Some(threads);
+        p.solve().ok()?;
+        let rel = p.reliability().ok()?;
+        let key = Key::LeverArm(CameraId(0));
+        let cov = p.covariance(key, 1.0).ok()??;
+        Some((rel, cov))
+    };
+    let (Some(a), Some(b)) = (run(1), run(3)) else {
+        panic!("no statistics");
+    };
+    assert_eq!(a, b);
+}
