@@ -181,8 +181,8 @@ fn dense(st: &Structure, red: &Reduced) -> faer::Mat<f64> {
 pub(crate) enum Qcc {
     /// The dense inverse.
     Dense(faer::Mat<f64>),
-    /// The selected inverse.
-    Sparse(Selected),
+    /// The selected inverse (boxed: it is the larger).
+    Sparse(Box<Selected>),
 }
 
 impl Qcc {
@@ -248,7 +248,9 @@ impl Linear<'_> {
             };
         }
         self.set_parallelism();
-        Ok(Qcc::Sparse(SparseFactor::new(st, red)?.selected_inverse()?))
+        Ok(Qcc::Sparse(Box::new(
+            SparseFactor::new(st, red)?.selected_inverse()?,
+        )))
     }
 }
 
