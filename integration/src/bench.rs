@@ -293,6 +293,10 @@ impl std::fmt::Display for AdjustBench {
             "simulated in {:.2} s; adjusted (snooping, variance components, statistics, reports) in {:.2} s; σ0 {:.3}",
             self.simulate_s, self.adjust_s, self.sigma0
         )?;
+        writeln!(
+            f,
+            "stages (nested: snooping includes its solves and cofactors, a solve its iterations):"
+        )?;
         for (what, n, s) in &self.stages {
             writeln!(
                 f,

@@ -142,15 +142,26 @@ fn data_snooping_finds_five_blunders_among_two_thousand_points() {
     // 5 % family-wise over all image coordinates (Bonferroni), not 0.1 % per test.
     let critical = photo::lsq::snooping_critical(0.05, 2 * n_image);
     p.options.max_iterations = 30;
+    let rounds = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    let seen = rounds.clone();
+    p.set_observer(Some(std::sync::Arc::new(move |step| {
+        if let photo::lsq::SolveStep::SnoopingRound(k) = step {
+            seen.store(k, std::sync::atomic::Ordering::Relaxed);
+        }
+    })));
     let (stats, removed) = p.data_snooping(critical).unwrap();
+    let rounds = rounds.load(std::sync::atomic::Ordering::Relaxed);
     let removed: Vec<FactorId> = removed.iter().map(|x| x.0).collect();
     let mut r = removed.clone();
     r.sort();
     let mut want = blunders.clone();
     want.sort();
-    eprintln!("{n_image} image points, {} unknowns, critical |w| {critical:.2}, σ0 {:.3}, removed {:?} (blunders {:?})", stats.unknowns, stats.sigma0, removed, blunders);
+    eprintln!("{n_image} image points, {} unknowns, critical |w| {critical:.2}, σ0 {:.3}, removed {:?} (blunders {:?}) in {rounds} rounds", stats.unknowns, stats.sigma0, removed, blunders);
     assert_eq!(r, want, "exactly the blunders are removed");
     assert!((stats.sigma0 - 1.0).abs() < 0.1, "σ0 {}", stats.sigma0);
+    // Blunders whose tests hardly depend on each other go in the same round: fewer rounds
+    // than one removal per round (five, and a last one that finds nothing).
+    assert!(rounds < 6, "{rounds} rounds");
 }
 
 #[test]

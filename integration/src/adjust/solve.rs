@@ -42,7 +42,11 @@ pub fn solve_with_progress(
     opts: &RunOptions,
     progress: Option<SharedProgress>,
 ) -> Result<Solved, AdjustError> {
+    let t0 = std::time::Instant::now();
     let mut built = build::build(project)?;
+    built
+        .problem
+        .record_time("build", t0.elapsed().as_secs_f64());
     built.problem.options.threads = opts.threads;
     if let Some(p) = progress.clone() {
         built

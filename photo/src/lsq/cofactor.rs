@@ -1,5 +1,6 @@
 //! The cofactors of the unknowns at a solution, without the full inverse: the reduced
-//! system is inverted (dense) and each eliminated block's cofactors follow from the Schur
+//! system is inverted (dense when small, its selected inverse on the pattern of the sparse
+//! Cholesky factor when large: `selinv`) and each eliminated block's cofactors follow from the Schur
 //! complement, Q_ec = −V⁻¹·Σ W_c′·Q_c′c and Q_ee = V⁻¹ − (Σ_c Q_ec·W_cᵀ)·V⁻¹ — all a factor
 //! touching one eliminated block and some kept ones needs; and from them each factor's
 //! redundancy numbers and normalised residuals.
@@ -7,9 +8,10 @@
 use super::error::SolveError;
 use super::factor::FactorId;
 use super::lin::Linearisation;
-use super::linear::Linear;
+use super::linear::{Linear, Qcc};
 use super::model::Model;
 use super::reduced::Reduced;
+use super::selinv::FactorFailure;
 use super::slots::Slot;
 use super::structure::Structure;
 use nalgebra::{DMatrix, DVector};
@@ -26,7 +28,9 @@ struct EQ {
 pub(crate) struct Cofactors {
     pub(crate) st: Arc<Structure>,
     pub(crate) lin: Linearisation,
-    qcc: faer::Mat<f64>,
+    /// The reduced system it was computed from (V⁻¹ and W are read again for correlations).
+    pub(crate) red: Reduced,
+    pub(crate) qcc: Qcc,
     qe: Vec<EQ>,
 }
 
@@ -46,13 +50,9 @@ impl Cofactors {
     /// different eliminated blocks).
     fn pair(&self, a: &Slot, b: &Slot) -> Option<DMatrix<f64>> {
         let st = &self.st;
-        let qcc = |ca: usize, cb: usize| {
-            let (ra, rb) = (st.coff[ca], st.coff[cb]);
-            DMatrix::from_fn(a.dim, b.dim, |i, j| self.qcc[(ra + i, rb + j)])
-        };
         let nbr = |e: usize, c: usize| st.nbrs(&st.eblocks[e]).binary_search(&c).ok();
         match (a.c, a.e, b.c, b.e) {
-            (Some(ca), _, Some(cb), _) => Some(qcc(ca, cb)),
+            (Some(ca), _, Some(cb), _) => self.qcc.block(st, ca, cb),
             (_, Some(ea), Some(cb), _) => Some(self.qe[ea].qec[nbr(ea, cb)?].clone()),
             (Some(ca), _, _, Some(eb)) => Some(self.qe[eb].qec[nbr(eb, ca)?].transpose()),
             (_, Some(ea), _, Some(eb)) if ea == eb => Some(self.qe[ea].qee.clone()),
@@ -87,19 +87,16 @@ impl Cofactors {
     }
 
     /// The cofactor block between two kept (not eliminated) blocks `a` and `b`.
-    pub(crate) fn cross(&self, a: usize, b: usize, da: usize, db: usize) -> Option<DMatrix<f64>> {
+    pub(crate) fn cross(&self, a: usize, b: usize) -> Option<DMatrix<f64>> {
         let st = &self.st;
-        let (ca, cb) = (st.c_of(a)?, st.c_of(b)?);
-        let (ra, rb) = (st.coff[ca], st.coff[cb]);
-        Some(DMatrix::from_fn(da, db, |i, j| self.qcc[(ra + i, rb + j)]))
+        self.qcc.block(st, st.c_of(a)?, st.c_of(b)?)
     }
 
     /// The cofactor block of a block.
     pub(crate) fn block(&self, b: usize, dim: usize) -> Option<DMatrix<f64>> {
         let st = &self.st;
         if let Some(c) = st.c_of(b) {
-            let r = st.coff[c];
-            return Some(DMatrix::from_fn(dim, dim, |i, j| self.qcc[(r + i, r + j)]));
+            return self.qcc.block(st, c, c).filter(|m| m.nrows() == dim);
         }
         st.e_of(b).map(|e| self.qe[e].qee.clone())
     }
@@ -120,12 +117,12 @@ impl Model {
             return Err(singular());
         }
         let qcc = if st.nr == 0 {
-            faer::Mat::zeros(0, 0)
+            Qcc::Dense(faer::Mat::zeros(0, 0))
         } else {
-            linear
-                .dense_factor(&st, &red, true)
-                .and_then(|(_, q)| q)
-                .ok_or_else(singular)?
+            linear.cofactor_matrix(&st, &red).map_err(|e| match e {
+                FactorFailure::Pivot(_) => singular(),
+                FactorFailure::Resources(what) => SolveError::TooLarge(what),
+            })?
         };
         let qe = st
             .eblocks
@@ -146,19 +143,24 @@ impl Model {
                     let (cn, dn) = (nbrs[n], wn.ncols());
                     let mut s = DMatrix::<f64>::zeros(d, dn);
                     for (n2, w2) in w.iter().enumerate() {
-                        let (r2, rn) = (st.coff[nbrs[n2]], st.coff[cn]);
-                        let q = DMatrix::from_fn(w2.ncols(), dn, |i, j| qcc[(r2 + i, rn + j)]);
-                        s += w2 * q;
+                        s += w2 * qcc.block(&st, nbrs[n2], cn)?;
                     }
                     let q = -(&vinv * s);
                     acc += &q * wn.transpose();
                     qec.push(q);
                 }
                 let qee = &vinv - acc * &vinv;
-                EQ { qee, qec }
+                Some(EQ { qee, qec })
             })
-            .collect();
-        Ok(Cofactors { st, lin, qcc, qe })
+            .collect::<Option<Vec<EQ>>>()
+            .ok_or_else(|| SolveError::TooLarge("a cofactor block".into()))?;
+        Ok(Cofactors {
+            st,
+            lin,
+            red,
+            qcc,
+            qe,
+        })
     }
 }
 

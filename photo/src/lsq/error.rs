@@ -20,6 +20,9 @@ pub enum SolveError {
     /// More unknowns than residual components.
     #[error("more unknowns ({0}) than observations ({1})")]
     Underdetermined(usize, usize),
+    /// The normal equations do not fit in memory (or in the index range).
+    #[error("the normal equations are too large to factorise: {0}")]
+    TooLarge(String),
     /// A factor cannot be evaluated at the current values.
     #[error("factor {} cannot be evaluated (a point behind its camera?)", .0.0)]
     Evaluation(FactorId),

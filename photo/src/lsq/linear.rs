@@ -1,12 +1,15 @@
 //! The reduced system's linear algebra: dense faer Cholesky when small, faer's sparse
 //! Cholesky (symbolic factorisation kept while the structure holds) when large; pivots that
-//! betray a datum defect; the inverse for statistics. This is the one place that sets faer's
-//! parallelism. faer's results depend on the degree of parallelism it is given (its matrix
-//! products block the sums by it), not on the rayon pool that runs the work, so it is always
-//! given [`FAER_DEGREE`]: `Options::threads` (the pool) changes speed, never results.
+//! betray a datum defect; the cofactors for statistics — the whole inverse when small, the
+//! selected inverse on the sparse factor's pattern when large (`selinv`), so that no n²
+//! matrix is ever allocated above `Options::dense_limit`. This is the one place that sets
+//! faer's parallelism. faer's results depend on the degree of parallelism it is given (its
+//! matrix products block the sums by it), not on the rayon pool that runs the work, so it is
+//! always given [`FAER_DEGREE`]: `Options::threads` (the pool) changes speed, never results.
 
 use super::options::Options;
 use super::reduced::Reduced;
+use super::selinv::{FactorFailure, Selected, SparseFactor};
 use super::structure::Structure;
 use faer::linalg::solvers::{DenseSolveCore, Solve};
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
@@ -173,8 +176,86 @@ fn dense(st: &Structure, red: &Reduced) -> faer::Mat<f64> {
     m
 }
 
+/// The cofactors of the reduced system: the whole inverse when small, the blocks on the
+/// pattern of the sparse factor (and any other on demand) when large.
+pub(crate) enum Qcc {
+    /// The dense inverse.
+    Dense(faer::Mat<f64>),
+    /// The selected inverse (boxed: it is the larger).
+    Sparse(Box<Selected>),
+}
+
+impl Qcc {
+    /// The cofactor block between reduced blocks `ca` (rows) and `cb`.
+    pub(crate) fn block(
+        &self,
+        st: &Structure,
+        ca: usize,
+        cb: usize,
+    ) -> Option<nalgebra::DMatrix<f64>> {
+        let (da, db) = (st.cdim[ca], st.cdim[cb]);
+        match self {
+            Qcc::Dense(m) => {
+                let (ra, rb) = (st.coff[ca], st.coff[cb]);
+                Some(nalgebra::DMatrix::from_fn(da, db, |i, j| {
+                    m[(ra + i, rb + j)]
+                }))
+            }
+            Qcc::Sparse(s) => s.block(ca, cb, da, db),
+        }
+    }
+
+    /// S⁻¹·`rhs`; `None` when a workspace cannot be had.
+    pub(crate) fn solve(&self, st: &Structure, rhs: faer::Mat<f64>) -> Option<faer::Mat<f64>> {
+        match self {
+            Qcc::Dense(m) if m.nrows() == st.nr => Some(m * rhs),
+            Qcc::Dense(_) => None,
+            Qcc::Sparse(s) => s.solve(rhs),
+        }
+    }
+}
+
+impl Linear<'_> {
+    /// The first column of S whose pivot is not significant (`Ok(None)`: regular), by the
+    /// dense factorisation when small, the sparse one when large; `Err` when S is not
+    /// positive definite (the sparse path names the failing column) or too large.
+    pub(crate) fn regularity(
+        &self,
+        st: &Structure,
+        red: &Reduced,
+    ) -> Result<Option<usize>, FactorFailure> {
+        if st.nr <= self.options.dense_limit {
+            return match self.dense_factor(st, red, false) {
+                Some((weak, _)) => Ok(weak),
+                None => Err(FactorFailure::Resources("dense factorisation".into())),
+            };
+        }
+        self.set_parallelism();
+        SparseFactor::new(st, red)?.weak()
+    }
+
+    /// The cofactors of S: the dense inverse when small, the selected inverse when large.
+    pub(crate) fn cofactor_matrix(
+        &self,
+        st: &Structure,
+        red: &Reduced,
+    ) -> Result<Qcc, FactorFailure> {
+        if st.nr <= self.options.dense_limit {
+            return match self.dense_factor(st, red, true) {
+                Some((_, Some(q))) => Ok(Qcc::Dense(q)),
+                Some((col, None)) => Err(FactorFailure::Pivot(col.unwrap_or(0))),
+                None => Err(FactorFailure::Resources("dense factorisation".into())),
+            };
+        }
+        self.set_parallelism();
+        Ok(Qcc::Sparse(Box::new(
+            SparseFactor::new(st, red)?.selected_inverse()?,
+        )))
+    }
+}
+
 /// The lower triangle of the reduced matrix as triplets (in a fixed order).
-fn triplets(st: &Structure, red: &Reduced) -> Vec<Triplet<usize, usize, f64>> {
+pub(crate) fn triplets(st: &Structure, red: &Reduced) -> Vec<Triplet<usize, usize, f64>> {
     let mut t = Vec::with_capacity(red.vals.len());
     for_each_block(st, red, |r0, c0, dr, dc, b| {
         for j in 0..dc {

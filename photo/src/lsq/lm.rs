@@ -11,6 +11,7 @@ use super::linear::Linear;
 use super::model::Model;
 use super::problem::Problem;
 use super::reduced::Reduced;
+use super::selinv::FactorFailure;
 use super::structure::Structure;
 use nalgebra::DMatrix;
 
@@ -58,16 +59,25 @@ impl Problem {
         // second evaluation of its factors.
         let (mut cand, mut cand_lin) = (Vec::new(), Linearisation::default());
         let (mut radius, mut nu) = (self.options.initial_radius, 2.0);
+        let mut t_it = std::time::Instant::now();
         while s.iterations < self.options.max_iterations {
+            if s.iterations > 0 {
+                self.time("iteration", t_it);
+            }
+            t_it = std::time::Instant::now();
             s.iterations += 1;
             self.notify(super::problem::SolveStep::Iteration(
                 s.iterations,
                 self.options.max_iterations,
             ));
-            let step = Model::reduce(&st, &lins, 1.0 / radius, true, &mut red)
+            let reduced = Model::reduce(&st, &lins, 1.0 / radius, true, &mut red);
+            self.time("reduce", t_it);
+            let t_f = std::time::Instant::now();
+            let step = reduced
                 .then(|| linear.solve_reduced(&st, &red))
                 .flatten()
                 .map(|dc| Model::back_substitute(&st, &red, dc));
+            self.time("factorise", t_f);
             let Some(step) = step else {
                 (radius, nu) = (radius / nu, nu * 2.0);
                 if radius < 1e-32 {
@@ -106,6 +116,9 @@ impl Problem {
                 }
             }
         }
+        if s.iterations > 0 {
+            self.time("iteration", t_it);
+        }
         let m = st.nres;
         if m < st.n {
             return Err(SolveError::Underdetermined(st.n, m));
@@ -128,7 +141,8 @@ impl Problem {
     }
 
     /// The undamped normals must be regular, otherwise there is a datum defect (no control,
-    /// nothing fixed). Checked once per structure (a dense factorisation of the reduced system).
+    /// nothing fixed). Checked once per structure (a dense factorisation of the reduced system
+    /// when small, a sparse one when large).
     fn check_regular(
         &self,
         st: &Structure,
@@ -154,13 +168,14 @@ impl Problem {
             return Err(singular());
         }
         if st.nr > 0 {
-            match linear.dense_factor(st, red, false) {
-                Some((None, _)) => {}
-                Some((Some(col), _)) => {
-                    let c = st.coff.partition_point(|&o| o <= col) - 1;
-                    return Err(SolveError::Dependent(self.model.keys[st.cblocks[c]]));
-                }
-                None => return Err(singular()),
+            let dependent = |col: usize| {
+                let c = st.coff.partition_point(|&o| o <= col) - 1;
+                SolveError::Dependent(self.model.keys[st.cblocks[c]])
+            };
+            match linear.regularity(st, red) {
+                Ok(None) => {}
+                Ok(Some(col)) | Err(FactorFailure::Pivot(col)) => return Err(dependent(col)),
+                Err(FactorFailure::Resources(what)) => return Err(SolveError::TooLarge(what)),
             }
         }
         if let Ok(mut r) = self.caches.regular_for.lock() {

@@ -19,13 +19,17 @@
 //!   parallel and solved by dense Cholesky when small, faer's sparse Cholesky (symbolic
 //!   factorisation kept) when large. Results are bit-identical whatever the thread count.
 //! - **Statistics** at the solution without the full inverse: covariances of chosen blocks,
-//!   redundancy numbers, normalised residuals ([`Problem::statistics`]); data snooping with
-//!   removal ([`Problem::data_snooping`]); Förstner variance components
+//!   redundancy numbers, normalised residuals ([`Problem::statistics`]), from the dense
+//!   inverse of the reduced system when small and from its selected inverse (Takahashi's
+//!   recurrences on the sparse Cholesky factor's pattern) when large; data snooping with
+//!   removal, several nearly independent suspects per round ([`Problem::data_snooping`]);
+//!   Förstner variance components
 //!   ([`Problem::variance_components`]).
 //!
 //! Units: whatever the factors use; σ0 is dimensionless. Cost = ½Σρ(‖L⁻¹r‖²).
 
 mod cofactor;
+mod correl;
 mod elim;
 mod error;
 mod factor;
@@ -38,6 +42,7 @@ mod options;
 mod pattern;
 mod problem;
 mod reduced;
+mod selinv;
 mod slots;
 mod snoop;
 mod stats;

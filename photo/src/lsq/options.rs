@@ -11,8 +11,9 @@ pub struct Options {
     pub function_tolerance: f64,
     /// Initial trust-region radius: the damping is 1/radius on the clamped diagonal.
     pub initial_radius: f64,
-    /// Largest reduced system solved by dense Cholesky; larger ones go to faer's sparse
-    /// Cholesky with the symbolic factorisation kept while the structure holds.
+    /// Largest reduced system solved by dense Cholesky (and inverted densely for
+    /// statistics); larger ones go to faer's sparse Cholesky with the symbolic factorisation
+    /// kept while the structure holds, and their statistics to the selected inverse.
     pub dense_limit: usize,
     /// Kinds of blocks eliminated by the Schur complement (object points by default).
     pub eliminate: Vec<KeyKind>,

@@ -248,20 +248,34 @@ impl Problem {
             if let Some(s) = c.as_ref().filter(|s| s.hash == hash) {
                 return s.clone();
             }
+            let t = std::time::Instant::now();
             let s = Arc::new(self.model.build_structure(&self.options.eliminate, hash));
             *c = Some(s.clone());
+            drop(c);
+            self.time("structure", t);
             return s;
         }
         Arc::new(self.model.build_structure(&self.options.eliminate, hash))
     }
 
-    /// The timed stages so far (solves, cofactor computations), emptied by the call.
+    /// The timed stages so far, emptied by the call: "structure" (the normal equations'
+    /// shape), "iteration" (one Levenberg–Marquardt step), "solve" (its iterations and
+    /// checks), "cofactors", "statistics" (cofactors when not cached, covariances and
+    /// reliability), "snooping" (its solves and cofactors included), and the caller's
+    /// [`Self::record_time`].
     pub fn take_timings(&self) -> Vec<Timing> {
         self.caches
             .timings
             .lock()
             .map(|mut t| std::mem::take(&mut *t))
             .unwrap_or_default()
+    }
+
+    /// Add a timed stage of the caller's (e.g. building the problem) to [`Self::take_timings`].
+    pub fn record_time(&self, what: &'static str, seconds: f64) {
+        if let Ok(mut t) = self.caches.timings.lock() {
+            t.push(Timing { what, seconds });
+        }
     }
 
     pub(crate) fn time(&self, what: &'static str, since: std::time::Instant) {

@@ -4,16 +4,24 @@ use super::error::SolveError;
 use super::factor::{FactorId, Group};
 use super::lm::Summary;
 use super::problem::Problem;
+use super::Reliability;
 
 /// σ multiplier of a suspect that cannot be removed (it keeps its block determined, with
 /// next to no weight).
 pub const KEPT_SIGMA_FACTOR: f64 = 100.0;
+
+/// Most suspects tested together in one round of data snooping.
+pub const BATCH: usize = 64;
 
 /// Least redundancy of a group whose variance component is estimated.
 pub const MIN_VCE_REDUNDANCY: f64 = 10.0;
 
 impl Problem {
     /// Data snooping: adjust, remove the factor with the largest |w| above `critical`, repeat.
+    /// Suspects whose tests hardly depend on each other are removed in the same round: the
+    /// next worst ones that stay above `critical` after the worse ones' possible influence is
+    /// taken off (see `independent_suspects`), so a large block with many blunders needs
+    /// few rounds, while a good observation inflated by a blunder waits for the next round.
     /// Returns the last adjustment and the removed factors in removal order with their |w|; a
     /// block of an eliminated kind that a removal leaves undetermined (no more residual rows
     /// than unknowns) is fixed out, its remaining factors following with w = 0. A factor whose
@@ -24,6 +32,7 @@ impl Problem {
         &mut self,
         critical: f64,
     ) -> Result<(Summary, Vec<(FactorId, f64)>), SolveError> {
+        let t0 = std::time::Instant::now();
         let mut removed = Vec::new();
         let mut round = 0;
         loop {
@@ -31,34 +40,102 @@ impl Problem {
             self.notify(super::problem::SolveStep::SnoopingRound(round));
             let summary = self.solve()?;
             let rel = self.reliability()?;
-            let kept: Vec<FactorId> = self.model.kept.iter().map(|k| k.0).collect();
-            let worst = rel
-                .iter()
-                .filter(|r| !kept.contains(&r.factor))
-                .map(|r| (r.factor, r.normalised.amax()))
-                .max_by(|a, b| a.1.total_cmp(&b.1));
-            match worst {
-                Some((k, w)) if w > critical => {
-                    let mark = removed.len();
-                    let fixed_before = self.model.fixed.clone();
-                    self.model.entries[k.0].removed = true;
-                    removed.push((k, w));
-                    self.drop_undetermined(k, &mut removed);
-                    if !self.undetermined()?.is_empty() {
-                        for (f, _) in removed.drain(mark..) {
-                            self.model.entries[f.0].removed = false;
-                        }
-                        self.model.fixed = fixed_before;
-                        // Kept, but weighted down so that its blunder does not spread into the
-                        // observations around it (which would then be removed instead).
-                        let e = &mut self.model.entries[k.0];
-                        e.noise = e.noise.scaled(KEPT_SIGMA_FACTOR, e.factor.dim());
-                        self.model.kept.push((k, w));
-                    }
+            let batch = self.independent_suspects(&rel, critical)?;
+            if batch.is_empty() {
+                self.time("snooping", t0);
+                return Ok((summary, removed));
+            }
+            for (k, w) in batch {
+                // A suspect that must be kept is weighted down: the others' tests change.
+                if !self.remove_or_keep(k, w, &mut removed)? {
+                    break;
                 }
-                _ => return Ok((summary, removed)),
             }
         }
+    }
+
+    /// Remove suspect `k` (|w| = `w`), or keep it weighted down when its removal would leave
+    /// a block undetermined. Returns whether it was removed.
+    fn remove_or_keep(
+        &mut self,
+        k: FactorId,
+        w: f64,
+        removed: &mut Vec<(FactorId, f64)>,
+    ) -> Result<bool, SolveError> {
+        if self.model.entries[k.0].removed {
+            return Ok(true);
+        }
+        let mark = removed.len();
+        let fixed_before = self.model.fixed.clone();
+        self.model.entries[k.0].removed = true;
+        removed.push((k, w));
+        self.drop_undetermined(k, removed);
+        if !self.undetermined()?.is_empty() {
+            for (f, _) in removed.drain(mark..) {
+                self.model.entries[f.0].removed = false;
+            }
+            self.model.fixed = fixed_before;
+            // Kept, but weighted down so that its blunder does not spread into the
+            // observations around it (which would then be removed instead).
+            let e = &mut self.model.entries[k.0];
+            e.noise = e.noise.scaled(KEPT_SIGMA_FACTOR, e.factor.dim());
+            self.model.kept.push((k, w));
+            return Ok(false);
+        }
+        Ok(true)
+    }
+
+    /// The suspects of one round, worst first: the worst active factor with |w| above
+    /// `critical` (kept suspects aside), and each of the next worst (up to [`BATCH`] in all)
+    /// that stays above `critical` even when every worse suspect's |w| is taken for a blunder
+    /// of its own: |w_b| − Σ_a |ρ_ab|·|w_a| > critical for some component b, over the
+    /// components a of the worse suspects (ρ: the correlation of the normalised residuals,
+    /// `correl`). A good observation inflated by a blunder nearby, or through the datum,
+    /// waits for the next round. The worst always comes first (ties: the last factor, as one
+    /// removal per round did).
+    fn independent_suspects(
+        &self,
+        rel: &[Reliability],
+        critical: f64,
+    ) -> Result<Vec<(FactorId, f64)>, SolveError> {
+        let kept: Vec<FactorId> = self.model.kept.iter().map(|k| k.0).collect();
+        let mut sus: Vec<(FactorId, f64, usize)> = rel
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| !kept.contains(&r.factor))
+            .map(|(k, r)| (r.factor, r.normalised.amax(), k))
+            .filter(|s| s.1 > critical)
+            .collect();
+        sus.sort_by(|a, b| b.1.total_cmp(&a.1).then(b.0 .0.cmp(&a.0 .0)));
+        sus.truncate(BATCH);
+        let mut out: Vec<(FactorId, f64)> = sus.iter().take(1).map(|s| (s.0, s.1)).collect();
+        if sus.len() < 2 {
+            return Ok(out);
+        }
+        let q = self.cofactors()?;
+        let ks: Vec<usize> = sus.iter().map(|s| s.2).collect();
+        let r: Vec<&nalgebra::DVector<f64>> = ks.iter().map(|&k| &rel[k].redundancy).collect();
+        let Some(rho) = q.correlations(&ks, &r) else {
+            return Ok(out);
+        };
+        for j in 1..ks.len() {
+            let wj = &rel[ks[j]].normalised;
+            let still = (0..wj.len()).any(|b| {
+                let shift: f64 = (0..j)
+                    .map(|i| {
+                        let wi = &rel[ks[i]].normalised;
+                        (0..wi.len())
+                            .map(|a| rho[j][i][(a, b)] * wi[a].abs())
+                            .sum::<f64>()
+                    })
+                    .sum();
+                wj[b].abs() - shift > critical
+            });
+            if still {
+                out.push((sus[j].0, sus[j].1));
+            }
+        }
+        Ok(out)
     }
 
     /// Factors data snooping found suspect (|w| above the critical value) but kept, because

@@ -102,7 +102,7 @@ impl Problem {
         for &(a, da) in &blocks {
             let mut rb = 0;
             for &(b, db) in &blocks {
-                let Some(m) = q.cross(a, b, da, db) else {
+                let Some(m) = q.cross(a, b).filter(|m| m.shape() == (da, db)) else {
                     return Ok(None);
                 };
                 out.view_mut((ra, rb), (da, db)).copy_from(&m);
@@ -126,11 +126,14 @@ impl Problem {
         keys: &[Key],
         sigma0: f64,
     ) -> Result<(Covariances, Vec<Reliability>), SolveError> {
+        let t = std::time::Instant::now();
         let q = self.cofactors()?;
-        Ok((
+        let out = (
             self.block_covariances(&q, keys, sigma0),
             reliability_with(&q),
-        ))
+        );
+        self.time("statistics", t);
+        Ok(out)
     }
 
     /// Per group: Σ of squared whitened residuals and of redundancy numbers (variance
