@@ -358,7 +358,7 @@ fn truth_text(out: &Path, name: &str) -> Result<String, ChainError> {
 /// Camera stations from the rover's events on the PPK trajectory, the lever arm rotated by
 /// the attitude an IMU would give (the simulated attitude, written as `imu_attitude.csv`);
 /// written as `camera_stations.csv`.
-fn exposures(
+pub(crate) fn exposures(
     out: &Path,
     scenario: &simulate::Scenario,
     rover: &ObsFile,
@@ -468,7 +468,7 @@ fn adjusted_errors(
 /// images with their strips (photographs in which nothing was measured, over the turns'
 /// edges, stay out) and `project.toml` (the scenario's camera and lever arm with the 5 mm σ
 /// of a tape measurement (`ppkat leverarm`), drift only for float segments (`auto`)); the image measurements and ground points are the simulator's.
-fn write_adjust_project(
+pub(crate) fn write_adjust_project(
     out: &Path,
     scenario: &simulate::Scenario,
     stations: &[CameraStation],

@@ -35,6 +35,7 @@ pub mod crs;
 pub mod demo;
 pub mod exposure;
 pub mod geoid_grid;
+pub mod hard_sky;
 pub mod height;
 pub mod import;
 pub mod observations;

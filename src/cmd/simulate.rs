@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 /// Simulate a survey flight with exact truth, or a ready-to-run adjustment project.
 ///
-/// A flight (--scenario FILE.toml, or --builtin demo, block20 or long) writes into the output
+/// A flight (--scenario FILE.toml, or --builtin demo, block20, long or hard-sky) writes into the output
 /// folder: rover.obs (10 Hz, flag-5 events at the exposures), base.obs, nav.rnx (a synthetic
 /// constellation), truth_trajectory.csv, truth_exposures.csv, ground_points.csv,
 /// image_observations.csv and truth_blunders.csv; with --raw ubx also rover.ubx and base.ubx,
@@ -14,6 +14,12 @@ use std::path::{Path, PathBuf};
 /// with --raw rtcm3 rover.rtcm3 and base.rtcm3, RTCM 3 logs (MSM7, station position 1005; no
 /// events: RTCM carries none). The scenario keys are shown in
 /// fixtures/scenario_small.toml; every error source can be switched under `[errors]`.
+///
+/// hard-sky is a flight where GNSS alone stays float at every strip start (5–6 satellites above
+/// 32°, every satellite lost at each turn and again 30–60 s into each strip, a base 20 km
+/// away); it also runs PPK and the exposures and writes rover_ppk.pos, antennas.csv,
+/// images.csv, project.toml (coupling = "loose": the PPK antenna positions) and
+/// project_tight.toml (coupling = "tight": the double-difference carrier phase itself).
 ///
 /// An adjustment project (--builtin classic-block, close-range, block1000, nav-block or
 /// textured-block: the classic 2-strip 1:8000 block, a close-range pair, a 1000-image block,
@@ -74,6 +80,10 @@ pub fn run(args: Args) -> Result<()> {
         .and_then(|b| block::builtin(b, &args.out))
     {
         println!("{}", r?);
+        return Ok(());
+    }
+    if args.builtin.as_deref() == Some("hard-sky") && args.raw.is_none() {
+        print!("{}", integration::hard_sky::run(&args.out)?);
         return Ok(());
     }
     let s = scenario(args.scenario.as_deref(), args.builtin.as_deref())?;

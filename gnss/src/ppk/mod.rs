@@ -33,6 +33,7 @@ mod segment;
 pub mod slip;
 mod smooth;
 mod state;
+pub mod tight;
 
 pub use measure::GateReason;
 pub use options::{ArMode, BasePosition, Estimate, FilterMode, Motion, PpkOptions, Reference};

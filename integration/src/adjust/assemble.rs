@@ -29,14 +29,26 @@ pub const GROUP_PRIOR: Group = Group(3);
 pub const GROUP_DISTANCE: Group = Group(4);
 /// Attitude observations.
 pub const GROUP_ATTITUDE: Group = Group(5);
+/// Double-difference carrier phase (tight coupling).
+pub const GROUP_PHASE: Group = Group(6);
+/// Double-difference code (tight coupling).
+pub const GROUP_CODE: Group = Group(7);
+/// Priors of the double-difference ionosphere (tight coupling).
+pub const GROUP_IONO: Group = Group(8);
+/// Integer constraints of fixed combinations of ambiguities (tight coupling).
+pub const GROUP_FIX: Group = Group(9);
 /// Names of the groups, by index.
-pub const GROUP_NAMES: [&str; 6] = [
+pub const GROUP_NAMES: [&str; 10] = [
     "image points",
     "control points",
     "GNSS centres",
     "lever-arm prior",
     "distances",
     "attitude",
+    "GNSS phase (DD)",
+    "GNSS code (DD)",
+    "ionosphere prior",
+    "ambiguity constraints",
 ];
 
 /// A drift group (key `Drift(DriftId(index))`): its name, model and reference time.

@@ -43,6 +43,8 @@ pub struct Built {
     pub unused_antennas: Vec<String>,
     /// Images without an antenna record in a project with GNSS (adjusted from their points).
     pub without_antenna: Vec<String>,
+    /// Tight coupling: the double differences and ambiguities (None: loose).
+    pub tight: Option<super::tight::Tight>,
 }
 
 /// Check the inputs, choose the frame and the start values, assemble the problem.
@@ -74,8 +76,23 @@ pub fn build(p: &Project) -> Result<Built, AdjustError> {
             .map(|(id, why)| (format!("image {id}"), why)),
     );
     let lat = super::latency::groups(p, &antenna_of)?;
+    // Tight coupling: the images carried by double differences get no loose GNSS factor.
+    let dd = super::tight::load(p, &antenna_of)?;
+    let loose_of: Vec<Option<usize>> = match &dd {
+        Some(d) => {
+            let tight = d.images();
+            (antenna_of.iter().enumerate())
+                .map(|(i, a)| a.filter(|_| !tight.contains(&i)))
+                .collect()
+        }
+        None => antenna_of.clone(),
+    };
     let (mut pr, point_names, single_ray, drifts) =
-        problem(p, &frame, &rays, &start, &antenna_of, &lat)?;
+        problem(p, &frame, &rays, &start, &loose_of, &lat)?;
+    let tight = match dd {
+        Some(d) => Some(super::tight::add(p, &frame, &mut pr, d, &antenna_of)?),
+        None => None,
+    };
     super::leave_out::undetermined(p, &point_names, &mut pr, &mut left_out)?;
     Ok(Built {
         frame,
@@ -87,6 +104,7 @@ pub fn build(p: &Project) -> Result<Built, AdjustError> {
         left_out,
         unused_antennas,
         without_antenna,
+        tight,
     })
 }
 

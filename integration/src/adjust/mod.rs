@@ -19,6 +19,7 @@ pub mod attitude;
 pub mod build;
 pub mod camera_section;
 mod checks;
+pub mod dd_factor;
 pub mod error;
 pub mod factors;
 mod frame;
@@ -36,6 +37,7 @@ mod start;
 pub mod start_file;
 mod summary;
 mod tables;
+pub mod tight;
 
 pub use error::AdjustError;
 use project::Project;

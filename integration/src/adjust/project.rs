@@ -151,6 +151,55 @@ pub struct GnssSection {
     /// Start value of the latency, and the prior's mean with `latency_sigma` (s, default 0).
     #[serde(default)]
     pub latency_start: f64,
+    /// loose (default: the antenna positions of a trajectory) or tight (the double-difference
+    /// carrier phase and code of `rover` and `base`, ambiguities resolved in the adjustment).
+    #[serde(default)]
+    pub coupling: Coupling,
+    /// Tight coupling: the rover's observation file (RINEX or a raw log).
+    #[serde(default)]
+    pub rover: Option<PathBuf>,
+    /// Tight coupling: the base's observation file.
+    #[serde(default)]
+    pub base: Option<PathBuf>,
+    /// Tight coupling: navigation files (broadcast orbits).
+    #[serde(default, deserialize_with = "one_or_many")]
+    pub nav: Vec<PathBuf>,
+    /// Tight coupling: the base antenna reference point, ECEF (m); absent: the base file's
+    /// header position.
+    #[serde(default)]
+    pub base_position: Option<[f64; 3]>,
+    /// Tight coupling: prior σ of each satellite's single-difference ionosphere per km of
+    /// baseline, mm/km (ppm; default 2, half the PPK filter's epoch prior: one value holds a whole arc). The double-difference ionosphere
+    /// of an arc is held by √2 times that, at least 5 mm; raise it on a disturbed day, or
+    /// fixes may be wrong.
+    #[serde(default = "two")]
+    pub iono_ppm: f64,
+}
+
+/// How GNSS enters the adjustment.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Coupling {
+    /// Antenna positions from a trajectory (today's PPK, then the adjustment).
+    #[default]
+    Loose,
+    /// Double-difference carrier phase and code at every exposure, float ambiguities in the
+    /// adjustment, resolved to integers there (see `adjust::tight`).
+    Tight,
+}
+
+/// One path or a list of paths.
+fn one_or_many<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<PathBuf>, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum OneOrMany {
+        One(PathBuf),
+        Many(Vec<PathBuf>),
+    }
+    Ok(match OneOrMany::deserialize(d)? {
+        OneOrMany::One(p) => vec![p],
+        OneOrMany::Many(v) => v,
+    })
 }
 
 impl GnssSection {
@@ -166,6 +215,9 @@ impl GnssSection {
 
 fn one() -> f64 {
     1.0
+}
+fn two() -> f64 {
+    2.0
 }
 fn yes() -> bool {
     true

@@ -148,7 +148,7 @@ fn solve_built(
     photo::lsq::SolveError,
 > {
     let opts = &project.file.adjustment;
-    let pr = &mut built.problem;
+    let (pr, tight) = (&mut built.problem, &mut built.tight);
     let tests: usize = pr.factors().map(|(_, f)| f.dim()).sum();
     let critical = photo::lsq::snooping_critical(opts.alpha, tests);
     let mut removed = Vec::new();
@@ -164,6 +164,14 @@ fn solve_built(
         Ok(())
     };
     snoop(pr, &mut removed)?;
+    if let Some(t) = tight.as_mut() {
+        // Integers with the image geometry in the ambiguities' covariance, then snooping
+        // again with them.
+        stage("adjustment: ambiguity resolution, iteration");
+        t.sigma_float = super::tight::centre_sigmas(pr, t)?;
+        super::tight::resolve(pr, t, RATIO_MIN, SUCCESS_MIN)?;
+        snoop(pr, &mut removed)?;
+    }
     let mut components = vec![1.0; GROUPS];
     if opts.variance_components {
         stage("adjustment: variance components, iteration");
@@ -175,6 +183,11 @@ fn solve_built(
     let stats = pr.solve()?;
     Ok((stats, removed, components, critical))
 }
+
+/// Tight coupling: the ratio test's threshold.
+const RATIO_MIN: f64 = 3.0;
+/// Tight coupling: the bootstrapped success rate a fixed subset must reach.
+const SUCCESS_MIN: f64 = 0.999;
 
 /// Number of observation groups (see `build::GROUP_NAMES`).
 const GROUPS: usize = build::GROUP_NAMES.len();

@@ -1,4 +1,4 @@
-//! The built-in flight scenarios: `demo`, `block20`, `long` — the `demo` scenario as TOML,
+//! The built-in flight scenarios: `demo`, `block20`, `long`, `hard-sky` — the `demo` scenario as TOML,
 //! the others derived from it with more and longer strips. Leaves: a [`Scenario`].
 
 use super::scenario::Scenario;
@@ -39,8 +39,9 @@ ties = 1500
 relief = 15.0
 "#;
 
-/// A built-in scenario by name: `demo` (about 4 minutes), `block20` (20 minutes, 10 Hz) or
-/// `long` (one hour, 10 Hz, for benchmarks).
+/// A built-in scenario by name: `demo` (about 4 minutes), `block20` (20 minutes, 10 Hz),
+/// `long` (one hour, 10 Hz, for benchmarks) or `hard-sky` (5 strips where GNSS alone stays
+/// float at every strip start: see [`crate::hard_sky`]).
 pub fn builtin(name: &str) -> Option<Scenario> {
     let mut s: Scenario = toml::from_str(DEMO).ok()?;
     match name {
@@ -55,10 +56,24 @@ pub fn builtin(name: &str) -> Option<Scenario> {
             s.flight.strips = 21;
             s.flight.strip_length = 9000.0;
         }
+        "hard-sky" => {
+            // GNSS alone fails here: 5–6 satellites, every one lost at each turn and again
+            // 30–60 s into each strip, a base 20 km away.
+            s.name = "hard-sky".into();
+            s.seed = 21;
+            s.flight.strips = 4;
+            s.flight.strip_length = 7000.0;
+            s.base.east = 3000.0;
+            s.base.north = -19800.0;
+            s.ground.ties = 1500;
+            s.errors.rover_mask_deg = 20.0;
+            s.errors.slips_at_turns = true;
+            s.errors.float_segment_s = Some([30.0, 60.0]);
+        }
         _ => return None,
     }
     Some(s)
 }
 
 /// Names of the built-in flight scenarios.
-pub const BUILTINS: [&str; 3] = ["demo", "block20", "long"];
+pub const BUILTINS: [&str; 4] = ["demo", "block20", "long", "hard-sky"];

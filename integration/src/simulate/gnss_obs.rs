@@ -53,6 +53,8 @@ pub struct Receiver<'a> {
     pub events: &'a [Epoch],
     /// Random cycle slips and gaps are injected in this receiver.
     pub faults: bool,
+    /// True times at which the receiver loses lock on every satellite (sorted).
+    pub lose_lock: &'a [Epoch],
 }
 
 /// One satellite as observed (before formatting).
@@ -213,13 +215,27 @@ pub fn simulate(
         rng_fault,
         faults,
         stats: ObsStats::default(),
+        mask: if rx.faults {
+            err.rover_mask_deg.max(SIM_MASK_DEG)
+        } else {
+            SIM_MASK_DEG
+        }
+        .to_radians(),
+        all_slip: false,
     };
     let mut body = String::with_capacity(n_epochs * 600);
     let events = event_tags(rx, err);
     let mut ev_i = 0;
     let mut first_pos = None;
+    let mut lost = 0;
     for k in 0..n_epochs {
         let tag = rx.start + Duration::from_seconds(k as f64 * rx.interval);
+        let t_true = tag - Duration::from_seconds(clock_at(rx, tag, err.receiver_clock));
+        sim.all_slip = false;
+        while lost < rx.lose_lock.len() && rx.lose_lock[lost] <= t_true {
+            sim.all_slip = k > 0;
+            lost += 1;
+        }
         // Event records that fall before this epoch's tag.
         while ev_i < events.len() && events[ev_i] < tag {
             write_event(&mut body, events[ev_i]);
@@ -268,6 +284,10 @@ struct Sim<'a> {
     rng_fault: Rng,
     faults: Faults,
     stats: ObsStats,
+    /// Tracking mask, radians.
+    mask: f64,
+    /// Every satellite slips at this epoch (a loss of lock since the previous one).
+    all_slip: bool,
 }
 
 impl Sim<'_> {
@@ -292,7 +312,7 @@ impl Sim<'_> {
                 continue;
             };
             let (az, el) = az_el(&p, &g, &Ecef(sp));
-            if el < SIM_MASK_DEG.to_radians() {
+            if el < self.mask {
                 self.tracks.remove(&sv);
                 continue;
             }
@@ -302,6 +322,13 @@ impl Sim<'_> {
                 .entry(sv)
                 .or_insert_with(|| Track::new(err, rng_noise));
             let mut lli = [0u8; 2];
+            if self.all_slip {
+                for (f, a) in tr.amb.iter_mut().enumerate() {
+                    *a += self.rng_fault.range(1.0, 20.0).round();
+                    lli[f] |= 1;
+                    self.stats.slips += 1;
+                }
+            }
             for &(s, gs, f) in &self.faults.slips {
                 if s == k && gs == si {
                     tr.amb[f] += self.rng_fault.range(1.0, 20.0).round();

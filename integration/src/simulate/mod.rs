@@ -156,6 +156,7 @@ pub fn run(s: &Scenario, dir: &Path) -> Result<SimReport, SimError> {
         interval: 1.0 / s.flight.rate_hz,
         events: &event_times,
         faults: true,
+        lose_lock: &lose_lock_times(s, &flight, start, &mut rng.fork(7)),
     };
     let base_ecef = site.to_ecef(&s.base_enu());
     let base_pos = move |_t: Epoch| base_ecef;
@@ -168,6 +169,7 @@ pub fn run(s: &Scenario, dir: &Path) -> Result<SimReport, SimError> {
         interval: s.base.interval_s,
         events: &[],
         faults: false,
+        lose_lock: &[],
     };
     let (rtext, rstats) = gnss_obs::simulate(&rover, &eph, &klob, &s.errors, &rng.fork(5));
     let (btext, bstats) = gnss_obs::simulate(&base, &eph, &klob, &s.errors, &rng.fork(6));
@@ -195,6 +197,24 @@ pub fn run(s: &Scenario, dir: &Path) -> Result<SimReport, SimError> {
         base_position: base_ecef,
         seconds: t_start.elapsed().as_secs_f64(),
     })
+}
+
+/// When the rover loses lock on every satellite (true GPST, sorted): at each strip start
+/// (`slips_at_turns`) and once more a random time after it (`float_segment_s`).
+fn lose_lock_times(s: &Scenario, flight: &Flight, start: Epoch, rng: &mut Rng) -> Vec<Epoch> {
+    let mut t = Vec::new();
+    for (_, t0, dur) in flight.strips() {
+        if s.errors.slips_at_turns {
+            t.push(t0);
+        }
+        if let Some([a, b]) = s.errors.float_segment_s {
+            t.push(t0 + rng.range(a, b).min(dur));
+        }
+    }
+    t.sort_by(f64::total_cmp);
+    t.into_iter()
+        .map(|x| start + Duration::from_seconds(x))
+        .collect()
 }
 
 /// The rover and base of a simulation also as u-blox UBX logs (`rover.ubx`, `base.ubx`:

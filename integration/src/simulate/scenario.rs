@@ -39,6 +39,9 @@ fn d_phase() -> f64 {
 fn d_img() -> f64 {
     0.5
 }
+fn d_mask() -> f64 {
+    5.0
+}
 
 /// A simulation scenario (every key is checked; unknown keys are errors).
 #[derive(Clone, Debug, Deserialize)]
@@ -186,6 +189,19 @@ pub struct ErrorModel {
     /// Gross errors (10–30 pixels) injected in the image measurements.
     #[serde(default)]
     pub image_blunders: usize,
+    /// Elevation below which the rover tracks nothing, degrees (default 5; a hard sky —
+    /// valleys, banking, a fuselage — leaves 5–6 satellites above 30–35°).
+    #[serde(default = "d_mask")]
+    pub rover_mask_deg: f64,
+    /// The rover loses lock on every satellite at the end of each turn (strip start), with
+    /// LLI set and new ambiguities.
+    #[serde(default)]
+    pub slips_at_turns: bool,
+    /// [min, max] seconds: the rover loses lock on every satellite once more at a random
+    /// time within that span after each strip start, so each strip starts with a short arc
+    /// of its own (a float segment for GNSS alone).
+    #[serde(default)]
+    pub float_segment_s: Option<[f64; 2]>,
 }
 
 impl Default for ErrorModel {
@@ -209,6 +225,9 @@ impl ErrorModel {
             gaps: 0,
             image_noise_px: 0.0,
             image_blunders: 0,
+            rover_mask_deg: d_mask(),
+            slips_at_turns: false,
+            float_segment_s: None,
         }
     }
 }
@@ -264,7 +283,7 @@ impl Scenario {
         let f = &self.flight;
         let c = &self.camera;
         let e = &self.errors;
-        let checks: [(&'static str, bool, &str); 16] = [
+        let checks: [(&'static str, bool, &str); 18] = [
             (
                 "flight.speed",
                 f.speed > 0.0 && f.speed < 300.0,
@@ -336,6 +355,17 @@ impl Scenario {
                 "errors.image_noise_px",
                 e.image_noise_px >= 0.0,
                 "must not be negative",
+            ),
+            (
+                "errors.rover_mask_deg",
+                (0.0..=60.0).contains(&e.rover_mask_deg),
+                "must be within 0–60 degrees",
+            ),
+            (
+                "errors.float_segment_s",
+                e.float_segment_s
+                    .is_none_or(|[a, b]| a.is_finite() && b.is_finite() && 0.0 < a && a <= b),
+                "must be [min, max] seconds with 0 < min ≤ max",
             ),
         ];
         for (key, ok, what) in checks {

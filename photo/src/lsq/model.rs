@@ -10,7 +10,7 @@ use nalgebra::{DMatrixViewMut, DVector};
 use std::collections::HashMap;
 
 /// The most blocks one factor may touch.
-pub const MAX_FACTOR_KEYS: usize = 8;
+pub const MAX_FACTOR_KEYS: usize = 32;
 
 /// One factor as the problem holds it.
 pub(crate) struct Entry {

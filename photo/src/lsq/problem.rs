@@ -22,6 +22,9 @@ pub enum BuildError {
     /// A factor or a call names a block that was never added.
     #[error("{0} is not a block of the problem")]
     UnknownKey(Key),
+    /// A new value does not match the block's kind or size.
+    #[error("{0}: a value of another kind or size")]
+    ValueShape(Key),
     /// A factor names one block twice, or more than [`MAX_FACTOR_KEYS`].
     #[error("a factor must name between 1 and {MAX_FACTOR_KEYS} different blocks ({0})")]
     Keys(String),
@@ -118,6 +121,19 @@ impl Problem {
     pub fn set_fixed(&mut self, key: Key, fixed: bool) -> Result<(), BuildError> {
         let b = self.block(key)?;
         self.model.fixed[b] = fixed;
+        Ok(())
+    }
+
+    /// Replace a block's value (of the same kind and size: an error otherwise), e.g. to hold
+    /// it at an integer with [`Self::set_fixed`].
+    pub fn set_value(&mut self, key: Key, value: Value) -> Result<(), BuildError> {
+        let b = self.block(key)?;
+        let old = &self.model.values[b];
+        if std::mem::discriminant(old) != std::mem::discriminant(&value) || old.dim() != value.dim()
+        {
+            return Err(BuildError::ValueShape(key));
+        }
+        self.model.values[b] = value;
         Ok(())
     }
 
