@@ -81,23 +81,29 @@ impl DdFactor {
         }
     }
 
-    /// The keys of kind `kind` (`Key::Custom(kind, n)`) the rows depend on.
-    pub fn custom_keys(&self, kind: &str) -> Vec<Key> {
-        self.keys
-            .iter()
-            .filter(|k| matches!(k, Key::Custom(c, _) if *c == kind))
-            .copied()
-            .collect()
-    }
-
-    /// The rover antenna (ECEF) this factor's model places at `pose`, `lever`.
-    pub fn antenna_shift(&self) -> Vector3<f64> {
-        self.shift
-    }
-
     /// The rows.
     pub fn rows(&self) -> impl Iterator<Item = &DdRow> {
         self.rows.iter().map(|r| &r.row)
+    }
+
+    /// The rows whose integer blocks (ambiguity, wide lane: the keys of kind `integer`
+    /// says) are all held, as `held` tells.
+    pub fn rows_held(
+        &self,
+        integer: impl Fn(&Key) -> bool,
+        held: impl Fn(&Key) -> bool,
+    ) -> impl Iterator<Item = &DdRow> {
+        self.rows
+            .iter()
+            .filter(move |r| {
+                let ints = r
+                    .terms
+                    .iter()
+                    .map(|(k, _)| &self.keys[*k])
+                    .filter(|k| integer(k));
+                ints.clone().count() > 0 && ints.into_iter().all(&held)
+            })
+            .map(|r| &r.row)
     }
 
     /// Phase or code.

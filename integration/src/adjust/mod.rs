@@ -38,6 +38,7 @@ pub mod start_file;
 mod summary;
 mod tables;
 pub mod tight;
+pub mod tight_report;
 
 pub use error::AdjustError;
 use project::Project;

@@ -421,7 +421,7 @@ fn load_antennas(
         .filter(|a| a.quality != 1)
         .map(|a| a.image.as_str())
         .collect();
-    if !unfixed.is_empty() {
+    if !unfixed.is_empty() && g.coupling == Coupling::Loose {
         warnings.push(format!(
             "{} of {} GNSS positions are not ambiguity-fixed (Q ≠ 1; first: {}): they enter with their larger covariance",
             unfixed.len(),

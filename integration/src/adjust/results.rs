@@ -176,6 +176,8 @@ pub struct Results {
     pub distance_residuals: Vec<DistanceResidual>,
     /// What the user should know (inputs left out, float positions …).
     pub warnings: Vec<String>,
+    /// Tight coupling: ambiguities fixed before and after, per exposure (None: loose).
+    pub tight: Option<super::tight_report::TightSummary>,
     /// The solver's timed stages (solves, cofactor computations), for benchmarks; not
     /// written to the reports (their bytes must not depend on the machine).
     #[serde(skip)]
@@ -335,6 +337,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         control_residuals: res.control,
         gnss_residuals: res.gnss,
         distance_residuals: res.distance,
+        tight: super::tight_report::summary(p, s),
         warnings: warnings(p, b)
             .into_iter()
             .chain(not_compared)

@@ -37,6 +37,9 @@ impl Results {
                 .collect();
             s += &format!("  {}: {}\n", e.name, v.join(", "));
         }
+        if let Some(t) = &self.tight {
+            s += &t.lines();
+        }
         s += &format!("removed by data snooping: {}\n", self.removed.len());
         for r in &self.removed {
             s += &format!("  {} (|w| {:.1}) {}\n", r.what, r.w, r.source);

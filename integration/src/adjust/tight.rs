@@ -101,17 +101,20 @@ impl Tight {
         self.blocks.iter().filter(|b| b.0 != IONO).count()
     }
 
-    /// Whether every ambiguity of image `i`'s phase factor is fixed (false without one).
+    /// Whether image `i`'s position is fixed: the phase double differences whose integers
+    /// are all held reach at least 3 satellites besides the pivots (so they determine the
+    /// position, as a partial fix does in the PPK filter).
     pub fn image_fixed(&self, pr: &Problem, i: usize) -> bool {
         let Some((Some(f), _)) = self.factors.get(&i) else {
             return false;
         };
-        pr.factor_as::<DdFactor>(*f).is_some_and(|d| {
-            [AMBIGUITY, WIDE]
-                .iter()
-                .flat_map(|k| d.custom_keys(k))
-                .all(|k| matches!(k, Key::Custom(_, n) if self.fixed.contains(&(n as usize))))
-        })
+        let Some(d) = pr.factor_as::<DdFactor>(*f) else {
+            return false;
+        };
+        let integer = |k: &Key| matches!(k, Key::Custom(c, _) if *c == AMBIGUITY || *c == WIDE);
+        let held = |k: &Key| matches!(k, Key::Custom(_, n) if self.fixed.contains(&(*n as usize)));
+        let sats: BTreeSet<gnss::sv::Sv> = d.rows_held(integer, held).map(|r| r.sv).collect();
+        sats.len() >= 3
     }
 }
 
