@@ -106,6 +106,10 @@ fn tight_coupling_fixes_the_strip_starts_gnss_alone_leaves_float() {
         }
     }
     assert_eq!(wrong, 0, "wrong integers among {} held", t.fixed.len());
+    // The centres' σ tell the truth: RMS error over RMS σ between 0.5 and 2.
+    let sig = rms(sum.images.iter().map(|x| &x.sigma_final));
+    let err = rms(sum.images.iter().filter_map(|x| e_tight.get(&x.image)));
+    assert!((0.5..=2.0).contains(&(err / sig)), "error {err} vs σ {sig}");
     // Camera centres within 3 cm everywhere, and check points within 1.2× of perfect GNSS.
     let all = rms(e_tight.values());
     assert!(all <= 0.03, "tight centres RMS {all}");

@@ -181,6 +181,7 @@ pub fn html(p: &Project, r: &Results) -> String {
     html_control(&mut s, r);
     html_distances(&mut s, r);
     html_removed(&mut s, r);
+    super::tight_report::html(&mut s, r);
     html_checks(&mut s, r);
     html_plots(&mut s, p, r);
     html_images(&mut s, r);

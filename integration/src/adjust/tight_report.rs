@@ -164,3 +164,46 @@ pub fn true_integers(
     }
     out
 }
+
+/// The report's section on tight coupling: the counts before (PPK) and after, and the
+/// exposures the PPK left float with the σ of their centres from the float and the final
+/// solution (at most 300 rows; the JSON has them all).
+pub fn html(s: &mut String, r: &super::results::Results) {
+    use std::fmt::Write as _;
+    let Some(t) = &r.tight else { return };
+    let _ = writeln!(
+        s,
+        "<h2>Tight coupling</h2><table><tr><th>exposures</th><th>fixed by PPK</th><th>fixed now</th><th>integer blocks held</th><th>wide lanes</th><th>ionospheres</th><th>rounds</th><th>without double differences</th></tr><tr><td>{}</td><td>{}</td><td>{}</td><td>{} of {}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr></table>",
+        t.exposures,
+        t.exposures_ppk_fixed,
+        t.exposures_fixed,
+        t.held,
+        t.ambiguities + t.wide_lanes,
+        t.wide_lanes,
+        t.ionospheres,
+        t.rounds.len(),
+        t.missing.len()
+    );
+    let float: Vec<&TightImage> = t.images.iter().filter(|x| x.ppk_quality != 1).collect();
+    if float.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "<p>Exposures the PPK left float ({}), σ of the projection centre (3D, m) from the float and the final adjustment:</p><table><tr><th>image</th><th>PPK Q</th><th>fixed now</th><th>phase DDs</th><th>σ float</th><th>σ final</th></tr>",
+        float.len()
+    );
+    for x in float.iter().take(300) {
+        let _ = writeln!(
+            s,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.4}</td><td>{:.4}</td></tr>",
+            x.image,
+            x.ppk_quality,
+            if x.fixed { "yes" } else { "no" },
+            x.phase_rows,
+            x.sigma_float,
+            x.sigma_final
+        );
+    }
+    let _ = writeln!(s, "</table>");
+}
