@@ -181,6 +181,19 @@ fn tight_and_loose_agree_where_the_ppk_is_fixed() {
         n += 1;
     }
     assert!(n > 100, "{n} exposures compared");
+    // Without the rover's observations, tight coupling says what it needs.
+    let text = std::fs::read_to_string(dir.join("project_tight.toml")).expect("project");
+    let broken: String = (text.lines())
+        .filter(|l| !l.starts_with("rover ="))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(dir.join("project_broken.toml"), broken).expect("write");
+    let p2 = Project::load(&dir.join("project_broken.toml")).expect("loads");
+    let e = solve(&p2, &RunOptions::default()).err().expect("refused");
+    assert!(
+        e.to_string().contains("project_broken.toml") && e.to_string().contains("rover ="),
+        "{e}"
+    );
     assert!(worst <= 3.0, "tight − loose up to {worst:.2} σ");
     eprintln!(
         "demo: {n} PPK-fixed exposures, tight − loose ≤ {worst:.2} σ (3D), tight centre RMS {:.3} m",
