@@ -59,10 +59,12 @@ impl GlonassEph {
         })
     }
 
-    /// Whether Bn marks no malfunction.
+    /// Whether the health field says OK: RINEX 2.11 writes Bn with 0 = OK, RINEX 3.x the
+    /// MSB of Bn (0 = healthy, 1 = unhealthy), and RTCM 1020 is decoded to the same 0/1; any
+    /// value other than 0 is unhealthy, as RTKLIB reads it. (Reading values below 4 as
+    /// healthy took a RINEX 3 "1 = unhealthy" satellite for a healthy one.)
     pub fn healthy(&self) -> bool {
-        // Bit 2 of Bn is the one that marks a malfunction; RINEX writes Bn (0 = OK).
-        self.health & 0x4 == 0 && self.health < 4
+        self.health == 0
     }
 
     fn deriv(&self, x: &[f64; 6]) -> [f64; 6] {
@@ -120,6 +122,40 @@ impl GlonassEph {
             vel: Vector3::new(x[3], x[4], x[5]),
             clock: self.minus_tau + self.gamma * dt,
             clock_rate: self.gamma,
+        }
+    }
+}
+
+#[cfg(test)]
+mod health_tests {
+    use super::GlonassEph;
+    use crate::rinex::nav::{NavKind, NavRecord};
+    use crate::sv::{Constellation, Sv};
+
+    /// A record with health field `h` (orbit[3]).
+    fn eph(h: f64) -> GlonassEph {
+        let mut orbit = vec![0.0; 12];
+        orbit[3] = h;
+        let r = NavRecord {
+            sv: Sv {
+                sys: Constellation::Glonass,
+                prn: 3,
+            },
+            kind: NavKind::Glonass,
+            toc: hifitime::Epoch::from_gpst_seconds(1.4e9),
+            clock: [0.0; 3],
+            orbit,
+            line: 1,
+        };
+        GlonassEph::from_record(&r).expect("complete record")
+    }
+
+    #[test]
+    fn only_a_zero_health_field_is_healthy() {
+        assert!(eph(0.0).healthy());
+        // RINEX 3: 1 is the MSB of Bn, a malfunction; RINEX 2.11 writes Bn, 0 = OK.
+        for h in [1.0, 2.0, 3.0, 4.0, 5.0] {
+            assert!(!eph(h).healthy(), "health {h}");
         }
     }
 }
