@@ -6,7 +6,7 @@
 mod cmd;
 
 use anyhow::{Context, Result};
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 
 /// The command line: one global option and a subcommand.
 #[derive(Parser)]
@@ -73,7 +73,18 @@ fn main() {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
-    let cli = Cli::parse();
+    let expanded = match cmd::config::expand(&Cli::command(), std::env::args_os().collect()) {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("error: {}", e.0);
+            std::process::exit(e.exit_code());
+        }
+    };
+    let cli = Cli::parse_from(expanded.args);
+    cmd::set_quiet(cli.quiet);
+    for n in &expanded.notes {
+        cmd::note(n);
+    }
     if let Err(e) = run(cli) {
         if let Some(i) = e.downcast_ref::<cmd::Incomplete>() {
             eprintln!("warning: {i}");

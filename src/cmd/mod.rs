@@ -5,6 +5,7 @@
 pub mod adjust;
 pub mod bal;
 pub mod bench;
+pub mod config;
 pub mod convert;
 pub mod demo;
 pub mod exposures;
@@ -14,6 +15,7 @@ pub mod leverarm;
 pub mod ppk;
 pub mod ppp;
 pub mod progress;
+pub mod rtklib_conf;
 pub mod simulate;
 pub mod spp;
 pub mod tiepoints;
@@ -196,6 +198,19 @@ pub fn triple(what: &str, s: &str) -> Result<[f64; 3]> {
         bail!("{what} '{s}': give exactly three numbers separated by commas");
     }
     Ok([v[0], v[1], v[2]])
+}
+
+/// Two non-negative numbers "A,B", e.g. `--phase-sigma 0.003,0.003`.
+pub fn pair(what: &str, s: &str) -> Result<(f64, f64)> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<std::result::Result<_, _>>()
+        .with_context(|| format!("{what} '{s}': give two numbers separated by a comma"))?;
+    if v.len() != 2 || v.iter().any(|x| !x.is_finite() || *x < 0.0) || v[0] + v[1] <= 0.0 {
+        bail!("{what} '{s}': give two numbers of at least 0, not both 0, separated by a comma");
+    }
+    Ok((v[0], v[1]))
 }
 
 /// The `--systems` list, e.g. "G,E,C,J,R".

@@ -122,6 +122,28 @@ pub struct Args {
     /// (low satellites are down-weighted by 1/sin(elevation), not dropped).
     #[arg(long, value_name = "DEG", default_value_t = 10.0)]
     elev_mask: f64,
+    /// Elevation mask of the ambiguities fixed, degrees (default: --elev-mask); satellites
+    /// between the two masks are used with float ambiguities.
+    #[arg(long, value_name = "DEG")]
+    ar_elev_mask: Option<f64>,
+    /// Ratio-test threshold: the second-best integer candidate's squared distance over the
+    /// best's must reach it for a fix (RTKLIB's pos2-arthres).
+    #[arg(long, value_name = "RATIO", default_value_t = 3.0, value_parser = at_least_one)]
+    ratio: f64,
+    /// Epochs an ambiguity must be locked before it may be fixed (RTKLIB's pos2-arlockcnt).
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    min_lock: usize,
+    /// Largest time difference between a rover epoch and the base epoch it is differenced
+    /// with, seconds (RTKLIB's pos2-maxage).
+    #[arg(long, value_name = "S", default_value_t = 30.0, value_parser = positive)]
+    max_age: f64,
+    /// Undifferenced carrier-phase sigma √(a² + (b/sin el)²): a,b in metres (RTKLIB's
+    /// stats-errphase and stats-errphaseel).
+    #[arg(long, value_name = "A,B", default_value = "0.003,0.003")]
+    phase_sigma: String,
+    /// Code sigma over carrier-phase sigma (RTKLIB's stats-eratio1).
+    #[arg(long, value_name = "RATIO", default_value_t = 100.0, value_parser = positive)]
+    code_phase_ratio: f64,
     /// Receiver antenna calibrations (ANTEX) for the antenna types in the file headers
     /// (default: no phase-centre corrections).
     #[arg(long, value_name = "FILE")]
@@ -130,6 +152,17 @@ pub struct Args {
     /// R GLONASS (float ambiguities only).
     #[arg(long, value_name = "LIST", default_value = "G,E,C,J")]
     systems: String,
+    /// Options from a TOML file: each key a flag of this command without its dashes
+    /// (`elev-mask = 15`, `nav = ["a.nav", "b.nav"]`, `base-from-ppp = true`); relative paths
+    /// are read from the file's folder. Flags on the command line win over the file. An
+    /// unknown key is an error. See the README for an example.
+    #[arg(long, value_name = "FILE.toml")]
+    config: Option<PathBuf>,
+    /// Options from an RTKLIB configuration file (rnx2rtkp/RTKPOST .conf: pos1-*, pos2-*,
+    /// stats-*, out-*, ant2-*, file-rcvantfile). What was mapped to which flag, and what was
+    /// ignored, is printed; --config and the command line win over it.
+    #[arg(long, value_name = "FILE.conf")]
+    rtklib_conf: Option<PathBuf>,
     /// Layout of the output: an RTKLIB .pos in llh or xyz, or KML, GeoJSON or GPX (WGS84,
     /// heights as --height; times in UTC) with every epoch's time, Q, satellites and σ.
     #[arg(long, value_enum, default_value = "llh")]
@@ -231,9 +264,19 @@ pub fn run_job(args: Args) -> Result<pipeline::PpkReport> {
     let base_position = base_position(args.base_pos.as_deref(), args.base_llh.as_deref())?;
     let systems = systems(&args.systems)?;
     let elev_mask = elev_mask(args.elev_mask)?;
+    let ar_elev_mask = match args.ar_elev_mask {
+        Some(m) => super::elev_mask(m).context("--ar-elev-mask")?,
+        None => elev_mask,
+    };
+    let phase_sigma = super::pair("--phase-sigma", &args.phase_sigma)?;
     let options = PpkOptions {
         elev_mask,
-        ar_elev_mask: elev_mask,
+        ar_elev_mask,
+        ratio_threshold: args.ratio,
+        min_lock: args.min_lock,
+        max_age: args.max_age,
+        phase_sigma,
+        code_phase_ratio: args.code_phase_ratio,
         systems,
         motion: match args.mode {
             MotionArg::Kinematic => Motion::Kinematic,
@@ -283,6 +326,22 @@ pub fn run_job(args: Args) -> Result<pipeline::PpkReport> {
     let report = pipeline::ppk(&job, &bar);
     drop(bar);
     report.context("carrier-phase positioning failed")
+}
+
+/// A number of at least 1 (the ratio threshold).
+fn at_least_one(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v >= 1.0 && v.is_finite() => Ok(v),
+        _ => Err("give a number of at least 1".to_string()),
+    }
+}
+
+/// A finite number above 0.
+fn positive(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v > 0.0 && v.is_finite() => Ok(v),
+        _ => Err("give a number above 0".to_string()),
+    }
 }
 
 /// `--base-pos X,Y,Z` (ECEF metres) or `--base-llh LAT,LON,H`, else the header's position.

@@ -101,7 +101,7 @@ pub struct PpkOptions {
     pub max_age: f64,
     /// Gap after which an ambiguity is reset, seconds (0: five rover intervals, at least 5 s).
     pub max_gap: f64,
-    /// Undifferenced phase sigma a + b/sin(el), metres.
+    /// Undifferenced phase sigma √(a² + (b/sin el)²), metres (a, b).
     pub phase_sigma: (f64, f64),
     /// Code sigma over phase sigma.
     pub code_phase_ratio: f64,
