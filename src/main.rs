@@ -55,6 +55,7 @@ enum Cmd {
     Import(cmd::import::Args),
     Match(cmd::tiepoints::Args),
     Demo(cmd::demo::Args),
+    Batch(cmd::batch::Args),
     Bench(cmd::bench::Args),
 }
 
@@ -128,6 +129,7 @@ fn dispatch(cmd: Cmd, threads: Option<usize>) -> Result<()> {
         Cmd::Import(a) => cmd::import::run(a),
         Cmd::Match(a) => cmd::tiepoints::run(a),
         Cmd::Demo(a) => cmd::demo::run(a, threads),
+        Cmd::Batch(a) => cmd::batch::run(a),
         Cmd::Bench(a) => cmd::bench::run(a, threads),
     }
 }

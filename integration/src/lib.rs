@@ -23,6 +23,7 @@
 //! - [`simulate`]: a flight simulator (scenario → RINEX, navigation and truth files) and
 //!   simulated adjustment projects with truth (aerial block, close-range pair).
 //! - [`demo`]: the whole chain on a simulated flight, compared with the truth.
+//! - [`batch`]: flights found in subfolders (`ppkat batch`) and their summary table.
 //! - [`bench`](mod@bench): throughput and peak memory of ingest and adjustment.
 //!
 //! Dependency direction: `pipeline` and `demo` use `exposure`; `pipeline` uses `observations`, `orbits` and `survey`; `demo` and `bench` use
@@ -30,6 +31,7 @@
 //! radians unless a file says degrees, lengths metres.
 
 pub mod adjust;
+pub mod batch;
 pub mod bench;
 pub mod crs;
 pub mod demo;

@@ -110,6 +110,11 @@ pub struct Args {
     /// Output file (replaced if it exists).
     #[arg(short = 'o', long, value_name = "OUT")]
     out: PathBuf,
+    /// Options from a TOML file: each key a flag of this command without its dashes
+    /// (`lever-arm = [0.02, -0.01, 0.12]`, `format = "metashape"`); relative paths are read
+    /// from the file's folder; flags on the command line win over the file.
+    #[arg(long, value_name = "FILE.toml")]
+    config: Option<PathBuf>,
 }
 
 /// Time system of a CSV of times.
@@ -157,6 +162,20 @@ enum ExportArg {
 
 /// Convert the arguments into a [`pipeline::ExposureJob`], run it and print its report.
 pub fn run(args: Args) -> Result<()> {
+    let job = job(args)?;
+    if job.geotag.is_some() && !job.heights.orthometric() {
+        super::note("geotags with ellipsoidal heights: EXIF GPSAltitude means above sea level, so the copies carry no EXIF altitude; the ellipsoidal height is in their XMP (ppkat:Height, drone-dji:AbsoluteAltitude). Give --height egm96 or geoid:FILE for a sea-level EXIF altitude.");
+    }
+    let report = pipeline::exposures(&job).context("exposures failed")?;
+    print!("{report}");
+    if let Some(n) = &report.names_note {
+        super::note(n);
+    }
+    super::complete(report.skipped())
+}
+
+/// The library's job for the arguments.
+pub fn job(args: Args) -> Result<pipeline::ExposureJob> {
     let events = match (args.events, args.mrk, args.times) {
         (Some(p), _, _) => EventSource::Rinex(p),
         (_, Some(p), _) => EventSource::Mrk(p),
@@ -217,13 +236,5 @@ pub fn run(args: Args) -> Result<()> {
         names: args.names,
         geotag: args.geotag,
     };
-    if job.geotag.is_some() && !job.heights.orthometric() {
-        super::note("geotags with ellipsoidal heights: EXIF GPSAltitude means above sea level, so the copies carry no EXIF altitude; the ellipsoidal height is in their XMP (ppkat:Height, drone-dji:AbsoluteAltitude). Give --height egm96 or geoid:FILE for a sea-level EXIF altitude.");
-    }
-    let report = pipeline::exposures(&job).context("exposures failed")?;
-    print!("{report}");
-    if let Some(n) = &report.names_note {
-        super::note(n);
-    }
-    super::complete(report.skipped())
+    Ok(job)
 }

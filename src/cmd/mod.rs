@@ -4,6 +4,7 @@
 
 pub mod adjust;
 pub mod bal;
+pub mod batch;
 pub mod bench;
 pub mod config;
 pub mod convert;

@@ -261,6 +261,15 @@ pub fn run(args: Args) -> Result<()> {
 
 /// Run the job the arguments describe with a progress spinner; its report.
 pub fn run_job(args: Args) -> Result<pipeline::PpkReport> {
+    let job = job(args)?;
+    let bar = super::progress::Bar::new();
+    let report = pipeline::ppk(&job, &bar);
+    drop(bar);
+    report.context("carrier-phase positioning failed")
+}
+
+/// The library's job for the arguments.
+pub fn job(args: Args) -> Result<pipeline::PpkJob> {
     let base_position = base_position(args.base_pos.as_deref(), args.base_llh.as_deref())?;
     let systems = systems(&args.systems)?;
     let elev_mask = elev_mask(args.elev_mask)?;
@@ -322,10 +331,7 @@ pub fn run_job(args: Args) -> Result<pipeline::PpkReport> {
         out: args.out,
         report: args.report,
     };
-    let bar = super::progress::Bar::new();
-    let report = pipeline::ppk(&job, &bar);
-    drop(bar);
-    report.context("carrier-phase positioning failed")
+    Ok(job)
 }
 
 /// A number of at least 1 (the ratio threshold).

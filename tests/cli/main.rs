@@ -7,6 +7,7 @@
 
 mod adjust;
 mod bal;
+mod batch;
 mod config;
 mod convert;
 mod exposures;
