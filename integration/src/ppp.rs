@@ -42,6 +42,9 @@ pub struct PppJob {
     pub format: crate::vector::TrajectoryFormat,
     /// Output `.pos`.
     pub out: PathBuf,
+    /// Heights written (the trajectory file and, with an orthometric model, the static
+    /// summary's orthometric height beside the ellipsoidal one).
+    pub heights: crate::height::Heights,
 }
 
 /// What a PPP run did.
@@ -135,10 +138,10 @@ pub fn ppp(job: &PppJob, progress: &dyn gnss::progress::Progress) -> Result<PppR
         &report.header(job),
         &report.records(),
         job.format,
-        &crate::height::Heights::Ellipsoidal,
+        &job.heights,
     )?;
     let mut report = report;
-    if let Some(json) = report.json() {
+    if let Some(json) = report.json(&job.heights)? {
         let path = side_path(&job.out, ".json");
         write_atomic(&path, |w| w.write_all(json.as_bytes()))?;
         report.summary = Some(path);
@@ -307,13 +310,17 @@ impl PppReport {
     }
 
     /// The JSON summary of a static run.
-    fn json(&self) -> Option<String> {
-        let (pos, cov) = self.last?;
+    fn json(&self, heights: &crate::height::Heights) -> Result<Option<String>> {
+        let (Some((pos, cov)), Some(first), Some(lastep)) = (
+            self.last,
+            self.result.epochs.first(),
+            self.result.epochs.last(),
+        ) else {
+            return Ok(None);
+        };
         let g = pos.to_geodetic();
         let sd = enu_sigmas(&pos, &cov);
-        let first = self.result.epochs.first()?;
-        let lastep = self.result.epochs.last()?;
-        let v = json!({
+        let mut v = json!({
             "program": format!("ppkat {}", env!("CARGO_PKG_VERSION")),
             "mode": "ppp-static",
             "refers_to": refer_name(self.refer),
@@ -334,7 +341,8 @@ impl PppReport {
             "rejected": self.result.rejected.iter().map(|(k, n)| (k.describe().to_string(), *n)).collect::<std::collections::BTreeMap<_, _>>(),
             "ambiguity_restarts": self.result.slips,
         });
-        serde_json::to_string_pretty(&v).ok().map(|s| s + "\n")
+        crate::survey::add_orthometric(&mut v["position"], &g, heights)?;
+        Ok(serde_json::to_string_pretty(&v).ok().map(|s| s + "\n"))
     }
 }
 

@@ -35,7 +35,12 @@ pub(crate) fn refer_name(refer: Reference) -> &'static str {
 /// The JSON summary of a static solution: position (ECEF and geodetic), σ east/north/up,
 /// ENU and ECEF covariances, fix state, span, epochs and residuals; `base_marker` is the base
 /// position used.
-pub fn json(s: &StaticSolution, refer: Reference, base_marker: &Ecef) -> String {
+pub fn json(
+    s: &StaticSolution,
+    refer: Reference,
+    base_marker: &Ecef,
+    heights: &crate::height::Heights,
+) -> gnss::error::Result<String> {
     let g = s.pos.to_geodetic();
     let enu = enu_cov(&s.pos, &s.cov);
     let rows = |m: &Matrix3<f64>| -> Vec<[f64; 3]> {
@@ -71,7 +76,25 @@ pub fn json(s: &StaticSolution, refer: Reference, base_marker: &Ecef) -> String 
         },
         "base_marker_ecef_m": [base_marker.0.x, base_marker.0.y, base_marker.0.z],
     });
-    serde_json::to_string_pretty(&v).unwrap_or_default() + "\n"
+    let mut v = v;
+    add_orthometric(&mut v["position"], &g, heights)?;
+    Ok(serde_json::to_string_pretty(&v).unwrap_or_default() + "\n")
+}
+
+/// With an orthometric height model, add the orthometric height, the model and the geoid
+/// undulation to a JSON position (which keeps its ellipsoidal height).
+pub fn add_orthometric(
+    position: &mut serde_json::Value,
+    g: &gnss::frame::Geodetic,
+    heights: &crate::height::Heights,
+) -> gnss::error::Result<()> {
+    if heights.orthometric() {
+        let n = heights.undulation(g)?;
+        position["orthometric_height_m"] = json!(g.h - n);
+        position["height_model"] = json!(heights.short());
+        position["geoid_undulation_m"] = json!(n);
+    }
+    Ok(())
 }
 
 /// Report lines of a static solution.

@@ -73,6 +73,12 @@ pub struct Args {
     /// trajectory for Google Earth (kml), QGIS (geojson) or GPS tools (gpx).
     #[arg(long, value_enum, default_value = "xyz")]
     format: TrajectoryFormatArg,
+    /// Heights written: ellipsoidal (WGS84, GNSS's own), egm96 (orthometric above the EGM96
+    /// geoid, built in) or geoid:FILE (orthometric above a grid: GeographicLib .pgm, PROJ
+    /// .gtx, or text lines LAT LON N). The header says which; a static run's OUT.pos.json
+    /// keeps the ellipsoidal height and adds the orthometric one with the geoid undulation.
+    #[arg(long, value_name = "HEIGHT", default_value = "ellipsoidal", value_parser = super::height_arg)]
+    height: String,
     /// Output .pos file (replaced if it exists; not written on failure).
     #[arg(short = 'o', long, value_name = "OUT.pos")]
     out: PathBuf,
@@ -121,6 +127,7 @@ pub fn run(args: Args) -> Result<()> {
         options,
         format: args.format.into(),
         out: args.out,
+        heights: super::heights(&args.height)?,
     };
     let bar = super::progress::Bar::new();
     let report = ppp::ppp(&job, &bar);

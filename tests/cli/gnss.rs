@@ -131,6 +131,10 @@ fn ppk_static_writes_the_accumulated_position_and_a_summary() {
     assert_eq!(v["quality"], "fixed");
     assert_eq!(v["epochs"], 120);
     assert_eq!(v["refers_to"], "arp");
+    assert!(
+        v["position"]["orthometric_height_m"].is_null(),
+        "ellipsoidal only"
+    );
     let se = v["sigma_m"]["east"].as_f64().unwrap();
     assert!((0.002..0.01).contains(&se), "σ east {se}");
     assert!(v["residuals"]["phase"]["rms_m"].as_f64().unwrap() < 0.01);
@@ -138,6 +142,13 @@ fn ppk_static_writes_the_accumulated_position_and_a_summary() {
     let last = pos_rows(&out).pop().unwrap();
     let x: f64 = last[2].parse().unwrap();
     assert!((x - xyz[0]).abs() < 1e-3, "{x} vs {}", xyz[0]);
+    // With --height egm96 (llh) the summary adds the orthometric height.
+    let ortho = tmp("geonet-static-egm96.pos");
+    let args = [GEONET_BASE_POS, "--mode", "static", "--height", "egm96"];
+    succeeds(&ppk(&rover, &base, &[&nav], &ortho, &args));
+    let json = std::fs::read_to_string(ortho.with_extension("pos.json")).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    super::precise::assert_orthometric(&v["position"]);
 }
 
 /// `bench ppk` runs the job and reports the engine's time per epoch.

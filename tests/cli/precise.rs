@@ -242,6 +242,32 @@ fn ppp_static_and_ppk_base_from_ppp() {
         "the last line is the final one"
     );
 
+    // Orthometric: the llh .pos in EGM96 heights, the summary with both heights.
+    let ortho = tmp("onsa_ppp_egm96.pos");
+    let mut args = vec![
+        "ppp",
+        "--obs",
+        p(&f[0]),
+        "--format",
+        "llh",
+        "--height",
+        "egm96",
+    ];
+    args.extend(["-o", p(&ortho)]);
+    args.extend(sp3_flags(&f));
+    args.extend(["--antex", p(&atx01), "--antex", p(&atx05)]);
+    succeeds(&ppkat(&args));
+    let pos = std::fs::read_to_string(&ortho).unwrap();
+    assert!(pos.contains("height=WGS84/geodetic(EGM96)"), "{pos}");
+    let sum: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(format!("{}.json", ortho.display())).unwrap(),
+    )
+    .unwrap();
+    assert_orthometric(&sum["position"]);
+    // ONSA's marker lies about 9 m above sea level (36.5 m of EGM96 undulation).
+    let big_h = sum["position"]["orthometric_height_m"].as_f64().unwrap();
+    assert!((big_h - 9.03).abs() < 0.05, "{big_h}");
+
     // Kinematic PPP as GeoJSON: a point per epoch besides the track.
     let gj = tmp("onsa_ppp_kin.geojson");
     let mut args = vec![
@@ -307,4 +333,26 @@ fn ppp_static_and_ppk_base_from_ppp() {
         err < 0.05,
         "zero-baseline rover from the PPP base: 3D error {err} m"
     );
+}
+
+/// A summary position with `--height egm96`: the ellipsoidal height kept, the EGM96 geoid
+/// undulation at the point beside it, and H = h − N.
+pub(crate) fn assert_orthometric(pos: &serde_json::Value) {
+    let num = |k: &str| pos[k].as_f64().unwrap_or_else(|| panic!("no {k}: {pos}"));
+    let (lat, lon, h) = (
+        num("latitude_deg"),
+        num("longitude_deg"),
+        num("ellipsoidal_height_m"),
+    );
+    let g = ::gnss::frame::Geodetic::from_degrees(lat, lon, h);
+    let n = ::integration::height::Heights::Egm96
+        .undulation(&g)
+        .unwrap();
+    assert_eq!(pos["height_model"], "EGM96");
+    assert!((num("geoid_undulation_m") - n).abs() < 1e-6, "{pos}");
+    assert!(
+        (num("orthometric_height_m") - (h - n)).abs() < 1e-6,
+        "{pos}"
+    );
+    assert!(n.abs() > 1.0, "a real undulation: {n}");
 }

@@ -453,7 +453,7 @@ pub fn ppk(job: &PpkJob, progress: &dyn gnss::progress::Progress) -> Result<PpkR
     let mut summary = None;
     if let Some(st) = &result.static_solution {
         let path = side_path(&job.out, ".json");
-        let text = crate::survey::json(st, o.refer, &result.base_marker);
+        let text = crate::survey::json(st, o.refer, &result.base_marker, &job.heights)?;
         gnss::solution::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
         summary = Some(path);
     }
