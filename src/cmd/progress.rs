@@ -51,6 +51,10 @@ impl Progress for Bar {
                 bar.set_style(style.progress_chars("=> "));
             }
             bar.set_message(stage.to_string());
+            if len == 0 {
+                // A stage of unknown length (reading a file) spins on its own.
+                bar.enable_steady_tick(std::time::Duration::from_millis(120));
+            }
             *b = Some(bar);
         });
     }

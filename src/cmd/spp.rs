@@ -92,7 +92,10 @@ pub fn run(args: Args) -> Result<()> {
         heights: super::heights(&args.height)?,
         out: args.out,
     };
-    let report = pipeline::spp(&job).context("single-point positioning failed")?;
+    let bar = super::progress::Bar::new();
+    let report = pipeline::spp(&job, &bar);
+    drop(bar);
+    let report = report.context("single-point positioning failed")?;
     for n in &report.notes {
         eprintln!("note: {n}");
     }

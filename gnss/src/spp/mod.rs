@@ -188,9 +188,24 @@ pub struct SppRun {
 
 /// Solve every epoch in order, each starting from the previous solution.
 pub fn run(epochs: &[ObsEpoch], header: &ObsHeader, orbits: &Orbits, opts: &SppOptions) -> SppRun {
+    run_with_progress(epochs, header, orbits, opts, &crate::progress::NoProgress)
+}
+
+/// [`run`], counting the epochs done on `progress` (stage "single point").
+pub fn run_with_progress(
+    epochs: &[ObsEpoch],
+    header: &ObsHeader,
+    orbits: &Orbits,
+    opts: &SppOptions,
+    progress: &dyn crate::progress::Progress,
+) -> SppRun {
     let mut out = SppRun::default();
     let mut prior = header.approx_position;
-    for e in epochs {
+    progress.set_len("single point", epochs.len() as u64);
+    for (i, e) in epochs.iter().enumerate() {
+        if i % 256 == 255 {
+            progress.inc(256);
+        }
         match solve_epoch(e, header, orbits, opts, prior) {
             Ok(s) => {
                 for (_, r) in &s.rejected {
@@ -207,5 +222,6 @@ pub fn run(epochs: &[ObsEpoch], header: &ObsHeader, orbits: &Orbits, opts: &SppO
             }
         }
     }
+    progress.finish();
     out
 }

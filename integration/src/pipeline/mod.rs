@@ -102,10 +102,11 @@ fn nothing_solved(what: &str, epochs: usize, reasons: Vec<String>, details: &[St
     ))
 }
 
-/// Run single-point positioning over a file and write the `.pos` output; `Err` when no
-/// epoch is solved.
-pub fn spp(job: &SppJob) -> Result<SppReport> {
+/// Run single-point positioning over a file and write the `.pos` output; `progress` shows
+/// the reading and counts the epochs solved. `Err` when no epoch is solved.
+pub fn spp(job: &SppJob, progress: &dyn gnss::progress::Progress) -> Result<SppReport> {
     gnss::atomic::clean_stale(&job.out);
+    progress.set_len("reading the observations", 0);
     let input = read_observations(&job.obs, job.obs_format, job.time_hint)?;
     let log_nav = input.nav.as_ref();
     let notes = log_notes(&[&input], &job.nav);
@@ -116,7 +117,8 @@ pub fn spp(job: &SppJob) -> Result<SppReport> {
     warnings.extend(input.warnings);
     warnings.extend(check_glonass_channels(&obs, &orbits, &job.options.systems)?);
     warnings.extend(file_warnings(&obs));
-    let run = gnss::spp::run(&obs.epochs, &obs.header, &orbits, &job.options);
+    let run =
+        gnss::spp::run_with_progress(&obs.epochs, &obs.header, &orbits, &job.options, progress);
     let records: Vec<PosRecord> = run
         .solutions
         .iter()
@@ -337,6 +339,7 @@ pub(crate) fn side_path(out: &std::path::Path, ext: &str) -> PathBuf {
 pub fn ppk(job: &PpkJob, progress: &dyn gnss::progress::Progress) -> Result<PpkReport> {
     let t0 = std::time::Instant::now();
     gnss::atomic::clean_stale(&job.out);
+    progress.set_len("reading rover and base", 0);
     let rover_in = read_observations(&job.rover, job.obs_format, job.time_hint)?;
     let base_in = read_observations(&job.base, job.obs_format, job.time_hint)?;
     let (rover, base) = (&rover_in.obs, &base_in.obs);
@@ -380,6 +383,7 @@ pub fn ppk(job: &PpkJob, progress: &dyn gnss::progress::Progress) -> Result<PpkR
         gnss::ppk::BasePosition::Given(p) => Some(p),
         gnss::ppk::BasePosition::Header => base.header.approx_position,
     };
+    progress.set_len("checking which receiver moves (single point)", 0);
     swap::check(
         (&job.rover, rover),
         (&job.base, base),
