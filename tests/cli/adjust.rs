@@ -98,9 +98,39 @@ fn adjust_a_simulated_block_end_to_end() {
         "{t}"
     );
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
-    assert_eq!(html.matches("<svg").count(), 4, "four plots");
+    assert_eq!(html.matches("<svg").count(), 5, "five plots");
     let json = std::fs::read_to_string(out.join("report.json")).unwrap();
     assert!(json.contains("\"checks\"") && json.contains("\"removed\""));
+    // Residuals: the pattern over the format, and the images as small multiples, the one
+    // with the largest RMS first, captioned with the RMS the images table gives.
+    assert!(html.contains("Image residuals: systematic pattern over the format"));
+    assert!(html.contains("the 24 of 29 images with the largest RMS"));
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let worst = v["images"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .max_by(|a, b| {
+            a["rms_px"]
+                .as_f64()
+                .unwrap()
+                .total_cmp(&b["rms_px"].as_f64().unwrap())
+        })
+        .unwrap();
+    let caption = format!(
+        "{}: {:.2} px, {} pts",
+        worst["id"].as_str().unwrap(),
+        worst["rms_px"].as_f64().unwrap(),
+        worst["points"]
+    );
+    let at = html
+        .find(&caption)
+        .expect("a panel captioned as the images table says");
+    assert_eq!(
+        html.find(" pts"),
+        Some(at + caption.len() - 4),
+        "the worst image first"
+    );
     let orient = std::fs::read_to_string(out.join("orientations.csv")).unwrap();
     assert_eq!(orient.lines().filter(|l| !l.starts_with('#')).count(), 30);
     // A project naming a missing table: the file is named, no outputs.

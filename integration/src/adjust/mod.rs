@@ -30,6 +30,7 @@ mod parameters;
 pub mod project;
 mod quality;
 pub mod report;
+mod residual_plots;
 pub mod residuals;
 pub mod results;
 pub mod solve;

@@ -350,7 +350,7 @@ fn html_checks(s: &mut String, r: &Results) {
 /// The SVG plots.
 fn html_plots(s: &mut String, p: &Project, r: &Results) {
     let _ = writeln!(s, "<h2>Plots</h2>");
-    s.push_str(&plot_image_residuals(p, r));
+    s.push_str(&super::residual_plots::image_residual_plots(p, r));
     if !r.checks.points.is_empty() {
         s.push_str(&plot_checks(r));
     }
@@ -380,30 +380,6 @@ fn html_images(s: &mut String, r: &Results) {
         };
         let _ = writeln!(s, "<tr><td>{}</td><td>{}</td>{xy}<td>{:.3}</td><td>{:.4}</td><td>{:.4}</td><td>{:.4}</td>{}{}<td>{}</td><td>{:.2}</td></tr>", i.id, i.strip, i.position.h, i.opk_deg[0], i.opk_deg[1], i.opk_deg[2], f3(i.sigma_centre, 1.0, 3), f3(i.sigma_angles_deg, 1.0, 4), i.points, i.rms_px);
     }
-}
-
-/// Residual vectors of all images in the image format (pixels), exaggerated.
-fn plot_image_residuals(p: &Project, r: &Results) -> String {
-    let cam = &p.cameras[0].camera;
-    let (w, h) = (cam.width_px as f64, cam.height_px as f64);
-    let vmax = r
-        .image_residuals
-        .iter()
-        .map(|v| v.v_px[0].hypot(v.v_px[1]))
-        .fold(1e-9, f64::max);
-    let k = 0.05 * w / vmax;
-    svg(
-        &format!("Image residuals, all images (vectors × {k:.0}; largest {vmax:.2} px)"),
-        |root| {
-            let mut ch = axes(root, 0.0..w, h..0.0, ("x (px)", "y (px)"), 50)?;
-            ch.draw_series(r.image_residuals.iter().map(|v| {
-                let a = (v.px[0], v.px[1]);
-                let b = (v.px[0] + k * v.v_px[0], v.px[1] + k * v.v_px[1]);
-                PathElement::new(vec![a, b], BLUE.stroke_width(1))
-            }))?;
-            Ok(())
-        },
-    )
 }
 
 /// Check-point errors: horizontal vectors at the points, height error as a coloured dot.
