@@ -216,4 +216,50 @@ fn killed_geotag_leaves_the_earlier_folder_whole() {
         p(&csv),
     ];
     killed_runs_leave_the_folder_whole(&args, &work, &out, 18);
+    // The stations file and the folder: the folder is swapped in only after the file, so a
+    // killed run never leaves new tagged photos beside an old stations file.
+    let new_csv = std::fs::read(&csv).unwrap();
+    let new_dir = contents(&out);
+    for ms in MOMENTS_MS {
+        mark_old(&csv);
+        for n in names(&out) {
+            mark_old(&out.join(n));
+        }
+        let old_dir = contents(&out);
+        kill_after(&args, Duration::from_millis(ms));
+        if !out.exists() {
+            succeeds_or_skips(&ppkat(&args));
+            continue;
+        }
+        let (csv_now, dir_now) = (std::fs::read(&csv).unwrap(), contents(&out));
+        let csv_new = csv_now == new_csv;
+        assert!(
+            csv_new || csv_now.ends_with(b"# old run\n"),
+            "killed at {ms} ms: a partial csv"
+        );
+        assert!(
+            dir_now == new_dir || dir_now == old_dir,
+            "killed at {ms} ms: a mixed folder"
+        );
+        assert!(
+            csv_new || dir_now == old_dir,
+            "killed at {ms} ms: new tagged photos beside the old stations file"
+        );
+        succeeds_or_skips(&ppkat(&args));
+    }
+    // A stations file that cannot be written: the run fails and the folder stays as it was.
+    for n in names(&out) {
+        mark_old(&out.join(n));
+    }
+    let old_dir = contents(&out);
+    let mut bad = args;
+    let nowhere = work.join("missing-folder").join("stations.csv");
+    bad[bad.len() - 1] = p(&nowhere);
+    fails_with(&ppkat(&bad), &["missing-folder"]);
+    assert_eq!(
+        contents(&out),
+        old_dir,
+        "tagged copies swapped in for a failed run"
+    );
+    assert_eq!(names(&work), ["tagged"], "the staged copies are removed");
 }

@@ -157,6 +157,21 @@ pub fn geotag(
     out_dir: &Path,
     heights: &Heights,
 ) -> Result<Geotagged> {
+    let (done, staged) = geotag_staged(photos, stations, out_dir, heights)?;
+    staged.commit()?;
+    Ok(done)
+}
+
+/// [`geotag`] without the last step: the tagged copies wait in the returned staging folder,
+/// which [`gnss::atomic::StagedDir::commit`] swaps in (dropped, it is removed and `out_dir`
+/// stays as it was). So a caller writing another output beside them commits both at the end,
+/// one right after the other.
+pub fn geotag_staged(
+    photos: &[Photo],
+    stations: &[CameraStation],
+    out_dir: &Path,
+    heights: &Heights,
+) -> Result<(Geotagged, gnss::atomic::StagedDir)> {
     for p in photos {
         let dest = out_dir.join(&p.name);
         let folder = p.path.parent().filter(|d| !d.as_os_str().is_empty());
@@ -196,8 +211,7 @@ pub fn geotag(
             Err(why) => done.skipped.push((p.path.clone(), why)),
         }
     }
-    staged.commit()?;
-    Ok(done)
+    Ok((done, staged))
 }
 
 /// Whether two paths name one existing file (a folder reached by another name).

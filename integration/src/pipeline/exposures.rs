@@ -95,13 +95,19 @@ pub fn exposures(job: &ExposureJob) -> Result<ExposureReport> {
     }
     let mut photo_problems = naming.problems;
     let mut geotagged = 0;
+    let mut staged = None;
     if let (Some(g), Some(Ok(m))) = (&job.geotag, &naming.photos) {
         let (photos, stations) = paired(m, &result.stations);
-        let done = crate::exposure::photos::geotag(&photos, &stations, g, &job.heights)?;
+        let (done, dir) =
+            crate::exposure::photos::geotag_staged(&photos, &stations, g, &job.heights)?;
         geotagged = done.written.len();
+        staged = Some(dir);
         photo_problems.retain(|(p, _)| !done.skipped.iter().any(|(q, _)| p == q));
         photo_problems.extend(done.skipped);
     }
+    // The tagged copies wait staged until the stations file is written, then are swapped in
+    // right after it: a run killed on the way leaves both outputs old, or (in the moment
+    // between the two renames) the new file beside the old folder.
     export::write(
         &job.out,
         &result.stations,
@@ -109,6 +115,9 @@ pub fn exposures(job: &ExposureJob) -> Result<ExposureReport> {
         job.projection,
         &job.heights,
     )?;
+    if let Some(dir) = staged {
+        dir.commit()?;
+    }
     Ok(ExposureReport {
         result,
         events: n,
