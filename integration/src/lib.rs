@@ -23,6 +23,7 @@
 //! - [`simulate`]: a flight simulator (scenario → RINEX, navigation and truth files) and
 //!   simulated adjustment projects with truth (aerial block, close-range pair).
 //! - [`demo`]: the whole chain on a simulated flight, compared with the truth.
+//! - [`rtklib_conf`]: an RTKLIB configuration file's options as `ppkat ppk` flags.
 //! - [`batch`]: flights found in subfolders (`ppkat batch`) and their summary table.
 //! - [`bench`](mod@bench): throughput and peak memory of ingest and adjustment.
 //!
@@ -47,6 +48,7 @@ mod plot;
 mod ppk_report;
 pub mod ppp;
 mod ppp_report;
+pub mod rtklib_conf;
 pub mod simulate;
 pub mod survey;
 pub mod tiepoints;

@@ -5,8 +5,8 @@
 //! texts, and a flag on the command line wins over both files (the TOML file wins over the
 //! RTKLIB one). A list-valued flag given on the command line replaces the file's list.
 
-use super::rtklib_conf;
 use clap::{ArgAction, Command};
+use integration::rtklib_conf::{self, resolve, Setting};
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 
@@ -37,15 +37,6 @@ impl ConfigError {
             2
         }
     }
-}
-
-/// One option from a file: the flag's long name, its values and the file it came from.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Setting {
-    /// Long flag name without dashes, e.g. `elev-mask`.
-    pub flag: String,
-    /// The values: one per repetition of a list flag, else one (`"true"` for a switch).
-    pub values: Vec<String>,
 }
 
 /// Expand the option files named on `argv` (the process's arguments, program name first)
@@ -243,16 +234,6 @@ fn toml_values(arg: &clap::Arg, value: &toml::Value, dir: &Path) -> Option<Vec<S
             parts.map(|p| vec![p.join(",")])
         }
         (v, _) => scalar(v).map(|v| vec![v]),
-    }
-}
-
-/// A path from an options file: relative ones are read from the file's folder.
-pub fn resolve(dir: &Path, path: &str) -> String {
-    let p = Path::new(path);
-    if p.is_relative() && !dir.as_os_str().is_empty() {
-        dir.join(p).to_string_lossy().to_string()
-    } else {
-        path.to_string()
     }
 }
 

@@ -16,7 +16,6 @@ pub mod leverarm;
 pub mod ppk;
 pub mod ppp;
 pub mod progress;
-pub mod rtklib_conf;
 pub mod simulate;
 pub mod spp;
 pub mod tiepoints;

@@ -1,13 +1,31 @@
-//! `--rtklib-conf FILE.conf`: the options of an RTKLIB configuration file (as rnx2rtkp and
-//! RTKPOST write them, `key =value # comment`) mapped to the flags of `ppkat ppk`.
+//! `ppkat ppk --rtklib-conf FILE.conf`: the options of an RTKLIB configuration file (as
+//! rnx2rtkp and RTKPOST write them, `key =value # comment`) mapped to the flags of `ppkat ppk`.
 //!
 //! Enumerated values are read by name or by number, as RTKLIB reads them. Only options with
 //! an equivalent are mapped; every other one is listed as ignored, so nothing is dropped
 //! silently.
 
-use super::config::{resolve, Setting};
 use std::collections::BTreeMap;
 use std::path::Path;
+
+/// One option for a command, as the flag that sets it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Setting {
+    /// Long flag name without dashes, e.g. `elev-mask`.
+    pub flag: String,
+    /// The values: one per repetition of a list flag, else one (`"true"` for a switch).
+    pub values: Vec<String>,
+}
+
+/// A path from an options file: relative ones are read from the file's folder `dir`.
+pub fn resolve(dir: &Path, path: &str) -> String {
+    let p = Path::new(path);
+    if p.is_relative() && !dir.as_os_str().is_empty() {
+        dir.join(p).to_string_lossy().to_string()
+    } else {
+        path.to_string()
+    }
+}
 
 /// What a configuration file sets: the flags, and the notes on what was mapped and ignored.
 #[derive(Debug, Default)]
@@ -40,6 +58,7 @@ impl Mapped {
         n
     }
 
+    /// Set `--flag to` for the option `key=value`.
     fn set(&mut self, key: &str, value: &str, flag: &str, to: String) {
         self.mapped.push(format!("{key}={value} → --{flag} {to}"));
         self.settings.retain(|s| s.flag != flag);
@@ -49,6 +68,7 @@ impl Mapped {
         });
     }
 
+    /// List `key=value` as ignored, with the reason.
     fn ignore(&mut self, key: &str, value: &str, why: &str) {
         self.ignored.push(format!("{key}={value} ({why})"));
     }
