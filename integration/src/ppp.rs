@@ -42,6 +42,10 @@ pub struct PppJob {
     pub format: crate::vector::TrajectoryFormat,
     /// Output `.pos`.
     pub out: PathBuf,
+    /// The observation file's format (`None`: told from the content).
+    pub obs_format: Option<gnss::obs::ObsFormat>,
+    /// When an RTCM 3 log was recorded (its week), if given.
+    pub time_hint: Option<gnss::raw::TimeHint>,
     /// Heights written (the trajectory file and, with an orthometric model, the static
     /// summary's orthometric height beside the ellipsoidal one).
     pub heights: crate::height::Heights,
@@ -80,8 +84,8 @@ pub fn ppp(job: &PppJob, progress: &dyn gnss::progress::Progress) -> Result<PppR
     for ext in ["", ".json", ".ztd.csv", ".html"] {
         gnss::atomic::clean_stale(&side_path(&job.out, ext));
     }
-    // RINEX or a raw receiver log, told from the content.
-    let input = crate::observations::read_observations(&job.obs, None, None)?;
+    // RINEX or a raw receiver log, told from the content unless the job says.
+    let input = crate::observations::read_observations(&job.obs, job.obs_format, job.time_hint)?;
     let obs = input.obs;
     gnss::ppk::require_phase(&obs, "observation")?;
     let log_nav = input.nav.as_ref();

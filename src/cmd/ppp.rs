@@ -1,6 +1,6 @@
 //! `ppkat ppp`: precise point positioning of one receiver.
 
-use super::{elev_mask, systems, TrajectoryFormatArg};
+use super::{elev_mask, systems, ObsFormatArg, TimeHintArgs, TrajectoryFormatArg};
 use anyhow::{Context, Result};
 use clap::ValueEnum;
 use integration::gnss::ppk::{Motion, Reference};
@@ -35,9 +35,14 @@ use std::path::PathBuf;
 #[derive(clap::Args)]
 pub struct Args {
     /// Observation file with two frequencies of code and phase: RINEX 2/3/4 (Hatanaka, gzip)
-    /// or a u-blox UBX log (RXM-RAWX), told from the content.
+    /// or a raw receiver log (u-blox UBX RXM-RAWX, RTCM 3 MSM), told from the content.
     #[arg(long, value_name = "FILE")]
     obs: PathBuf,
+    /// Format of the observation file; auto tells it from its content.
+    #[arg(long, value_enum, value_name = "FORMAT", default_value = "auto")]
+    obs_format: ObsFormatArg,
+    #[command(flatten)]
+    time: TimeHintArgs,
     /// Precise orbits (SP3-a/b/c/d, plain or gzip); give the flag once per file: the
     /// previous, current and next day's files cover the day's edges.
     #[arg(long, value_name = "FILE", required = true)]
@@ -128,6 +133,8 @@ pub fn run(args: Args) -> Result<()> {
         format: args.format.into(),
         out: args.out,
         heights: super::heights(&args.height)?,
+        obs_format: args.obs_format.into(),
+        time_hint: args.time.hint(),
     };
     let bar = super::progress::Bar::new();
     let report = ppp::ppp(&job, &bar);

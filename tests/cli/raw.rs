@@ -268,4 +268,17 @@ fn rtcm_logs_carry_their_orbits_and_base_station() {
         &ppkat(&["info", p(&base), "--date-hint", "2001-01-01"]),
         &["contradicts the log"],
     );
+    // ppp reads the log with the hint it is given, too (the SP3 is never reached).
+    let o = ppkat(&[
+        "ppp",
+        "--obs",
+        p(&base),
+        "--sp3",
+        p(&dir.join("none.sp3")),
+        "--date-hint",
+        "2001-01-01",
+        "-o",
+        p(&dir.join("ppp.pos")),
+    ]);
+    fails_with(&o, &["contradicts the log"]);
 }
