@@ -95,8 +95,13 @@ pub(super) fn problem(
     }
     let point_names: Vec<String> = rays.keys().map(|s| s.to_string()).collect();
     let mut single_ray = Vec::new();
+    // Ground points by id (the first of an id), looked up once per point, not scanned.
+    let mut ground_of = std::collections::BTreeMap::new();
+    for g in &p.ground {
+        ground_of.entry(g.id.as_str()).or_insert(g);
+    }
     for (k, (id, ks)) in rays.iter().enumerate() {
-        let ground = p.ground.iter().find(|g| g.id == *id);
+        let ground = ground_of.get(*id).copied();
         if ground.is_some_and(|g| g.kind == PointKind::Check) {
             // Check points stay independent: intersected after the adjustment.
             continue;
