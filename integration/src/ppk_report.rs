@@ -1,8 +1,9 @@
 //! `ppk … --report OUT.html`: a self-contained page (inline SVG, no scripts, no network)
 //! showing where a carrier-phase run fixed and where it did not — the ground track coloured
 //! by Q with the rover's exposure events, time series of the satellites, the ratio, the σ
-//! east/north/up and the age of the base, the fix rate per Q, the ambiguity segments and the
-//! settings the run used.
+//! east/north/up, the forward − backward separation, the ambiguity resets of each pass and
+//! the age of the base, the fix rate per Q, the ambiguity segments and the settings the run
+//! used.
 //!
 //! Enters: a [`PpkReport`] (after the run), the `.pos` header lines (the settings) and the
 //! rover's flag-5 event times. Leaves: the HTML text. Legends are HTML above each plot, so
@@ -117,6 +118,8 @@ pub fn html(r: &PpkReport, settings: &[String], events: &[Epoch]) -> String {
     s += &ground_track(tr, events);
     s += &satellites_and_ratio(tr, &axis);
     s += &sigmas(tr, &axis);
+    s += &separation(&r.result.diagnostics, &axis, &r.result.base_marker);
+    s += &resets(&r.result.diagnostics, &axis);
     s += &age(tr, &axis);
     s += &segment_table(tr);
     s += &settings_table(settings);
@@ -339,6 +342,109 @@ fn sigmas(tr: &Trajectory, axis: &TimeAxis) -> String {
                 sig.iter().map(|p| (p.0, p.1[k].log10())),
                 c,
             ))?;
+        }
+        Ok(())
+    });
+    s
+}
+
+/// Forward minus backward solution, east/north/up in centimetres: where the two passes
+/// disagree, at least one of them is wrong (GrafNav's "combined separation"). `origin`
+/// orients east/north/up.
+fn separation(d: &gnss::ppk::PassDiagnostics, axis: &TimeAxis, origin: &Ecef) -> String {
+    let title = "Forward − backward separation (cm)";
+    if d.separation.is_empty() {
+        return format!("<h3>{title}</h3><p>One pass only: nothing to compare.</p>\n");
+    }
+    let r = enu_rotation(&origin.to_geodetic());
+    let k = d.separation.len().div_ceil(MAX_POINTS).max(1);
+    let pts: Vec<(f64, [f64; 3])> = d
+        .separation
+        .iter()
+        .step_by(k)
+        .map(|x| {
+            let e = r * x.d * 100.0;
+            (axis.x(x.time), [e.x, e.y, e.z])
+        })
+        .collect();
+    let xr = range(pts.iter().map(|p| p.0));
+    let largest = |fixed: bool| {
+        d.separation
+            .iter()
+            .filter(|x| x.both_fixed || !fixed)
+            .map(|x| x.d.norm() * 100.0)
+            .fold(0.0, f64::max)
+    };
+    let (big, big_fixed) = (largest(false), largest(true));
+    let lim = pts
+        .iter()
+        .flat_map(|p| p.1)
+        .fold(1.0f64, |m, v| m.max(v.abs()))
+        * 1.1;
+    let names = [
+        ("east", RGBColor(210, 30, 30)),
+        ("north", RGBColor(40, 90, 220)),
+        ("up", RGBColor(0, 150, 60)),
+    ];
+    let mut s = legend(&names.map(|(n, c)| (n.to_string(), c, "━")));
+    s += &svg_sized(
+        &format!(
+            "{title}: largest {big:.1} cm (3D); {big_fixed:.1} cm where both passes are fixed"
+        ),
+        (900, 300),
+        |root| {
+            let mut ch = axes(root, xr.0..xr.1, -lim..lim, (&axis.desc, "cm"), 50)?;
+            for (k, (_, c)) in names.iter().enumerate() {
+                ch.draw_series(LineSeries::new(pts.iter().map(|p| (p.0, p.1[k])), c))?;
+            }
+            Ok(())
+        },
+    );
+    s
+}
+
+/// Ambiguity resets (slips, gaps, outliers) per epoch of each pass.
+fn resets(d: &gnss::ppk::PassDiagnostics, axis: &TimeAxis) -> String {
+    let passes = [
+        ("forward", RGBColor(40, 90, 220), &d.forward_resets),
+        ("backward", RGBColor(240, 140, 0), &d.backward_resets),
+    ];
+    let total = |v: &[(Epoch, u32)]| v.iter().map(|x| x.1 as u64).sum::<u64>();
+    let entries: Vec<(String, RGBColor, &str)> = passes
+        .iter()
+        .filter(|p| !p.2.is_empty())
+        .map(|(n, c, v)| {
+            (
+                format!("{n} ({} resets at {} epochs)", total(v), v.len()),
+                *c,
+                "●",
+            )
+        })
+        .collect();
+    let title = "Ambiguity resets per epoch (cycle slips, gaps, outliers)";
+    if entries.is_empty() {
+        return format!("<h3>{title}</h3><p>No ambiguity was reset.</p>\n");
+    }
+    let xs = passes.iter().flat_map(|p| p.2.iter().map(|x| axis.x(x.0)));
+    let xr = range(xs);
+    let top = passes
+        .iter()
+        .flat_map(|p| p.2.iter().map(|x| x.1))
+        .max()
+        .unwrap_or(1) as f64
+        * 1.15;
+    let mut s = legend(&entries);
+    s += &svg_sized(title, (900, 240), |root| {
+        let mut ch = axes(root, xr.0..xr.1, 0.0..top, (&axis.desc, "resets"), 50)?;
+        for (k, (_, c, v)) in passes.iter().enumerate() {
+            // Backward marks a little to the right of forward ones at the same epoch.
+            let dx = (xr.1 - xr.0) * 0.002 * k as f64;
+            ch.draw_series(v.iter().map(|(t, n)| {
+                PathElement::new(
+                    vec![(axis.x(*t) + dx, 0.0), (axis.x(*t) + dx, *n as f64)],
+                    c.stroke_width(2),
+                )
+            }))?;
         }
         Ok(())
     });

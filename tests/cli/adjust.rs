@@ -9,7 +9,7 @@ fn simulate_project(name: &str, dir: &Path) -> String {
 }
 
 /// The numbers of a report line, parentheses and commas ignored.
-fn numbers(line: &str) -> Vec<f64> {
+pub(super) fn numbers(line: &str) -> Vec<f64> {
     line.replace(['(', ')', ','], " ")
         .split_whitespace()
         .filter_map(|w| w.parse().ok())

@@ -1,6 +1,7 @@
 //! Outputs other tools read: the PPK quality report (HTML), and trajectories as KML, GeoJSON
 //! and GPX holding the same epochs and coordinates as the `.pos`.
 
+use super::adjust::numbers;
 use super::*;
 
 /// `ppk --report`: a self-contained page with its plots and the fix-rate table of the run.
@@ -29,8 +30,42 @@ fn ppk_report_is_written_with_its_plots() {
         "{t}"
     );
     let page = std::fs::read_to_string(&html).unwrap();
-    // Ground track, satellites, ratio, σ E/N/U, age.
-    assert_eq!(page.matches("<svg").count(), 5, "five plots");
+    // Ground track, satellites, ratio, σ E/N/U, separation, resets, age.
+    assert_eq!(page.matches("<svg").count(), 7, "seven plots");
+    // Where both passes are fixed they agree within the 5 cm the combination demands of an
+    // epoch it calls fixed (all 120 are; measured 2.2 cm at most, partial fixes near the end
+    // where 5–6 satellites remain). At the ends one pass is still float: decimetres apart.
+    let title = page
+        .find("separation (cm): largest ")
+        .map(|at| &page[at..at + 120])
+        .expect("a separation plot");
+    let nums = numbers(title);
+    assert!(
+        nums[1] < 5.0,
+        "both fixed, yet {} cm apart: {title}",
+        nums[1]
+    );
+    assert!(nums[0] > 10.0 * nums[1], "a float pass end shows: {title}");
+    // The resets drawn are those the run reports (slips of every cause + post-fit outliers).
+    for pass in ["forward", "backward"] {
+        let line = t
+            .lines()
+            .find(|l| {
+                l.trim_start()
+                    .starts_with(&format!("{pass}: ambiguity resets"))
+            })
+            .unwrap();
+        let n = numbers(line);
+        let total = n[0]
+            + line
+                .split("post-fit outliers ")
+                .nth(1)
+                .map_or(0.0, |x| numbers(x)[0]);
+        assert!(
+            page.contains(&format!("{pass} ({} resets at ", total as u64)),
+            "{pass}: {line}"
+        );
+    }
     for needle in [
         "Ground track",
         "Satellites used",

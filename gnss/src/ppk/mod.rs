@@ -37,7 +37,7 @@ pub mod tight;
 
 pub use measure::GateReason;
 pub use options::{ArMode, BasePosition, Estimate, FilterMode, Motion, PpkOptions, Reference};
-pub use output::{EpochSol, Models, PassStats, PpkResult, Spread, StaticSolution};
+pub use output::{EpochSol, Models, PassDiagnostics, PassStats, PpkResult, Spread, StaticSolution};
 
 use crate::error::{Error, Result};
 use crate::frame::{enu_rotation, Ecef};
@@ -211,6 +211,8 @@ struct PassOutput {
     sols: Vec<Option<EpochSol>>,
     stats: PassStats,
     priors: Vec<Option<smooth::Prior>>,
+    /// Rover epochs (index) at which ambiguities were reset, with how many, in pass order.
+    resets: Vec<(usize, u32)>,
 }
 
 /// One pass of the filter over every rover epoch (forward or backward in time). With
@@ -227,6 +229,7 @@ fn run_pass(
         sols: vec![None; n],
         stats: PassStats::default(),
         priors: Vec::new(),
+        resets: Vec::new(),
     };
     let order: Box<dyn Iterator<Item = usize>> = if backward {
         Box::new((0..n).rev())
@@ -246,6 +249,7 @@ fn run_pass(
             base: crossed(&inputs.base_breaks, prev_j, j),
         };
         (prev_i, prev_j) = (Some(i), Some(j));
+        let resets_before = f.stats.resets();
         out.sols[i] = f.step(
             inputs.rover_epoch(i),
             inputs.base_epoch(j),
@@ -256,6 +260,10 @@ fn run_pass(
         if let Some(p) = f.take_prior() {
             out.priors.resize_with(n, || None);
             out.priors[i] = Some(p);
+        }
+        let reset = f.stats.resets().saturating_sub(resets_before);
+        if reset > 0 {
+            out.resets.push((i, reset.min(u32::MAX as usize) as u32));
         }
     }
     out.stats = f.stats;
@@ -477,6 +485,7 @@ pub fn process(
         }
     };
     progress.finish();
+    let diagnostics = diagnostics(fw.as_ref(), bw.as_ref(), rover);
     let merged = merge_passes(fw.as_ref(), bw.as_ref(), smoothed);
     let (epochs, unsolved) = output_epochs(merged, &inputs, &opts, antenna_sigma, &base_arp);
     let static_solution = match (opts.motion, &fw) {
@@ -493,5 +502,45 @@ pub fn process(
         base_marker,
         models,
         warnings,
+        diagnostics,
     })
+}
+
+/// The passes' separation per epoch and their resets, in time order.
+fn diagnostics(
+    fw: Option<&PassOutput>,
+    bw: Option<&PassOutput>,
+    rover: &ObsFile,
+) -> PassDiagnostics {
+    let separation = match (fw, bw) {
+        (Some(f), Some(b)) => f
+            .sols
+            .iter()
+            .zip(&b.sols)
+            .filter_map(|(a, b)| Some((a.as_ref()?, b.as_ref()?)))
+            .map(|(a, b)| output::Separation {
+                time: a.time,
+                d: a.pos.0 - b.pos.0,
+                both_fixed: a.quality == Quality::Fixed && b.quality == Quality::Fixed,
+            })
+            .collect(),
+        _ => Vec::new(),
+    };
+    let resets = |p: Option<&PassOutput>| -> Vec<(hifitime::Epoch, u32)> {
+        let mut v: Vec<(hifitime::Epoch, u32)> = p
+            .map(|p| {
+                p.resets
+                    .iter()
+                    .map(|&(i, n)| (rover.epochs[i].time, n))
+                    .collect()
+            })
+            .unwrap_or_default();
+        v.sort_by_key(|a| a.0);
+        v
+    };
+    PassDiagnostics {
+        separation,
+        forward_resets: resets(fw),
+        backward_resets: resets(bw),
+    }
 }

@@ -174,6 +174,39 @@ pub struct PpkResult {
     pub warnings: Vec<String>,
     /// The static solution (static runs only).
     pub static_solution: Option<StaticSolution>,
+    /// What the passes say of each epoch: their separation and their ambiguity resets.
+    pub diagnostics: PassDiagnostics,
+}
+
+/// What the forward and backward passes say of each epoch, for the quality report.
+#[derive(Clone, Debug, Default)]
+pub struct PassDiagnostics {
+    /// Forward minus backward solution of each epoch both passes solved, in time order.
+    /// With the two-filter smoother the forward pass is the smoothed one.
+    pub separation: Vec<Separation>,
+    /// Rover epochs at which the forward pass reset ambiguities (slips, gaps, outliers), with
+    /// how many, in time order.
+    pub forward_resets: Vec<(Epoch, u32)>,
+    /// The same for the backward pass, in time order.
+    pub backward_resets: Vec<(Epoch, u32)>,
+}
+
+/// The two passes' solutions of one epoch compared.
+#[derive(Clone, Copy, Debug)]
+pub struct Separation {
+    /// The epoch (the forward solution's time).
+    pub time: Epoch,
+    /// Forward minus backward position, ECEF metres.
+    pub d: nalgebra::Vector3<f64>,
+    /// Whether both passes fixed the epoch (then they should agree to millimetres).
+    pub both_fixed: bool,
+}
+
+impl PassStats {
+    /// Ambiguity resets so far: slips of every cause and post-fit outliers.
+    pub fn resets(&self) -> usize {
+        self.slips.values().sum::<usize>() + self.outlier_resets
+    }
 }
 
 impl PpkResult {
