@@ -147,13 +147,12 @@ fn constrain(
     var: f64,
 ) -> bool {
     let v = z - d * &*x;
-    let s = d * &*p * d.transpose() + DMatrix::identity(d.nrows(), d.nrows()) * var;
-    let Some(ch) = s.cholesky() else { return false };
-    let dp = d * &*p;
-    let k = ch.solve(&dp).transpose();
-    *x += &k * v;
-    *p = &*p - &k * &dp;
-    *p = (&*p + p.transpose()) * 0.5;
+    let r = DMatrix::identity(d.nrows(), d.nrows()) * var;
+    let Some((dx, pn)) = super::update::update(p, d, &r, &v) else {
+        return false;
+    };
+    *x += dx;
+    *p = (&pn + pn.transpose()) * 0.5;
     true
 }
 

@@ -34,6 +34,7 @@ pub mod slip;
 mod smooth;
 mod state;
 pub mod tight;
+mod update;
 
 pub use measure::GateReason;
 pub use options::{ArMode, BasePosition, Estimate, FilterMode, Motion, PpkOptions, Reference};
