@@ -59,9 +59,10 @@ impl PassInputs<'_> {
 
 /// The measurements of the processed systems of one file, per epoch.
 fn measurements(f: &ObsFile, orbits: &Orbits, opts: &PpkOptions) -> Vec<Vec<SatMeas>> {
+    use rayon::prelude::*;
     let plan = SignalPlan::new(&f.header);
     f.epochs
-        .iter()
+        .par_iter()
         .map(|e| {
             extract(
                 e,
@@ -166,20 +167,35 @@ fn start_values(
         systems: opts.systems.clone(),
         ..SppOptions::default()
     };
-    let mut starts = Vec::with_capacity(rover.epochs.len());
-    let mut prior = rover.header.approx_position;
-    for e in &rover.epochs {
-        match spp::solve_epoch(e, &rover.header, orbits, &sopts, prior) {
-            Ok(s) => {
-                prior = Some(s.pos);
-                let clock = s.clocks.values().next().copied().unwrap_or(0.0) / crate::orbit::C;
-                starts.push(Ok((s.pos, clock)));
-            }
-            Err((why, _)) => starts.push(Err(why.kind().to_string())),
-        }
-    }
-    starts
+    // Chunks of a fixed size solved in parallel, each from the header's position on: the
+    // same results whatever the number of threads.
+    use rayon::prelude::*;
+    let chunks: Vec<Vec<_>> = rover
+        .epochs
+        .par_chunks(START_CHUNK)
+        .map(|chunk| {
+            let mut prior = rover.header.approx_position;
+            chunk
+                .iter()
+                .map(
+                    |e| match spp::solve_epoch(e, &rover.header, orbits, &sopts, prior) {
+                        Ok(s) => {
+                            prior = Some(s.pos);
+                            let clock =
+                                s.clocks.values().next().copied().unwrap_or(0.0) / crate::orbit::C;
+                            Ok((s.pos, clock))
+                        }
+                        Err((why, _)) => Err(why.kind().to_string()),
+                    },
+                )
+                .collect()
+        })
+        .collect();
+    chunks.into_iter().flatten().collect()
 }
+
+/// Rover epochs per chunk of start values solved on one thread.
+const START_CHUNK: usize = 2048;
 
 /// The longest distance of a rover start position from the base antenna, metres, over the
 /// start positions that a neighbouring epoch confirms (within 100 m plus 100 m/s of their
