@@ -23,26 +23,32 @@ fn folder(name: &str) -> PathBuf {
     d
 }
 
+/// The reference run with [`FLAGS`] on GEONET's `[rover, base, nav]` into `dir/flags.pos`.
+fn flags_run(dir: &Path, [rover, base, nav]: [&Path; 3]) -> PathBuf {
+    let by_flags = dir.join("flags.pos");
+    let mut args = vec![
+        "ppk",
+        "--rover",
+        p(rover),
+        "--base",
+        p(base),
+        "--nav",
+        p(nav),
+    ];
+    args.extend(FLAGS);
+    args.extend(["-o", p(&by_flags)]);
+    let t = succeeds(&ppkat(&args));
+    assert!(t.contains("115 solved, 113 fixed"), "{t}");
+    by_flags
+}
+
 #[test]
 fn a_toml_file_gives_the_same_run_as_its_flags() {
     let Some([rover, base, nav]) = geonet() else {
         return;
     };
     let dir = folder("config-toml");
-    let by_flags = dir.join("flags.pos");
-    let mut args = vec![
-        "ppk",
-        "--rover",
-        p(&rover),
-        "--base",
-        p(&base),
-        "--nav",
-        p(&nav),
-    ];
-    args.extend(FLAGS);
-    args.extend(["-o", p(&by_flags)]);
-    let t = succeeds(&ppkat(&args));
-    assert!(t.contains("115 solved, 113 fixed"), "{t}");
+    let by_flags = flags_run(&dir, [&rover, &base, &nav]);
 
     let cfg = dir.join("flight.toml");
     std::fs::write(
@@ -86,19 +92,7 @@ fn an_rtklib_conf_gives_the_same_run_and_says_what_it_mapped() {
         return;
     };
     let dir = folder("config-rtklib");
-    let by_flags = dir.join("flags.pos");
-    let mut args = vec![
-        "ppk",
-        "--rover",
-        p(&rover),
-        "--base",
-        p(&base),
-        "--nav",
-        p(&nav),
-    ];
-    args.extend(FLAGS);
-    args.extend(["-o", p(&by_flags)]);
-    succeeds(&ppkat(&args));
+    let by_flags = flags_run(&dir, [&rover, &base, &nav]);
 
     // As RTKPOST writes it (names, comments, options ppkat has no use for).
     let conf = dir.join("rtkpost.conf");
