@@ -17,10 +17,15 @@ use crate::rinex::ObsFile;
 use crate::spp::{self, SppOptions};
 use hifitime::Epoch;
 
-/// Everything a pass reads, per rover epoch.
-pub(super) struct PassInputs<'a> {
-    pub(super) rover: &'a ObsFile,
-    pub(super) base: &'a ObsFile,
+/// Everything a pass reads, per rover epoch. It holds no reference to the observation
+/// files, so a caller done with their records may release them before the passes.
+pub(super) struct PassInputs {
+    /// The rover file's header.
+    pub(super) rover_header: crate::rinex::ObsHeader,
+    /// Time tag of each rover epoch.
+    pub(super) rover_times: Vec<Epoch>,
+    /// Time tag of each base epoch.
+    pub(super) base_times: Vec<Epoch>,
     pub(super) rover_meas: Vec<Vec<SatMeas>>,
     pub(super) base_meas: Vec<Vec<SatMeas>>,
     /// Base epoch of each rover epoch.
@@ -37,11 +42,11 @@ pub(super) struct PassInputs<'a> {
     pub(super) base_views: Vec<Vec<Option<SatView>>>,
 }
 
-impl PassInputs<'_> {
+impl PassInputs {
     /// Rover epoch `i` as the filter reads it.
     pub(super) fn rover_epoch(&self, i: usize) -> ReceiverEpoch<'_> {
         ReceiverEpoch {
-            time: self.rover.epochs[i].time,
+            time: self.rover_times[i],
             meas: &self.rover_meas[i],
             views: &self.rover_views[i],
         }
@@ -50,7 +55,7 @@ impl PassInputs<'_> {
     /// Base epoch `j` as the filter reads it.
     pub(super) fn base_epoch(&self, j: usize) -> ReceiverEpoch<'_> {
         ReceiverEpoch {
-            time: self.base.epochs[j].time,
+            time: self.base_times[j],
             meas: &self.base_meas[j],
             views: &self.base_views[j],
         }
@@ -80,13 +85,13 @@ fn measurements(f: &ObsFile, orbits: &Orbits, opts: &PpkOptions) -> Vec<Vec<SatM
 /// processed systems skipped), start values and arc breaks (each receiver's Doppler in the
 /// slip test only when it follows its phase); what was skipped, ignored or left without a
 /// base goes to `warnings`. An error when no rover epoch pairs with a base epoch.
-pub(super) fn prepare<'a>(
-    rover: &'a ObsFile,
-    base: &'a ObsFile,
+pub(super) fn prepare(
+    rover: &ObsFile,
+    base: &ObsFile,
     orbits: &Orbits,
     opts: &PpkOptions,
     warnings: &mut Vec<String>,
-) -> Result<PassInputs<'a>> {
+) -> Result<PassInputs> {
     let times = |f: &ObsFile| -> Vec<Epoch> { f.epochs.iter().map(|e| e.time).collect() };
     let (rover_times, base_times) = (times(rover), times(base));
     let (rover_meas, base_meas) = rayon::join(
@@ -140,8 +145,9 @@ pub(super) fn prepare<'a>(
     let stretches = checks::lonely_stretches(&rover_times, &lonely);
     warnings.extend(checks::lonely_warnings(&stretches));
     Ok(PassInputs {
-        rover,
-        base,
+        rover_header: rover.header.clone(),
+        rover_times,
+        base_times,
         rover_meas,
         base_meas,
         matched: pairing.matched,

@@ -225,7 +225,7 @@ fn run_pass(
     priors: Option<&[Option<smooth::Prior>]>,
     progress: &dyn crate::progress::Progress,
 ) -> PassOutput {
-    let n = inputs.rover.epochs.len();
+    let n = inputs.rover_times.len();
     let mut out = PassOutput {
         sols: vec![None; n],
         stats: PassStats::default(),
@@ -342,8 +342,7 @@ fn output_epochs(
     antenna_sigma: (f64, f64),
     base_arp: &Ecef,
 ) -> (Vec<TrajectoryEpoch>, Vec<(Epoch, String)>) {
-    let rover = inputs.rover;
-    let mut epochs = Vec::with_capacity(rover.epochs.len());
+    let mut epochs = Vec::with_capacity(inputs.rover_times.len());
     let mut unsolved = Vec::new();
     for (i, s) in merged.into_iter().enumerate() {
         match s {
@@ -351,7 +350,7 @@ fn output_epochs(
                 // Rover marker = antenna reference point − header offset.
                 let pos = match opts.refer {
                     Reference::Arp => s.pos,
-                    Reference::Marker => Ecef(s.pos.0 - arp_offset(&rover.header, &s.pos)),
+                    Reference::Marker => Ecef(s.pos.0 - arp_offset(&inputs.rover_header, &s.pos)),
                 };
                 // The position belongs to the true reception time: the receiver's time tag
                 // minus its clock offset (as RTKLIB reports it). A moving rover at 60 m/s
@@ -383,7 +382,7 @@ fn output_epochs(
                 } else {
                     "fewer than two satellites common to rover and base above the mask".to_string()
                 };
-                unsolved.push((rover.epochs[i].time, why));
+                unsolved.push((inputs.rover_times[i], why));
             }
         }
     }
@@ -402,6 +401,48 @@ pub fn process(
     opts: &PpkOptions,
     progress: &dyn crate::progress::Progress,
 ) -> Result<PpkResult> {
+    let prepared = prepare_run(rover, base, base_pos, orbits, opts)?;
+    Ok(run_prepared(prepared, progress))
+}
+
+/// [`process`], releasing the files' observation records once the passes' inputs are drawn
+/// from them: the passes read only those, so the records (the largest part of the input) do
+/// not stay in memory through the passes. The files keep their headers and events.
+pub fn process_releasing(
+    rover: &mut ObsFile,
+    base: &mut ObsFile,
+    base_pos: BasePosition,
+    orbits: &Orbits,
+    opts: &PpkOptions,
+    progress: &dyn crate::progress::Progress,
+) -> Result<PpkResult> {
+    let prepared = prepare_run(rover, base, base_pos, orbits, opts)?;
+    rover.epochs = Vec::new();
+    base.epochs = Vec::new();
+    Ok(run_prepared(prepared, progress))
+}
+
+/// What a run has settled before its passes.
+struct Prepared {
+    inputs: inputs::PassInputs,
+    opts: PpkOptions,
+    warnings: Vec<String>,
+    base_marker: Ecef,
+    base_arp: Ecef,
+    antennas: (Option<AntennaPcv>, Option<AntennaPcv>),
+    antenna_sigma: (f64, f64),
+    models: Models,
+    segment_gap: f64,
+}
+
+/// The checks, the models and the passes' inputs of a run.
+fn prepare_run(
+    rover: &ObsFile,
+    base: &ObsFile,
+    base_pos: BasePosition,
+    orbits: &Orbits,
+    opts: &PpkOptions,
+) -> Result<Prepared> {
     let mut warnings = Vec::new();
     require_phase(rover, "rover")?;
     require_phase(base, "base")?;
@@ -426,12 +467,38 @@ pub fn process(
             _ => Err(String::new()),
         })
         .collect();
-    let times: Vec<Epoch> = rover.epochs.iter().map(|e| e.time).collect();
-    let longest = inputs::longest_baseline(&starts, &times, &base_arp);
+    let longest = inputs::longest_baseline(&starts, &inputs.rover_times, &base_arp);
     let models = choose_models(&mut opts, longest);
     warnings.extend(checks::baseline_warning(longest));
     // A step longer than 2.5 nominal intervals between solved epochs starts a new segment.
     let segment_gap = 2.5 * interval(rover);
+    Ok(Prepared {
+        inputs,
+        opts,
+        warnings,
+        base_marker,
+        base_arp,
+        antennas,
+        antenna_sigma,
+        models,
+        segment_gap,
+    })
+}
+
+/// The passes of a prepared run and their output.
+fn run_prepared(p: Prepared, progress: &dyn crate::progress::Progress) -> PpkResult {
+    let Prepared {
+        inputs,
+        opts,
+        mut warnings,
+        base_marker,
+        base_arp,
+        antennas,
+        antenna_sigma,
+        models,
+        segment_gap,
+    } = p;
+    let n_rover = inputs.rover_times.len();
     let run = |backward: bool, o: &PpkOptions, priors: Option<&[Option<smooth::Prior>]>| {
         let mut f = filter::Filter::new(o, base_arp, antennas.clone(), segment_gap);
         if backward && priors.is_none() && o.ar == ArMode::Off {
@@ -450,7 +517,7 @@ pub fn process(
         FilterMode::Backward => "PPK backward pass",
         FilterMode::Combined => "PPK forward and backward passes",
     };
-    progress.set_len(stage, (passes * rover.epochs.len()) as u64);
+    progress.set_len(stage, (passes * n_rover) as u64);
     let (fw, bw) = match opts.filter {
         FilterMode::Forward => (Some(run(false, &opts, None)), None),
         FilterMode::Backward => (None, Some(run(true, &opts, None))),
@@ -486,32 +553,32 @@ pub fn process(
         }
     };
     progress.finish();
-    let diagnostics = diagnostics(fw.as_ref(), bw.as_ref(), rover);
+    let diagnostics = diagnostics(fw.as_ref(), bw.as_ref(), &inputs.rover_times);
     let merged = merge_passes(fw.as_ref(), bw.as_ref(), smoothed);
     let (epochs, unsolved) = output_epochs(merged, &inputs, &opts, antenna_sigma, &base_arp);
     let static_solution = match (opts.motion, &fw) {
         (Motion::Static, Some(fw)) => StaticSolution::of(&epochs, &fw.stats),
         _ => None,
     };
-    Ok(PpkResult {
+    PpkResult {
         static_solution,
         trajectory: Trajectory::new(epochs, SegmentSource::Filter),
         forward: fw.map(|x| x.stats),
         backward: bw.map(|x| x.stats),
         unsolved,
-        rover_epochs: rover.epochs.len(),
+        rover_epochs: n_rover,
         base_marker,
         models,
         warnings,
         diagnostics,
-    })
+    }
 }
 
 /// The passes' separation per epoch and their resets, in time order.
 fn diagnostics(
     fw: Option<&PassOutput>,
     bw: Option<&PassOutput>,
-    rover: &ObsFile,
+    rover_times: &[Epoch],
 ) -> PassDiagnostics {
     let separation = match (fw, bw) {
         (Some(f), Some(b)) => f
@@ -529,12 +596,7 @@ fn diagnostics(
     };
     let resets = |p: Option<&PassOutput>| -> Vec<(hifitime::Epoch, u32)> {
         let mut v: Vec<(hifitime::Epoch, u32)> = p
-            .map(|p| {
-                p.resets
-                    .iter()
-                    .map(|&(i, n)| (rover.epochs[i].time, n))
-                    .collect()
-            })
+            .map(|p| p.resets.iter().map(|&(i, n)| (rover_times[i], n)).collect())
             .unwrap_or_default();
         v.sort_by_key(|a| a.0);
         v

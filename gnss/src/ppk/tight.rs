@@ -224,8 +224,8 @@ pub fn double_differences(
 }
 
 /// What forming one epoch's rows reads.
-struct Ctx<'a, 'b> {
-    inp: &'a PassInputs<'b>,
+struct Ctx<'a> {
+    inp: &'a PassInputs,
     opts: &'a PpkOptions,
     base_arp: Ecef,
     rover_arcs: &'a Arcs,
@@ -251,7 +251,7 @@ struct Sd {
     view: SatView,
 }
 
-impl Ctx<'_, '_> {
+impl Ctx<'_> {
     /// The rows of rover epoch `i`, pivots kept in `pivots` while their arcs continue.
     fn epoch(
         &self,

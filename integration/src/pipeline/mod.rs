@@ -340,8 +340,8 @@ pub fn ppk(job: &PpkJob, progress: &dyn gnss::progress::Progress) -> Result<PpkR
     let t0 = std::time::Instant::now();
     gnss::atomic::clean_stale(&job.out);
     progress.set_len("reading rover and base", 0);
-    let rover_in = read_observations(&job.rover, job.obs_format, job.time_hint)?;
-    let base_in = read_observations(&job.base, job.obs_format, job.time_hint)?;
+    let mut rover_in = read_observations(&job.rover, job.obs_format, job.time_hint)?;
+    let mut base_in = read_observations(&job.base, job.obs_format, job.time_hint)?;
     let (rover, base) = (&rover_in.obs, &base_in.obs);
     gnss::ppk::require_phase(rover, "rover")?;
     gnss::ppk::require_phase(base, "base")?;
@@ -393,7 +393,16 @@ pub fn ppk(job: &PpkJob, progress: &dyn gnss::progress::Progress) -> Result<PpkR
     )?;
     let read_seconds = t0.elapsed().as_secs_f64();
     let t1 = std::time::Instant::now();
-    let result = gnss::ppk::process(rover, base, base_position, &orbits, &job.options, progress)?;
+    // The observation records are released once the passes' inputs are drawn from them.
+    let result = gnss::ppk::process_releasing(
+        &mut rover_in.obs,
+        &mut base_in.obs,
+        base_position,
+        &orbits,
+        &job.options,
+        progress,
+    )?;
+    let rover = &rover_in.obs;
     let process_seconds = t1.elapsed().as_secs_f64();
     if result.trajectory.epochs.is_empty() {
         let reasons = result.unsolved.iter().map(|(_, w)| w.clone()).collect();
