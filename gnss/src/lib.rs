@@ -20,6 +20,7 @@
 pub mod atomic;
 pub mod error;
 pub mod frame;
+pub mod memory;
 pub mod model;
 pub mod obs;
 pub mod orbit;

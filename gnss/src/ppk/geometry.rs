@@ -21,17 +21,6 @@ pub struct ReceiverEpoch<'a> {
     pub views: &'a [Option<SatView>],
 }
 
-/// The view of every satellite of every epoch of one receiver (computed once per run, in
-/// parallel: both filter passes and every rover epoch paired with a base epoch read them).
-pub fn views(orbits: &Orbits, times: &[Epoch], meas: &[Vec<SatMeas>]) -> Vec<Vec<Option<SatView>>> {
-    use rayon::prelude::*;
-    times
-        .par_iter()
-        .zip(meas)
-        .map(|(t, m)| m.iter().map(|s| SatView::at(orbits, s, *t)).collect())
-        .collect()
-}
-
 /// A satellite as seen by one receiver at its epoch.
 #[derive(Clone, Copy, Debug)]
 pub struct SatView {

@@ -7,13 +7,13 @@
 //! [`PassInputs`], which every pass reads and none changes; errors when no rover epoch pairs
 //! with a base epoch.
 
-use super::geometry::{views, ReceiverEpoch, SatView};
+use super::geometry::{ReceiverEpoch, SatView};
 use super::obs::{extract, SatMeas, SignalPlan};
 use super::{checks, slip, PpkOptions};
 use crate::error::{Error, Result};
 use crate::frame::Ecef;
 use crate::orbit::Orbits;
-use crate::rinex::ObsFile;
+use crate::rinex::{ObsEpoch, ObsFile, ObsHeader};
 use crate::spp::{self, SppOptions};
 use hifitime::Epoch;
 
@@ -52,6 +52,17 @@ impl PassInputs {
         }
     }
 
+    /// Release the measurements, views and arc breaks once the passes are done; the times,
+    /// pairing and start values stay.
+    pub(super) fn release_measurements(&mut self) {
+        self.rover_meas = Vec::new();
+        self.base_meas = Vec::new();
+        self.rover_views = Vec::new();
+        self.base_views = Vec::new();
+        self.rover_breaks = Vec::new();
+        self.base_breaks = Vec::new();
+    }
+
     /// Base epoch `j` as the filter reads it.
     pub(super) fn base_epoch(&self, j: usize) -> ReceiverEpoch<'_> {
         ReceiverEpoch {
@@ -62,23 +73,112 @@ impl PassInputs {
     }
 }
 
-/// The measurements of the processed systems of one file, per epoch.
-fn measurements(f: &ObsFile, orbits: &Orbits, opts: &PpkOptions) -> Vec<Vec<SatMeas>> {
+/// A receiver's observation records as [`prepare`] takes them: borrowed from a file that
+/// keeps them, or handed over, so that each chunk is released as soon as what the passes
+/// read is drawn from it (the records never sit beside the measurements in memory).
+pub(super) enum Records<'a> {
+    /// Records the caller keeps.
+    Borrowed(&'a [ObsEpoch]),
+    /// Records released chunk by chunk.
+    Owned(Vec<ObsEpoch>),
+}
+
+impl Records<'_> {
+    /// The records' time tags.
+    fn times(&self) -> Vec<Epoch> {
+        let r: &[ObsEpoch] = match self {
+            Records::Borrowed(r) => r,
+            Records::Owned(r) => r,
+        };
+        r.iter().map(|e| e.time).collect()
+    }
+}
+
+/// Start position and receiver clock offset (s) of a rover epoch, or why there is none.
+type Start = std::result::Result<(Ecef, f64), String>;
+
+/// What the passes read of one receiver's records: measurements of the processed systems,
+/// the satellites' views, and (rover only) the start values; aligned with the records.
+#[derive(Default)]
+struct Drawn {
+    meas: Vec<Vec<SatMeas>>,
+    views: Vec<Vec<Option<SatView>>>,
+    starts: Vec<Start>,
+}
+
+/// Draw from `records` in chunks of [`START_CHUNK`] epochs solved in parallel (each chunk's
+/// start values from the header's position on, so the same whatever the number of
+/// threads); owned records are released chunk by chunk.
+fn draw(
+    records: Records<'_>,
+    h: &ObsHeader,
+    orbits: &Orbits,
+    opts: &PpkOptions,
+    with_starts: bool,
+) -> Drawn {
     use rayon::prelude::*;
-    let plan = SignalPlan::new(&f.header);
-    f.epochs
-        .par_iter()
-        .map(|e| {
-            extract(
-                e,
-                &f.header,
-                &plan,
-                &opts.systems,
-                opts.nf,
-                &orbits.broadcast,
-            )
-        })
-        .collect()
+    let plan = SignalPlan::new(h);
+    let sopts = with_starts.then(|| SppOptions {
+        elev_mask: opts.elev_mask,
+        systems: opts.systems.clone(),
+        ..SppOptions::default()
+    });
+    let chunk = |c: &[ObsEpoch]| draw_chunk(c, h, &plan, orbits, opts, sopts.as_ref());
+    let parts: Vec<Drawn> = match records {
+        Records::Borrowed(r) => r.par_chunks(START_CHUNK).map(chunk).collect(),
+        Records::Owned(r) => {
+            let mut rest = r.into_iter();
+            let chunks: Vec<Vec<ObsEpoch>> = std::iter::from_fn(|| {
+                let c: Vec<ObsEpoch> = rest.by_ref().take(START_CHUNK).collect();
+                (!c.is_empty()).then_some(c)
+            })
+            .collect();
+            // Each chunk is dropped as soon as it is drawn, and its pages handed back: the
+            // allocator would keep them for the reading thread, not for the drawing ones.
+            chunks
+                .into_par_iter()
+                .map(|c| {
+                    let d = chunk(&c);
+                    drop(c);
+                    crate::memory::release_freed();
+                    d
+                })
+                .collect()
+        }
+    };
+    let mut all = Drawn::default();
+    for p in parts {
+        all.meas.extend(p.meas);
+        all.views.extend(p.views);
+        all.starts.extend(p.starts);
+    }
+    all
+}
+
+/// [`draw`] of one chunk, on one thread.
+fn draw_chunk(
+    chunk: &[ObsEpoch],
+    h: &ObsHeader,
+    plan: &SignalPlan,
+    orbits: &Orbits,
+    opts: &PpkOptions,
+    sopts: Option<&SppOptions>,
+) -> Drawn {
+    let meas: Vec<Vec<SatMeas>> = chunk
+        .iter()
+        .map(|e| extract(e, h, plan, &opts.systems, opts.nf, &orbits.broadcast))
+        .collect();
+    let views = chunk
+        .iter()
+        .zip(&meas)
+        .map(|(e, m)| m.iter().map(|s| SatView::at(orbits, s, e.time)).collect())
+        .collect();
+    let starts = sopts.map_or_else(Vec::new, |s| start_values(chunk, h, orbits, s));
+    Drawn {
+        meas,
+        views,
+        starts,
+    }
 }
 
 /// Everything a pass reads: measurements, base pairing (base epochs without phase of the
@@ -86,18 +186,18 @@ fn measurements(f: &ObsFile, orbits: &Orbits, opts: &PpkOptions) -> Vec<Vec<SatM
 /// slip test only when it follows its phase); what was skipped, ignored or left without a
 /// base goes to `warnings`. An error when no rover epoch pairs with a base epoch.
 pub(super) fn prepare(
-    rover: &ObsFile,
-    base: &ObsFile,
+    (rover, rover_records): (&ObsFile, Records<'_>),
+    (base, base_records): (&ObsFile, Records<'_>),
     orbits: &Orbits,
     opts: &PpkOptions,
     warnings: &mut Vec<String>,
 ) -> Result<PassInputs> {
-    let times = |f: &ObsFile| -> Vec<Epoch> { f.epochs.iter().map(|e| e.time).collect() };
-    let (rover_times, base_times) = (times(rover), times(base));
-    let (rover_meas, base_meas) = rayon::join(
-        || measurements(rover, orbits, opts),
-        || measurements(base, orbits, opts),
+    let (rover_times, base_times) = (rover_records.times(), base_records.times());
+    let (rover_drawn, base_drawn) = rayon::join(
+        || draw(rover_records, &rover.header, orbits, opts, true),
+        || draw(base_records, &base.header, orbits, opts, false),
     );
+    let (rover_meas, base_meas) = (rover_drawn.meas, base_drawn.meas);
     let usable: Vec<bool> = base_meas.iter().map(|m| !m.is_empty()).collect();
     let pairing = checks::pair_base_epochs(&rover_times, &base_times, &usable, opts.max_age);
     let systems: Vec<String> = opts
@@ -137,10 +237,6 @@ pub(super) fn prepare(
         || slip::arc_breaks(&rover_times, &rover_meas, opts.max_gap, rover_doppler),
         || slip::arc_breaks(&base_times, &base_meas, base_gap, base_doppler),
     );
-    let (rover_views, base_views) = rayon::join(
-        || views(orbits, &rover_times, &rover_meas),
-        || views(orbits, &base_times, &base_meas),
-    );
     let lonely = checks::without_common(&rover_meas, &base_meas, &pairing.matched);
     let stretches = checks::lonely_stretches(&rover_times, &lonely);
     warnings.extend(checks::lonely_warnings(&stretches));
@@ -151,53 +247,37 @@ pub(super) fn prepare(
         rover_meas,
         base_meas,
         matched: pairing.matched,
-        starts: start_values(rover, orbits, opts),
+        starts: rover_drawn.starts,
         rover_breaks,
         base_breaks,
-        rover_views,
-        base_views,
+        rover_views: rover_drawn.views,
+        base_views: base_drawn.views,
     })
 }
 
-/// Start position and receiver clock offset (s) of each rover epoch from its code
-/// solution, or why there is none. As in RTKLIB, an epoch whose code solution fails (too few
-/// satellites, GDOP > 30, inconsistent) gets no carrier-phase solution either: its geometry
-/// cannot be trusted.
+/// Start position and receiver clock offset (s) of each epoch of a chunk from its code
+/// solution, each from the previous one and the first from the header's position, or why
+/// there is none. As in RTKLIB, an epoch whose code solution fails (too few satellites,
+/// GDOP > 30, inconsistent) gets no carrier-phase solution either: its geometry cannot be
+/// trusted.
 fn start_values(
-    rover: &ObsFile,
+    chunk: &[ObsEpoch],
+    h: &ObsHeader,
     orbits: &Orbits,
-    opts: &PpkOptions,
-) -> Vec<std::result::Result<(Ecef, f64), String>> {
-    let sopts = SppOptions {
-        elev_mask: opts.elev_mask,
-        systems: opts.systems.clone(),
-        ..SppOptions::default()
-    };
-    // Chunks of a fixed size solved in parallel, each from the header's position on: the
-    // same results whatever the number of threads.
-    use rayon::prelude::*;
-    let chunks: Vec<Vec<_>> = rover
-        .epochs
-        .par_chunks(START_CHUNK)
-        .map(|chunk| {
-            let mut prior = rover.header.approx_position;
-            chunk
-                .iter()
-                .map(
-                    |e| match spp::solve_epoch(e, &rover.header, orbits, &sopts, prior) {
-                        Ok(s) => {
-                            prior = Some(s.pos);
-                            let clock =
-                                s.clocks.values().next().copied().unwrap_or(0.0) / crate::orbit::C;
-                            Ok((s.pos, clock))
-                        }
-                        Err((why, _)) => Err(why.kind().to_string()),
-                    },
-                )
-                .collect()
+    sopts: &SppOptions,
+) -> Vec<Start> {
+    let mut prior = h.approx_position;
+    chunk
+        .iter()
+        .map(|e| match spp::solve_epoch(e, h, orbits, sopts, prior) {
+            Ok(s) => {
+                prior = Some(s.pos);
+                let clock = s.clocks.values().next().copied().unwrap_or(0.0) / crate::orbit::C;
+                Ok((s.pos, clock))
+            }
+            Err((why, _)) => Err(why.kind().to_string()),
         })
-        .collect();
-    chunks.into_iter().flatten().collect()
+        .collect()
 }
 
 /// Rover epochs per chunk of start values solved on one thread.

@@ -401,13 +401,18 @@ pub fn process(
     opts: &PpkOptions,
     progress: &dyn crate::progress::Progress,
 ) -> Result<PpkResult> {
-    let prepared = prepare_run(rover, base, base_pos, orbits, opts)?;
+    let records = (
+        inputs::Records::Borrowed(&rover.epochs),
+        inputs::Records::Borrowed(&base.epochs),
+    );
+    let prepared = prepare_run(rover, base, records, base_pos, orbits, opts)?;
     Ok(run_prepared(prepared, progress))
 }
 
-/// [`process`], releasing the files' observation records once the passes' inputs are drawn
-/// from them: the passes read only those, so the records (the largest part of the input) do
-/// not stay in memory through the passes. The files keep their headers and events.
+/// [`process`], releasing the files' observation records as the passes' inputs are drawn
+/// from them, chunk by chunk: the passes read only those, so the records (the largest part
+/// of the input) never sit beside them in memory. The files keep their headers and events;
+/// their records are gone, also when this fails.
 pub fn process_releasing(
     rover: &mut ObsFile,
     base: &mut ObsFile,
@@ -416,10 +421,17 @@ pub fn process_releasing(
     opts: &PpkOptions,
     progress: &dyn crate::progress::Progress,
 ) -> Result<PpkResult> {
-    let prepared = prepare_run(rover, base, base_pos, orbits, opts)?;
-    rover.epochs = Vec::new();
-    base.epochs = Vec::new();
-    Ok(run_prepared(prepared, progress))
+    let interval = interval(rover);
+    require_phase(rover, "rover")?;
+    require_phase(base, "base")?;
+    let records = (
+        inputs::Records::Owned(std::mem::take(&mut rover.epochs)),
+        inputs::Records::Owned(std::mem::take(&mut base.epochs)),
+    );
+    let prepared = prepare_run_at(rover, base, records, interval, base_pos, orbits, opts);
+    // The records, freed chunk by chunk on the thread that read them, leave the process.
+    crate::memory::release_freed();
+    Ok(run_prepared(prepared?, progress))
 }
 
 /// What a run has settled before its passes.
@@ -439,13 +451,36 @@ struct Prepared {
 fn prepare_run(
     rover: &ObsFile,
     base: &ObsFile,
+    records: (inputs::Records<'_>, inputs::Records<'_>),
+    base_pos: BasePosition,
+    orbits: &Orbits,
+    opts: &PpkOptions,
+) -> Result<Prepared> {
+    require_phase(rover, "rover")?;
+    require_phase(base, "base")?;
+    prepare_run_at(
+        rover,
+        base,
+        records,
+        interval(rover),
+        base_pos,
+        orbits,
+        opts,
+    )
+}
+
+/// [`prepare_run`] once the files' phase is checked and the rover's epoch interval
+/// (seconds) known: `records` may have been taken out of the files.
+fn prepare_run_at(
+    rover: &ObsFile,
+    base: &ObsFile,
+    records: (inputs::Records<'_>, inputs::Records<'_>),
+    interval: f64,
     base_pos: BasePosition,
     orbits: &Orbits,
     opts: &PpkOptions,
 ) -> Result<Prepared> {
     let mut warnings = Vec::new();
-    require_phase(rover, "rover")?;
-    require_phase(base, "base")?;
     let base_marker = base_marker(base, base_pos, &mut warnings)?;
     let base_arp = Ecef(base_marker.0 + arp_offset(&base.header, &base_marker));
     let antennas = antenna_calibrations(opts, rover, base, &mut warnings);
@@ -456,9 +491,15 @@ fn prepare_run(
         opts.filter = FilterMode::Forward;
     }
     if opts.max_gap <= 0.0 {
-        opts.max_gap = (5.0 * interval(rover)).max(5.0);
+        opts.max_gap = (5.0 * interval).max(5.0);
     }
-    let inputs = inputs::prepare(rover, base, orbits, &opts, &mut warnings)?;
+    let inputs = inputs::prepare(
+        (rover, records.0),
+        (base, records.1),
+        orbits,
+        &opts,
+        &mut warnings,
+    )?;
     // Only epochs paired with a base epoch count: a cold start's wild code solutions where
     // the base has no phase would otherwise switch the long-baseline models on.
     let starts: Vec<_> = (inputs.starts.iter().zip(&inputs.matched))
@@ -471,7 +512,7 @@ fn prepare_run(
     let models = choose_models(&mut opts, longest);
     warnings.extend(checks::baseline_warning(longest));
     // A step longer than 2.5 nominal intervals between solved epochs starts a new segment.
-    let segment_gap = 2.5 * interval(rover);
+    let segment_gap = 2.5 * interval;
     Ok(Prepared {
         inputs,
         opts,
@@ -488,7 +529,7 @@ fn prepare_run(
 /// The passes of a prepared run and their output.
 fn run_prepared(p: Prepared, progress: &dyn crate::progress::Progress) -> PpkResult {
     let Prepared {
-        inputs,
+        mut inputs,
         opts,
         mut warnings,
         base_marker,
@@ -553,18 +594,23 @@ fn run_prepared(p: Prepared, progress: &dyn crate::progress::Progress) -> PpkRes
         }
     };
     progress.finish();
+    // Only the epochs' times, pairing and start values are read from here on.
+    inputs.release_measurements();
+    crate::memory::release_freed();
     let diagnostics = diagnostics(fw.as_ref(), bw.as_ref(), &inputs.rover_times);
     let merged = merge_passes(fw.as_ref(), bw.as_ref(), smoothed);
+    let keep_stats = |p: Option<PassOutput>| p.map(|p| p.stats);
+    let (fw, bw) = (keep_stats(fw), keep_stats(bw));
     let (epochs, unsolved) = output_epochs(merged, &inputs, &opts, antenna_sigma, &base_arp);
     let static_solution = match (opts.motion, &fw) {
-        (Motion::Static, Some(fw)) => StaticSolution::of(&epochs, &fw.stats),
+        (Motion::Static, Some(fw)) => StaticSolution::of(&epochs, fw),
         _ => None,
     };
     PpkResult {
         static_solution,
         trajectory: Trajectory::new(epochs, SegmentSource::Filter),
-        forward: fw.map(|x| x.stats),
-        backward: bw.map(|x| x.stats),
+        forward: fw,
+        backward: bw,
         unsolved,
         rover_epochs: n_rover,
         base_marker,

@@ -168,7 +168,13 @@ pub fn double_differences(
     if opts.max_gap <= 0.0 {
         opts.max_gap = (5.0 * super::interval(rover)).max(5.0);
     }
-    let inp = inputs::prepare(rover, base, orbits, &opts, &mut warnings)?;
+    let inp = inputs::prepare(
+        (rover, inputs::Records::Borrowed(&rover.epochs)),
+        (base, inputs::Records::Borrowed(&base.epochs)),
+        orbits,
+        &opts,
+        &mut warnings,
+    )?;
     let rover_arcs = Arcs::of(&inp.rover_breaks, &inp.rover_meas);
     let base_arcs = Arcs::of(&inp.base_breaks, &inp.base_meas);
     let times: Vec<Epoch> = inp
