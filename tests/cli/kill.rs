@@ -1,6 +1,7 @@
-//! `kill -9` of `ppk`, `adjust`, `import` and `exposures --geotag` at several moments, over
-//! the outputs of an earlier run: the earlier outputs stay whole or the new ones appear whole,
-//! never a mix or a partial file, and the next run leaves no temporary behind.
+//! `kill -9` of `ppk` (over RINEX and over a real u-blox log), `adjust`, `import` and
+//! `exposures --geotag` at several moments, over the outputs of an earlier run: the earlier
+//! outputs stay whole or the new ones appear whole, never a mix or a partial file, and the
+//! next run leaves no temporary behind.
 
 use super::*;
 use std::time::Duration;
@@ -59,32 +60,76 @@ fn killed_ppk_leaves_the_earlier_pos_whole() {
         demo.join("base.obs"),
         demo.join("nav.rnx"),
     );
-    let args = ppk_args(&rover, &base, &[&nav], &out, &[]);
-    succeeds(&ppkat(&args));
-    let new = std::fs::read(&out).unwrap();
-    mark_old(&out);
-    let old = std::fs::read(&out).unwrap();
+    killed_ppk_runs(&ppk_args(&rover, &base, &[&nav], &out, &[]), &dir, &out);
+}
+
+/// The same over a real u-blox log read directly (the rover) against RTKLIB's RINEX of the
+/// same log (the base): a zero baseline, so every solved position is the base's to 0.2 mm.
+#[test]
+fn killed_ppk_of_a_real_ubx_log_leaves_the_earlier_pos_whole() {
+    const LOG: &str = "gnss/ubx-navsol-2025/16dBatt_no_interference_coldstart";
+    let names = [".ubx", ".obs.gz", ".nav.gz"].map(|ext| format!("{LOG}{ext}"));
+    let Some([log, obs, nav]) = shared_all([&names[0], &names[1], &names[2]]) else {
+        return;
+    };
+    let dir = tmp("kill-ppk-ubx");
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("out.pos");
+    killed_ppk_runs(&ppk_args(&log, &obs, &[&nav], &out, &[]), &dir, &out);
+    let text = std::fs::read_to_string(&out).unwrap();
+    let reference: Vec<f64> = (text.lines())
+        .find_map(|l| l.strip_prefix("% ref pos   :"))
+        .expect("a ref pos line")
+        .split_whitespace()
+        .map(|w| w.parse().unwrap())
+        .collect();
+    let rows: Vec<Vec<f64>> = (text.lines().filter(|l| !l.starts_with('%')))
+        .map(|l| {
+            l.split_whitespace()
+                .skip(2)
+                .take(4)
+                .map(|w| w.parse().unwrap())
+                .collect()
+        })
+        .collect();
+    assert_eq!(rows.len(), 559, "559 of the 562 epochs solved");
+    for r in &rows {
+        assert_eq!(r[3], 1.0, "fixed: {r:?}");
+        let d_lat = (r[0] - reference[0]).to_radians() * 6.37e6;
+        let d_lon = (r[1] - reference[1]).to_radians() * 6.37e6 * 47.25f64.to_radians().cos();
+        let d_h = r[2] - reference[2];
+        assert!(
+            d_lat.abs() < 2e-4 && d_lon.abs() < 2e-4 && d_h.abs() < 2e-4,
+            "{r:?} against {reference:?}"
+        );
+    }
+}
+
+/// Run the `ppk` of `args` (writing `out`, alone in `dir`) once, mark its output as old, then
+/// kill reruns at each of [`MOMENTS_MS`]: `out` is the old file or the new one, never a
+/// partial one; a last run writes the first run's file bit for bit and leaves no temporary.
+fn killed_ppk_runs(args: &[&str], dir: &Path, out: &Path) {
+    succeeds(&ppkat(args));
+    let new = std::fs::read(out).unwrap();
+    mark_old(out);
+    let old = std::fs::read(out).unwrap();
     for ms in MOMENTS_MS {
-        kill_after(&args, Duration::from_millis(ms));
-        let now = std::fs::read(&out).unwrap();
+        kill_after(args, Duration::from_millis(ms));
+        let now = std::fs::read(out).unwrap();
         assert!(
             now == old || now == new,
             "killed at {ms} ms: a partial .pos"
         );
         // Only the output itself, and perhaps the killed run's hidden temporary.
-        for n in names(&dir) {
+        for n in names(dir) {
             assert!(n == "out.pos" || n.starts_with(".out.pos."), "{n}");
         }
-        std::fs::write(&out, &old).unwrap();
+        std::fs::write(out, &old).unwrap();
     }
-    succeeds(&ppkat(&args));
+    succeeds(&ppkat(args));
+    assert_eq!(std::fs::read(out).unwrap(), new, "reruns are bit-identical");
     assert_eq!(
-        std::fs::read(&out).unwrap(),
-        new,
-        "reruns are bit-identical"
-    );
-    assert_eq!(
-        names(&dir),
+        names(dir),
         ["out.pos"],
         "the next run removed the temporaries"
     );
