@@ -38,6 +38,7 @@ pub mod rtcm_write;
 pub mod sbf;
 pub mod sbf_eph_write;
 pub mod sbf_items;
+pub mod sbf_meas;
 pub mod sbf_nav;
 pub mod sbf_obs;
 pub mod sbf_write;

@@ -62,7 +62,7 @@ pub fn for_each_sbf(path: &Path, mut f: impl FnMut(RawItem)) -> Result<RawStats>
         };
         match b.number {
             MEAS_EPOCH => {
-                let Some(m) = sbf::decode_meas_epoch(b.bytes) else {
+                let Some(m) = super::sbf_meas::decode_meas_epoch(b.bytes) else {
                     malformed(&mut st);
                     continue;
                 };

@@ -30,7 +30,7 @@
 //!   measurement-availability permission) is dropped whole, as RTKLIB does.
 
 use super::rtcm_msm::band_slot;
-use super::sbf::{MeasEpoch, SigMeas};
+use super::sbf_meas::{MeasEpoch, SigMeas};
 use super::ubx_obs::{RawEpoch, RawSat, RawSignal};
 use super::RawStats;
 use crate::signal::frequency;
@@ -273,7 +273,7 @@ impl SbfConverter {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::raw::sbf::SatMeas;
+    use crate::raw::sbf_meas::SatMeas;
 
     fn sig(sig: u8, lock: Option<u16>, type2: bool) -> SigMeas {
         SigMeas {
