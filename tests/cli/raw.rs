@@ -109,7 +109,7 @@ fn bench_ingest_times_the_conversion_of_a_log() {
     };
     let t = succeeds(&ppkat(&["bench", "ingest", p(&log)]));
     assert!(
-        t.contains("convert: 3.0 MB of raw log (562 epochs, 28 ephemerides)"),
+        t.contains("convert: 3.0 MB of u-blox UBX log (562 epochs, 28 ephemerides)"),
         "{t}"
     );
     assert!(
@@ -312,6 +312,11 @@ fn sbf_logs_carry_their_orbits_and_events() {
         assert!(i.contains("signals C1C L1C D1C S1C C2W L2W D2W S2W"), "{i}");
         assert!(i.contains("0 checksum failures"), "{i}");
     }
+    let b = succeeds(&ppkat(&["bench", "ingest", p(&rover)]));
+    assert!(
+        b.contains("MB of Septentrio SBF log (1175 epochs, 144 ephemerides)"),
+        "{b}"
+    );
     let (obs, nav, ev) = (
         dir.join("sbf.obs"),
         dir.join("sbf.nav"),

@@ -43,9 +43,11 @@ pub const BDS_NAV: u16 = 4081;
 /// ExtEvent block number.
 pub const EXT_EVENT: u16 = 5924;
 
-/// CRC-16-CCITT lookup table (polynomial 0x1021), built at compile time.
-const CRC_TABLE: [u16; 256] = {
-    let mut t = [0u16; 256];
+/// CRC-16-CCITT lookup tables (polynomial 0x1021), built at compile time: `CRC_TABLES[0]` is
+/// the byte-wise table, `CRC_TABLES[k]` the contribution of a byte followed by `k` zero bytes
+/// (slicing by 8: eight independent look-ups per 8 bytes instead of a chain of eight).
+const CRC_TABLES: [[u16; 256]; 8] = {
+    let mut t = [[0u16; 256]; 8];
     let mut i = 0;
     while i < 256 {
         let mut c = (i as u16) << 8;
@@ -58,17 +60,43 @@ const CRC_TABLE: [u16; 256] = {
             };
             k += 1;
         }
-        t[i] = c;
+        t[0][i] = c;
         i += 1;
+    }
+    let mut k = 1;
+    while k < 8 {
+        let mut i = 0;
+        while i < 256 {
+            let v = t[k - 1][i];
+            t[k][i] = (v << 8) ^ t[0][(v >> 8) as usize];
+            i += 1;
+        }
+        k += 1;
     }
     t
 };
 
+/// One byte of the CRC.
+fn crc_byte(c: u16, b: u8) -> u16 {
+    (c << 8) ^ CRC_TABLES[0][((c >> 8) as u8 ^ b) as usize]
+}
+
 /// CRC-16-CCITT with initial value 0 (the XMODEM variant SBF uses).
 pub fn crc16(data: &[u8]) -> u16 {
-    data.iter().fold(0u16, |c, &b| {
-        (c << 8) ^ CRC_TABLE[((c >> 8) as u8 ^ b) as usize]
-    })
+    let t = &CRC_TABLES;
+    let mut chunks = data.chunks_exact(8);
+    let mut c = 0u16;
+    for b in &mut chunks {
+        c = t[7][((c >> 8) as u8 ^ b[0]) as usize]
+            ^ t[6][(c as u8 ^ b[1]) as usize]
+            ^ t[5][b[2] as usize]
+            ^ t[4][b[3] as usize]
+            ^ t[3][b[4] as usize]
+            ^ t[2][b[5] as usize]
+            ^ t[1][b[6] as usize]
+            ^ t[0][b[7] as usize];
+    }
+    chunks.remainder().iter().fold(c, |c, &b| crc_byte(c, b))
 }
 
 /// Whether a whole block (`$@` through its padding) has the right CRC.
@@ -314,6 +342,18 @@ mod tests {
     fn crc_is_ccitt_with_initial_zero() {
         // the XMODEM check value of "123456789"
         assert_eq!(crc16(b"123456789"), 0x31c3);
+        // slicing by 8 equals the byte-wise CRC at every length and alignment
+        let data: Vec<u8> = (0..40u32).map(|i| (i * 37 + 11) as u8).collect();
+        for a in 0..8 {
+            for n in 0..data.len() - a {
+                let d = &data[a..a + n];
+                assert_eq!(
+                    crc16(d),
+                    d.iter().fold(0, |c, &b| crc_byte(c, b)),
+                    "{a} {n}"
+                );
+            }
+        }
         let b = block(4027, 1, &[1, 2, 3, 4, 5, 6]);
         assert_eq!(b.len(), 16);
         assert_eq!(&b[4..8], &[0xbb, 0x2f, 16, 0]); // 4027 | 1 << 13 = 0x2fbb

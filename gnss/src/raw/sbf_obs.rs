@@ -35,7 +35,6 @@ use super::ubx_obs::{RawEpoch, RawSat, RawSignal};
 use super::RawStats;
 use crate::signal::frequency;
 use crate::sv::{Constellation, Sv};
-use std::collections::HashMap;
 
 /// Speed of light, m/s.
 const C: f64 = 299_792_458.0;
@@ -130,7 +129,14 @@ struct Lock {
 /// The converter's state across epochs.
 #[derive(Default)]
 pub struct SbfConverter {
-    locks: HashMap<(Sv, [u8; 2]), Lock>,
+    /// Lock state per SVID and signal number (`svid << 6 | sig`: a flat table rather than a
+    /// hash map, which cost a tenth of the conversion).
+    locks: Vec<Lock>,
+}
+
+/// The lock-table index of an SVID and signal number (0..=63).
+fn lock_key(svid: u8, sig: u8) -> usize {
+    (svid as usize) << 6 | (sig as usize & 63)
 }
 
 /// A signal of one satellite placed in a slot, before the slots are filled.
@@ -172,7 +178,7 @@ impl SbfConverter {
                     e.glonass.push((sv.prn, ch));
                 }
             }
-            let mut placed = self.satellite_signals(sv, s.fcn, &s.sigs, stats);
+            let mut placed = self.satellite_signals(sv, s.svid, s.fcn, &s.sigs, stats);
             placed.sort_by_key(|p| p.sig);
             let mut sat = RawSat { sv, sig: [None; 3] };
             for p in placed {
@@ -193,6 +199,7 @@ impl SbfConverter {
     fn satellite_signals(
         &mut self,
         sv: Sv,
+        svid: u8,
         fcn: Option<i8>,
         sigs: &[SigMeas],
         stats: &mut RawStats,
@@ -235,7 +242,7 @@ impl SbfConverter {
                 (Some(pr), Some(c), Some(f)) if g.type2 || g.lock.is_some() => pr * f / C + c,
                 _ => 0.0,
             };
-            let lli = self.lli(sv, code, g, cp != 0.0);
+            let lli = self.lli(lock_key(svid, g.sig), g, cp != 0.0);
             out.push(Placed {
                 sig: g.sig,
                 slot,
@@ -253,8 +260,11 @@ impl SbfConverter {
     }
 
     /// The loss-of-lock indicator of one measurement, updating the signal's lock state.
-    fn lli(&mut self, sv: Sv, code: [u8; 2], g: &SigMeas, phase: bool) -> u8 {
-        let st = self.locks.entry((sv, code)).or_default();
+    fn lli(&mut self, key: usize, g: &SigMeas, phase: bool) -> u8 {
+        if self.locks.is_empty() {
+            self.locks = vec![Lock::default(); 1 << 14];
+        }
+        let st = &mut self.locks[key & 0x3fff];
         if let Some(lock) = g.lock {
             let cap = if g.type2 { 254 } else { u16::MAX };
             if lock == 0 || st.last.is_some_and(|l| lock < l.min(cap)) {
@@ -372,13 +382,13 @@ mod tests {
     fn type2_lock_time_clipped_at_254_is_no_slip() {
         let mut c = SbfConverter::new();
         let mut st = RawStats::default();
-        let sv = Sv::new(Constellation::Gps, 1);
+        let k = lock_key(1, 2);
         let t1 = sig(0, Some(400), false);
-        assert_eq!(c.lli(sv, *b"2W", &t1, true), 0);
+        assert_eq!(c.lli(k, &t1, true), 0);
         let t2 = sig(2, Some(254), true);
-        assert_eq!(c.lli(sv, *b"2W", &t2, true), 0);
+        assert_eq!(c.lli(k, &t2, true), 0);
         let t2 = sig(2, Some(12), true);
-        assert_eq!(c.lli(sv, *b"2W", &t2, true), 1);
+        assert_eq!(c.lli(k, &t2, true), 1);
         let mut m = epoch(vec![sig(0, Some(1), false)]);
         m.flags = 0x80;
         assert!(c.epoch(&m, &mut st).is_none());
