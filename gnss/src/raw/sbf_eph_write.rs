@@ -224,3 +224,87 @@ pub fn iono_blocks(k: &Klobuchar, leap: i32, t_ms: i64) -> Vec<u8> {
     out.extend(block(GPS_UTC, 0, &utc.0));
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::raw::sbf_nav::decode_nav;
+    use crate::sv::Sv;
+    use hifitime::Epoch;
+
+    /// Every field back within the f4 precision SBF carries (10⁻⁷ relative).
+    fn same(a: &NavRecord, b: &NavRecord) {
+        assert_eq!((a.sv, a.kind, a.toc), (b.sv, b.kind, b.toc));
+        assert_eq!(a.orbit.len(), b.orbit.len());
+        for (x, y) in a
+            .clock
+            .iter()
+            .chain(&a.orbit)
+            .zip(b.clock.iter().chain(&b.orbit))
+        {
+            assert!((x - y).abs() <= 1e-7 * y.abs(), "{x} vs {y}");
+        }
+    }
+
+    #[test]
+    fn beidou_and_glonass_blocks_read_back() {
+        // BDT week 944 (GPS week 2300), toc = toe = 3600 s BDT
+        let toc = Epoch::from_gpst_seconds(2300.0 * 604_800.0 + 3600.0 + 14.0);
+        let mut orbit = vec![
+            1.0,
+            331.890625,
+            -4.659e-9,
+            0.8665 * PI,
+            1.1011e-5,
+            9.5e-4,
+            -1.409e-5,
+            6493.38,
+            3600.0,
+            -2.6e-8,
+            0.134 * PI,
+            -2.3e-8,
+            0.0135 * PI,
+            424.171875,
+            0.433 * PI,
+            -5.5e-9,
+            -2.8e-10,
+        ];
+        orbit.extend([0.0, 944.0, 0.0, 2.0, 0.0, 2e-10, -9.5e-9, 3000.0, 1.0]);
+        let bds = NavRecord {
+            sv: crate::sv::Sv::new(Constellation::BeiDou, 45),
+            kind: NavKind::Kepler,
+            toc,
+            clock: [3.94e-4, 2.5e-11, 0.0],
+            orbit,
+            line: 0,
+        };
+        let b = nav_block(&bds).unwrap();
+        same(&decode_nav(BDS_NAV, &b).unwrap(), &bds);
+
+        // GLONASS slot 3, channel −4, toe 395118 s of GPS week 2300 (frame time in UTC)
+        let toe = Epoch::from_gpst_seconds(2300.0 * 604_800.0 + 395_118.0);
+        let glo = NavRecord {
+            sv: Sv::new(Constellation::Glonass, 3),
+            kind: NavKind::Glonass,
+            toc: toe,
+            clock: [1.259408891201e-4, 9.094947017729e-13, 395_100.0],
+            orbit: vec![
+                -7741.1689453125,
+                -2.988474845886,
+                0.0,
+                1.0,
+                10624.01220703125,
+                0.1815881729126,
+                1.862645149231e-9,
+                -4.0,
+                21866.857421875,
+                -1.144448280334,
+                -2.793967723846e-9,
+                3.0,
+            ],
+            line: 0,
+        };
+        let b = nav_block(&glo).unwrap();
+        same(&decode_nav(GLO_NAV, &b).unwrap(), &glo);
+    }
+}

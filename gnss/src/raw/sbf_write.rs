@@ -166,7 +166,7 @@ fn type1(id: u8, fcn: Option<i8>, g: &Sig, n2: u8) -> [u8; 20] {
     t[16..18].copy_from_slice(&(g.lock_s as u16).to_le_bytes());
     let hi = match (g.sig, fcn) {
         (32.., _) => g.sig - 32,
-        (8..=11, Some(f)) => (f + 8) as u8,
+        (8..=11, Some(f)) => (f.clamp(-8, 23) + 8) as u8,
         _ => 0,
     };
     t[18] = hi << 3 | u8::from(g.half) << 2;
