@@ -61,7 +61,7 @@ pub fn detect_format(path: &Path) -> Result<ObsFormat> {
         Error::input(
             path,
             "neither a RINEX observation file (no 'RINEX VERSION / TYPE' first line) nor a \
-             raw log (no UBX or RTCM 3 frame with a valid checksum in the first 64 KiB); give \
+             raw log (no UBX, RTCM 3 or SBF frame with a valid checksum in the first 64 KiB); give \
              --obs-format to read it as one of them anyway",
         )
     })

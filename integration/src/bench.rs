@@ -38,6 +38,8 @@ impl std::fmt::Display for Ingest {
 /// small logs give a stable figure.
 #[derive(Clone, Debug)]
 pub struct ConvertBench {
+    /// The log's format.
+    pub format: gnss::raw::RawFormat,
     /// Bytes of the log.
     pub bytes: u64,
     /// Conversions run.
@@ -64,9 +66,10 @@ impl std::fmt::Display for ConvertBench {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         writeln!(
             f,
-            "convert: {:.1} MB of raw log ({} epochs, {} ephemerides) to RINEX observations and \
+            "convert: {:.1} MB of {} log ({} epochs, {} ephemerides) to RINEX observations and \
              navigation, {} runs in {:.3} s = {:.0} MB/s",
             self.bytes as f64 / 1e6,
+            self.format.name(),
             self.stats.epochs,
             self.stats.nav.ephemerides,
             self.runs,
@@ -100,7 +103,7 @@ fn thread_cpu_seconds() -> Option<f64> {
 }
 
 /// Convert a raw log to temporary RINEX observation and navigation files, repeatedly.
-fn convert_bench(path: &Path, format: Option<gnss::raw::RawFormat>) -> Result<ConvertBench> {
+fn convert_bench(path: &Path, format: gnss::raw::RawFormat) -> Result<ConvertBench> {
     let dir = std::env::temp_dir();
     let id = std::process::id();
     let (obs, nav) = (
@@ -111,7 +114,7 @@ fn convert_bench(path: &Path, format: Option<gnss::raw::RawFormat>) -> Result<Co
     // (without any, convert refuses a navigation file).
     let first = convert(
         path,
-        format,
+        Some(format),
         None,
         Outputs {
             obs: &obs,
@@ -129,7 +132,7 @@ fn convert_bench(path: &Path, format: Option<gnss::raw::RawFormat>) -> Result<Co
     let mut runs = 0;
     let mut last = first;
     while last.is_ok() && (runs == 0 || (t.elapsed().as_secs_f64() < 1.0 && runs < 1000)) {
-        last = convert(path, format, None, outs);
+        last = convert(path, Some(format), None, outs);
         runs += 1;
     }
     let seconds = t.elapsed().as_secs_f64();
@@ -138,6 +141,7 @@ fn convert_bench(path: &Path, format: Option<gnss::raw::RawFormat>) -> Result<Co
     let _ = std::fs::remove_file(&nav);
     let stats = last?;
     Ok(ConvertBench {
+        format,
         bytes: stats.bytes,
         runs,
         seconds,
@@ -213,7 +217,7 @@ pub fn peak_rss_kib() -> Option<u64> {
 /// is converted ([`ConvertBench`]), a RINEX file parsed ([`rinex_ingest`]).
 pub fn ingest(path: &Path) -> Result<Ingest> {
     match detect_format(path)? {
-        ObsFormat::Raw(f) => convert_bench(path, Some(f)).map(|b| Ingest::Raw(Box::new(b))),
+        ObsFormat::Raw(f) => convert_bench(path, f).map(|b| Ingest::Raw(Box::new(b))),
         ObsFormat::Rinex => rinex_ingest(path).map(Ingest::Rinex),
     }
 }

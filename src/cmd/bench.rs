@@ -10,7 +10,8 @@ use std::path::PathBuf;
 /// joint adjustment's wall time and memory.
 ///
 /// `ppkat bench ingest FILE` streams an observation file through the parser and prints MB/s
-/// of RINEX text and the peak memory; given a raw receiver log (u-blox UBX) it times its
+/// of RINEX text and the peak memory; given a raw receiver log (u-blox UBX, RTCM 3 or
+/// Septentrio SBF) it times its
 /// conversion to RINEX observations and navigation instead and prints MB/s of log. `ppkat bench ppk …` runs `ppkat ppk` with the same
 /// flags and prints the engine's milliseconds per rover epoch and the peak memory.
 /// `ppkat bench adjust` simulates a block of photos and prints its joint adjustment's wall

@@ -9,12 +9,15 @@ use std::path::PathBuf;
 /// The format of the log.
 #[derive(Clone, Copy, ValueEnum)]
 pub enum FormatArg {
-    /// Recognise the format from the file's content (UBX sync bytes with a valid checksum)
+    /// Recognise the format from the file's content (UBX, RTCM 3 or SBF frames with a valid
+    /// checksum)
     Auto,
     /// u-blox UBX (RXM-RAWX measurements, TIM-TM2 time marks)
     Ubx,
     /// RTCM 3 (MSM4/5/6/7 observations, 1020 GLONASS channels, 1005/1006 station position)
     Rtcm3,
+    /// Septentrio SBF (MeasEpoch measurements, GPSNav/GALNav/BDSNav/GLONav, ExtEvent)
+    Sbf,
 }
 
 /// Convert a raw receiver log to a RINEX 3.04 observation file with flag-5 event records.
@@ -25,8 +28,12 @@ pub enum FormatArg {
 /// BeiDou C2I…); TIM-TM2 time marks become flag-5 event records (falling edges, as convbin)
 /// and, with --events, a CSV of every edge. With --nav, the ephemerides decoded from the
 /// navigation subframes (RXM-SFRBX; GPS/QZSS words parity-checked, Galileo pages CRC-checked)
-/// go to a RINEX 3.04 navigation file. The format is recognised from the content, not
-/// the file name. Prints what was read and everything skipped: checksum failures, truncated
+/// go to a RINEX 3.04 navigation file. RTCM 3 logs give MSM observations, their ephemeris
+/// messages and the station position. Septentrio SBF logs give MeasEpoch measurements (RINEX
+/// codes as RTKLIB and Septentrio's converter name them: GPS C1C/C2W/C2L/C5Q, Galileo
+/// C1C/C5Q/C7Q …; loss of lock from the lock time and the half-cycle flag), the decoded
+/// navigation blocks (GPSNav, GALNav, BDSNav, GLONav) for --nav, and ExtEvent time marks as
+/// flag-5 events. The format is recognised from the content, not the file name. Prints what was read and everything skipped: checksum failures, truncated
 /// frames, unused message types with their counts, dropped measurements by reason.
 #[derive(clap::Args)]
 pub struct Args {
@@ -56,6 +63,7 @@ pub fn run(a: Args) -> Result<()> {
         FormatArg::Auto => None,
         FormatArg::Ubx => Some(RawFormat::Ubx),
         FormatArg::Rtcm3 => Some(RawFormat::Rtcm3),
+        FormatArg::Sbf => Some(RawFormat::Sbf),
     };
     let outs = Outputs {
         obs: &a.out,

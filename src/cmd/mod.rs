@@ -80,8 +80,8 @@ pub fn complete(skipped: Vec<String>) -> Result<()> {
 /// The format of an observation input.
 #[derive(Clone, Copy, ValueEnum)]
 pub enum ObsFormatArg {
-    /// Tell it from the content: RINEX (its first line, or gzip) or a raw receiver log (UBX
-    /// frames with valid checksums)
+    /// Tell it from the content: RINEX (its first line, or gzip) or a raw receiver log (UBX,
+    /// RTCM 3 or SBF frames with valid checksums)
     Auto,
     /// RINEX 2/3/4 observations (plain, gzip, Hatanaka)
     Rinex,
@@ -89,6 +89,8 @@ pub enum ObsFormatArg {
     Ubx,
     /// RTCM 3 log (MSM4/5/6/7 observations), e.g. DJI PPKRAW.bin
     Rtcm3,
+    /// Septentrio SBF log (MeasEpoch measurements, GPS/GAL/BDS/GLO nav blocks, ExtEvent)
+    Sbf,
 }
 
 impl From<ObsFormatArg> for Option<ObsFormat> {
@@ -98,6 +100,7 @@ impl From<ObsFormatArg> for Option<ObsFormat> {
             ObsFormatArg::Rinex => Some(ObsFormat::Rinex),
             ObsFormatArg::Ubx => Some(ObsFormat::Raw(RawFormat::Ubx)),
             ObsFormatArg::Rtcm3 => Some(ObsFormat::Raw(RawFormat::Rtcm3)),
+            ObsFormatArg::Sbf => Some(ObsFormat::Raw(RawFormat::Sbf)),
         }
     }
 }

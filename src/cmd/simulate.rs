@@ -12,7 +12,9 @@ use std::path::{Path, PathBuf};
 /// image_observations.csv and truth_blunders.csv; with --raw ubx also rover.ubx and base.ubx,
 /// the same observations as u-blox logs (RXM-RAWX, and TIM-TM2 time marks at the exposures);
 /// with --raw rtcm3 rover.rtcm3 and base.rtcm3, RTCM 3 logs (MSM7, station position 1005; no
-/// events: RTCM carries none). The scenario keys are shown in
+/// events: RTCM carries none); with --raw sbf rover.sbf and base.sbf, Septentrio SBF logs
+/// (GPSNav/GALNav ephemerides, GPSIon/GPSUtc, MeasEpoch, ExtEvent at the exposures; no station
+/// position: SBF carries none). The scenario keys are shown in
 /// fixtures/scenario_small.toml; every error source can be switched under `[errors]`.
 ///
 /// hard-sky is a flight where GNSS alone stays float at every strip start (5–6 satellites above
@@ -62,6 +64,8 @@ pub enum RawArg {
     Ubx,
     /// RTCM 3: MSM7 per system and epoch, 1005, 1019 (week), 1020 (GLONASS channels); no events
     Rtcm3,
+    /// Septentrio SBF: GPSNav/GALNav, GPSIon/GPSUtc, MeasEpoch per epoch, ExtEvent per exposure
+    Sbf,
 }
 
 /// Simulate the built-in project or the flight scenario named by the arguments and print the
@@ -93,6 +97,15 @@ pub fn run(args: Args) -> Result<()> {
         let (rover, base, dropped) = simulate::write_rtcm(&rep)?;
         println!(
             "raw logs: {} and {} (RTCM 3; {dropped} measurements RTCM cannot carry)",
+            rover.display(),
+            base.display()
+        );
+    }
+    if let Some(RawArg::Sbf) = args.raw {
+        let (rover, base, dropped) = simulate::write_sbf(&rep)?;
+        println!(
+            "raw logs: {} and {} (Septentrio SBF; {dropped} measurements SBF cannot carry; no \
+             station position: SBF carries none)",
             rover.display(),
             base.display()
         );

@@ -109,7 +109,7 @@ fn bench_ingest_times_the_conversion_of_a_log() {
     };
     let t = succeeds(&ppkat(&["bench", "ingest", p(&log)]));
     assert!(
-        t.contains("convert: 3.0 MB of raw log (562 epochs, 28 ephemerides)"),
+        t.contains("convert: 3.0 MB of u-blox UBX log (562 epochs, 28 ephemerides)"),
         "{t}"
     );
     assert!(
@@ -281,4 +281,100 @@ fn rtcm_logs_carry_their_orbits_and_base_station() {
         p(&dir.join("ppp.pos")),
     ]);
     fails_with(&o, &["contradicts the log"]);
+}
+
+/// `simulate --raw sbf` logs carry their ephemerides, ionosphere and exposures: `info` reads
+/// them by content (and with `--obs-format sbf`), `convert` writes the observations, the
+/// navigation file and the events, and `ppk` runs on the logs alone (no --nav), fixing as on
+/// the RINEX files.
+#[test]
+fn sbf_logs_carry_their_orbits_and_events() {
+    let dir = tmp("sim-sbf");
+    let t = succeeds(&ppkat(&[
+        "simulate",
+        "--scenario",
+        p(&fixture("scenario_small.toml")),
+        "--out",
+        p(&dir),
+        "--raw",
+        "sbf",
+    ]));
+    assert!(t.contains("0 measurements SBF cannot carry"), "{t}");
+    let rover = dir.join("rover.sbf");
+    for extra in [None, Some("sbf")] {
+        let mut args = vec!["info", p(&rover)];
+        if let Some(f) = extra {
+            args.extend(["--obs-format", f]);
+        }
+        let i = succeeds(&ppkat(&args));
+        assert!(i.starts_with("Septentrio SBF log"), "{i}");
+        assert!(i.contains("26 external events"), "{i}");
+        assert!(i.contains("signals C1C L1C D1C S1C C2W L2W D2W S2W"), "{i}");
+        assert!(i.contains("0 checksum failures"), "{i}");
+    }
+    let b = succeeds(&ppkat(&["bench", "ingest", p(&rover)]));
+    assert!(
+        b.contains("MB of Septentrio SBF log (1175 epochs, 144 ephemerides)"),
+        "{b}"
+    );
+    let (obs, nav, ev) = (
+        dir.join("sbf.obs"),
+        dir.join("sbf.nav"),
+        dir.join("sbf.csv"),
+    );
+    let c = succeeds(&ppkat(&[
+        "convert",
+        "--in",
+        p(&rover),
+        "--format",
+        "sbf",
+        "-o",
+        p(&obs),
+        "--nav",
+        p(&nav),
+        "--events",
+        p(&ev),
+    ]));
+    assert!(c.contains("1175 observation epochs, 26 events"), "{c}");
+    let n = std::fs::read_to_string(&nav).unwrap();
+    assert!(n.contains("GPSA") && n.contains("IONOSPHERIC CORR") && n.contains("\nE01 "));
+    let csv = std::fs::read_to_string(&ev).unwrap();
+    assert_eq!(csv.lines().count(), 27, "{csv}");
+    assert!(
+        csv.lines().nth(1).unwrap().contains(",falling,1,true"),
+        "{csv}"
+    );
+    let xyz = t
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("base:"))
+        .and_then(|l| l.split(" at ").nth(1))
+        .map(|l| l.split_whitespace().take(3).collect::<Vec<_>>().join(","))
+        .unwrap();
+    let (s, r) = (tmp("sim-sbf.pos"), tmp("sim-sbf-rnx.pos"));
+    for (rov, base, out, nav) in [
+        ("rover.sbf", "base.sbf", &s, None),
+        ("rover.obs", "base.obs", &r, Some(dir.join("nav.rnx"))),
+    ] {
+        let mut args = vec![
+            "ppk".to_string(),
+            "--rover".into(),
+            p(&dir.join(rov)).into(),
+            "--base".into(),
+            p(&dir.join(base)).into(),
+            format!("--base-pos={xyz}"),
+            "-o".into(),
+            p(out).into(),
+        ];
+        if let Some(n) = nav {
+            args.extend(["--nav".into(), p(&n).into()]);
+        }
+        succeeds(&ppkat(&args.iter().map(String::as_str).collect::<Vec<_>>()));
+    }
+    let (ls, lr) = (pos_lines(&s), pos_lines(&r));
+    assert_eq!(ls.len(), 1175);
+    for (a, b) in ls.iter().zip(&lr) {
+        let fa: Vec<&str> = a.split_whitespace().collect();
+        let fb: Vec<&str> = b.split_whitespace().collect();
+        assert_eq!((fa[0], fa[1], fa[5]), (fb[0], fb[1], fb[5]), "time and Q");
+    }
 }

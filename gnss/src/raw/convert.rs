@@ -148,8 +148,8 @@ fn write_nav_file(input: &Path, path: &Path, nav: &LogNav, st: &RawStats) -> Res
             input,
             format!(
                 "no complete ephemeris in the log's navigation messages ({} read): enable \
-                 UBX-RXM-SFRBX (u-blox) or RTCM 1019/1020/1042/1044/1045/1046 on the \
-                 receiver, or leave out --nav",
+                 UBX-RXM-SFRBX (u-blox), RTCM 1019/1020/1042/1044/1045/1046 or SBF \
+                 GPSNav/GALNav/BDSNav/GLONav on the receiver, or leave out --nav",
                 st.nav.messages
             ),
         ));

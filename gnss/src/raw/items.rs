@@ -39,6 +39,9 @@ pub struct EventMark {
     pub count: u16,
     /// The receiver marked the time valid.
     pub valid: bool,
+    /// The edge becomes a flag-5 event record: UBX falling edges (as convbin writes them),
+    /// every SBF ExtEvent (the receiver times only the edge it is set to).
+    pub record: bool,
 }
 
 /// One item of a raw log, in file order.
@@ -120,17 +123,20 @@ pub fn for_each_item(
             let fm = detect(&head).ok_or_else(|| {
                 Error::input(
                     path,
-                    "no UBX frame (B5 62 with a valid checksum) nor RTCM 3 frame (D3 with a \
-                     valid CRC) in the first 64 KiB: not a raw log ppkat reads; give a UBX or \
-                     RTCM 3 log, or --format ubx|rtcm3 to read it anyway",
+                    "no UBX frame (B5 62 with a valid checksum), RTCM 3 frame (D3 with a valid \
+                     CRC) nor SBF block ($@ with a valid CRC) in the first 64 KiB: not a raw \
+                     log ppkat reads; give a UBX, RTCM 3 or SBF log, or --format \
+                     ubx|rtcm3|sbf to read it anyway",
                 )
             })?;
             file = BufReader::new(File::open(path).map_err(io)?);
             fm
         }
     };
-    if format == RawFormat::Rtcm3 {
-        return super::rtcm_items::for_each_rtcm(path, hint, f);
+    match format {
+        RawFormat::Rtcm3 => return super::rtcm_items::for_each_rtcm(path, hint, f),
+        RawFormat::Sbf => return super::sbf_items::for_each_sbf(path, f),
+        RawFormat::Ubx => {}
     }
     let mut r = FrameReader::new(file);
     let mut st = RawStats::default();
@@ -209,6 +215,7 @@ fn marks(t: &Tm2, leap: i8) -> Vec<EventMark> {
             edge,
             count: t.count,
             valid: t.time_valid,
+            record: edge == Edge::Falling,
         });
     }
     v

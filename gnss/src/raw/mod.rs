@@ -3,8 +3,9 @@
 //! What enters: the bytes of a receiver log. What leaves: observation epochs in the records of
 //! [`crate::rinex`] ([`ObsEpoch`](crate::rinex::ObsEpoch), [`SatObs`](crate::rinex::SatObs)) (so that the RINEX writer and every engine take them as they take a
 //! RINEX file), camera events, and [`RawStats`] counting everything that was dropped.
-//! Uses [`crate::rinex::write`] to write RINEX. Formats: u-blox UBX ([`ubx`]) and RTCM 3
-//! MSM observations ([`rtcm`], [`rtcm_msm`], [`rtcm_items`]).
+//! Uses [`crate::rinex::write`] to write RINEX. Formats: u-blox UBX ([`ubx`]), RTCM 3
+//! MSM observations ([`rtcm`], [`rtcm_msm`], [`rtcm_items`]) and Septentrio SBF ([`sbf`],
+//! [`sbf_obs`], [`sbf_nav`], [`sbf_items`]).
 //!
 //! The UBX decoder is our own rather than the `ublox` crate: the conversion must reproduce
 //! RTKLIB convbin bit for bit (its loss-of-lock rules need the raw `trkStat`, `locktime` and
@@ -13,6 +14,12 @@
 //! The RTCM 3 decoder is our own for the same reasons (CRC failures counted, lock-time
 //! indicators kept raw for the loss-of-lock rule) and because the frame and MSM layouts are
 //! short; it reuses [`bits`] (bit fields, CRC-24Q) already written for navigation messages.
+//! The SBF decoder is our own for the same reasons again: the crates that read SBF
+//! (`libsbf`, `sbf-tools`) are parse-only, giving raw fields (no pseudorange, phase in
+//! cycles or Type-2 values from their offsets), they stop at the first bad block where CRC
+//! failures must be counted and the search resumed, the lock time and half-cycle flag must be
+//! kept raw for the loss-of-lock rule, and the writer `simulate --raw sbf` needs is ours
+//! anyway; the block format is a sync, a CRC-16 and little-endian fields.
 
 pub mod bits;
 pub mod convert;
@@ -28,6 +35,13 @@ pub mod rtcm_items;
 pub mod rtcm_msm;
 pub mod rtcm_station;
 pub mod rtcm_write;
+pub mod sbf;
+pub mod sbf_eph_write;
+pub mod sbf_items;
+pub mod sbf_meas;
+pub mod sbf_nav;
+pub mod sbf_obs;
+pub mod sbf_write;
 pub mod source;
 pub mod ubx;
 pub mod ubx_nav;
@@ -44,6 +58,8 @@ pub enum RawFormat {
     Ubx,
     /// RTCM 3 (MSM observations), e.g. DJI `PPKRAW.bin`.
     Rtcm3,
+    /// Septentrio SBF (MeasEpoch, decoded navigation blocks, ExtEvent).
+    Sbf,
 }
 
 impl RawFormat {
@@ -52,12 +68,13 @@ impl RawFormat {
         match self {
             RawFormat::Ubx => "u-blox UBX",
             RawFormat::Rtcm3 => "RTCM 3",
+            RawFormat::Sbf => "Septentrio SBF",
         }
     }
 }
 
 /// The format of a log from its first bytes: the format of the first whole frame with a
-/// valid checksum (UBX Fletcher, RTCM 3 CRC-24Q) within them. `None` when no known format is
+/// valid checksum (UBX Fletcher, RTCM 3 CRC-24Q, SBF CRC-16-CCITT) within them. `None` when no known format is
 /// recognised.
 pub fn detect(head: &[u8]) -> Option<RawFormat> {
     let mut i = 0;
@@ -71,6 +88,9 @@ pub fn detect(head: &[u8]) -> Option<RawFormat> {
         }
         if rtcm::frame_at(head, i) {
             return Some(RawFormat::Rtcm3);
+        }
+        if sbf::block_at(head, i) {
+            return Some(RawFormat::Sbf);
         }
         i += 1;
     }

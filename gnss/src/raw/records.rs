@@ -5,7 +5,7 @@
 //! What enters: [`RawItem`]s in file order. What leaves: [`RinexOut`]s in RINEX order, and
 //! the header's types and span from a [`Scan`].
 
-use super::items::{gpst, Edge, EventMark, RawItem};
+use super::items::{gpst, EventMark, RawItem};
 use super::ubx_obs::RawEpoch;
 use crate::error::{Error, Result};
 use crate::rinex::{Obs, ObsCode, SatObs};
@@ -131,7 +131,8 @@ pub fn span(scan: &Scan, input: &Path) -> Result<(Epoch, Epoch)> {
             input,
             "no measurement epoch with a known GPS week: for UBX enable RXM-RAWX output on \
              the receiver and log after it has acquired time; for RTCM 3 log MSM4/5/6/7 \
-             together with an ephemeris message (1019, 1042, 1045 or 1046) that gives the week",
+             together with an ephemeris message (1019, 1042, 1045 or 1046) that gives the week; \
+             for SBF log the MeasEpoch block (Meas3 blocks are not read)",
         )),
     }
 }
@@ -144,8 +145,8 @@ pub enum RinexOut {
     Event(Epoch, Vec<String>),
 }
 
-/// Puts a log's items in RINEX order: a time mark's falling edge (as convbin) goes before the
-/// first epoch not earlier than it; every edge is kept in `marks` for the CSV.
+/// Puts a log's items in RINEX order: a time mark that is a record (UBX: its falling edge, as
+/// convbin; SBF: every event) goes before the first epoch not earlier than it; every edge is kept in `marks` for the CSV.
 pub struct RinexOrder<'a> {
     types: &'a [(Constellation, Vec<ObsCode>)],
     pending: Vec<EventMark>,
@@ -172,7 +173,7 @@ impl<'a> RinexOrder<'a> {
         match it {
             RawItem::Event(ev) => {
                 self.marks.push(ev);
-                if ev.edge == Edge::Falling {
+                if ev.record {
                     self.pending.push(ev);
                 }
             }

@@ -36,12 +36,12 @@ fn put_sm(w: &mut Writer, n: usize, v: i64) {
 }
 
 /// The URA index (0–15) whose nominal value is the first at least `m` metres.
-fn ura_index(m: f64) -> i64 {
+pub(crate) fn ura_index(m: f64) -> i64 {
     (0..15).find(|&n| ura_metres(n) >= m).unwrap_or(15) as i64
 }
 
 /// The SISA index nearest `m` metres (255: no accuracy prediction).
-fn sisa_index(m: f64) -> i64 {
+pub(crate) fn sisa_index(m: f64) -> i64 {
     if m < 0.0 {
         return 255;
     }

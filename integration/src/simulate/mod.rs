@@ -252,6 +252,29 @@ pub fn write_rtcm(rep: &SimReport) -> Result<(PathBuf, PathBuf, u64), SimError> 
     Ok((rover, base, dropped))
 }
 
+/// The rover and base of a simulation also as Septentrio SBF logs (`rover.sbf`, `base.sbf`:
+/// the constellation's ephemerides as GPSNav and GALNav, its Klobuchar parameters as GPSIon
+/// and GPSUtc, then a MeasEpoch per epoch and an ExtEvent per exposure), made from the RINEX
+/// files it wrote: their paths and how many measurements SBF could not carry (none for the
+/// simulator's GPS L1/L2 and Galileo E1/E5a). SBF has no block for the station position or
+/// antenna the RINEX header gives (a receiver logs them in its setup blocks, which ppkat does
+/// not read).
+pub fn write_sbf(rep: &SimReport) -> Result<(PathBuf, PathBuf, u64), SimError> {
+    let mut paths = Vec::new();
+    let mut dropped = 0;
+    let nav = NavFile::read(&rep.nav)?;
+    let iono = nav.gps_iono.map(|k| (k, nav.leap_seconds.unwrap_or(18)));
+    for (src, name) in [(&rep.rover, "rover.sbf"), (&rep.base, "base.sbf")] {
+        let (bytes, d) =
+            gnss::raw::sbf_write::sbf_from_obs(&ObsFile::read(src)?, &nav.records, iono);
+        dropped += d;
+        paths.push(io::write_bytes(&rep.dir, name, &bytes)?);
+    }
+    let base = paths.pop().unwrap_or_default();
+    let rover = paths.pop().unwrap_or_default();
+    Ok((rover, base, dropped))
+}
+
 /// The synthetic constellation's navigation file for `[start, end]` (GPST), written to
 /// `dir/nav.rnx` and read back with our own reader: its path, the ephemerides and the GPS
 /// Klobuchar parameters the simulation uses.

@@ -1,0 +1,29 @@
+#![no_main]
+//! Septentrio SBF logs: blocks, MeasEpoch (Type-1/Type-2 sub-blocks), the navigation blocks
+//! (GPSNav, GALNav, BDSNav, GLONav, each decoded record written back), GPSIon/GPSUtc and
+//! ExtEvent.
+
+use libfuzzer_sys::fuzz_target;
+use ppkat_fuzz::with_file;
+
+fuzz_target!(|data: &[u8]| {
+    use gnss::raw::{items::for_each_item, sbf, sbf_nav, RawFormat};
+    with_file("f.sbf", data, |p| {
+        let _ = for_each_item(p, Some(RawFormat::Sbf), None, |_| {});
+    });
+    // a block on its own, as every decoder sees it
+    if let Some(m) = gnss::raw::sbf_meas::decode_meas_epoch(data) {
+        let mut st = gnss::raw::RawStats::default();
+        let _ = gnss::raw::sbf_obs::SbfConverter::new().epoch(&m, &mut st);
+    }
+    if let Some(e) = sbf::decode_ext_event(data) {
+        let _ = e.time();
+    }
+    for n in [sbf::GPS_NAV, sbf::GAL_NAV, sbf::BDS_NAV, sbf::GLO_NAV] {
+        if let Ok(r) = sbf_nav::decode_nav(n, data) {
+            let _ = gnss::raw::sbf_eph_write::nav_block(&r);
+        }
+    }
+    let _ = gnss::raw::sbf_items::decode_gps_ion(data);
+    let _ = gnss::raw::sbf_items::decode_gps_utc(data);
+});
