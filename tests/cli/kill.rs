@@ -1,5 +1,5 @@
-//! `kill -9` of `ppk` (over RINEX and over a real u-blox log), `adjust`, `import` and
-//! `exposures --geotag` at several moments, over the outputs of an earlier run: the earlier
+//! `kill -9` of `ppk` (over RINEX and over a real u-blox log), `adjust`, `import`, `match`
+//! and `exposures --geotag` at several moments, over the outputs of an earlier run: the earlier
 //! outputs stay whole or the new ones appear whole, never a mix or a partial file, and the
 //! next run leaves no temporary behind.
 
@@ -217,6 +217,35 @@ fn killed_import_leaves_the_earlier_folder_whole() {
         p(&out),
     ];
     killed_runs_leave_the_folder_whole(&args, &work, &out, 5);
+}
+
+#[test]
+fn killed_match_leaves_the_earlier_folder_whole() {
+    let Some(photos) = shared("photo/brighton-beach") else {
+        return;
+    };
+    let work = tmp("kill-match");
+    let input = tmp("kill-match-photos");
+    std::fs::create_dir_all(&work).unwrap();
+    std::fs::create_dir_all(&input).unwrap();
+    // Four overlapping photos, reduced while decoded: a run of a few seconds.
+    for n in 18..22 {
+        let name = format!("DJI_{n:04}.JPG");
+        std::fs::copy(photos.join(&name), input.join(&name)).unwrap();
+    }
+    let out = work.join("tie");
+    let args = [
+        "match",
+        "--photos",
+        p(&input),
+        "--max-image-size",
+        "800",
+        "--max-features",
+        "1000",
+        "-o",
+        p(&out),
+    ];
+    killed_runs_leave_the_folder_whole(&args, &work, &out, 6);
 }
 
 /// A DJI Timestamp.MRK of the 18 Brighton Beach photos (DJI_0018 … DJI_0035), 3 s apart inside
