@@ -43,7 +43,8 @@ enum BenchCmd {
 /// Writes only those temporary files, removed after.
 #[derive(clap::Args)]
 struct IngestArgs {
-    /// RINEX observation file to parse (plain, Hatanaka or gzip), or a u-blox UBX log.
+    /// RINEX observation file to parse (plain, Hatanaka or gzip), or a raw receiver log
+    /// (u-blox UBX, RTCM 3, Septentrio SBF).
     #[arg(value_name = "FILE")]
     file: PathBuf,
 }

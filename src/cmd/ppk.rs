@@ -40,10 +40,10 @@ use std::sync::Arc;
 /// broadcast antenna phase centre largely cancels).
 #[derive(clap::Args)]
 pub struct Args {
-    /// Observation file of the moving receiver: RINEX, or a u-blox UBX log.
+    /// Observation file of the moving receiver: RINEX, or a raw receiver log (u-blox UBX, RTCM 3, Septentrio SBF).
     #[arg(long, value_name = "FILE")]
     rover: PathBuf,
-    /// Observation file of the base (reference) receiver: RINEX, or a u-blox UBX log.
+    /// Observation file of the base (reference) receiver: RINEX, or a raw receiver log (u-blox UBX, RTCM 3, Septentrio SBF).
     #[arg(long, value_name = "FILE")]
     base: PathBuf,
     /// Format of both observation files; auto tells each from its content (so a UBX rover

@@ -23,7 +23,7 @@ use std::path::PathBuf;
 /// delay is applied, and GLONASS satellites need the observation header's frequency channels.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Observation file of the receiver to position: RINEX, or a u-blox UBX log.
+    /// Observation file of the receiver to position: RINEX, or a raw receiver log (u-blox UBX, RTCM 3, Septentrio SBF).
     #[arg(long, value_name = "FILE")]
     obs: PathBuf,
     /// Format of the observation file; auto tells it from the content.

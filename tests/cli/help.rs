@@ -60,8 +60,8 @@ fn every_argument_of_every_subcommand_is_described() {
     // The flags the issue named, with their texts.
     let t = succeeds(&ppkat(&["ppk", "--help"]));
     for needle in [
-        "--rover <FILE>\n          Observation file of the moving receiver: RINEX, or a u-blox UBX log",
-        "--base <FILE>\n          Observation file of the base (reference) receiver: RINEX, or a u-blox UBX log",
+        "--rover <FILE>\n          Observation file of the moving receiver: RINEX, or a raw receiver log (u-blox UBX, RTCM 3, Septentrio SBF)",
+        "--base <FILE>\n          Observation file of the base (reference) receiver: RINEX, or a raw receiver log (u-blox UBX, RTCM 3, Septentrio SBF)",
         "--obs-format <FORMAT>\n          Format of both observation files",
         "--format <FORMAT>\n          Layout of the output",
         "-o, --out <OUT.pos>\n          Output file",
