@@ -102,6 +102,26 @@ pub fn gpst(week: u16, tow: f64) -> Epoch {
     Epoch::from_gpst_nanoseconds(ns.max(0) as u64)
 }
 
+/// Hands decoded epochs on in file order, counting them and the time jumps (an epoch not
+/// after the one before it); one for every log format.
+#[derive(Default)]
+pub(crate) struct EpochOrder {
+    last: Option<(u16, f64)>,
+}
+
+impl EpochOrder {
+    /// Count `e` (and a time jump if it is not after the last epoch) and hand it to `f`.
+    pub(crate) fn emit(&mut self, e: RawEpoch, st: &mut RawStats, f: &mut dyn FnMut(RawItem)) {
+        let t = (e.week, e.tow);
+        if self.last.is_some_and(|l| l >= t) {
+            st.time_jumps += 1;
+        }
+        self.last = Some(t);
+        st.epochs += 1;
+        f(RawItem::Epoch(e));
+    }
+}
+
 /// Read every item of a log, calling `f` on each; returns what was read and dropped. `hint`
 /// settles the week where the format leaves it open (RTCM 3; see [`TimeHint`]).
 pub fn for_each_item(
@@ -144,7 +164,7 @@ pub fn for_each_item(
     let mut nav = NavDecoder::new();
     let mut week = None;
     let mut leap = 18i8;
-    let mut last: Option<(u16, f64)> = None;
+    let mut order = EpochOrder::default();
     while let Some(fr) = r.next_frame(&mut st).map_err(io)? {
         match (fr.class, fr.id) {
             (0x02, 0x15) => {
@@ -159,13 +179,7 @@ pub fn for_each_item(
                     week = Some(x.week);
                 }
                 if let Some(e) = conv.epoch(&x, &mut st) {
-                    let t = (e.week, e.tow);
-                    if last.is_some_and(|l| (l.0, l.1) >= t) {
-                        st.time_jumps += 1;
-                    }
-                    last = Some(t);
-                    st.epochs += 1;
-                    f(RawItem::Epoch(e));
+                    order.emit(e, &mut st, &mut f);
                 }
             }
             (0x0d, 0x03) => {

@@ -17,7 +17,7 @@
 //! is handed on once; repeats are counted among the navigation messages.
 
 use super::bits::bits_u;
-use super::items::RawItem;
+use super::items::{EpochOrder, RawItem};
 use super::rtcm::{message_number, FrameReader};
 use super::rtcm_eph::{decode_ephemeris, gps_week, EphError, BDT_WEEK0};
 use super::rtcm_msm::{decode_msm, msm_kind, MsmDecoder, WEEK_MS};
@@ -187,16 +187,7 @@ pub fn for_each_rtcm(
     };
     let mut dec = MsmDecoder::new(start.map(|s| s.0));
     let mut eph = EphDecoder::default();
-    let mut last: Option<(u16, f64)> = None;
-    let mut emit = |e: super::ubx_obs::RawEpoch, st: &mut RawStats, f: &mut dyn FnMut(RawItem)| {
-        let t = (e.week, e.tow);
-        if last.is_some_and(|l| l >= t) {
-            st.time_jumps += 1;
-        }
-        last = Some(t);
-        st.epochs += 1;
-        f(RawItem::Epoch(e));
-    };
+    let mut order = EpochOrder::default();
     while let Some(p) = r.next_frame(&mut st).map_err(io)? {
         let n = message_number(p);
         if msm_kind(n).is_some() {
@@ -205,7 +196,7 @@ pub fn for_each_rtcm(
                 continue;
             };
             if let Some(e) = dec.push(&m, &mut st) {
-                emit(e, &mut st, &mut f);
+                order.emit(e, &mut st, &mut f);
             }
             continue;
         }
@@ -226,7 +217,7 @@ pub fn for_each_rtcm(
         }
     }
     if let Some(e) = dec.finish() {
-        emit(e, &mut st, &mut f);
+        order.emit(e, &mut st, &mut f);
     }
     Ok(st)
 }

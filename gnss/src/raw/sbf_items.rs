@@ -11,7 +11,7 @@
 //! ExtEvent blocks become events numbered in file order (SBF has no edge counter); each is a
 //! flag-5 record whatever its polarity, since the receiver times only the edge it is set to.
 
-use super::items::{Edge, EventMark, RawItem};
+use super::items::{Edge, EpochOrder, EventMark, RawItem};
 use super::sbf::{self, FrameReader, EXT_EVENT, MEAS_EPOCH};
 use super::sbf_nav::NavBlocks;
 use super::sbf_obs::SbfConverter;
@@ -54,7 +54,7 @@ pub fn for_each_sbf(path: &Path, mut f: impl FnMut(RawItem)) -> Result<RawStats>
     let mut conv = SbfConverter::new();
     let mut nav = NavBlocks::default();
     let (mut iono, mut leap): (Option<Klobuchar>, Option<i32>) = (None, None);
-    let mut last: Option<(u16, f64)> = None;
+    let mut order = EpochOrder::default();
     let mut count = 0u16;
     while let Some(b) = r.next_block(&mut st).map_err(io)? {
         let malformed = |st: &mut RawStats| {
@@ -67,13 +67,7 @@ pub fn for_each_sbf(path: &Path, mut f: impl FnMut(RawItem)) -> Result<RawStats>
                     continue;
                 };
                 if let Some(e) = conv.epoch(&m, &mut st) {
-                    let t = (e.week, e.tow);
-                    if last.is_some_and(|l| l >= t) {
-                        st.time_jumps += 1;
-                    }
-                    last = Some(t);
-                    st.epochs += 1;
-                    f(RawItem::Epoch(e));
+                    order.emit(e, &mut st, &mut f);
                 }
             }
             EXT_EVENT => {
