@@ -342,7 +342,14 @@ fn parse_time(date: &str, time: &str) -> Option<Epoch> {
         tp.next()?.parse::<i64>().ok()?,
         tp.next()?.parse::<f64>().ok()?,
     );
-    if d.len() != 3 {
+    // Fields out of their ranges (an infinite or huge second among them) are no time.
+    let in_range = d.len() == 3
+        && (1..=12).contains(&d[1])
+        && (1..=31).contains(&d[2])
+        && (0..=23).contains(&h)
+        && (0..=59).contains(&m)
+        && (0.0..61.0).contains(&s);
+    if !in_range {
         return None;
     }
     let base = Epoch::maybe_from_gregorian(
@@ -362,6 +369,25 @@ fn parse_time(date: &str, time: &str) -> Option<Epoch> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A fuzzed `.pos` line's second `00.09e9800` (infinite) panicked in the time library;
+    /// fields out of their ranges are no time.
+    #[test]
+    fn times_out_of_range_are_refused() {
+        assert!(parse_time("2024/06/12", "09:00:00.099800").is_some());
+        for (date, time) in [
+            ("2024/06/12", "09:00:00.09e9800"),
+            ("2024/06/12", "09:00:NaN"),
+            ("2024/06/12", "09:00:-1"),
+            ("2024/06/12", "24:00:00"),
+            ("2024/06/12", "09:60:00"),
+            ("2024/06/12", "265:00:00"),
+            ("2024/13/12", "09:00:00"),
+            ("2024/06/300", "09:00:00"),
+        ] {
+            assert!(parse_time(date, time).is_none(), "{date} {time}");
+        }
+    }
 
     /// A `.pos` with the header `write_pos` writes and RTKLIB's base line for `format`.
     fn written(format: PosFormat, base: &Ecef, name: &str) -> String {

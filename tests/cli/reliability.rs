@@ -233,3 +233,25 @@ fn output_folders_holding_other_files_are_refused_untouched() {
     succeeds(&geotag(&tagged));
     assert!(tagged.join("a.jpg").exists());
 }
+
+/// A `.pos` the `pos` fuzz target mutated: an infinite second (`00.09e9800`) in line 6
+/// panicked inside the time library; now it is refused at its line.
+#[test]
+fn a_fuzzed_pos_with_an_infinite_second_is_refused_at_its_line() {
+    let pos = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/fuzz/pos-infinite-second.pos");
+    let times = file("times-fuzzed-pos.csv", TIMES.as_bytes());
+    let out = tmp("fuzzed-pos.csv");
+    fails_with(
+        &ppkat(&[
+            "exposures",
+            "--trajectory",
+            p(&pos),
+            "--times",
+            p(&times),
+            "-o",
+            p(&out),
+        ]),
+        &["pos-infinite-second.pos:6", "unreadable date/time"],
+    );
+}
