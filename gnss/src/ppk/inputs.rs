@@ -84,13 +84,17 @@ pub(super) enum Records<'a> {
 }
 
 impl Records<'_> {
-    /// The records' time tags.
-    fn times(&self) -> Vec<Epoch> {
-        let r: &[ObsEpoch] = match self {
+    /// The records.
+    pub(super) fn as_slice(&self) -> &[ObsEpoch] {
+        match self {
             Records::Borrowed(r) => r,
             Records::Owned(r) => r,
-        };
-        r.iter().map(|e| e.time).collect()
+        }
+    }
+
+    /// The records' time tags.
+    fn times(&self) -> Vec<Epoch> {
+        self.as_slice().iter().map(|e| e.time).collect()
     }
 }
 

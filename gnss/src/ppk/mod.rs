@@ -44,7 +44,7 @@ use crate::error::{Error, Result};
 use crate::frame::{enu_rotation, Ecef};
 use crate::model::antex::AntennaPcv;
 use crate::orbit::Orbits;
-use crate::rinex::{ObsFile, ObsHeader};
+use crate::rinex::{ObsEpoch, ObsFile, ObsHeader};
 use crate::solution::Quality;
 use crate::trajectory::{SegmentSource, Trajectory, TrajectoryEpoch};
 use hifitime::Epoch;
@@ -81,13 +81,18 @@ fn systematic(at: &Ecef, sigma: (f64, f64)) -> nalgebra::Matrix3<f64> {
 }
 
 /// Median spacing of epochs, seconds.
-fn interval(f: &ObsFile) -> f64 {
-    crate::time::median_spacing(f.epochs.iter().map(|e| e.time))
+fn interval(epochs: &[ObsEpoch]) -> f64 {
+    crate::time::median_spacing(epochs.iter().map(|e| e.time))
 }
 
 /// Error unless the file holds carrier-phase observations.
 pub fn require_phase(f: &ObsFile, role: &str) -> Result<()> {
-    let any = f.epochs.iter().take(100).any(|e| {
+    require_phase_in(f, &f.epochs, role)
+}
+
+/// [`require_phase`] of the file's records `epochs`, which may have been taken out of it.
+fn require_phase_in(f: &ObsFile, epochs: &[ObsEpoch], role: &str) -> Result<()> {
+    let any = epochs.iter().take(100).any(|e| {
         e.sats.iter().any(|s| {
             f.header
                 .types_of(s.sv.sys)
@@ -421,15 +426,13 @@ pub fn process_releasing(
     opts: &PpkOptions,
     progress: &dyn crate::progress::Progress,
 ) -> Result<PpkResult> {
-    let interval = interval(rover);
-    require_phase(rover, "rover")?;
-    require_phase(base, "base")?;
     let records = (
         inputs::Records::Owned(std::mem::take(&mut rover.epochs)),
         inputs::Records::Owned(std::mem::take(&mut base.epochs)),
     );
-    let prepared = prepare_run_at(rover, base, records, interval, base_pos, orbits, opts);
-    // The records, freed chunk by chunk on the thread that read them, leave the process.
+    let prepared = prepare_run(rover, base, records, base_pos, orbits, opts);
+    // What the preparation freed besides the chunks (the records' own list among it) leaves
+    // the process before the passes.
     crate::memory::release_freed();
     Ok(run_prepared(prepared?, progress))
 }
@@ -447,7 +450,8 @@ struct Prepared {
     segment_gap: f64,
 }
 
-/// The checks, the models and the passes' inputs of a run.
+/// The checks, the models and the passes' inputs of a run, drawn from `records` (the
+/// files' own, borrowed or taken out of them).
 fn prepare_run(
     rover: &ObsFile,
     base: &ObsFile,
@@ -456,30 +460,9 @@ fn prepare_run(
     orbits: &Orbits,
     opts: &PpkOptions,
 ) -> Result<Prepared> {
-    require_phase(rover, "rover")?;
-    require_phase(base, "base")?;
-    prepare_run_at(
-        rover,
-        base,
-        records,
-        interval(rover),
-        base_pos,
-        orbits,
-        opts,
-    )
-}
-
-/// [`prepare_run`] once the files' phase is checked and the rover's epoch interval
-/// (seconds) known: `records` may have been taken out of the files.
-fn prepare_run_at(
-    rover: &ObsFile,
-    base: &ObsFile,
-    records: (inputs::Records<'_>, inputs::Records<'_>),
-    interval: f64,
-    base_pos: BasePosition,
-    orbits: &Orbits,
-    opts: &PpkOptions,
-) -> Result<Prepared> {
+    require_phase_in(rover, records.0.as_slice(), "rover")?;
+    require_phase_in(base, records.1.as_slice(), "base")?;
+    let interval = interval(records.0.as_slice());
     let mut warnings = Vec::new();
     let base_marker = base_marker(base, base_pos, &mut warnings)?;
     let base_arp = Ecef(base_marker.0 + arp_offset(&base.header, &base_marker));

@@ -166,7 +166,7 @@ pub fn double_differences(
     let base_arp = Ecef(marker.0 + arp_offset(&base.header, &marker));
     let mut opts = opts.clone();
     if opts.max_gap <= 0.0 {
-        opts.max_gap = (5.0 * super::interval(rover)).max(5.0);
+        opts.max_gap = (5.0 * super::interval(&rover.epochs)).max(5.0);
     }
     let inp = inputs::prepare(
         (rover, inputs::Records::Borrowed(&rover.epochs)),
@@ -186,7 +186,7 @@ pub fn double_differences(
             Err(_) => e.time,
         })
         .collect();
-    let half = 0.5 * super::interval(rover) + 1e-6;
+    let half = 0.5 * super::interval(&rover.epochs) + 1e-6;
     let mut set = DdSet {
         epochs: Vec::new(),
         missing: Vec::new(),
