@@ -93,27 +93,20 @@ pub fn run(args: Args) -> Result<()> {
     let s = scenario(args.scenario.as_deref(), args.builtin.as_deref())?;
     let rep = simulate::run(&s, &args.out)?;
     print!("{rep}");
-    if let Some(RawArg::Rtcm3) = args.raw {
-        let (rover, base, dropped) = simulate::write_rtcm(&rep)?;
+    let raw = match args.raw {
+        None => None,
+        Some(RawArg::Ubx) => Some((simulate::write_ubx(&rep)?, "u-blox UBX", "UBX", "")),
+        Some(RawArg::Rtcm3) => Some((simulate::write_rtcm(&rep)?, "RTCM 3", "RTCM", "")),
+        Some(RawArg::Sbf) => Some((
+            simulate::write_sbf(&rep)?,
+            "Septentrio SBF",
+            "SBF",
+            "; no station position: SBF carries none",
+        )),
+    };
+    if let Some(((rover, base, dropped), format, short, note)) = raw {
         println!(
-            "raw logs: {} and {} (RTCM 3; {dropped} measurements RTCM cannot carry)",
-            rover.display(),
-            base.display()
-        );
-    }
-    if let Some(RawArg::Sbf) = args.raw {
-        let (rover, base, dropped) = simulate::write_sbf(&rep)?;
-        println!(
-            "raw logs: {} and {} (Septentrio SBF; {dropped} measurements SBF cannot carry; no \
-             station position: SBF carries none)",
-            rover.display(),
-            base.display()
-        );
-    }
-    if let Some(RawArg::Ubx) = args.raw {
-        let (rover, base, dropped) = simulate::write_ubx(&rep)?;
-        println!(
-            "raw logs: {} and {} (u-blox UBX; {dropped} measurements UBX cannot carry)",
+            "raw logs: {} and {} ({format}; {dropped} measurements {short} cannot carry{note})",
             rover.display(),
             base.display()
         );

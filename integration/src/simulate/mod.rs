@@ -222,16 +222,23 @@ fn lose_lock_times(s: &Scenario, flight: &Flight, start: Epoch, rng: &mut Rng) -
 /// and how many measurements UBX could not carry (none for the simulator's GPS L1/L2 and
 /// Galileo E1/E5a).
 pub fn write_ubx(rep: &SimReport) -> Result<(PathBuf, PathBuf, u64), SimError> {
-    let mut paths = Vec::new();
-    let mut dropped = 0;
-    for (src, name) in [(&rep.rover, "rover.ubx"), (&rep.base, "base.ubx")] {
-        let (bytes, d) = gnss::raw::ubx_write::ubx_from_obs(&ObsFile::read(src)?);
-        dropped += d;
-        paths.push(io::write_bytes(&rep.dir, name, &bytes)?);
-    }
-    let base = paths.pop().unwrap_or_default();
-    let rover = paths.pop().unwrap_or_default();
-    Ok((rover, base, dropped))
+    write_logs(rep, "ubx", gnss::raw::ubx_write::ubx_from_obs)
+}
+
+/// The rover's and base's RINEX files of a simulation re-encoded by `encode` (the log's bytes
+/// and how many measurements it could not carry) into `rover.EXT` and `base.EXT`: their
+/// paths and the measurements dropped in both.
+fn write_logs(
+    rep: &SimReport,
+    ext: &str,
+    encode: impl Fn(&ObsFile) -> (Vec<u8>, u64),
+) -> Result<(PathBuf, PathBuf, u64), SimError> {
+    let (rover_bytes, rover_dropped) = encode(&ObsFile::read(&rep.rover)?);
+    let rover = io::write_bytes(&rep.dir, &format!("rover.{ext}"), &rover_bytes)?;
+    drop(rover_bytes);
+    let (base_bytes, base_dropped) = encode(&ObsFile::read(&rep.base)?);
+    let base = io::write_bytes(&rep.dir, &format!("base.{ext}"), &base_bytes)?;
+    Ok((rover, base, rover_dropped + base_dropped))
 }
 
 /// The rover and base of a simulation also as RTCM 3 logs (`rover.rtcm3`, `base.rtcm3`: 1005,
@@ -239,17 +246,10 @@ pub fn write_ubx(rep: &SimReport) -> Result<(PathBuf, PathBuf, u64), SimError> {
 /// from the RINEX files it wrote: their paths and how many measurements RTCM could not carry.
 /// RTCM has no camera events (DJI writes them to a separate `.MRK` file).
 pub fn write_rtcm(rep: &SimReport) -> Result<(PathBuf, PathBuf, u64), SimError> {
-    let mut paths = Vec::new();
-    let mut dropped = 0;
     let nav = NavFile::read(&rep.nav)?;
-    for (src, name) in [(&rep.rover, "rover.rtcm3"), (&rep.base, "base.rtcm3")] {
-        let (bytes, d) = gnss::raw::rtcm_write::rtcm_from_obs(&ObsFile::read(src)?, &nav.records);
-        dropped += d;
-        paths.push(io::write_bytes(&rep.dir, name, &bytes)?);
-    }
-    let base = paths.pop().unwrap_or_default();
-    let rover = paths.pop().unwrap_or_default();
-    Ok((rover, base, dropped))
+    write_logs(rep, "rtcm3", |f| {
+        gnss::raw::rtcm_write::rtcm_from_obs(f, &nav.records)
+    })
 }
 
 /// The rover and base of a simulation also as Septentrio SBF logs (`rover.sbf`, `base.sbf`:
@@ -260,19 +260,11 @@ pub fn write_rtcm(rep: &SimReport) -> Result<(PathBuf, PathBuf, u64), SimError> 
 /// antenna the RINEX header gives (a receiver logs them in its setup blocks, which ppkat does
 /// not read).
 pub fn write_sbf(rep: &SimReport) -> Result<(PathBuf, PathBuf, u64), SimError> {
-    let mut paths = Vec::new();
-    let mut dropped = 0;
     let nav = NavFile::read(&rep.nav)?;
     let iono = nav.gps_iono.map(|k| (k, nav.leap_seconds.unwrap_or(18)));
-    for (src, name) in [(&rep.rover, "rover.sbf"), (&rep.base, "base.sbf")] {
-        let (bytes, d) =
-            gnss::raw::sbf_write::sbf_from_obs(&ObsFile::read(src)?, &nav.records, iono);
-        dropped += d;
-        paths.push(io::write_bytes(&rep.dir, name, &bytes)?);
-    }
-    let base = paths.pop().unwrap_or_default();
-    let rover = paths.pop().unwrap_or_default();
-    Ok((rover, base, dropped))
+    write_logs(rep, "sbf", |f| {
+        gnss::raw::sbf_write::sbf_from_obs(f, &nav.records, iono)
+    })
 }
 
 /// The synthetic constellation's navigation file for `[start, end]` (GPST), written to
