@@ -17,6 +17,15 @@ fn pos_lines(path: &Path) -> Vec<String> {
         .collect()
 }
 
+/// The base position `simulate` prints ("base: … at X Y Z (ECEF)"), as `X,Y,Z`.
+fn simulated_base_xyz(t: &str) -> String {
+    t.lines()
+        .find_map(|l| l.trim().strip_prefix("base:"))
+        .and_then(|l| l.split(" at ").nth(1))
+        .map(|l| l.split_whitespace().take(3).collect::<Vec<_>>().join(","))
+        .unwrap_or_else(|| panic!("no base position in\n{t}"))
+}
+
 #[test]
 fn info_describes_a_ubx_log() {
     let Some(log) = shared(COLD) else {
@@ -169,12 +178,7 @@ fn simulate_writes_the_rover_and_base_also_as_ubx() {
     // PPK on the logs against PPK on the RINEX files, the base position given to both (a log
     // has no header position): the same fix state everywhere, positions within 1 mm (they
     // differ by the 0.1 mm the .pos prints at most).
-    let xyz = t
-        .lines()
-        .find_map(|l| l.trim().strip_prefix("base:"))
-        .and_then(|l| l.split(" at ").nth(1))
-        .map(|l| l.split_whitespace().take(3).collect::<Vec<_>>().join(","))
-        .unwrap();
+    let xyz = simulated_base_xyz(&t);
     let base_pos = format!("--base-pos={xyz}");
     let nav = dir.join("nav.rnx");
     let run = |rover: &str, base: &str, out: &Path| {
@@ -344,12 +348,7 @@ fn sbf_logs_carry_their_orbits_and_events() {
         csv.lines().nth(1).unwrap().contains(",falling,1,true"),
         "{csv}"
     );
-    let xyz = t
-        .lines()
-        .find_map(|l| l.trim().strip_prefix("base:"))
-        .and_then(|l| l.split(" at ").nth(1))
-        .map(|l| l.split_whitespace().take(3).collect::<Vec<_>>().join(","))
-        .unwrap();
+    let xyz = simulated_base_xyz(&t);
     let (s, r) = (tmp("sim-sbf.pos"), tmp("sim-sbf-rnx.pos"));
     for (rov, base, out, nav) in [
         ("rover.sbf", "base.sbf", &s, None),
