@@ -45,18 +45,18 @@ fn observations_match_the_models_with_errors_off() {
             let s2 = orbits
                 .sat(
                     sat.sv,
-                    t0 - hifitime::Duration::from_seconds(first.pv.clock),
+                    t0 - hifitime::Duration::from_seconds(first.clock),
                     b'1',
                 )
                 .unwrap();
-            let tau = (s2.pv.pos.0 - rx).norm() / C;
+            let tau = (s2.pos.0 - rx).norm() / C;
             let (sn, cs) = (OMEGA_E * tau).sin_cos();
             let sp = nalgebra::Vector3::new(
-                cs * s2.pv.pos.0.x + sn * s2.pv.pos.0.y,
-                -sn * s2.pv.pos.0.x + cs * s2.pv.pos.0.y,
-                s2.pv.pos.0.z,
+                cs * s2.pos.0.x + sn * s2.pos.0.y,
+                -sn * s2.pos.0.x + cs * s2.pos.0.y,
+                s2.pos.0.z,
             );
-            let model = (sp - rx).norm() - C * s2.pv.clock;
+            let model = (sp - rx).norm() - C * s2.clock;
             worst_p = worst_p.max((p - model).abs());
             let lam = C / 1575.42e6;
             worst_l = worst_l.max((sat.obs[1].value * lam - p).abs());

@@ -209,20 +209,29 @@ impl KeplerEph {
 
     /// Satellite position (ECEF at the transmission time) and clock at GPST `t`.
     pub fn compute(&self, t: Epoch) -> SatPosClock {
-        let (pos, clk_rel) = self.position(t);
+        let (pos, clock) = self.position_clock(t);
         // Velocity by central difference: simple and exact to well below a mm/s.
         let h = 0.001;
         let (p1, _) = self.position(t + Duration::from_seconds(h));
         let (p0, _) = self.position(t - Duration::from_seconds(h));
         let vel = (p1 - p0) / (2.0 * h);
         let dt = (t - self.toc).to_seconds();
-        let clock = self.af[0] + self.af[1] * dt + self.af[2] * dt * dt + clk_rel;
         SatPosClock {
-            pos: Ecef(pos),
+            pos,
             vel,
             clock,
             clock_rate: self.af[1] + 2.0 * self.af[2] * dt,
         }
+    }
+
+    /// Position and clock (s, relativistic correction included, group delay not applied) at
+    /// transmission time `t` (GPST), as [`Self::compute`] gives them, without the velocity
+    /// (which costs two more orbit evaluations).
+    pub fn position_clock(&self, t: Epoch) -> (Ecef, f64) {
+        let (pos, clk_rel) = self.position(t);
+        let dt = (t - self.toc).to_seconds();
+        let clock = self.af[0] + self.af[1] * dt + self.af[2] * dt * dt + clk_rel;
+        (Ecef(pos), clock)
     }
 
     fn position(&self, t: Epoch) -> (Vector3<f64>, f64) {

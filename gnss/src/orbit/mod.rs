@@ -16,6 +16,7 @@ pub use kepler::{GalMessage, KeplerEph, SatPosClock, C};
 pub use precise::{ClockSource, MergeReport, PreciseOrbits, Unavailable};
 pub use sp3::Sp3;
 
+use crate::frame::Ecef;
 use crate::rinex::nav::{Klobuchar, NavFile, NavKind};
 use crate::sv::{Constellation, Sv};
 use hifitime::Epoch;
@@ -58,6 +59,17 @@ impl Eph {
         match self {
             Eph::Kepler(k) => k.compute(t),
             Eph::Glonass(g) => g.compute(t),
+        }
+    }
+    /// Position and clock at transmission time `t` (GPST), as [`Self::compute`] gives
+    /// them, without the velocity where it costs extra orbit evaluations.
+    pub fn position_clock(&self, t: Epoch) -> (Ecef, f64) {
+        match self {
+            Eph::Kepler(k) => k.position_clock(t),
+            Eph::Glonass(g) => {
+                let pv = g.compute(t);
+                (pv.pos, pv.clock)
+            }
         }
     }
     /// Broadcast group delay (s) for a signal on `band` (0 for GLONASS).
@@ -214,8 +226,10 @@ pub struct Orbits {
 /// A satellite at its transmission time, ready for a range model.
 #[derive(Clone, Copy, Debug)]
 pub struct SatInfo {
-    /// Position, velocity and clock.
-    pub pv: SatPosClock,
+    /// Position, ECEF at transmission time, metres.
+    pub pos: Ecef,
+    /// Clock offset in seconds, relativistic correction included, group delay not applied.
+    pub clock: f64,
     /// Group delay (s) to subtract from the clock for the band asked.
     pub group_delay: f64,
 }
@@ -239,14 +253,18 @@ impl Orbits {
     pub fn sat_or_why(&self, sv: Sv, t: Epoch, band: u8) -> Result<SatInfo, Unavailable> {
         let eph = self.broadcast.select(sv, t);
         if let Some(p) = &self.precise {
+            let pv = p.compute(sv, t)?;
             return Ok(SatInfo {
-                pv: p.compute(sv, t)?,
+                pos: pv.pos,
+                clock: pv.clock,
                 group_delay: eph.map(|e| e.group_delay(band)).unwrap_or(0.0),
             });
         }
         let eph = eph.ok_or(Unavailable::NoOrbit)?;
+        let (pos, clock) = eph.position_clock(t);
         Ok(SatInfo {
-            pv: eph.compute(t),
+            pos,
+            clock,
             group_delay: eph.group_delay(band),
         })
     }

@@ -40,11 +40,11 @@ impl SatView {
                 .unwrap_or(0.075 * C);
         let t0 = t_rx - Duration::from_seconds(p / C);
         let first = orbits.sat(m.sv, t0, b'1')?;
-        let t = t0 - Duration::from_seconds(first.pv.clock);
+        let t = t0 - Duration::from_seconds(first.clock);
         let s = orbits.sat(m.sv, t, b'1')?;
         Some(SatView {
-            pos: s.pv.pos.0,
-            clock: s.pv.clock,
+            pos: s.pos.0,
+            clock: s.clock,
         })
     }
 

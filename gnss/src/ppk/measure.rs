@@ -20,6 +20,7 @@
 
 use super::dd::DdGroup;
 use super::geometry::tropo;
+use super::obs::NF;
 use super::options::PpkOptions;
 use super::pair::{has_phase, Pair};
 use super::state::{AmbKey, State, StateKey};
@@ -60,12 +61,44 @@ pub(super) struct Row {
     pub(super) slot: usize,
     /// Index of its group (rows of one group are consecutive).
     pub(super) group: usize,
-    /// Design row over the whole state vector.
-    pub(super) h: DVector<f64>,
+    /// Design row over the whole state vector, its non-zero entries.
+    pub(super) h: SparseRow,
     /// Observed − modelled, metres.
     pub(super) innovation: f64,
     /// SD variance of `sv` (the group adds its pivot's), m².
     pub(super) var: f64,
+}
+
+/// Most non-zero entries of a design row: the position (3), two ambiguities, two
+/// ionosphere states and the zenith wet delay.
+const ROW_ENTRIES: usize = 8;
+
+/// The non-zero entries of a design row, (state offset, value), without an allocation.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct SparseRow {
+    entries: [(usize, f64); ROW_ENTRIES],
+    len: usize,
+}
+
+impl SparseRow {
+    /// Set the entry of state `k` to `v` (replacing a value set before).
+    fn set(&mut self, k: usize, v: f64) {
+        if let Some(e) = self.entries[..self.len].iter_mut().find(|e| e.0 == k) {
+            e.1 = v;
+            return;
+        }
+        assert!(
+            self.len < ROW_ENTRIES,
+            "a design row has at most {ROW_ENTRIES} entries"
+        );
+        self.entries[self.len] = (k, v);
+        self.len += 1;
+    }
+
+    /// The entries set, in the order first set.
+    pub(super) fn entries(&self) -> &[(usize, f64)] {
+        &self.entries[..self.len]
+    }
 }
 
 /// The rows of one epoch at one state.
@@ -117,6 +150,34 @@ fn undifferenced(pairs: &[Pair], rx: &Vector3<f64>) -> Vec<Pre> {
         .collect()
 }
 
+/// Each pair's state offsets, looked up once per epoch (the rows read them many times).
+struct StateOffsets {
+    /// SD ambiguity state per pair and slot.
+    ambiguity: Vec<[Option<usize>; NF]>,
+    /// SD ionosphere state per pair.
+    iono: Vec<Option<usize>>,
+}
+
+impl StateOffsets {
+    fn of(pairs: &[Pair], state: &State, nf: usize) -> Self {
+        let ambiguity = pairs
+            .iter()
+            .map(|p| {
+                std::array::from_fn(|slot| {
+                    (slot < nf)
+                        .then(|| state.offset(StateKey::Ambiguity(AmbKey { sv: p.r.sv, slot })))
+                        .flatten()
+                })
+            })
+            .collect();
+        let iono = pairs
+            .iter()
+            .map(|p| state.offset(StateKey::Iono(p.r.sv)))
+            .collect();
+        StateOffsets { ambiguity, iono }
+    }
+}
+
 /// Every DD row of the epoch at the current state, none rejected.
 pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residuals {
     let x = &state.x;
@@ -126,18 +187,17 @@ pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residu
         .expect("the position block exists");
     let rx = Vector3::from_iterator(x.rows_range(pos.clone()).iter().copied());
     let pre = undifferenced(pairs, &rx);
+    let offsets = StateOffsets::of(pairs, state, o.nf);
+    let ztd = state.offset(StateKey::Tropo);
     let mut out = Residuals::default();
     for sys in Constellation::ALL {
+        if !pairs.iter().any(|p| p.r.sv.sys == sys) {
+            continue;
+        }
         for f in 0..o.nf {
             for kind in [ObsKind::Phase, ObsKind::Code] {
-                let amb = |i: usize| {
-                    state.offset(StateKey::Ambiguity(AmbKey {
-                        sv: pairs[i].r.sv,
-                        slot: f,
-                    }))
-                };
-                let iono = |i: usize| state.offset(StateKey::Iono(pairs[i].r.sv));
-                let ztd = state.offset(StateKey::Tropo);
+                let amb = |i: usize| offsets.ambiguity[i][f];
+                let iono = |i: usize| offsets.iono[i];
                 // Members with the needed data (and an ambiguity state for phase).
                 let members: Vec<usize> = (0..pairs.len())
                     .filter(|&i| {
@@ -191,20 +251,22 @@ pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residu
                 let gi = out.pivot_var.len();
                 for &i in &group.others {
                     let v = (obs_sd(i) - model_sd(i)) - y_ref;
-                    let mut hr = DVector::zeros(x.len());
+                    let mut hr = SparseRow::default();
                     let de = -(pre[i].e - pre[refi].e);
-                    hr.rows_range_mut(pos.clone()).copy_from(&de);
+                    for (k, v) in pos.clone().zip(de.iter()) {
+                        hr.set(k, *v);
+                    }
                     if let (Some(ki), Some(kr)) = (iono(i), iono(refi)) {
-                        hr[ki] = mu(i);
-                        hr[kr] = -mu(refi);
+                        hr.set(ki, mu(i));
+                        hr.set(kr, -mu(refi));
                     }
                     if let Some(k) = ztd {
-                        hr[k] = pairs[i].map_wet - pairs[refi].map_wet;
+                        hr.set(k, pairs[i].map_wet - pairs[refi].map_wet);
                     }
                     if phase {
                         if let (Some(ki), Some(kr)) = (amb(i), amb(refi)) {
-                            hr[ki] = pairs[i].r.wavelength(f);
-                            hr[kr] = -pairs[refi].r.wavelength(f);
+                            hr.set(ki, pairs[i].r.wavelength(f));
+                            hr.set(kr, -pairs[refi].r.wavelength(f));
                         }
                     }
                     out.rows.push(Row {
@@ -260,7 +322,12 @@ impl Residuals {
         if m == 0 {
             return None;
         }
-        let h = DMatrix::from_fn(m, nx, |i, j| rows[i].h[j]);
+        let mut h = DMatrix::zeros(m, nx);
+        for (i, r) in rows.iter().enumerate() {
+            for &(j, v) in r.h.entries() {
+                h[(i, j)] = v;
+            }
+        }
         let v = DVector::from_iterator(m, rows.iter().map(|r| r.innovation));
         let mut r = DMatrix::zeros(m, m);
         let mut at = 0;
@@ -300,7 +367,11 @@ mod tests {
             pivot: Sv::new(Constellation::Gps, 1),
             slot: 0,
             group,
-            h: DVector::from_element(4, prn as f64),
+            h: {
+                let mut h = SparseRow::default();
+                (0..4).for_each(|j| h.set(j, prn as f64));
+                h
+            },
             innovation,
             var: prn as f64,
         }

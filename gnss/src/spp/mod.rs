@@ -124,14 +124,14 @@ fn measurement(
         Unavailable::NoClock => Rejection::NoClock,
     };
     let first = orbits.sat_or_why(s.sv, t0, band).map_err(why)?;
-    let ttx = t0 - Duration::from_seconds(first.pv.clock - first.group_delay);
+    let ttx = t0 - Duration::from_seconds(first.clock - first.group_delay);
     let si = orbits.sat_or_why(s.sv, ttx, band).map_err(why)?;
     Ok(Meas {
         sv: s.sv,
         pr,
         freq,
-        sat: si.pv.pos,
-        sat_clock: si.pv.clock - si.group_delay,
+        sat: si.pos,
+        sat_clock: si.clock - si.group_delay,
     })
 }
 
