@@ -34,6 +34,7 @@ use super::segment::{FixedIntegers, SegmentTracker};
 use super::slip::{SlipCause, Slips};
 use super::smooth::{self, Prior};
 use super::state::{AmbKey, State, StateKey};
+use super::update::Gain;
 use crate::frame::{Ecef, Geodetic};
 use crate::model::antex::AntennaPcv;
 use crate::solution::Quality;
@@ -41,6 +42,11 @@ use hifitime::Epoch;
 
 /// Position change (m) of a measurement update beyond which the rows are linearised again.
 const RELINEARISE: f64 = 0.05;
+
+/// Position change (m) of a measurement update up to which the second linearisation keeps
+/// the first's gain and covariance (see [`Filter::measurement_update`]): the lines of sight
+/// turn by under 5·10⁻⁷ rad over it, which changes the correction by micrometres.
+const GAIN_REUSE: f64 = 10.0;
 
 /// The arc breaks one step applies (see [`super::slip::arc_breaks`]): the rover's since the
 /// previous step of the pass, and the base's since the base epoch of the previous step.
@@ -329,13 +335,17 @@ impl<'a> Filter<'a> {
     /// by [`RELINEARISE`] or more: the geometry hardly cares about metres of start error, but
     /// the rover troposphere does — 5 m of height is 6 mm at 15°).
     /// Each linearisation forms the residuals at the current state, passes them through the
-    /// innovation gate and updates from the prior (IEKF). Returns the number of satellites
-    /// used; None when no row is left or the innovation covariance is singular.
+    /// innovation gate and updates from the prior (IEKF). The second keeps the first's gain
+    /// and covariance when its rows are the same and the first moved the position by
+    /// [`GAIN_REUSE`] or less (the usual case: a code start metres off); it then costs a
+    /// triangular solve, not a second update. Returns the number of satellites used; None
+    /// when no row is left or the innovation covariance is singular.
     fn measurement_update(&mut self, pairs: &[Pair]) -> Option<usize> {
         let o = self.opts;
         let x0 = self.state.x.clone();
         let p0 = self.state.p.clone();
         let mut used_sats = 0;
+        let mut first: Option<(Vec<measure::RowId>, Gain)> = None;
         for iter in 0..2 {
             let at = self.state.position();
             let all = measure::residuals(pairs, &self.state, o);
@@ -348,12 +358,22 @@ impl<'a> Filter<'a> {
             // IEKF: innovation about the prior.
             let dxi = &x0 - &self.state.x;
             let innov = &lin.v - &lin.h * &dxi;
-            let (dx, p) = super::update::update(&p0, &lin.h, &lin.r, &innov)?;
+            let ids = kept.row_ids();
+            if let Some((_, gain)) = first.as_ref().filter(|(first_ids, _)| *first_ids == ids) {
+                // The same rows, linearised [`GAIN_REUSE`] or less away: their design rows
+                // differ by the turn of the lines of sight (under 5·10⁻⁷), so the first gain
+                // and covariance stand; what changed is the model the innovations carry.
+                self.state.x = &x0 + gain.correction(&innov);
+                break;
+            }
+            let (dx, p, gain) = super::update::update_keeping_gain(&p0, &lin.h, &lin.r, &innov)?;
             self.state.x = &x0 + dx;
             self.state.p = p;
+            let moved = (self.state.position() - at).norm();
+            first = (moved <= GAIN_REUSE).then_some((ids, gain));
             // A second linearisation only when the position moved enough to change the
             // model: 5 cm of height change the troposphere by under 0.1 mm at 15°.
-            if iter == 0 && (self.state.position() - at).norm() < RELINEARISE {
+            if iter == 0 && moved < RELINEARISE {
                 break;
             }
         }

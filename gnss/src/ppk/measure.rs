@@ -313,7 +313,18 @@ pub(super) fn gate(
     (Residuals { rows, pivot_var }, counts)
 }
 
+/// What identifies a row: its kind, satellite, pivot and slot.
+pub(super) type RowId = (ObsKind, Sv, Sv, usize);
+
 impl Residuals {
+    /// The rows' identities, in order.
+    pub(super) fn row_ids(&self) -> Vec<RowId> {
+        self.rows
+            .iter()
+            .map(|r| (r.kind, r.sv, r.pivot, r.slot))
+            .collect()
+    }
+
     /// Design matrix, innovations and covariance for a state of length `nx`; None without
     /// rows.
     pub(super) fn linearise(&self, nx: usize) -> Option<Linearised> {

@@ -20,6 +20,42 @@ pub(super) fn update(
     r: &DMatrix<f64>,
     innov: &DVector<f64>,
 ) -> Option<(DVector<f64>, DMatrix<f64>)> {
+    update_keeping_gain(p0, h, r, innov).map(|(dx, p, _)| (dx, p))
+}
+
+/// The gain of an update, W and L, kept to correct the prior by other innovations of the
+/// same rows (the second linearisation of an iterated update, when the design rows have
+/// hardly changed).
+pub(super) struct Gain {
+    /// Wᵀ = (P·Hᵀ)·L⁻ᵀ, state × rows.
+    wt: DMatrix<f64>,
+    /// The Cholesky factor of S, lower triangle.
+    l: DMatrix<f64>,
+}
+
+impl Gain {
+    /// The correction Wᵀ·(L⁻¹·ν) to add to the prior state for innovations `innov` of the
+    /// rows the gain was formed for.
+    pub(super) fn correction(&self, innov: &DVector<f64>) -> DVector<f64> {
+        let l = &self.l;
+        let mut u = innov.clone();
+        for i in 0..u.len() {
+            for k in 0..i {
+                u[i] -= l[(i, k)] * u[k];
+            }
+            u[i] /= l[(i, i)];
+        }
+        &self.wt * u
+    }
+}
+
+/// [`update`], with the gain it used.
+pub(super) fn update_keeping_gain(
+    p0: &DMatrix<f64>,
+    h: &DMatrix<f64>,
+    r: &DMatrix<f64>,
+    innov: &DVector<f64>,
+) -> Option<(DVector<f64>, DMatrix<f64>, Gain)> {
     let (m, n) = h.shape();
     let nz: Vec<Vec<(usize, f64)>> = (0..m)
         .map(|i| {
@@ -47,8 +83,7 @@ pub(super) fn update(
             s[(a, b)] += nz[a].iter().map(|&(j, v)| v * col[j]).sum::<f64>();
         }
     }
-    let ch = s.cholesky()?;
-    let l = ch.l_dirty();
+    let l = s.cholesky()?.unpack_dirty();
     // Wᵀ = (P·Hᵀ)·L⁻ᵀ, column by column: Wᵀ[:, i] = (PHᵀ[:, i] − Σₖ₍ₖ₌₀..ᵢ₎ L[i,k]·Wᵀ[:, k]) / L[i,i];
     // every step an axpy over a contiguous column.
     let mut wt = pht;
@@ -66,7 +101,8 @@ pub(super) fn update(
         wt.column_mut(i).unscale_mut(d);
         u[i] /= d;
     }
-    Some((&wt * u, p0 - &wt * wt.transpose()))
+    let p = p0 - &wt * wt.transpose();
+    Some((&wt * u, p, Gain { wt, l }))
 }
 
 #[cfg(test)]
@@ -95,5 +131,10 @@ mod tests {
         let (dx_ref, p_ref) = (&k * &v, &p0 - &k * &h * &p0);
         assert!((dx - dx_ref).amax() < 1e-12);
         assert!((p - p_ref).amax() < 1e-12);
+        // The kept gain corrects the prior for other innovations as K·ν does.
+        let (dx, _, gain) = update_keeping_gain(&p0, &h, &r, &v).unwrap();
+        assert!((gain.correction(&v) - &dx).amax() < 1e-14);
+        let v2 = DVector::from_vec(vec![-0.7, 0.4, 0.01, 1.5]);
+        assert!((gain.correction(&v2) - &k * &v2).amax() < 1e-12);
     }
 }
