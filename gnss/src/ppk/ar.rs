@@ -124,18 +124,14 @@ fn dd_groups(cands: &[Candidate], excluded: &[Sv], mature: usize) -> Vec<DdGroup
         .collect()
 }
 
-/// The DD operator of groups: one row per non-pivot member, +1 on its state, −1 on the pivot's.
-fn dd_operator(groups: &[DdGroup<Candidate>], n: usize) -> DMatrix<f64> {
-    let m = groups.iter().map(|g| g.others.len()).sum();
-    let mut d = DMatrix::zeros(m, n);
-    let rows = groups
+/// The DD operator of groups, kept sparse: per row (one per non-pivot member) the state
+/// offsets of its +1 (the member) and its −1 (the pivot). Products with it are differences
+/// of two rows or columns, rounded once as the dense products would round them.
+fn dd_operator(groups: &[DdGroup<Candidate>]) -> Vec<(usize, usize)> {
+    groups
         .iter()
-        .flat_map(|g| g.others.iter().map(move |c| (c.state, g.pivot.state)));
-    for (i, (a, r)) in rows.enumerate() {
-        d[(i, a)] = 1.0;
-        d[(i, r)] = -1.0;
-    }
-    d
+        .flat_map(|g| g.others.iter().map(move |c| (c.state, g.pivot.state)))
+        .collect()
 }
 
 /// Constrain `x`, `p` to `d·x = z` with variance `var` (a Kalman update).
@@ -194,8 +190,8 @@ fn position_range(st: &State) -> Range<usize> {
 
 /// The float DD ambiguities of the groups and their covariance.
 struct FloatDd {
-    /// DD operator (DD rows × state).
-    d: DMatrix<f64>,
+    /// DD operator (DD rows × state), as [`dd_operator`] gives it.
+    d: Vec<(usize, usize)>,
     /// Float DD ambiguities, cycles.
     a: DVector<f64>,
     /// Their covariance, cycles².
@@ -204,11 +200,28 @@ struct FloatDd {
 
 impl FloatDd {
     fn of(st: &State, groups: &[DdGroup<Candidate>]) -> FloatDd {
-        let d = dd_operator(groups, st.x.len());
-        let a = &d * &st.x;
-        let q = &d * &st.p * d.transpose();
+        let d = dd_operator(groups);
+        let m = d.len();
+        let a = DVector::from_iterator(m, d.iter().map(|&(i, r)| st.x[i] - st.x[r]));
+        // D·P row by row (P is symmetric: its rows are its columns), then (D·P)·Dᵀ.
+        let dp = DMatrix::from_fn(m, st.x.len(), |i, j| {
+            let (a, r) = d[i];
+            st.p[(a, j)] - st.p[(r, j)]
+        });
+        let q = DMatrix::from_fn(m, m, |i, j| {
+            let (a, r) = d[j];
+            dp[(i, a)] - dp[(i, r)]
+        });
         let q = (&q + q.transpose()) * 0.5;
         FloatDd { d, a, q }
+    }
+
+    /// D·M for a matrix M over the state (rows: state).
+    fn times(&self, m: &DMatrix<f64>) -> DMatrix<f64> {
+        DMatrix::from_fn(self.d.len(), m.ncols(), |i, j| {
+            let (a, r) = self.d[i];
+            m[(a, j)] - m[(r, j)]
+        })
     }
 }
 
@@ -235,7 +248,14 @@ fn fixed_solution(
 ) -> Option<FixedSolution> {
     let n = dec.n;
     let zs = DMatrix::from_fn(n, k, |i, j| dec.z_column(n - k + j)[i]);
-    let c = zs.transpose() * &fl.d; // k × m
+    // C = Z_Sᵀ·D, k × state: integers, exact in any order.
+    let mut c = DMatrix::zeros(k, st.x.len());
+    for (row, &(a, r)) in fl.d.iter().enumerate() {
+        for i in 0..k {
+            c[(i, a)] += zs[(row, i)];
+            c[(i, r)] -= zs[(row, i)];
+        }
+    }
     let pc = &st.p * c.transpose(); // m × k
     let q = &c * &pc;
     let ch = ((&q + q.transpose()) * 0.5).cholesky()?;
@@ -250,11 +270,15 @@ fn fixed_solution(
         cov += &delta * delta.transpose() * (1.0 - dec.success_rate(k));
     }
     // The DD ambiguities conditioned on the fix: those it determines become integers.
-    let qac = &fl.d * &pc; // DD × k
+    let qac = fl.times(&pc); // DD × k
     let a_fixed = &fl.a - &qac * &shift;
-    let q_fixed = &fl.q - &qac * ch.solve(&qac.transpose());
+    // Only the diagonal of Q_a − Q_ac·Q⁻¹·Q_ca is read: column sums of squares of L⁻¹·Q_ca.
+    let y = ch.l_dirty().solve_lower_triangular(&qac.transpose())?;
     let dd_integers = (0..fl.a.len())
-        .map(|i| (q_fixed[(i, i)].max(0.0).sqrt() < 0.02).then(|| a_fixed[i].round() as i64))
+        .map(|i| {
+            let var = fl.q[(i, i)] - y.column(i).norm_squared();
+            (var.max(0.0).sqrt() < 0.02).then(|| a_fixed[i].round() as i64)
+        })
         .collect();
     Some(FixedSolution {
         position: Vector3::new(x[0], x[1], x[2]),
