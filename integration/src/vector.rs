@@ -65,12 +65,7 @@ pub fn write_named(
     format: TrajectoryFormat,
     heights: &Heights,
 ) -> Result<()> {
-    let pts: Vec<Point> = records
-        .iter()
-        .enumerate()
-        .map(|(i, r)| point(r, names.get(i), heights))
-        .collect::<Result<_>>()?;
-    let text = match format {
+    match format {
         TrajectoryFormat::Pos(PosFormat::Xyz) if heights.orthometric() => {
             return Err(gnss::error::Error::input(
                 path,
@@ -80,8 +75,18 @@ pub fn write_named(
         TrajectoryFormat::Pos(f) if !heights.orthometric() => {
             return write_pos(path, header, records, f)
         }
+        _ => {}
+    }
+    // Only the formats below read the points (a plain `.pos` converts its records itself).
+    let pts: Vec<Point> = records
+        .iter()
+        .enumerate()
+        .map(|(i, r)| point(r, names.get(i), heights))
+        .collect::<Result<_>>()?;
+    let text = match format {
         TrajectoryFormat::Pos(f) => {
-            // The geoid heights as the records' heights: each point moved along its normal.
+            // Orthometric heights (ellipsoidal ones were written above): the geoid heights as
+            // the records' heights, each point moved along its normal.
             let moved: Vec<PosRecord> = records
                 .iter()
                 .zip(&pts)
