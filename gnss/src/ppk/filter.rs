@@ -58,6 +58,13 @@ pub struct StepSlips {
     pub base: Slips,
 }
 
+/// The rows of a measurement update's last linearisation (all of them, before the
+/// innovation gate) and the state they were formed at.
+struct Linearisation {
+    rows: measure::Residuals,
+    at: nalgebra::DVector<f64>,
+}
+
 /// Sigma of the predicted position (the code solution), metres.
 const POSITION_SIGMA: f64 = 30.0;
 
@@ -153,8 +160,8 @@ impl<'a> Filter<'a> {
         if self.record {
             self.recorded = Some(Prior::of(&self.state));
         }
-        let used_sats = self.measurement_update(&pairs)?;
-        self.post_fit_check(&pairs);
+        let (used_sats, last) = self.measurement_update(&pairs)?;
+        self.post_fit_check(last);
         self.count_locks(t, &pairs);
         let smoothed = prior.and_then(|p| smooth::fuse(&self.state, p)).zip(prior);
         Some(self.solve(t, tb, used_sats, &pairs, smoothed))
@@ -340,16 +347,21 @@ impl<'a> Filter<'a> {
     /// [`GAIN_REUSE`] or less (the usual case: a code start metres off); it then costs a
     /// triangular solve, not a second update. Returns the number of satellites used; None
     /// when no row is left or the innovation covariance is singular.
-    fn measurement_update(&mut self, pairs: &[Pair]) -> Option<usize> {
+    fn measurement_update(&mut self, pairs: &[Pair]) -> Option<(usize, Linearisation)> {
         let o = self.opts;
         let x0 = self.state.x.clone();
         let p0 = self.state.p.clone();
         let mut used_sats = 0;
         let mut first: Option<(Vec<measure::RowId>, Gain)> = None;
+        let mut last = None;
         for iter in 0..2 {
             let at = self.state.position();
             let all = measure::residuals(pairs, &self.state, o);
-            let (kept, rejected) = measure::gate(all, o.max_innovation);
+            let (kept, rejected) = measure::gate(all.clone(), o.max_innovation);
+            last = Some(Linearisation {
+                rows: all,
+                at: self.state.x.clone(),
+            });
             for (reason, n) in rejected {
                 *self.stats.rejected.entry(reason).or_default() += n;
             }
@@ -379,14 +391,22 @@ impl<'a> Filter<'a> {
         }
         let p = &self.state.p;
         self.state.p = (p + p.transpose()) * 0.5;
-        Some(used_sats)
+        Some((used_sats, last?))
     }
 
     /// Post-fit phase residuals: one larger than `max_phase_residual` betrays an undetected
-    /// slip; its ambiguity is reset at the next epoch.
-    fn post_fit_check(&mut self, pairs: &[Pair]) {
+    /// slip; its ambiguity is reset at the next epoch. The residuals are those of the last
+    /// linearisation carried to the updated state, v − h·(x − x_lin). The state is close to
+    /// where they were formed: under [`RELINEARISE`] from it when the first linearisation
+    /// was the last, the model's change (millimetres) after a second. The model's curvature
+    /// over that is below 0.1 mm, so forming the rows a third time would tell nothing more.
+    fn post_fit_check(&mut self, last: Linearisation) {
         let o = self.opts;
-        let res = measure::residuals(pairs, &self.state, o);
+        let dx = &self.state.x - &last.at;
+        let mut res = last.rows;
+        for row in &mut res.rows {
+            row.innovation -= row.h.entries().iter().map(|&(j, v)| v * dx[j]).sum::<f64>();
+        }
         for row in &res.rows {
             // Rows beyond the innovation gate did not enter the solution.
             if row.innovation.abs() <= o.max_innovation {
