@@ -4,12 +4,20 @@
 
 /// An unsigned field of `len` (≤ 32) bits starting at bit `pos`; bits past the end read as 0.
 pub fn bits_u(buf: &[u8], pos: usize, len: usize) -> u32 {
-    let mut v = 0u32;
-    for i in pos..pos + len {
-        let bit = buf.get(i / 8).map_or(0, |b| (b >> (7 - i % 8)) & 1);
-        v = (v << 1) | bit as u32;
+    if len == 0 {
+        return 0;
     }
-    v
+    if len > 32 {
+        // The low 32 bits, as shifting the whole field through a u32 would leave them.
+        return bits_u(buf, pos + len - 32, 32);
+    }
+    // The (at most five) bytes the field spans, big-endian in a u64.
+    let (first, last) = (pos / 8, (pos + len - 1) / 8);
+    let acc = (first..=last).fold(0u64, |acc, i| {
+        (acc << 8) | u64::from(buf.get(i).copied().unwrap_or(0))
+    });
+    let shift = (last - first + 1) * 8 - pos % 8 - len;
+    ((acc >> shift) & ((1u64 << len) - 1)) as u32
 }
 
 /// A two's-complement field of `len` (1..=32) bits starting at bit `pos`.
@@ -38,19 +46,33 @@ pub fn set_bits(buf: &mut [u8], pos: usize, len: usize, v: u32) {
 
 /// CRC-24Q (the Qualcomm CRC of Galileo I/NAV, RTCM 3 and SBAS) of whole bytes.
 pub fn crc24q(data: &[u8]) -> u32 {
-    const POLY: u32 = 0x186_4CFB;
-    let mut crc = 0u32;
-    for &b in data {
-        crc ^= (b as u32) << 16;
-        for _ in 0..8 {
+    data.iter().fold(0u32, |crc, &b| {
+        ((crc << 8) ^ CRC24Q_TABLE[((crc >> 16) as u8 ^ b) as usize]) & 0xFF_FFFF
+    })
+}
+
+/// The CRC-24Q polynomial, x²⁴ + … + 1.
+const CRC24Q_POLY: u32 = 0x186_4CFB;
+
+/// The CRC-24Q of each byte value (a byte at a time instead of a bit at a time).
+const CRC24Q_TABLE: [u32; 256] = {
+    let mut t = [0u32; 256];
+    let mut i = 0;
+    while i < 256 {
+        let mut crc = (i as u32) << 16;
+        let mut k = 0;
+        while k < 8 {
             crc <<= 1;
             if crc & 0x100_0000 != 0 {
-                crc ^= POLY;
+                crc ^= CRC24Q_POLY;
             }
+            k += 1;
         }
+        t[i] = crc & 0xFF_FFFF;
+        i += 1;
     }
-    crc & 0xFF_FFFF
-}
+    t
+};
 
 #[cfg(test)]
 mod tests {
@@ -68,6 +90,28 @@ mod tests {
         set_bits(&mut b, 32, 32, 0x8000_0001);
         assert_eq!(bits_s(&b, 32, 32), i32::MIN + 1);
         assert_eq!(bits_u(&b, 60, 8), 0x10, "bits past the end read as 0");
+    }
+
+    /// The byte-wise field reader equals reading bit by bit, at every offset and length,
+    /// across the end of the buffer too.
+    #[test]
+    fn fields_equal_bit_by_bit_reading() {
+        let buf: Vec<u8> = (0..9u32).map(|i| (i * 97 + 13) as u8 ^ 0xA5).collect();
+        let slow = |pos: usize, len: usize| {
+            (pos..pos + len).fold(0u32, |v, i| {
+                let bit = buf.get(i / 8).map_or(0, |b| (b >> (7 - i % 8)) & 1);
+                (v << 1) | u32::from(bit)
+            })
+        };
+        for pos in 0..80 {
+            for len in 0..=40 {
+                assert_eq!(
+                    bits_u(&buf, pos, len),
+                    slow(pos, len),
+                    "pos {pos} len {len}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -148,22 +148,26 @@ pub fn write_header(w: &mut dyn Write, h: &HeaderOut) -> Result<()> {
 
 /// Write an observation epoch (flag 0) with its satellites.
 pub fn write_epoch(w: &mut dyn Write, t: Epoch, sats: &[SatObs]) -> Result<()> {
-    writeln!(w, "> {}  0{:3}{:21}", epoch_fields(t), sats.len(), "")?;
+    // The record is put together here and handed over at once: a write per field through
+    // `dyn Write` cost more than the formatting.
+    let mut text = Vec::with_capacity(64 + sats.len() * (4 + 16 * 8));
+    writeln!(text, "> {}  0{:3}{:21}", epoch_fields(t), sats.len(), "")?;
     for s in sats {
-        write!(w, "{}", s.sv)?;
+        write!(text, "{}", s.sv)?;
         for o in &s.obs {
             if o.value.is_nan() {
-                w.write_all(b"              ")?;
+                text.extend_from_slice(b"              ");
             } else {
                 let mut buf = [0u8; 32];
                 let n = f14_3(o.value % 1e9, &mut buf);
-                w.write_all(&buf[..n])?;
+                text.extend_from_slice(&buf[..n]);
             }
             let digit = |d: u8| if d == 0 { b' ' } else { b'0' + d.min(9) };
-            w.write_all(&[digit(o.lli), digit(o.ssi)])?;
+            text.extend_from_slice(&[digit(o.lli), digit(o.ssi)]);
         }
-        writeln!(w)?;
+        text.push(b'\n');
     }
+    w.write_all(&text)?;
     Ok(())
 }
 
