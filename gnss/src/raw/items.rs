@@ -6,6 +6,7 @@
 //! bounded), and the [`RawStats`] of everything read and dropped. Used by
 //! [`super::convert`] (RINEX files) and [`super::source`] (observations in memory).
 
+use super::rtcm_msm::WEEK_MS;
 use super::ubx::{self, FrameReader, Tm2};
 use super::ubx_nav::{NavDecoder, NavOut};
 use super::ubx_obs::{RawEpoch, RawxConverter};
@@ -162,7 +163,7 @@ pub fn for_each_item(
     let mut st = RawStats::default();
     let mut conv = RawxConverter::new();
     let mut nav = NavDecoder::new();
-    let mut week = None;
+    let mut now_ms = None;
     let mut leap = 18i8;
     let mut order = EpochOrder::default();
     while let Some(fr) = r.next_frame(&mut st).map_err(io)? {
@@ -176,7 +177,10 @@ pub fn for_each_item(
                     leap = x.leap_s;
                 }
                 if x.week != 0 {
-                    week = Some(x.week);
+                    now_ms = Some(
+                        x.week as i64 * WEEK_MS
+                            + (x.rcv_tow.clamp(0.0, 604_800.0) * 1000.0).round() as i64,
+                    );
                 }
                 if let Some(e) = conv.epoch(&x, &mut st) {
                     order.emit(e, &mut st, &mut f);
@@ -192,7 +196,7 @@ pub fn for_each_item(
                     f(RawItem::Event(ev));
                 }
             }
-            (0x02, 0x13) => match nav.push(fr.payload, week, &mut st) {
+            (0x02, 0x13) => match nav.push(fr.payload, now_ms, &mut st) {
                 Some(NavOut::Ephemeris(r)) => f(RawItem::Ephemeris(r)),
                 Some(NavOut::GpsIono(k, l)) => f(RawItem::GpsIono(k, l)),
                 None => {}
