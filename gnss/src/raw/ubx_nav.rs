@@ -21,7 +21,7 @@
 
 use super::bds_nav::{self, SUBFRAME_BYTES as BDS_BYTES};
 use super::bits::bits_u;
-use super::glo_nav::{self, STRING_BYTES};
+use super::glo_nav::{self, G, STRING_BYTES};
 use super::inav::{self, PageError, WORD_BYTES};
 use super::lnav::{self, SetError, SUBFRAME_BYTES};
 use super::rtcm_msm::WEEK_MS;
@@ -47,10 +47,10 @@ struct Parts {
     e5b: bool,
     /// BeiDou D1 subframes 1–3 (the first three) or D2 subframe 1 pages 1–10.
     bds: [Option<[u8; BDS_BYTES]>; 10],
-    /// GLONASS strings 1–4 of the frame `glo_frame`, received in order up to `glo_last`.
-    glo: [Option<[u8; STRING_BYTES]>; 4],
-    glo_frame: u32,
-    glo_last: u32,
+    /// GLONASS strings 1–4, each with the index of its frame ([`glonass_frame`]).
+    glo: [Option<([u8; STRING_BYTES], i64)>; 4],
+    /// The last tb of string 2, and the first and last frames that gave it.
+    glo_tb: Option<(u32, i64, i64)>,
     /// Issue of data, toe and toc of the last ephemeris given.
     last: Option<(u32, u64, u64)>,
     /// The parts held form the last ephemeris given.
@@ -276,23 +276,32 @@ impl NavDecoder {
             st.page_errors += 1;
             return None;
         }
+        let frame = glonass_frame(dwrd.get(3).copied().unwrap_or(0), now_ms);
         let parts = self.parts.entry(sv).or_default();
-        let frame = dwrd.get(3).copied().unwrap_or(0);
-        // Strings 1–4 come in order, every 2 s (twice when L1OF and L2OF are both tracked):
-        // a new frame, or a string out of that order, starts the set anew.
-        let in_order = m == parts.glo_last || m == parts.glo_last + 1;
-        if frame != parts.glo_frame || !in_order || m == 1 && parts.glo_last != 1 {
-            parts.glo = [None; 4];
+        if m == 2 {
+            // tb: a new value starts a new span of frames of one ephemeris.
+            let tb = bits_u(&s, glo_nav::FIELDS[G::Tb as usize].3, 7);
+            parts.glo_tb = match parts.glo_tb {
+                Some((t, first, last)) if t == tb && frame >= first => {
+                    Some((t, first, last.max(frame)))
+                }
+                _ => Some((tb, frame, frame)),
+            };
         }
-        parts.glo_frame = frame;
-        parts.glo_last = m;
         if m > 4 {
             return None;
         }
-        parts.glo[m as usize - 1] = Some(s);
+        parts.glo[m as usize - 1] = Some((s, frame));
         let [Some(s1), Some(s2), Some(s3), Some(s4)] = &parts.glo else {
             return None;
         };
+        // Strings of different frames carry one ephemeris when every one lies within the
+        // frames whose string 2 gave the same tb (the content changes only with tb).
+        let (_, first, last) = parts.glo_tb?;
+        if [s1, s2, s3, s4].iter().any(|x| x.1 < first || x.1 > last) {
+            return None;
+        }
+        let (s1, s2, s3, s4) = (&s1.0, &s2.0, &s3.0, &s4.0);
         match glo_nav::ephemeris(sv, channel, [s1, s2, s3, s4], now_ms) {
             Ok(r) => parts.give(r, st),
             Err(e) => {
@@ -311,6 +320,18 @@ impl NavDecoder {
     pub fn finish(&self, stats: &mut RawStats) {
         stats.nav.incomplete += self.parts.values().filter(|p| !p.complete).count() as u64;
     }
+}
+
+/// A GLONASS frame's index from the fourth SFRBX word (superframe number in bits 31–16, frame
+/// number 1–5 in bits 7–0), or, when the receiver gives none, from the receiver's time: the
+/// 30-s frame it falls in (GLONASS time = UTC + 3 h, frames start on its whole half-minutes).
+fn glonass_frame(word: u32, now_ms: Option<i64>) -> i64 {
+    if word != 0 {
+        return (word >> 16) as i64 * 5 + (word & 0xFF) as i64;
+    }
+    now_ms.map_or(0, |t| {
+        (t - super::rtcm_msm::leap_seconds(t) * 1000).div_euclid(30_000)
+    })
 }
 
 impl Parts {

@@ -351,10 +351,32 @@ mod tests {
         let mut dec = NavDecoder::new();
         assert!(p.iter().all(|q| dec.push(q, None, &mut st).is_none()));
         assert_eq!(st.nav.before_week_known, 1);
-        // A string out of order (3 before 2) starts the set anew: nothing until the next frame.
+        // Strings of one frame in any order make the set; a string of a later frame whose
+        // string 2 was lost is not mixed with strings of another tb.
         let mut st = RawStats::default();
         let shuffled = [p[0].clone(), p[2].clone(), p[1].clone(), p[3].clone()];
-        assert!(decode(&shuffled, now, &mut st).is_none());
+        assert!(decode(&shuffled, now, &mut st).is_some());
+        let mut next = r.clone();
+        next.toc = next.toc + hifitime::Duration::from_seconds(1800.0);
+        next.orbit[0] += 10.0;
+        let q: Vec<Vec<u8>> = sfrbx_payloads(&next)
+            .unwrap()
+            .into_iter()
+            .map(|mut x| {
+                x[20..24].copy_from_slice(&(1u32 << 16 | 2).to_le_bytes()); // frame 2
+                x
+            })
+            .collect();
+        let mut dec = NavDecoder::new();
+        for x in [&p[0], &p[1], &p[2], &q[3]] {
+            assert!(dec.push(x, Some(now), &mut st).is_none());
+        }
+        assert!(dec.push(&q[1], Some(now), &mut st).is_none());
+        assert!(dec.push(&q[0], Some(now), &mut st).is_none());
+        let Some(NavOut::Ephemeris(b)) = dec.push(&q[2], Some(now), &mut st) else {
+            panic!("frame 2 complete");
+        };
+        assert_eq!((b.toc, b.orbit[0]), (next.toc, next.orbit[0]));
         let mut bad = p.clone();
         bad[2][9] ^= 0x01;
         assert!(decode(&bad, now, &mut st).is_none());
