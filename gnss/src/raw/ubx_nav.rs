@@ -98,8 +98,12 @@ impl NavDecoder {
                 self.beidou(sv, &words, &mut stats.nav)
             }
             (Some(sv), 4) if sv.sys == Constellation::Glonass && sig <= 2 => {
-                let channel = p[3] as i8 - 7;
-                self.glonass(sv, &words, channel, now_ms, &mut stats.nav)
+                // freqId: the frequency channel + 7 (−7…+6)
+                if p[3] > 13 {
+                    stats.nav.page_errors += 1;
+                    return None;
+                }
+                self.glonass(sv, &words, p[3] as i8 - 7, now_ms, &mut stats.nav)
             }
             _ => {
                 let name = sv.map_or("unknown system".to_string(), |s| format!("{:?}", s.sys));
