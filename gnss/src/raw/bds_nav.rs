@@ -19,7 +19,7 @@
 use super::bits::{bits_u, set_bits};
 use super::lnav::ura_metres;
 use super::rtcm_eph::BDT_WEEK0;
-use crate::rinex::nav::{NavKind, NavRecord};
+use crate::rinex::nav::{Klobuchar, NavKind, NavRecord};
 use crate::sv::Sv;
 use crate::time::{from_week_tow, WEEK_SECONDS};
 use hifitime::Duration;
@@ -103,36 +103,81 @@ pub fn d2_page(sf: &[u8]) -> u32 {
     bits_u(sf, 42, 4)
 }
 
+/// The Klobuchar parameters of a D1 subframe 1 (α0–α3, β0–β3; ICD §5.2.4.7).
+pub fn klobuchar(sf1: &[u8]) -> Klobuchar {
+    let field = |parts: &[(usize, usize)]| parts_value(&[sf1], 0, true, parts) as f64;
+    Klobuchar {
+        alpha: [
+            field(&[(126, 8)]) * p2(-30),
+            field(&[(134, 8)]) * p2(-27),
+            field(&[(150, 8)]) * p2(-24),
+            field(&[(158, 8)]) * p2(-24),
+        ],
+        beta: [
+            field(&[(166, 6), (180, 2)]) * p2(11),
+            field(&[(182, 8)]) * p2(14),
+            field(&[(190, 8)]) * p2(16),
+            field(&[(198, 4), (210, 4)]) * p2(16),
+        ],
+    }
+}
+
 /// A quantity of the ephemeris, as the integer the message carries.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[allow(missing_docs)]
 pub enum Q {
+    /// Autonomous satellite health flag.
     SatH1,
+    /// Age of data, clock.
     Aodc,
+    /// User range accuracy index.
     Urai,
+    /// BDT week number (of transmission).
     Week,
+    /// Time of clock (8 s).
     Toc,
+    /// Group delay B1I (0.1 ns).
     Tgd1,
+    /// Group delay B2I (0.1 ns).
     Tgd2,
+    /// Clock bias a0.
     A0,
+    /// Clock drift a1.
     A1,
+    /// Clock drift rate a2.
     A2,
+    /// Age of data, ephemeris.
     Aode,
+    /// Mean motion difference Δn.
     Dn,
+    /// Argument-of-latitude cosine harmonic.
     Cuc,
+    /// Mean anomaly at toe.
     M0,
+    /// Eccentricity.
     E,
+    /// Argument-of-latitude sine harmonic.
     Cus,
+    /// Orbit-radius cosine harmonic.
     Crc,
+    /// Orbit-radius sine harmonic.
     Crs,
+    /// Square root of the semi-major axis.
     SqrtA,
+    /// Time of ephemeris (8 s).
     Toe,
+    /// Inclination at toe.
     I0,
+    /// Inclination cosine harmonic.
     Cic,
+    /// Rate of right ascension Ω̇.
     OmegaDot,
+    /// Inclination sine harmonic.
     Cis,
+    /// Rate of inclination.
     Idot,
+    /// Longitude of the ascending node Ω0.
     Omega0,
+    /// Argument of perigee ω.
     Omega,
 }
 
@@ -211,21 +256,26 @@ pub const D2: [Field; 27] = [
     (Q::Idot, 9, true, &[(51, 1), (60, 13)]),
 ];
 
-/// A field's value from the subframes (a part at position ≥ 300·k lies in the k-th
-/// subframe after the field's own).
-fn read(f: &Field, sf: &[&[u8; SUBFRAME_BYTES]]) -> i64 {
-    let (_, first, signed, parts) = *f;
+/// The value of bit parts (position, length; a position ≥ 300·k lies in the k-th subframe
+/// after `first`), the most significant first, two's complement when `signed`.
+fn parts_value(sf: &[&[u8]], first: usize, signed: bool, parts: &[(usize, usize)]) -> i64 {
     let (mut v, mut n) = (0i64, 0usize);
     for &(pos, len) in parts {
-        let s = sf.get(first + pos / 300).map_or(&[][..], |s| &s[..]);
+        let s = sf.get(first + pos / 300).copied().unwrap_or(&[]);
         v = v << len | bits_u(s, pos % 300, len) as i64;
         n += len;
     }
-    if signed && v >> (n - 1) & 1 == 1 {
+    if signed && n > 0 && v >> (n - 1) & 1 == 1 {
         v - (1 << n)
     } else {
         v
     }
+}
+
+/// A field's value from the subframes.
+fn read(f: &Field, sf: &[&[u8; SUBFRAME_BYTES]]) -> i64 {
+    let s: Vec<&[u8]> = sf.iter().map(|x| &x[..]).collect();
+    parts_value(&s, f.1, f.2, f.3)
 }
 
 /// Write a field's value (its low bits) into the subframes (the inverse of [`read`]).
@@ -376,6 +426,21 @@ mod tests {
                 assert!(!check_word(index, w ^ 1 << bit), "word {index} bit {bit}");
             }
         }
+    }
+
+    #[test]
+    fn klobuchar_fields_across_words() {
+        let mut sf = [0u8; SUBFRAME_BYTES];
+        set_bits(&mut sf, 126, 8, 0xFD); // α0 = −3
+        set_bits(&mut sf, 158, 8, 0x07); // α3 = 7
+                                         // β0 = −74 = 1011 0110: its 6 MSBs in word 7, its 2 LSBs past word 7's parity.
+        set_bits(&mut sf, 166, 6, 0b101101);
+        set_bits(&mut sf, 180, 2, 0b10);
+        set_bits(&mut sf, 198, 4, 0b0001); // β3 = 0001 0011 = 19
+        set_bits(&mut sf, 210, 4, 0b0011);
+        let k = klobuchar(&sf);
+        assert_eq!(k.alpha, [-3.0 * p2(-30), 0.0, 0.0, 7.0 * p2(-24)]);
+        assert_eq!(k.beta, [-74.0 * p2(11), 0.0, 0.0, 19.0 * p2(16)]);
     }
 
     #[test]

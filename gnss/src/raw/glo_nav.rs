@@ -73,25 +73,42 @@ pub fn string_number(s: &[u8]) -> u32 {
 
 /// A quantity of the ephemeris, as the integer the strings carry.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[allow(missing_docs)]
 pub enum G {
+    /// tk hours.
     TkH,
+    /// tk minutes.
     TkM,
+    /// tk half-minute (30 s).
     TkS,
+    /// Velocity x (2⁻²⁰ km/s).
     Vx,
+    /// Acceleration x (2⁻³⁰ km/s²).
     Ax,
+    /// Position x (2⁻¹¹ km).
     X,
+    /// The MSB of Bn (health flag).
     Bn,
+    /// tb, index of the 15-min interval of the day (Moscow time).
     Tb,
+    /// Velocity y.
     Vy,
+    /// Acceleration y.
     Ay,
+    /// Position y.
     Y,
+    /// Relative frequency offset γn (2⁻⁴⁰).
     Gamma,
+    /// Velocity z.
     Vz,
+    /// Acceleration z.
     Az,
+    /// Position z.
     Z,
+    /// Clock offset τn (2⁻³⁰ s).
     Tau,
+    /// Age of the data En (days).
     En,
+    /// Slot number n.
     Slot,
 }
 

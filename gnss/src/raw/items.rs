@@ -56,6 +56,8 @@ pub enum RawItem {
     Ephemeris(NavRecord),
     /// GPS Klobuchar parameters and leap seconds (GPS − UTC) from the navigation message.
     GpsIono(Klobuchar, i32),
+    /// BeiDou Klobuchar parameters from the navigation message.
+    BdsIono(Klobuchar),
 }
 
 /// The navigation data of a log, gathered from its items.
@@ -67,6 +69,8 @@ pub struct LogNav {
     pub gps_iono: Option<Klobuchar>,
     /// The last leap seconds broadcast.
     pub leap_seconds: Option<i32>,
+    /// The last BeiDou Klobuchar parameters broadcast.
+    pub bds_iono: Option<Klobuchar>,
 }
 
 impl LogNav {
@@ -78,6 +82,7 @@ impl LogNav {
                 self.gps_iono = Some(*k);
                 self.leap_seconds = Some(*leap);
             }
+            RawItem::BdsIono(k) => self.bds_iono = Some(*k),
             _ => {}
         }
     }
@@ -89,7 +94,7 @@ impl LogNav {
             version: 3.04,
             records: self.records.clone(),
             gps_iono: self.gps_iono,
-            bds_iono: None,
+            bds_iono: self.bds_iono,
             leap_seconds: self.leap_seconds,
             skipped: Vec::new(),
         }
@@ -199,6 +204,7 @@ pub fn for_each_item(
             (0x02, 0x13) => match nav.push(fr.payload, now_ms, &mut st) {
                 Some(NavOut::Ephemeris(r)) => f(RawItem::Ephemeris(r)),
                 Some(NavOut::GpsIono(k, l)) => f(RawItem::GpsIono(k, l)),
+                Some(NavOut::BdsIono(k)) => f(RawItem::BdsIono(k)),
                 None => {}
             },
             (c, i) => *st.unused.entry(ubx::type_name(c, i)).or_default() += 1,

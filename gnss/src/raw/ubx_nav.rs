@@ -37,6 +37,8 @@ pub enum NavOut {
     Ephemeris(NavRecord),
     /// GPS Klobuchar parameters and leap seconds (subframe 4 page 18).
     GpsIono(Klobuchar, i32),
+    /// BeiDou Klobuchar parameters (D1 subframe 1), when they differ from the last given.
+    BdsIono(Klobuchar),
 }
 
 /// The parts collected for one satellite.
@@ -61,6 +63,7 @@ struct Parts {
 #[derive(Default)]
 pub struct NavDecoder {
     parts: HashMap<Sv, Parts>,
+    bds_iono: Option<Klobuchar>,
 }
 
 impl NavDecoder {
@@ -83,7 +86,11 @@ impl NavDecoder {
             .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
             .collect();
         let (gnss, sig) = (p[0], p[2]);
-        let sv = super::ubx_obs::satellite(gnss, p[1]);
+        // BeiDou PRNs up to 63 (GEO 59–63 broadcast D2); RXM-RAWX keeps convbin's 1–50.
+        let sv = match (gnss, p[1]) {
+            (3, prn @ 1..=63) => Some(Sv::new(Constellation::BeiDou, prn)),
+            (g, id) => super::ubx_obs::satellite(g, id),
+        };
         let week = now_ms.map(|t| t.div_euclid(WEEK_MS) as u16);
         match (sv, words.len()) {
             (Some(sv), 10)
@@ -233,8 +240,13 @@ impl NavDecoder {
             // almanac, health, time offsets: not used
             _ => return None,
         };
+        let iono = (!d2 && id == 1).then(|| bds_nav::klobuchar(&sf));
         let parts = self.parts.entry(sv).or_default();
         parts.bds[slot] = Some(sf);
+        if iono.is_some() && iono != self.bds_iono {
+            self.bds_iono = iono;
+            return iono.map(NavOut::BdsIono);
+        }
         let n = if d2 { 10 } else { 3 };
         // A set is tried when the last part of a frame arrives.
         if slot + 1 != n {

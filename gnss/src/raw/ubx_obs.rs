@@ -87,7 +87,7 @@ pub(crate) fn satellite(gnss_id: u8, sv_id: u8) -> Option<Sv> {
         0 => (Constellation::Gps, 1, 32, 0),
         1 => (Constellation::Sbas, 120, 158, 100),
         2 => (Constellation::Galileo, 1, 36, 0),
-        3 => (Constellation::BeiDou, 1, 63, 0),
+        3 => (Constellation::BeiDou, 1, 50, 0),
         5 => (Constellation::Qzss, 1, 10, 0),
         6 => (Constellation::Glonass, 1, 27, 0),
         7 => (Constellation::Irnss, 1, 14, 0),
