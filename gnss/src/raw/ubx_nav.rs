@@ -3,8 +3,8 @@
 //! What enters: RXM-SFRBX payloads, and the receiver's time (from RXM-RAWX, once it knows the
 //! GPS week). What leaves: each distinct ephemeris once, as a [`NavRecord`] (GPS and QZSS LNAV
 //! through [`super::lnav`], Galileo I/NAV through [`super::inav`], BeiDou D1/D2 through
-//! [`super::bds_nav`], GLONASS L1OF/L2OF through [`super::glo_nav`]), the GPS Klobuchar
-//! parameters, and in [`NavStats`] every subframe, page or string that failed its checks and
+//! [`super::bds_nav`], GLONASS L1OF/L2OF through [`super::glo_nav`]), the GPS and BeiDou
+//! Klobuchar parameters, and in [`NavStats`] every subframe, page or string that failed its checks and
 //! every set left incomplete.
 //!
 //! u-blox packing, checked on the cold-start log of the shared data (849 of 849 GPS subframes
@@ -98,8 +98,8 @@ impl NavDecoder {
             {
                 self.lnav(sv, &words, week, &mut stats.nav)
             }
-            (Some(sv), 8) if sv.sys == Constellation::Galileo && (sig == 1 || sig == 5) => {
-                self.inav(sv, &words, sig == 5, &mut stats.nav)
+            (Some(sv), 8 | 9) if sv.sys == Constellation::Galileo && (sig == 1 || sig == 5) => {
+                self.inav(sv, &words[..8], sig == 5, &mut stats.nav)
             }
             (Some(sv), 10) if sv.sys == Constellation::BeiDou && sig <= 3 => {
                 self.beidou(sv, &words, &mut stats.nav)
