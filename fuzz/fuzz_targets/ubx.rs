@@ -1,5 +1,6 @@
 #![no_main]
-//! u-blox UBX logs: frames, RXM-RAWX and TIM-TM2 decoding.
+//! u-blox UBX logs: frames, RXM-RAWX, RXM-SFRBX (GPS, Galileo, BeiDou D1/D2, GLONASS; seed
+//! `sfrbx_bds_glo.ubx`) and TIM-TM2 decoding.
 
 use libfuzzer_sys::fuzz_target;
 use ppkat_fuzz::with_file;

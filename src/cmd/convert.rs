@@ -27,8 +27,9 @@ pub enum FormatArg {
 /// convbin writes them (signal codes with the combined attribute: GPS C1C/C2X, Galileo C1X/C7X,
 /// BeiDou C2I…); TIM-TM2 time marks become flag-5 event records (falling edges, as convbin)
 /// and, with --events, a CSV of every edge. With --nav, the ephemerides decoded from the
-/// navigation subframes (RXM-SFRBX; GPS/QZSS words parity-checked, Galileo pages CRC-checked)
-/// go to a RINEX 3.04 navigation file. RTCM 3 logs give MSM observations, their ephemeris
+/// navigation subframes (RXM-SFRBX; GPS/QZSS words parity-checked, Galileo pages CRC-checked,
+/// BeiDou D1/D2 words BCH-checked, GLONASS strings Hamming-checked) go to a RINEX 3.04
+/// navigation file. RTCM 3 logs give MSM observations, their ephemeris
 /// messages and the station position. Septentrio SBF logs give MeasEpoch measurements (RINEX
 /// codes as RTKLIB and Septentrio's converter name them: GPS C1C/C2W/C2L/C5Q, Galileo
 /// C1C/C5Q/C7Q …; loss of lock from the lock time and the half-cycle flag), the decoded
@@ -50,7 +51,7 @@ pub struct Args {
     #[arg(long, value_name = "OUT.csv")]
     events: Option<PathBuf>,
     /// RINEX 3.04 mixed navigation file to write, of the ephemerides decoded from the log's
-    /// navigation subframes (RXM-SFRBX: GPS/QZSS LNAV, Galileo I/NAV).
+    /// navigation subframes (RXM-SFRBX: GPS/QZSS LNAV, Galileo I/NAV, BeiDou D1/D2, GLONASS).
     #[arg(long, value_name = "OUT.nav")]
     nav: Option<PathBuf>,
     #[command(flatten)]

@@ -161,6 +161,7 @@ fn write_nav_file(input: &Path, path: &Path, nav: &LogNav, st: &RawStats) -> Res
             input.file_name().unwrap_or_default().to_string_lossy()
         )],
         gps_iono: nav.gps_iono,
+        bds_iono: nav.bds_iono,
         leap_seconds: nav.leap_seconds,
     };
     write_atomic(path, |w| write_nav(w, &h, &nav.records))?;

@@ -6,6 +6,7 @@
 //! bounded), and the [`RawStats`] of everything read and dropped. Used by
 //! [`super::convert`] (RINEX files) and [`super::source`] (observations in memory).
 
+use super::rtcm_msm::WEEK_MS;
 use super::ubx::{self, FrameReader, Tm2};
 use super::ubx_nav::{NavDecoder, NavOut};
 use super::ubx_obs::{RawEpoch, RawxConverter};
@@ -55,6 +56,8 @@ pub enum RawItem {
     Ephemeris(NavRecord),
     /// GPS Klobuchar parameters and leap seconds (GPS − UTC) from the navigation message.
     GpsIono(Klobuchar, i32),
+    /// BeiDou Klobuchar parameters from the navigation message.
+    BdsIono(Klobuchar),
 }
 
 /// The navigation data of a log, gathered from its items.
@@ -66,6 +69,8 @@ pub struct LogNav {
     pub gps_iono: Option<Klobuchar>,
     /// The last leap seconds broadcast.
     pub leap_seconds: Option<i32>,
+    /// The last BeiDou Klobuchar parameters broadcast.
+    pub bds_iono: Option<Klobuchar>,
 }
 
 impl LogNav {
@@ -77,6 +82,7 @@ impl LogNav {
                 self.gps_iono = Some(*k);
                 self.leap_seconds = Some(*leap);
             }
+            RawItem::BdsIono(k) => self.bds_iono = Some(*k),
             _ => {}
         }
     }
@@ -88,7 +94,7 @@ impl LogNav {
             version: 3.04,
             records: self.records.clone(),
             gps_iono: self.gps_iono,
-            bds_iono: None,
+            bds_iono: self.bds_iono,
             leap_seconds: self.leap_seconds,
             skipped: Vec::new(),
         }
@@ -162,7 +168,7 @@ pub fn for_each_item(
     let mut st = RawStats::default();
     let mut conv = RawxConverter::new();
     let mut nav = NavDecoder::new();
-    let mut week = None;
+    let mut now_ms = None;
     let mut leap = 18i8;
     let mut order = EpochOrder::default();
     while let Some(fr) = r.next_frame(&mut st).map_err(io)? {
@@ -176,7 +182,10 @@ pub fn for_each_item(
                     leap = x.leap_s;
                 }
                 if x.week != 0 {
-                    week = Some(x.week);
+                    now_ms = Some(
+                        x.week as i64 * WEEK_MS
+                            + (x.rcv_tow.clamp(0.0, 604_800.0) * 1000.0).round() as i64,
+                    );
                 }
                 if let Some(e) = conv.epoch(&x, &mut st) {
                     order.emit(e, &mut st, &mut f);
@@ -192,9 +201,10 @@ pub fn for_each_item(
                     f(RawItem::Event(ev));
                 }
             }
-            (0x02, 0x13) => match nav.push(fr.payload, week, &mut st) {
+            (0x02, 0x13) => match nav.push(fr.payload, now_ms, &mut st) {
                 Some(NavOut::Ephemeris(r)) => f(RawItem::Ephemeris(r)),
                 Some(NavOut::GpsIono(k, l)) => f(RawItem::GpsIono(k, l)),
+                Some(NavOut::BdsIono(k)) => f(RawItem::BdsIono(k)),
                 None => {}
             },
             (c, i) => *st.unused.entry(ubx::type_name(c, i)).or_default() += 1,

@@ -21,9 +21,11 @@
 //! kept raw for the loss-of-lock rule, and the writer `simulate --raw sbf` needs is ours
 //! anyway; the block format is a sync, a CRC-16 and little-endian fields.
 
+pub mod bds_nav;
 pub mod bits;
 pub mod convert;
 pub mod frames;
+pub mod glo_nav;
 pub mod inav;
 pub mod items;
 pub mod lnav;
@@ -45,6 +47,7 @@ pub mod sbf_write;
 pub mod source;
 pub mod ubx;
 pub mod ubx_nav;
+pub mod ubx_nav_write;
 pub mod ubx_obs;
 pub mod ubx_write;
 
@@ -215,20 +218,24 @@ pub struct RawStats {
 pub struct NavStats {
     /// Navigation messages read (u-blox RXM-SFRBX).
     pub messages: u64,
-    /// GPS/QZSS subframes with a word whose parity fails.
+    /// Subframes or strings whose parity fails: a GPS/QZSS word's parity, a BeiDou word's
+    /// BCH(15,11) code, a GLONASS string's Hamming code.
     pub parity_failures: u64,
     /// Galileo pages whose CRC-24Q fails.
     pub crc_failures: u64,
-    /// Subframes or pages out of structure: a GPS preamble or subframe id that is wrong, a
-    /// Galileo page whose halves are not even then odd.
+    /// Subframes or pages out of structure: a GPS or BeiDou preamble, subframe id or page
+    /// number that is wrong, a Galileo page whose halves are not even then odd, a GLONASS
+    /// string number 0.
     pub page_errors: u64,
     /// Galileo alert pages (no navigation data).
     pub alert_pages: u64,
     /// Sets whose parts carried different issues of data when the last part arrived (a new
-    /// upload being broadcast); the set completes with later parts.
+    /// upload being broadcast), BeiDou sets whose parts are not of one frame, GLONASS strings
+    /// 1–4 naming another slot; the set completes with later parts.
     pub inconsistent: u64,
     /// GPS/QZSS sets complete before the receiver knew the GPS week (the broadcast week is
-    /// modulo 1024); the set completes again when it is rebroadcast.
+    /// modulo 1024), GLONASS sets before it knew its time (the strings carry times of day);
+    /// the set completes again when it is rebroadcast.
     pub before_week_known: u64,
     /// Distinct ephemerides decoded.
     pub ephemerides: u64,

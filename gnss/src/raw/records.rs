@@ -177,7 +177,7 @@ impl<'a> RinexOrder<'a> {
                     self.pending.push(ev);
                 }
             }
-            RawItem::Ephemeris(_) | RawItem::GpsIono(..) => {}
+            RawItem::Ephemeris(_) | RawItem::GpsIono(..) | RawItem::BdsIono(_) => {}
             RawItem::Epoch(e) => {
                 let t = gpst(e.week, e.tow);
                 let (now, later): (Vec<_>, Vec<_>) = self

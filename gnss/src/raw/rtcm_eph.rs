@@ -376,7 +376,7 @@ fn galileo_1045_1046(mut f: Fields, inav: bool, now: Option<i64>) -> Result<NavR
 }
 
 /// The instant (ms) of a time of day `tod_ms` on the day nearest `near` (same time scale).
-fn nearest_day(tod_ms: i64, near: i64) -> i64 {
+pub(crate) fn nearest_day(tod_ms: i64, near: i64) -> i64 {
     let base = near - near.rem_euclid(DAY_MS) + tod_ms.rem_euclid(DAY_MS);
     [base - DAY_MS, base, base + DAY_MS]
         .into_iter()

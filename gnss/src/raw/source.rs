@@ -55,7 +55,7 @@ pub fn read_log(path: &Path, format: Option<RawFormat>, hint: Option<TimeHint>) 
                 items.push(RawItem::Epoch(e));
             }
             RawItem::Event(_) => items.push(it),
-            RawItem::Ephemeris(_) | RawItem::GpsIono(..) => {}
+            RawItem::Ephemeris(_) | RawItem::GpsIono(..) | RawItem::BdsIono(_) => {}
         }
     })?;
     span(&scan, path)?;

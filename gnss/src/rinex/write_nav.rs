@@ -20,6 +20,8 @@ pub struct NavHeaderOut {
     pub comments: Vec<String>,
     /// GPS Klobuchar parameters (IONOSPHERIC CORR GPSA/GPSB), when known.
     pub gps_iono: Option<Klobuchar>,
+    /// BeiDou Klobuchar parameters (IONOSPHERIC CORR BDSA/BDSB), when known.
+    pub bds_iono: Option<Klobuchar>,
     /// GPS − UTC leap seconds (LEAP SECONDS), when known.
     pub leap_seconds: Option<i32>,
 }
@@ -37,8 +39,9 @@ pub fn sci(x: f64, width: usize, decimals: usize) -> String {
 /// Write the header.
 pub fn write_nav_header(w: &mut dyn Write, h: &NavHeaderOut) -> Result<()> {
     opening(w, "N: GNSS NAV DATA", &h.program, &h.comments)?;
-    if let Some(k) = &h.gps_iono {
-        for (name, v) in [("GPSA", k.alpha), ("GPSB", k.beta)] {
+    for (k, a, b) in [(&h.gps_iono, "GPSA", "GPSB"), (&h.bds_iono, "BDSA", "BDSB")] {
+        let Some(k) = k else { continue };
+        for (name, v) in [(a, k.alpha), (b, k.beta)] {
             let vals: String = v.iter().map(|x| sci(*x, 12, 4)).collect();
             line(w, &format!("{name} {vals}"), "IONOSPHERIC CORR")?;
         }
