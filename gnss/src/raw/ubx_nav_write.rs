@@ -357,7 +357,7 @@ mod tests {
         let shuffled = [p[0].clone(), p[2].clone(), p[1].clone(), p[3].clone()];
         assert!(decode(&shuffled, now, &mut st).is_some());
         let mut next = r.clone();
-        next.toc = next.toc + hifitime::Duration::from_seconds(1800.0);
+        next.toc += hifitime::Duration::from_seconds(1800.0);
         next.orbit[0] += 10.0;
         let q: Vec<Vec<u8>> = sfrbx_payloads(&next)
             .unwrap()
