@@ -242,27 +242,28 @@ fn erf(x: f64) -> f64 {
     }
 }
 
+/// A decorrelated ambiguity's chance of rounding to its integer, 2Φ(1 / (2σ)) − 1, from its
+/// conditional variance `d`.
+fn fix_rate(d: f64) -> f64 {
+    erf(1.0 / (2.0 * (2.0 * d).sqrt()))
+}
+
 impl Decorrelated {
     /// Bootstrapped success rate of fixing the last `k` decorrelated ambiguities:
     /// Π (2Φ(1 / (2σ_i)) − 1) over their conditional sigmas, a sharp lower bound of the
     /// integer least-squares success rate.
     pub fn success_rate(&self, k: usize) -> f64 {
-        self.fix_rates()[self.n - k.min(self.n)..].iter().product()
-    }
-
-    /// Each decorrelated ambiguity's chance of rounding to its integer, 2Φ(1 / (2σ_i)) − 1.
-    fn fix_rates(&self) -> Vec<f64> {
-        self.d
+        self.d[self.n - k.min(self.n)..]
             .iter()
-            .map(|&d| erf(1.0 / (2.0 * (2.0 * d).sqrt())))
-            .collect()
+            .map(|&d| fix_rate(d))
+            .product()
     }
 
     /// The largest `k` whose [`Self::success_rate`] reaches `p_min` (0 when not even one).
     /// Each ambiguity's rate is computed once (the products, in the same order as
     /// [`Self::success_rate`]'s, are cheap; `erf` is not).
     pub fn most_fixable(&self, p_min: f64) -> usize {
-        let rates = self.fix_rates();
+        let rates: Vec<f64> = self.d.iter().map(|&d| fix_rate(d)).collect();
         (1..=self.n)
             .take_while(|&k| rates[self.n - k..].iter().product::<f64>() >= p_min)
             .last()

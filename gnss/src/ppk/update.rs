@@ -41,7 +41,10 @@ impl Gain {
         let mut u = innov.clone();
         for i in 0..u.len() {
             for k in 0..i {
-                u[i] -= l[(i, k)] * u[k];
+                let lik = l[(i, k)];
+                if lik != 0.0 {
+                    u[i] -= lik * u[k];
+                }
             }
             u[i] /= l[(i, i)];
         }
@@ -87,22 +90,19 @@ pub(super) fn update_keeping_gain(
     // Wᵀ = (P·Hᵀ)·L⁻ᵀ, column by column: Wᵀ[:, i] = (PHᵀ[:, i] − Σₖ₍ₖ₌₀..ᵢ₎ L[i,k]·Wᵀ[:, k]) / L[i,i];
     // every step an axpy over a contiguous column.
     let mut wt = pht;
-    let mut u = innov.clone();
     for i in 0..m {
         for k in 0..i {
             let lik = l[(i, k)];
             if lik != 0.0 {
                 let (done, mut rest) = wt.columns_range_pair_mut(k, i..);
                 rest.column_mut(0).axpy(-lik, &done, 1.0);
-                u[i] -= lik * u[k];
             }
         }
-        let d = l[(i, i)];
-        wt.column_mut(i).unscale_mut(d);
-        u[i] /= d;
+        wt.column_mut(i).unscale_mut(l[(i, i)]);
     }
     let p = p0 - &wt * wt.transpose();
-    Some((&wt * u, p, Gain { wt, l }))
+    let gain = Gain { wt, l };
+    Some((gain.correction(innov), p, gain))
 }
 
 #[cfg(test)]
