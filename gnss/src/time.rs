@@ -33,6 +33,19 @@ pub fn week_tow(e: Epoch) -> (u32, f64) {
     (week as u32, s - week * WEEK_SECONDS)
 }
 
+/// The week of seconds-of-week `sow` (an ephemeris' toe) given with `week`, the week of
+/// `sent_sow` (its transmission, within half a week of it): `week` + 1 when `sow` lies early
+/// in the next week, − 1 when it lies late in the previous one.
+pub fn week_of(week: i64, sow: f64, sent_sow: f64) -> i64 {
+    if sow < sent_sow - WEEK_SECONDS / 2.0 {
+        week + 1
+    } else if sow > sent_sow + WEEK_SECONDS / 2.0 {
+        week - 1
+    } else {
+        week
+    }
+}
+
 /// The GPST epoch of a GPS week and seconds of week.
 pub fn from_week_tow(week: u32, tow: f64) -> Epoch {
     Epoch::from_gpst_seconds(week as f64 * WEEK_SECONDS) + Duration::from_seconds(tow)

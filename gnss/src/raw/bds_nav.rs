@@ -21,7 +21,7 @@ use super::lnav::ura_metres;
 use super::rtcm_eph::BDT_WEEK0;
 use crate::rinex::nav::{Klobuchar, NavKind, NavRecord};
 use crate::sv::Sv;
-use crate::time::{from_week_tow, WEEK_SECONDS};
+use crate::time::{from_week_tow, week_of, WEEK_SECONDS};
 use hifitime::Duration;
 use std::f64::consts::PI;
 
@@ -354,12 +354,7 @@ pub fn record(sv: Sv, q: &[i64; QUANTITIES], sow0: u32) -> NavRecord {
     let toe = v(Q::Toe);
     let sent = sow0 as f64;
     // The week broadcast is that of transmission; toe may lie in the week before or after.
-    let mut week = q[Q::Week as usize];
-    if toe < sent - WEEK_SECONDS / 2.0 {
-        week += 1;
-    } else if toe > sent + WEEK_SECONDS / 2.0 {
-        week -= 1;
-    }
+    let week = week_of(q[Q::Week as usize], toe, sent);
     let sent_in_toe_week = sent + (q[Q::Week as usize] - week) as f64 * WEEK_SECONDS;
     let orbit = vec![
         v(Q::Aode),

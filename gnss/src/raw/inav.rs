@@ -9,7 +9,7 @@
 use super::bits::{bits_s, bits_u, crc24q, set_bits};
 use crate::rinex::nav::{NavKind, NavRecord};
 use crate::sv::{Constellation, Sv};
-use crate::time::{from_week_tow, WEEK_SECONDS};
+use crate::time::{from_week_tow, week_of};
 use std::f64::consts::PI;
 
 /// Bytes of one data word (128 bits: the word type, then its fields).
@@ -97,12 +97,7 @@ pub fn ephemeris(sv: Sv, w: [&[u8; WORD_BYTES]; 5], e5b: bool) -> Option<NavReco
     let toc_s = bits_u(w4, 54, 14) as f64 * 60.0;
     let tow = bits_u(w5, 85, 20) as f64;
     // GST week of toe: the broadcast week is that of word 5's transmission.
-    let mut week = bits_u(w5, 73, 12) as i64 + 1024;
-    if toe_s - tow > WEEK_SECONDS / 2.0 {
-        week -= 1;
-    } else if toe_s - tow < -WEEK_SECONDS / 2.0 {
-        week += 1;
-    }
+    let week = week_of(bits_u(w5, 73, 12) as i64 + 1024, toe_s, tow);
     let health = bits_u(w5, 67, 2) << 7
         | bits_u(w5, 71, 1) << 6
         | bits_u(w5, 69, 2) << 1

@@ -10,7 +10,7 @@
 use super::bits::{bits_s, bits_u, set_bits};
 use crate::rinex::nav::{Klobuchar, NavKind, NavRecord};
 use crate::sv::{Constellation, Sv};
-use crate::time::{from_week_tow, WEEK_SECONDS};
+use crate::time::{from_week_tow, week_of};
 use std::f64::consts::PI;
 
 /// The TLM word's preamble (its first 8 data bits).
@@ -105,15 +105,11 @@ pub fn ephemeris(
     }
     let week = week.ok_or(SetError::NoWeek)?;
     let wn10 = bits_u(s1, 48, 10) as i64;
-    let mut full = wn10 + 1024 * ((week as i64 - wn10) as f64 / 1024.0).round() as i64;
+    let sent_week = wn10 + 1024 * ((week as i64 - wn10) as f64 / 1024.0).round() as i64;
     let tow1 = bits_u(s1, 24, 17) as f64 * 6.0;
     let toe_s = bits_u(s2, 216, 16) as f64 * 16.0;
     // The week of toe: toe may lie in the next (or previous) week of transmission.
-    if toe_s < tow1 - WEEK_SECONDS / 2.0 {
-        full += 1;
-    } else if toe_s > tow1 + WEEK_SECONDS / 2.0 {
-        full -= 1;
-    }
+    let full = week_of(sent_week, toe_s, tow1);
     let toc_s = bits_u(s1, 176, 16) as f64 * 16.0;
     let tgd = bits_s(s1, 160, 8);
     let fit_flag = bits_u(s2, 232, 1) == 1;
