@@ -4,8 +4,9 @@
 //! leaves behind (its temporaries, or a folder renamed away just before the swap) is cleaned
 //! up, or put back, by the next run that writes the same output.
 //!
-//! Temporaries are named `.NAME.PID.tmp` (files), `.NAME.PID.new` and `.NAME.PID.old`
-//! (folders); one whose process is gone is stale.
+//! Temporaries are named `.NAME.PID.tmp` (files), `.NAME.PID.spill` (a conversion's
+//! intermediate file, where it cannot be unlinked while open), `.NAME.PID.new` and
+//! `.NAME.PID.old` (folders); one whose process is gone is stale.
 
 use crate::error::{Error, Result};
 use std::io::Write;
@@ -25,7 +26,7 @@ fn split(path: &Path) -> (PathBuf, String) {
 }
 
 /// The hidden sibling of `path` for this process, with `kind` (`tmp`, `new`, `old`).
-fn sibling(path: &Path, kind: &str) -> PathBuf {
+pub(crate) fn sibling(path: &Path, kind: &str) -> PathBuf {
     let (dir, name) = split(path);
     dir.join(format!(".{name}.{}.{kind}", std::process::id()))
 }
@@ -57,7 +58,8 @@ fn stale(path: &Path, kind: &str) -> Vec<PathBuf> {
 /// Remove what killed runs left of `path`: stale temporary files and staging folders; a
 /// folder renamed away just before its swap is put back when `path` is missing.
 pub fn clean_stale(path: &Path) {
-    for t in stale(path, "tmp").into_iter().chain(stale(path, "new")) {
+    let files = stale(path, "tmp").into_iter().chain(stale(path, "spill"));
+    for t in files.chain(stale(path, "new")) {
         let _ = std::fs::remove_dir_all(&t).or_else(|_| std::fs::remove_file(&t));
     }
     for old in stale(path, "old") {
@@ -81,17 +83,78 @@ pub fn write_atomic(
     clean_stale(path);
     let tmp = sibling(path, "tmp");
     let res = (|| {
-        let file = std::fs::File::create(&tmp)?;
+        let file = Writeback::new(std::fs::File::create(&tmp)?);
         let mut w = std::io::BufWriter::new(file);
         f(&mut w)?;
         w.flush()?;
-        w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+        w.into_inner()
+            .map_err(|e| e.into_error())?
+            .file
+            .sync_all()?;
         std::fs::rename(&tmp, path)
     })();
     if res.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
     res.map_err(io)
+}
+
+/// A file whose written pages are handed to the disk every few megabytes (Linux), so that the
+/// closing `fsync` of a large output waits for the last few only instead of for all of it.
+struct Writeback {
+    file: std::fs::File,
+    started: u64,
+    pending: u64,
+}
+
+impl Writeback {
+    /// Pages handed to the disk at a time.
+    const STEP: u64 = 8 << 20;
+
+    fn new(file: std::fs::File) -> Self {
+        Writeback {
+            file,
+            started: 0,
+            pending: 0,
+        }
+    }
+}
+
+impl Write for Writeback {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = self.file.write(buf)?;
+        self.pending += n as u64;
+        if self.pending >= Self::STEP {
+            start_writeback(&self.file, self.started, self.pending);
+            self.started += self.pending;
+            self.pending = 0;
+        }
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.file.flush()
+    }
+}
+
+/// Start writing `len` bytes of `file` from `offset` to the disk, without waiting; a hint
+/// whose failure the closing `fsync` reports.
+fn start_writeback(file: &std::fs::File, offset: u64, len: u64) {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::fd::AsRawFd;
+        // SAFETY: sync_file_range only reads the descriptor and range; the file is open.
+        unsafe {
+            libc::sync_file_range(
+                file.as_raw_fd(),
+                offset as libc::off64_t,
+                len as libc::off64_t,
+                libc::SYNC_FILE_RANGE_WRITE,
+            );
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = (file, offset, len);
 }
 
 /// A folder being written whole: fill [`StagedDir::path`], then [`StagedDir::commit`] swaps it

@@ -3,18 +3,22 @@
 //! What enters: the path of a log and its format (detected from content when not given).
 //! What leaves: the RINEX observation file, the optional RINEX navigation file (ephemerides
 //! decoded from the log's navigation subframes) and event CSV, each written atomically, and
-//! the [`RawStats`] of the conversion. The log is read twice (first for the header's
-//! observation types, time span and the ephemerides, then to write the observations), so
-//! memory stays bounded whatever the log's size.
+//! the [`RawStats`] of the conversion. The log is decoded once; its epochs and time marks go
+//! to a temporary file ([`super::spill`]) while the header's observation types, time span and
+//! the ephemerides are gathered, and are written as RINEX from there, formatted on all
+//! threads in batches (the same bytes for any thread count). Memory stays bounded whatever
+//! the log's size.
 
 use super::items::{for_each_item, Edge, LogNav, RawItem};
-use super::records::{span, RinexOrder, RinexOut, Scan};
+use super::records::{span, write_raw_epoch, RinexOrder, RinexOut, Scan};
+use super::spill::{self, Spill};
 use super::{RawFormat, RawStats, TimeHint};
 use crate::error::{Error, Result};
 use crate::rinex::write::{self, HeaderOut};
 use crate::rinex::write_nav::{write_nav, NavHeaderOut};
+use crate::rinex::ObsCode;
 use crate::solution::write_atomic;
-use std::io::Write;
+use crate::sv::Constellation;
 use std::path::Path;
 
 /// The files `convert` writes.
@@ -39,8 +43,8 @@ pub fn convert(
     convert_with_progress(input, format, hint, outs, &crate::progress::NoProgress)
 }
 
-/// [`convert`], counting the epochs of each pass on `progress` (the first pass's length is
-/// not known beforehand; the second's is the first's count).
+/// [`convert`], counting the log's epochs as they are decoded, then the RINEX records as they
+/// are written, on `progress` (the first count's length is not known beforehand).
 pub fn convert_with_progress(
     input: &Path,
     format: Option<RawFormat>,
@@ -51,22 +55,41 @@ pub fn convert_with_progress(
     let (out, events) = (outs.obs, outs.events);
     let mut scan = Scan::default();
     let mut lognav = LogNav::default();
-    let mut epochs = 0u64;
+    let mut records = 0u64;
+    let spill_err = |cause| Error::Write {
+        path: out.to_path_buf(),
+        cause,
+    };
+    let mut spill = Spill::create(out).map_err(spill_err)?;
+    let mut kept: std::io::Result<()> = Ok(());
+    let mut order = RinexOrder::default();
     progress.set_len("reading the log, epoch", 0);
-    let st1 = for_each_item(input, format, hint, |it| {
+    let st = for_each_item(input, format, hint, |it| {
         lognav.add(&it);
-        if let RawItem::Epoch(e) = it {
-            scan.add(&e);
-            epochs += 1;
+        if let RawItem::Epoch(e) = &it {
+            scan.add(e);
             progress.inc(1);
         }
+        if kept.is_ok() {
+            kept = order.item(it, &mut |o| {
+                records += 1;
+                spill.push(&o)
+            });
+        }
     })?;
-    progress.set_len("writing RINEX", epochs);
+    kept.and_then(|_| {
+        order.finish(&mut |o| {
+            records += 1;
+            spill.push(&o)
+        })
+    })
+    .map_err(spill_err)?;
+    progress.set_len("writing RINEX records", records);
     if let Some(p) = outs.nav {
-        write_nav_file(input, p, &lognav, &st1)?;
+        write_nav_file(input, p, &lognav, &st)?;
     }
     let (first, last) = span(&scan, input)?;
-    let station = st1.station.rinex();
+    let station = st.station.rinex();
     let h = HeaderOut {
         program: "ppkat convert".into(),
         comments: vec![
@@ -89,41 +112,25 @@ pub fn convert_with_progress(
         last,
         glonass: scan.glonass.iter().map(|(&s, &c)| (s, c)).collect(),
     };
-    let mut order = RinexOrder::new(&h.types);
-    // The second pass's own error (the log changed or became unreadable) is kept here and
-    // the atomic write abandoned, so no partial file replaces OUT.
-    let mut pass2: Option<Result<RawStats>> = None;
-    let written = write_atomic(out, |w| {
+    let mut kept = spill.into_reader().map_err(spill_err)?;
+    write_atomic(out, |w| {
         write::write_header(w, &h)?;
-        let mut res = Ok(());
-        let mut put = |o: RinexOut| write_record(w, o);
-        let st = for_each_item(input, format, hint, |it| {
-            if matches!(it, RawItem::Epoch(_)) {
-                progress.inc(1);
-            }
-            if res.is_ok() {
-                res = order.item(it, &mut put);
-            }
-        });
-        res?;
-        let failed = st.is_err();
-        pass2 = Some(st);
-        if failed {
-            return Err(std::io::Error::other(
-                "reading the log a second time failed",
-            ));
+        let mut texts = Vec::new();
+        while let Some(block) = kept.next_block(BLOCK)? {
+            let recs = block.records();
+            // the block before is written while this one is formatted
+            let mut formatted = Ok(Vec::new());
+            let written = rayon::in_place_scope(|s| {
+                s.spawn(|_| formatted = format_block(&recs, &h.types));
+                texts.iter().try_for_each(|t: &Vec<u8>| w.write_all(t))
+            });
+            written?;
+            texts = formatted?;
+            progress.inc(recs.len() as u64);
         }
-        order.finish(&mut put)
-    });
+        texts.iter().try_for_each(|t| w.write_all(t))
+    })?;
     progress.finish();
-    if let Some(Err(e)) = pass2 {
-        return Err(e);
-    }
-    written?;
-    let st = match pass2 {
-        Some(Ok(st)) => st,
-        _ => return Err(Error::input(input, "internal: the second pass did not run")),
-    };
     if let Some(p) = events {
         write_atomic(p, |w| {
             writeln!(w, "week,tow,edge,count,valid")?;
@@ -139,6 +146,28 @@ pub fn convert_with_progress(
         })?;
     }
     Ok(st)
+}
+
+/// Bytes of records formatted together, on all threads: enough to keep them busy, little
+/// enough that a block and its text (about 2.5 times as much) stay a few megabytes.
+const BLOCK: usize = 1 << 21;
+
+/// The RINEX text of a block's records, formatted on all threads: one text per run of
+/// records (few large writes rather than one per epoch), in order.
+fn format_block(
+    recs: &[&[u8]],
+    types: &[(Constellation, Vec<ObsCode>)],
+) -> std::io::Result<Vec<Vec<u8>>> {
+    use rayon::prelude::*;
+    recs.par_chunks(64)
+        .map(|run| {
+            let mut text = Vec::with_capacity(run.iter().map(|r| r.len() * 2).sum());
+            for r in run {
+                write_record(&mut text, &spill::decode(r)?, types)?;
+            }
+            Ok(text)
+        })
+        .collect()
 }
 
 /// The navigation file of a log's ephemerides; an error when the log has none.
@@ -168,9 +197,17 @@ fn write_nav_file(input: &Path, path: &Path, nav: &LogNav, st: &RawStats) -> Res
     Ok(())
 }
 
-fn write_record(w: &mut dyn Write, o: RinexOut) -> std::io::Result<()> {
+/// One record as RINEX text; an epoch without a satellite of the header's types is none.
+fn write_record(
+    text: &mut Vec<u8>,
+    o: &RinexOut,
+    types: &[(Constellation, Vec<ObsCode>)],
+) -> std::io::Result<()> {
     match o {
-        RinexOut::Epoch(t, sats) => write::write_epoch(w, t, &sats),
-        RinexOut::Event(t, c) => write::write_event(w, t, &c),
+        RinexOut::Epoch(t, e) => {
+            write_raw_epoch(text, *t, e, types);
+            Ok(())
+        }
+        RinexOut::Event(t, c) => write::write_event(text, *t, c),
     }
 }

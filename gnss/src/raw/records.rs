@@ -85,8 +85,9 @@ const RINEX_ORDER: [Constellation; 7] = [
     Constellation::Irnss,
 ];
 
-/// One epoch's satellites aligned with the header's types; satellites with none are left out.
-fn sat_records(e: &RawEpoch, types: &[(Constellation, Vec<ObsCode>)]) -> Vec<SatObs> {
+/// One epoch's satellites aligned with the header's types; satellites with none are left out
+/// (an epoch left with none is not a RINEX record).
+pub fn sat_records(e: &RawEpoch, types: &[(Constellation, Vec<ObsCode>)]) -> Vec<SatObs> {
     let mut out = Vec::new();
     for s in &e.sats {
         let Some((_, ts)) = types.iter().find(|(sys, _)| *sys == s.sv.sys) else {
@@ -123,6 +124,72 @@ fn sat_records(e: &RawEpoch, types: &[(Constellation, Vec<ObsCode>)]) -> Vec<Sat
     out
 }
 
+/// One epoch as the RINEX text [`crate::rinex::write::write_epoch`] writes of its
+/// [`sat_records`], formatted straight from the raw epoch (nothing allocated per satellite);
+/// nothing when no satellite has an observation of the header's types.
+pub fn write_raw_epoch(
+    text: &mut Vec<u8>,
+    t: Epoch,
+    e: &RawEpoch,
+    types: &[(Constellation, Vec<ObsCode>)],
+) {
+    use crate::rinex::write::{epoch_line, put_obs_field, sv_field};
+    let start = text.len();
+    epoch_line(text, t, 0);
+    let body = text.len();
+    let mut n = 0usize;
+    for s in &e.sats {
+        let Some((_, ts)) = types.iter().find(|(sys, _)| *sys == s.sv.sys) else {
+            continue;
+        };
+        let line = text.len();
+        sv_field(text, s.sv);
+        let cols = text.len();
+        text.resize(cols + 16 * ts.len(), b' ');
+        let mut any = false;
+        // the last slot first, so that the first signal of a code is the one left (as
+        // `sat_records` finds it)
+        for g in s.sig.iter().rev().flatten() {
+            for (j, ty) in ts.iter().enumerate() {
+                if [ty.band(), ty.attribute()] != g.code {
+                    continue;
+                }
+                any = true;
+                let (v, lli) = match ty.kind() {
+                    b'C' => (g.pr, 0),
+                    b'L' => (g.cp, g.lli & 3),
+                    b'D' => (g.doppler, 0),
+                    _ => (g.cno, 0),
+                };
+                let f = &mut text[cols + 16 * j..cols + 16 * (j + 1)];
+                if let Ok(f) = <&mut [u8; 16]>::try_from(f) {
+                    put_obs_field(f, if v == 0.0 { f64::NAN } else { v }, lli, 0);
+                }
+            }
+        }
+        if any {
+            text.push(b'\n');
+            n += 1;
+        } else {
+            text.truncate(line);
+        }
+    }
+    match n {
+        0 => text.truncate(start),
+        1..=999 => {
+            // the count field of the opening line, 3 wide after `> date  0`
+            let c = format!("{n:3}");
+            text[start + 32..start + 35].copy_from_slice(c.as_bytes());
+        }
+        _ => {
+            let sats = text.split_off(body);
+            text.truncate(start);
+            epoch_line(text, t, n);
+            text.extend_from_slice(&sats);
+        }
+    }
+}
+
 /// The first and last epoch of a scan, or the error saying the log has no usable epoch.
 pub fn span(scan: &Scan, input: &Path) -> Result<(Epoch, Epoch)> {
     match (scan.first, scan.last) {
@@ -139,31 +206,23 @@ pub fn span(scan: &Scan, input: &Path) -> Result<(Epoch, Epoch)> {
 
 /// One RINEX record of a log.
 pub enum RinexOut {
-    /// An observation epoch (flag 0) with its satellites.
-    Epoch(Epoch, Vec<SatObs>),
+    /// An observation epoch (flag 0) and its satellites, not yet aligned with the header's
+    /// types ([`sat_records`] does that; an epoch it leaves empty is no record).
+    Epoch(Epoch, RawEpoch),
     /// A flag-5 event with its comment lines.
     Event(Epoch, Vec<String>),
 }
 
 /// Puts a log's items in RINEX order: a time mark that is a record (UBX: its falling edge, as
 /// convbin; SBF: every event) goes before the first epoch not earlier than it; every edge is kept in `marks` for the CSV.
-pub struct RinexOrder<'a> {
-    types: &'a [(Constellation, Vec<ObsCode>)],
+#[derive(Default)]
+pub struct RinexOrder {
     pending: Vec<EventMark>,
     /// Every time-mark edge, in file order.
     pub marks: Vec<EventMark>,
 }
 
-impl<'a> RinexOrder<'a> {
-    /// An ordering for a header with `types`.
-    pub fn new(types: &'a [(Constellation, Vec<ObsCode>)]) -> Self {
-        RinexOrder {
-            types,
-            pending: Vec::new(),
-            marks: Vec::new(),
-        }
-    }
-
+impl RinexOrder {
     /// Take one item; hand the records it completes to `out`.
     pub fn item<E>(
         &mut self,
@@ -188,10 +247,7 @@ impl<'a> RinexOrder<'a> {
                     out(mark(m))?;
                 }
                 self.pending = later;
-                let sats = sat_records(&e, self.types);
-                if !sats.is_empty() {
-                    out(RinexOut::Epoch(t, sats))?;
-                }
+                out(RinexOut::Epoch(t, e))?;
             }
         }
         Ok(())

@@ -20,11 +20,12 @@
 //!   second signal of a band already filled (signal ids ascending), is dropped and counted.
 
 use super::bits::{bits_s, bits_u};
+use super::slots::SlotTable;
 use super::ubx_obs::{RawEpoch, RawSat, RawSignal};
 use super::RawStats;
 use crate::signal::frequency;
 use crate::sv::{Constellation, Sv};
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
 
 /// Metres per millisecond of range (c · 1 ms).
 pub const RANGE_MS: f64 = 299_792.458;
@@ -193,39 +194,49 @@ fn field_bits(kind: u8) -> (usize, usize, usize, usize, bool) {
     }
 }
 
-/// Satellite data of an MSM from bit `pos`: rough ranges (ms), extended information and rough
-/// phase range rates (m/s); `None` where flagged invalid. Returns the bit after them too.
-type SatData = (Vec<Option<f64>>, Vec<u8>, Vec<Option<f64>>, usize);
+/// Satellite data of an MSM from bit `pos` (for its first `ns` ≤ 64 satellites): rough ranges
+/// (ms), extended information and rough phase range rates (m/s); `None` where flagged
+/// invalid. Returns the bit after them too. Fixed arrays: nothing is allocated per message.
+struct SatData {
+    rough: [Option<f64>; 64],
+    ext: [u8; 64],
+    rough_rate: [Option<f64>; 64],
+    end: usize,
+}
 
 fn sat_data(p: &[u8], mut pos: usize, ns: usize, rates: bool) -> SatData {
-    let mut rough = vec![None; ns];
-    let mut ext = vec![15u8; ns];
-    let mut rough_rate = vec![None; ns];
-    for (s, r) in rough.iter_mut().enumerate() {
+    let mut d = SatData {
+        rough: [None; 64],
+        ext: [15; 64],
+        rough_rate: [None; 64],
+        end: 0,
+    };
+    for (s, r) in d.rough[..ns].iter_mut().enumerate() {
         let int = bits_u(p, pos + 8 * s, 8);
         *r = (int != 255).then_some(int as f64);
     }
     pos += 8 * ns;
     if rates {
-        for (s, e) in ext.iter_mut().enumerate() {
+        for (s, e) in d.ext[..ns].iter_mut().enumerate() {
             *e = bits_u(p, pos + 4 * s, 4) as u8;
         }
         pos += 4 * ns;
     }
-    for (s, r) in rough.iter_mut().enumerate() {
+    for (s, r) in d.rough[..ns].iter_mut().enumerate() {
         if let Some(v) = r.as_mut() {
             *v += bits_u(p, pos + 10 * s, 10) as f64 / 1024.0;
         }
     }
     pos += 10 * ns;
     if rates {
-        for (s, r) in rough_rate.iter_mut().enumerate() {
+        for (s, r) in d.rough_rate[..ns].iter_mut().enumerate() {
             let v = bits_s(p, pos + 14 * s, 14);
             *r = (v != -8192).then_some(v as f64);
         }
         pos += 14 * ns;
     }
-    (rough, ext, rough_rate, pos)
+    d.end = pos;
+    d
 }
 
 /// Decode an MSM payload; `None` when it is not an MSM or is shorter than its masks announce.
@@ -238,32 +249,47 @@ pub fn decode_msm(p: &[u8]) -> Option<Msm> {
         .filter(|i| sat_mask >> (63 - i) & 1 == 1)
         .map(|i| i as u8 + 1)
         .collect();
-    let sigs: Vec<u8> = (0..32)
-        .filter(|i| sig_mask >> (31 - i) & 1 == 1)
-        .map(|i| i as u8 + 1)
-        .collect();
-    let (ns, ng) = (sats.len(), sigs.len());
+    let (mut sigs, mut ng) = ([0u8; 32], 0);
+    for i in (0..32).filter(|i| sig_mask >> (31 - i) & 1 == 1) {
+        sigs[ng] = i as u8 + 1;
+        ng += 1;
+    }
+    let ns = sats.len();
     if ns * ng > 64 {
         return None;
     }
-    let mut pos = 169;
-    let mut cell_ids = Vec::new();
-    for s in 0..ns {
-        for &g in &sigs {
-            if bits_u(p, pos, 1) == 1 {
-                cell_ids.push((s, g));
+    // the cell mask: at most 64 bits, read at once
+    let cell_mask = if ns * ng > 0 {
+        u64::from(bits_u(p, 169, (ns * ng).min(32))) << (ns * ng).saturating_sub(32)
+            | if ns * ng > 32 {
+                u64::from(bits_u(p, 201, ns * ng - 32))
+            } else {
+                0
             }
-            pos += 1;
+    } else {
+        0
+    };
+    let mut cell_ids = [(0usize, 0u8); 64];
+    let mut nc = 0;
+    for k in 0..ns * ng {
+        if cell_mask >> (ns * ng - 1 - k) & 1 == 1 {
+            cell_ids[nc] = (k / ng, sigs[k % ng]);
+            nc += 1;
         }
     }
-    let nc = cell_ids.len();
+    let pos = 169 + ns * ng;
     let (fpr, fcp, flock, fcno, rates) = field_bits(kind);
     let sat_bits = if rates { 36 } else { 18 };
     let cell_bits = fpr + fcp + flock + 1 + fcno + if rates { 15 } else { 0 };
     if pos + ns * sat_bits + nc * cell_bits > p.len() * 8 {
         return None;
     }
-    let (rough, ext, rough_rate, pos) = sat_data(p, pos, ns, rates);
+    let SatData {
+        rough,
+        ext,
+        rough_rate,
+        end: pos,
+    } = sat_data(p, pos, ns, rates);
     let field = |base: usize, n: usize, k: usize, signed: bool| -> i64 {
         if signed {
             bits_s(p, base + n * k, n) as i64
@@ -282,7 +308,7 @@ pub fn decode_msm(p: &[u8]) -> Option<Msm> {
     let p_half = p_lock + nc * flock;
     let p_cno = p_half + nc;
     let p_rate = p_cno + nc * fcno;
-    for (k, &(s, g)) in cell_ids.iter().enumerate() {
+    for (k, &(s, g)) in cell_ids[..nc].iter().enumerate() {
         let pr = field(p_pr, fpr, k, true);
         let cp = field(p_cp, fcp, k, true);
         let lock = field(p_lock, flock, k, false) as u32;
@@ -320,8 +346,8 @@ pub fn decode_msm(p: &[u8]) -> Option<Msm> {
         sys,
         kind,
         epoch,
+        ext: ext[..ns].to_vec(),
         sats,
-        ext,
         cells,
     })
 }
@@ -359,7 +385,7 @@ pub fn msm_time(sys: Constellation, epoch: u32, hint: i64) -> i64 {
 /// Turns MSMs into epochs; keeps lock times, GLONASS channels and the current epoch.
 #[derive(Default)]
 pub struct MsmDecoder {
-    locks: HashMap<(Sv, usize), u64>,
+    locks: SlotTable<Option<u64>>,
     /// GLONASS frequency channels known (slot → channel).
     pub glonass: BTreeMap<u8, i8>,
     hint: Option<i64>,
@@ -445,7 +471,7 @@ impl MsmDecoder {
             if f.is_none() && (c.cp_ms.is_some() || c.rate.is_some()) {
                 st.drop("GLONASS phase/Doppler without a frequency channel (no 1020, MSM4/6)");
             }
-            let prev = self.locks.insert((sv, slot), c.lock_ms);
+            let prev = self.locks.get_mut(sv, slot).replace(c.lock_ms);
             let slip =
                 (c.lock_ms == 0 && prev.unwrap_or(0) == 0) || prev.is_some_and(|p| c.lock_ms < p);
             let lam = f.map(|f| 299_792_458.0 / f);

@@ -7,7 +7,7 @@
 //! [`RawStats`]. So an engine gives the same answer on a log as on its conversion.
 
 use super::items::{for_each_item, LogNav, RawItem};
-use super::records::{span, RinexOrder, RinexOut, Scan};
+use super::records::{sat_records, span, RinexOrder, RinexOut, Scan};
 use super::{RawFormat, RawStats, TimeHint};
 use crate::error::Result;
 use crate::frame::Ecef;
@@ -60,17 +60,22 @@ pub fn read_log(path: &Path, format: Option<RawFormat>, hint: Option<TimeHint>) 
     })?;
     span(&scan, path)?;
     let types = scan.types();
-    let mut order = RinexOrder::new(&types);
+    let mut order = RinexOrder::default();
     let (mut epochs, mut events) = (Vec::new(), Vec::new());
     let mut put = |o: RinexOut| -> std::result::Result<(), ()> {
         match o {
-            RinexOut::Epoch(time, sats) => epochs.push(ObsEpoch {
-                time,
-                flag: 0,
-                clock_offset: None,
-                sats: printed(sats),
-                line: 0,
-            }),
+            RinexOut::Epoch(time, e) => {
+                let sats = sat_records(&e, &types);
+                if !sats.is_empty() {
+                    epochs.push(ObsEpoch {
+                        time,
+                        flag: 0,
+                        clock_offset: None,
+                        sats: printed(sats),
+                        line: 0,
+                    });
+                }
+            }
             RinexOut::Event(t, records) => events.push(Event {
                 time: Some(t),
                 flag: 5,

@@ -22,10 +22,10 @@
 //!   A slip flagged on a measurement without phase is carried to the next phase (convbin's
 //!   save/restore of slips).
 
+use super::slots::SlotTable;
 use super::ubx::{Rawx, RawxMeas};
 use super::RawStats;
 use crate::sv::{Constellation, Sv};
-use std::collections::HashMap;
 
 /// One signal of one satellite, ready for RINEX.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -78,7 +78,7 @@ struct Lock {
 #[derive(Default)]
 pub struct RawxConverter {
     gen9: bool,
-    locks: HashMap<(Sv, usize), Lock>,
+    locks: SlotTable<Lock>,
 }
 
 /// System and RINEX PRN of a u-blox GNSS id and satellite id (RTKLIB's satellite ranges).
@@ -198,7 +198,7 @@ impl RawxConverter {
             m.half_cyc()
         };
         let halfc = m.sub_half_cyc();
-        let st = self.locks.entry((sv, idx)).or_default();
+        let st = self.locks.get_mut(sv, idx);
         let lockt = m.locktime as f64 * 1e-3;
         let slip = m.locktime == 0 || lockt < st.lockt || halfc != st.halfc || m.cp_stdev >= 15;
         if slip {
@@ -231,7 +231,7 @@ impl RawxConverter {
         for s in &mut e.sats {
             for (idx, g) in s.sig.iter_mut().enumerate() {
                 let Some(g) = g else { continue };
-                let st = self.locks.entry((s.sv, idx)).or_default();
+                let st = self.locks.get_mut(s.sv, idx);
                 if g.lli & 1 != 0 {
                     st.slip_carry = true;
                 }

@@ -151,67 +151,257 @@ pub fn write_epoch(w: &mut dyn Write, t: Epoch, sats: &[SatObs]) -> Result<()> {
     // The record is put together here and handed over at once: a write per field through
     // `dyn Write` cost more than the formatting.
     let mut text = Vec::with_capacity(64 + sats.len() * (4 + 16 * 8));
-    writeln!(text, "> {}  0{:3}{:21}", epoch_fields(t), sats.len(), "")?;
+    epoch_line(&mut text, t, sats.len());
     for s in sats {
-        write!(text, "{}", s.sv)?;
+        sv_field(&mut text, s.sv);
         for o in &s.obs {
-            if o.value.is_nan() {
-                text.extend_from_slice(b"              ");
-            } else {
-                let mut buf = [0u8; 32];
-                let n = f14_3(o.value % 1e9, &mut buf);
-                text.extend_from_slice(&buf[..n]);
-            }
-            let digit = |d: u8| if d == 0 { b' ' } else { b'0' + d.min(9) };
-            text.extend_from_slice(&[digit(o.lli), digit(o.ssi)]);
+            text.extend_from_slice(&obs_field(o.value, o.lli, o.ssi));
         }
         text.push(b'\n');
     }
-    w.write_all(&text)?;
-    Ok(())
+    w.write_all(&text)
+}
+
+/// The line opening an observation epoch (flag 0) of `n` satellites: as
+/// `"> {epoch_fields}  0{n:3}"` and 21 blanks, its date worked out here rather than through
+/// the time library's calendar and the formatter (a tenth of a conversion's time).
+pub fn epoch_line(text: &mut Vec<u8>, t: Epoch, n: usize) {
+    match t.to_gpst_nanoseconds() {
+        Ok(ns) if n < 1000 => {
+            text.extend_from_slice(b"> ");
+            gpst_fields(text, ns);
+            text.extend_from_slice(&[
+                b' ',
+                b' ',
+                b'0',
+                if n >= 100 {
+                    b'0' + (n / 100) as u8
+                } else {
+                    b' '
+                },
+                if n >= 10 {
+                    b'0' + (n / 10 % 10) as u8
+                } else {
+                    b' '
+                },
+                b'0' + (n % 10) as u8,
+            ]);
+            text.extend_from_slice(&[b' '; 21]);
+            text.push(b'\n');
+        }
+        _ => {
+            let _ = writeln!(text, "> {}  0{:3}{:21}", epoch_fields(t), n, "");
+        }
+    }
+}
+
+/// [`epoch_fields`] of the GPST time `ns` nanoseconds after the GPS epoch (1980-01-06): the
+/// GPST calendar has no leap seconds, so the date is the civil date of the day count.
+fn gpst_fields(text: &mut Vec<u8>, ns: u64) {
+    const DAY: u64 = 86_400 * 10_000_000; // in 100 ns
+    let ticks = ns.saturating_add(50) / 100;
+    let (days, tod) = (ticks / DAY, ticks % DAY);
+    // civil date of a day count since 1970-01-01 (the GPS epoch is its day 3657); the
+    // algorithm of H. Hinnant's "chrono-compatible low-level date algorithms"
+    let z = days as i64 + 3657 + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    let (s, frac) = (tod / 10_000_000, tod % 10_000_000);
+    let two = |v: u64| [b'0' + (v / 10) as u8, b'0' + (v % 10) as u8];
+    let y = y as u64;
+    text.extend_from_slice(&[
+        b'0' + (y / 1000 % 10) as u8,
+        b'0' + (y / 100 % 10) as u8,
+        b'0' + (y / 10 % 10) as u8,
+        b'0' + (y % 10) as u8,
+        b' ',
+    ]);
+    for (v, sep) in [(m as u64, b' '), (d as u64, b' '), (s / 3600, b' ')] {
+        text.extend_from_slice(&two(v));
+        text.push(sep);
+    }
+    text.extend_from_slice(&two(s / 60 % 60));
+    let sec = s % 60;
+    text.extend_from_slice(&[
+        b' ',
+        if sec >= 10 {
+            b'0' + (sec / 10) as u8
+        } else {
+            b' '
+        },
+        b'0' + (sec % 10) as u8,
+        b'.',
+    ]);
+    let mut f = [b'0'; 7];
+    let mut r = frac;
+    for c in f.iter_mut().rev() {
+        *c = b'0' + (r % 10) as u8;
+        r /= 10;
+    }
+    text.extend_from_slice(&f);
+}
+
+/// A satellite's three characters, `G05`.
+pub fn sv_field(text: &mut Vec<u8>, sv: crate::sv::Sv) {
+    let p = sv.prn;
+    if p < 100 {
+        text.extend_from_slice(&[sv.sys.letter() as u8, b'0' + p / 10, b'0' + p % 10]);
+    } else {
+        let _ = write!(text, "{sv}");
+    }
+}
+
+/// One observation as its 16 characters into `f`: F14.3 of the value modulo 10⁹ (blank when
+/// NaN), then the LLI and SSI digits (blank when 0). Written in place, digit by digit: a
+/// field put together elsewhere and copied over stalled on the copy.
+pub fn put_obs_field(f: &mut [u8; 16], value: f64, lli: u8, ssi: u8) {
+    f.fill(b' ');
+    if !value.is_nan() {
+        let v = if value.abs() < 1e9 {
+            value
+        } else {
+            value % 1e9
+        };
+        match thousandths(v.abs()).filter(|&n| n > 0 && n < 1_000_000_000_000) {
+            Some(n) => {
+                // n < 10¹²: three groups of four digits, each two pairs, worked out side by
+                // side (a digit at a time is one long chain of divisions)
+                let (c, r) = (n / 100_000_000, n % 100_000_000);
+                let (b, a) = (r / 10_000, r % 10_000);
+                let mut d = [0u8; 12];
+                for (k, g) in [c, b, a].into_iter().enumerate() {
+                    let (hi, lo) = ((g / 100) as usize * 2, (g % 100) as usize * 2);
+                    d[4 * k..4 * k + 2].copy_from_slice(&PAIRS[hi..hi + 2]);
+                    d[4 * k + 2..4 * k + 4].copy_from_slice(&PAIRS[lo..lo + 2]);
+                }
+                // integer digits: all of n's above the three decimals, at least one
+                let int = POW10[4..].iter().filter(|&&p| n >= p).count() + 1;
+                f[1..10].copy_from_slice(&d[..9]);
+                f[10] = b'.';
+                f[11..14].copy_from_slice(&d[9..]);
+                f[1..10 - int].fill(b' ');
+                if v < 0.0 {
+                    f[9 - int] = b'-';
+                }
+            }
+            None => {
+                // F14.3 of |v| < 10⁹ (or of NaN from an infinite value) is 14 characters wide
+                let mut buf = [0u8; 32];
+                let n = f14_3(v, &mut buf).max(14);
+                f[..14].copy_from_slice(&buf[n - 14..n]);
+            }
+        }
+    }
+    let digit = |d: u8| if d == 0 { b' ' } else { b'0' + d.min(9) };
+    f[14] = digit(lli);
+    f[15] = digit(ssi);
+}
+
+/// [`put_obs_field`] into a new array.
+pub fn obs_field(value: f64, lli: u8, ssi: u8) -> [u8; 16] {
+    let mut f = [b' '; 16];
+    put_obs_field(&mut f, value, lli, ssi);
+    f
 }
 
 /// `v` as F14.3 into `buf`, exactly as `format!("{v:14.3}")` prints it (ties to even on the
-/// exact binary value); returns the length. Integer arithmetic where the rounding direction
-/// is beyond doubt (|v| < 10⁹, not within 10⁻⁶ of a tie, not rounding to zero), the standard
-/// formatter otherwise: observation files are mostly these numbers, and the standard
-/// formatter's exact path costs half of a conversion.
+/// exact binary value); returns the length. Integer arithmetic where the rounding is beyond
+/// doubt (|v| < 10⁹, not rounding to zero, and either not within 10⁻³ of a tie or an exact
+/// tie), the standard formatter otherwise: observation files are mostly these numbers, and
+/// the standard formatter's exact path costs half of a conversion.
 pub fn f14_3(v: f64, buf: &mut [u8; 32]) -> usize {
-    let scaled = v.abs() * 1e3;
-    let frac = scaled - scaled.floor();
-    // Error of `scaled` below 1.2e-4 for |v| < 1e9: a fraction this far from 0.5 rounds surely.
-    if v.abs() < 1e9 && (frac - 0.5).abs() > 1e-3 {
-        let n = scaled.round() as u64;
-        if n > 0 {
-            let mut digits = [0u8; 20];
-            let mut k = 0;
-            let mut m = n;
-            while m > 0 || k < 4 {
-                digits[k] = b'0' + (m % 10) as u8;
-                m /= 10;
-                k += 1;
-            }
-            let len = k + 1 + usize::from(v < 0.0);
-            let pad = 14usize.saturating_sub(len);
-            buf[..pad].fill(b' ');
-            let mut i = pad;
-            if v < 0.0 {
-                buf[i] = b'-';
-                i += 1;
-            }
-            for d in (3..k).rev() {
-                buf[i] = digits[d];
-                i += 1;
-            }
-            buf[i] = b'.';
-            buf[i + 1..i + 4].copy_from_slice(&[digits[2], digits[1], digits[0]]);
-            return i + 4;
-        }
+    if let Some(n) = thousandths(v.abs()).filter(|&n| n > 0) {
+        return put_fixed3(n, v < 0.0, buf);
     }
     let s = format!("{v:14.3}");
     let n = s.len().min(buf.len());
     buf[..n].copy_from_slice(&s.as_bytes()[..n]);
     n
+}
+
+/// `a` (≥ 0) in thousandths rounded as the standard formatter rounds, where that is sure.
+fn thousandths(a: f64) -> Option<u64> {
+    if a.is_nan() || a >= 1e9 {
+        return None;
+    }
+    let scaled = a * 1e3;
+    // truncation through i64 (a single instruction each way, unlike u64) rather than floor
+    let n = scaled as i64;
+    let frac = scaled - n as f64;
+    // Error of `scaled` below 1.2e-4 for a < 1e9: a fraction this far from 0.5 rounds surely.
+    if (frac - 0.5).abs() > 1e-3 {
+        return Some(n as u64 + u64::from(frac > 0.5));
+    }
+    // A binary value is an exact tie only as j/16 with j odd (then a·1000 = 125·j/2): the
+    // formatter rounds it to the even thousandth. C/N0 in 1/16 dB-Hz (RTCM 3) is such a value.
+    let t = a * 16.0;
+    let j = t as u64;
+    if j as f64 == t && j % 2 == 1 {
+        let m = (j * 125 - 1) / 2;
+        return Some(m + (m & 1));
+    }
+    None
+}
+
+/// 10⁰ … 10¹¹.
+const POW10: [u64; 12] = {
+    let mut p = [1u64; 12];
+    let mut k = 1;
+    while k < 12 {
+        p[k] = p[k - 1] * 10;
+        k += 1;
+    }
+    p
+};
+
+/// The two digits of 0 … 99, one after the other.
+const PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
+2021222324252627282930313233343536373839\
+4041424344454647484950515253545556575859\
+6061626364656667686970717273747576777879\
+8081828384858687888990919293949596979899";
+
+/// `n` thousandths (n > 0) as F14.3 (wider when it does not fit) with a sign; the length.
+fn put_fixed3(n: u64, negative: bool, buf: &mut [u8; 32]) -> usize {
+    // digits right-aligned in `d`, at least four (0.001 is 0001)
+    let mut d = [b'0'; 20];
+    let mut k = d.len();
+    let mut m = n;
+    while m >= 100 {
+        let p = (m % 100) as usize * 2;
+        m /= 100;
+        k -= 2;
+        d[k..k + 2].copy_from_slice(&PAIRS[p..p + 2]);
+    }
+    if m >= 10 {
+        let p = m as usize * 2;
+        k -= 2;
+        d[k..k + 2].copy_from_slice(&PAIRS[p..p + 2]);
+    } else {
+        k -= 1;
+        d[k] = b'0' + m as u8;
+    }
+    let k = k.min(d.len() - 4);
+    let len = d.len() - k + 1 + usize::from(negative);
+    let pad = 14usize.saturating_sub(len);
+    buf[..pad].fill(b' ');
+    let mut i = pad;
+    if negative {
+        buf[i] = b'-';
+        i += 1;
+    }
+    let int = &d[k..d.len() - 3];
+    buf[i..i + int.len()].copy_from_slice(int);
+    i += int.len();
+    buf[i] = b'.';
+    buf[i + 1..i + 4].copy_from_slice(&d[d.len() - 3..]);
+    i + 4
 }
 
 /// Write a flag-5 (external event) record at `t`, followed by `comments` as COMMENT lines.
@@ -228,6 +418,40 @@ mod tests {
     use super::f14_3;
 
     #[test]
+    fn epoch_lines_print_as_the_calendar_and_formatter() {
+        use super::{epoch_fields, epoch_line};
+        use hifitime::Epoch;
+        let mut x: u64 = 0x2545_F491_4F6C_DD1D;
+        let mut times: Vec<u64> = vec![
+            0,
+            1,
+            49,
+            50,
+            99_999_950,
+            59_999_999_951,
+            86_400_000_000_000 - 1,
+        ];
+        for _ in 0..100_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            // 1980 to about 2160, at any nanosecond; and 10 Hz epochs
+            let ns = x % (180 * 365 * 86_400 * 1_000_000_000);
+            times.push(ns);
+            times.push(ns / 100_000_000 * 100_000_000);
+        }
+        for ns in times {
+            let t = Epoch::from_gpst_nanoseconds(ns);
+            for n in [0, 7, 12, 123, 999, 1000] {
+                let mut fast = Vec::new();
+                epoch_line(&mut fast, t, n);
+                let slow = format!("> {}  0{:3}{:21}\n", epoch_fields(t), n, "");
+                assert_eq!(String::from_utf8(fast).unwrap(), slow, "{ns} {n}");
+            }
+        }
+    }
+
+    #[test]
     fn f14_3_prints_as_the_standard_formatter() {
         let mut buf = [0u8; 32];
         let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
@@ -240,19 +464,40 @@ mod tests {
             0.0015,
             -1336.3125,
             1e9 - 1e-4,
+            0.0625,
+            -0.0625,
+            0.1875,
+            0.001,
+            999_999_999.999_5,
+            999_999_999.062_5,
+            1e9,
+            -1e9,
+            1e15 + 0.5,
+            f64::INFINITY,
         ];
         for k in 0..200_000 {
             x ^= x << 13;
             x ^= x >> 7;
             x ^= x << 17;
             let u = (x >> 11) as f64 / (1u64 << 53) as f64;
-            let v = match k % 4 {
-                0 => (u - 0.5) * 2e8,                       // phase
-                1 => 2e7 + u * 1e7,                         // pseudorange
-                2 => ((u - 0.5) * 1e4) as f32 as f64,       // Doppler from f32: ties
-                _ => ((u - 0.5) * 1e6 * 8.0).round() / 8e3, // exact eighths of a thousandth
+            let v = match k % 6 {
+                0 => (u - 0.5) * 2e8,                         // phase
+                1 => 2e7 + u * 1e7,                           // pseudorange
+                2 => ((u - 0.5) * 1e4) as f32 as f64,         // Doppler from f32: ties
+                3 => ((u - 0.5) * 1e6 * 8.0).round() / 8e3,   // exact eighths of a thousandth
+                4 => ((u - 0.5) * 1e4 * 16.0).round() / 16.0, // sixteenths: exact ties
+                _ => ((u - 0.5) * 2e9 * 16.0).round() / 16.0, // sixteenths near 10⁹
             };
             vals.push(v);
+        }
+        for &v in &vals {
+            // the in-place field equals the formatter's text of the value modulo 10⁹
+            let field = super::obs_field(v, 1, 0);
+            if !v.is_nan() {
+                let s = format!("{:14.3}", v % 1e9);
+                assert_eq!(std::str::from_utf8(&field[..14]).unwrap(), s, "{v}");
+                assert_eq!(&field[14..], b"1 ");
+            }
         }
         for v in vals {
             let n = f14_3(v, &mut buf);
