@@ -3,7 +3,21 @@
 //! as the interface documents number them.
 
 /// An unsigned field of `len` (≤ 32) bits starting at bit `pos`; bits past the end read as 0.
+#[inline]
 pub fn bits_u(buf: &[u8], pos: usize, len: usize) -> u32 {
+    // Eight bytes at once where the buffer has them (the field spans at most five).
+    if (1..=32).contains(&len) {
+        if let Some(b) = buf.get(pos / 8..pos / 8 + 8) {
+            let acc = u64::from_be_bytes(b.try_into().unwrap_or([0; 8]));
+            return ((acc >> (64 - pos % 8 - len)) & ((1u64 << len) - 1)) as u32;
+        }
+    }
+    bits_u_near_end(buf, pos, len)
+}
+
+/// [`bits_u`] of a field of any length, or within eight bytes of the end.
+#[cold]
+fn bits_u_near_end(buf: &[u8], pos: usize, len: usize) -> u32 {
     if len == 0 {
         return 0;
     }
@@ -11,12 +25,7 @@ pub fn bits_u(buf: &[u8], pos: usize, len: usize) -> u32 {
         // The low 32 bits, as shifting the whole field through a u32 would leave them.
         return bits_u(buf, pos + len - 32, 32);
     }
-    // Eight bytes at once where the buffer has them (the field spans at most five).
-    if let Some(b) = buf.get(pos / 8..pos / 8 + 8) {
-        let acc = u64::from_be_bytes(b.try_into().unwrap_or([0; 8]));
-        return ((acc >> (64 - pos % 8 - len)) & ((1u64 << len) - 1)) as u32;
-    }
-    // Near the end: the (at most five) bytes the field spans, big-endian in a u64.
+    // The (at most five) bytes the field spans, big-endian in a u64.
     let (first, last) = (pos / 8, (pos + len - 1) / 8);
     let acc = (first..=last).fold(0u64, |acc, i| {
         (acc << 8) | u64::from(buf.get(i).copied().unwrap_or(0))
@@ -26,6 +35,7 @@ pub fn bits_u(buf: &[u8], pos: usize, len: usize) -> u32 {
 }
 
 /// A two's-complement field of `len` (1..=32) bits starting at bit `pos`.
+#[inline]
 pub fn bits_s(buf: &[u8], pos: usize, len: usize) -> i32 {
     let u = bits_u(buf, pos, len);
     if len == 32 {

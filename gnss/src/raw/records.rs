@@ -14,11 +14,16 @@ use hifitime::Epoch;
 use std::collections::BTreeMap;
 use std::path::Path;
 
+/// A signal's system (index), band slot and RINEX code.
+type SlotCode = (usize, usize, [u8; 2]);
+
 /// Observation types per system from the first pass: per slot, the code and which of C, L,
 /// D, S ever had a value.
 #[derive(Default)]
 pub struct Scan {
-    codes: BTreeMap<(usize, usize, [u8; 2]), u8>,
+    /// (system, slot, code) and its mask, in the order first seen (a few dozen at most: a
+    /// search of this list is cheaper than a tree's for every signal of every epoch).
+    codes: Vec<(SlotCode, u8)>,
     /// GLONASS slots and their frequency channels.
     pub glonass: BTreeMap<u8, i8>,
     /// Time of the first epoch.
@@ -39,11 +44,15 @@ impl Scan {
         for s in &e.sats {
             for (idx, g) in s.sig.iter().enumerate() {
                 let Some(g) = g else { continue };
-                let m = self
-                    .codes
-                    .entry((s.sv.sys.index(), idx, g.code))
-                    .or_default();
-                *m |= u8::from(g.pr != 0.0)
+                let key = (s.sv.sys.index(), idx, g.code);
+                let k = match self.codes.iter().position(|(c, _)| *c == key) {
+                    Some(k) => k,
+                    None => {
+                        self.codes.push((key, 0));
+                        self.codes.len() - 1
+                    }
+                };
+                self.codes[k].1 |= u8::from(g.pr != 0.0)
                     | u8::from(g.cp != 0.0) << 1
                     | u8::from(g.doppler != 0.0) << 2
                     | u8::from(g.cno != 0.0) << 3;
@@ -54,9 +63,11 @@ impl Scan {
     /// Observation types per system, in RTKLIB's order of systems.
     pub fn types(&self) -> Vec<(Constellation, Vec<ObsCode>)> {
         let mut out: Vec<(Constellation, Vec<ObsCode>)> = Vec::new();
+        let mut codes = self.codes.clone();
+        codes.sort_unstable();
         for sys in RINEX_ORDER {
             let mut v = Vec::new();
-            for (&(s, _, code), &mask) in &self.codes {
+            for &((s, _, code), mask) in &codes {
                 if s != sys.index() {
                     continue;
                 }

@@ -136,14 +136,11 @@ pub fn lock_ms_ext(ind: u32) -> u64 {
     if ind < 64 {
         return ind as u64;
     }
+    // block k (of 32 indicators) starts at 64 + 32·(2^(k+1) − 2) ms and steps by 2^(k+1)
     let ind = ind.min(704) as u64;
-    let (mut t, mut i, mut step) = (64u64, 64u64, 2u64);
-    while i + 32 <= ind {
-        t += 32 * step;
-        i += 32;
-        step *= 2;
-    }
-    t + (ind - i) * step
+    let (k, within) = ((ind - 64) / 32, (ind - 64) % 32);
+    let step = 2u64 << k;
+    64 + 32 * (step - 2) + within * step
 }
 
 /// One cell (satellite × signal) of an MSM, in physical units.
@@ -525,6 +522,17 @@ mod tests {
         assert_eq!(lock_ms_ext(96), 128);
         assert_eq!(lock_ms_ext(128), 256);
         assert_eq!(lock_ms_ext(704), 67_108_864);
+        assert_eq!(lock_ms_ext(1023), 67_108_864);
+        // the closed form equals stepping through the blocks
+        for ind in 64..=704u64 {
+            let (mut t, mut i, mut step) = (64u64, 64u64, 2u64);
+            while i + 32 <= ind {
+                t += 32 * step;
+                i += 32;
+                step *= 2;
+            }
+            assert_eq!(lock_ms_ext(ind as u32), t + (ind - i) * step, "{ind}");
+        }
         assert_eq!(lock_ms(1), 32);
         assert_eq!(lock_ms(15), 524_288);
     }
