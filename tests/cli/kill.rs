@@ -1,4 +1,4 @@
-//! `kill -9` of `ppk` (over RINEX and over a real u-blox log), `adjust`, `import`, `match`
+//! `kill -9` of `ppk` (over RINEX and over a real u-blox log), `convert`, `adjust`, `import`, `match`
 //! and `exposures --geotag` at several moments, over the outputs of an earlier run: the earlier
 //! outputs stay whole or the new ones appear whole, never a mix or a partial file, and the
 //! next run leaves no temporary behind.
@@ -336,4 +336,58 @@ fn killed_geotag_leaves_the_earlier_folder_whole() {
         "tagged copies swapped in for a failed run"
     );
     assert_eq!(names(&work), ["tagged"], "the staged copies are removed");
+}
+
+#[test]
+fn killed_convert_leaves_the_earlier_rinex_whole_and_no_spill() {
+    let Some(log) = shared("gnss/ubx-navsol-2025/16dBatt_no_interference_coldstart.ubx") else {
+        return;
+    };
+    let (dir, fresh) = (tmp("kill-convert"), tmp("kill-convert-fresh"));
+    for d in [&dir, &fresh] {
+        let _ = std::fs::remove_dir_all(d);
+        std::fs::create_dir_all(d).unwrap();
+    }
+    let args = |d: &Path| {
+        let (o, n) = (d.join("out.obs"), d.join("out.nav"));
+        let v: Vec<String> = ["convert", "--in", p(&log), "-o", p(&o), "--nav", p(&n)]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        v
+    };
+    let run = |d: &Path| {
+        let a = args(d);
+        succeeds(&ppkat(&a.iter().map(String::as_str).collect::<Vec<_>>()));
+    };
+    run(&fresh);
+    let new = contents(&fresh);
+    run(&dir);
+    mark_old(&dir.join("out.obs"));
+    mark_old(&dir.join("out.nav"));
+    let old = contents(&dir);
+    assert_ne!(old, new);
+    let a = args(&dir);
+    let a: Vec<&str> = a.iter().map(String::as_str).collect();
+    for ms in [2, 8, 20, 40, 80] {
+        kill_after(&a, Duration::from_millis(ms));
+        // each output is the earlier run's or the new one, whole; the spill is never seen
+        let now = contents(&dir);
+        for name in ["out.nav", "out.obs"] {
+            let get = |c: &[(String, Vec<u8>)]| c.iter().find(|f| f.0 == name).cloned();
+            let f = get(&now).expect("output present");
+            assert!(
+                f == get(&old).unwrap() || f == get(&new).unwrap(),
+                "{name} at {ms} ms"
+            );
+        }
+        assert!(
+            names(&dir).iter().all(|n| !n.contains(".spill")),
+            "{:?}",
+            names(&dir)
+        );
+    }
+    run(&dir);
+    assert_eq!(contents(&dir), new);
+    assert_eq!(names(&dir), ["out.nav", "out.obs"]);
 }
