@@ -1,5 +1,5 @@
-//! `kill -9` of `ppk` (over RINEX and over a real u-blox log), `convert`, `adjust`, `import`, `match`
-//! and `exposures --geotag` at several moments, over the outputs of an earlier run: the earlier
+//! `kill -9` of `ppk` (over RINEX and over a real u-blox log), `convert`, `adjust`, `import`,
+//! `match` and `exposures --geotag` at several moments, over the outputs of an earlier run: the earlier
 //! outputs stay whole or the new ones appear whole, never a mix or a partial file, and the
 //! next run leaves no temporary behind.
 
