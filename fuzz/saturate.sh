@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Run each named target (default: all) in rounds of CHUNK seconds from its corpus until a round
+# finds no new coverage edge after loading the corpus (libFuzzer's "cov"), or CAP seconds in
+# all have run. Prints one line per round and a verdict per target; logs in logs/TARGET.rN.log.
+# Same settings as run.sh (one job, -O, 2 GiB RSS limit, 10 s per input, 64 KiB inputs).
+set -u
+cd "$(dirname "$0")"
+CHUNK=${CHUNK:-600}
+CAP=${CAP:-3600}
+targets=("$@")
+[ ${#targets[@]} -eq 0 ] && targets=(rinex_obs rinex_nav sp3 clk antex mrk times_csv attitude_csv project_toml patb bal exif pos ubx rtcm sbf xmp photo_meta project_tables micmac colmap rtklib_conf)
+mkdir -p logs
+for t in "${targets[@]}"; do
+    mkdir -p "corpus/$t"
+    cp -n seeds/"$t"/* "corpus/$t/" 2>/dev/null
+    spent=0 round=0 runs_all=0 verdict="not saturated after ${CAP} s"
+    while [ "$spent" -lt "$CAP" ]; do
+        round=$((round + 1))
+        log=logs/$t.r$round.log
+        start=$(date +%s)
+        cargo +nightly fuzz run -O "$t" "corpus/$t" -- \
+            -max_total_time="$CHUNK" -rss_limit_mb=2048 -timeout=10 -max_len=65536 \
+            >"$log" 2>&1
+        rc=$?
+        spent=$((spent + $(date +%s) - start))
+        inited=$(grep -oE 'INITED cov: [0-9]+' "$log" | grep -oE '[0-9]+$' | tail -1)
+        final=$(grep -oE 'cov: [0-9]+' "$log" | grep -oE '[0-9]+$' | sort -n | tail -1)
+        runs=$(grep -oE '^Done [0-9]+ runs' "$log" | grep -oE '[0-9]+' | tail -1)
+        runs_all=$((runs_all + ${runs:-0}))
+        echo "$t round $round: exit $rc, ${runs:-?} runs, cov ${inited:-?} -> ${final:-?}, ${spent} s in all"
+        if [ "$rc" -ne 0 ]; then verdict="stopped: exit $rc (see $log)"; break; fi
+        if [ -n "${inited:-}" ] && [ "${inited}" = "${final}" ]; then
+            verdict="saturated: round $round (${CHUNK} s, ${runs} runs) found no new edge"
+            break
+        fi
+    done
+    echo "$t: $verdict; $runs_all runs in $spent s; cov ${final:-?}"
+done
