@@ -85,3 +85,28 @@ fn writes_the_ephemerides_of_the_navigation_subframes() {
     );
     assert!(!o2.exists() && !n2.exists());
 }
+
+#[test]
+fn conversion_is_the_same_for_any_thread_count() {
+    let Some(log) = shared("gnss/ubx-navsol-2025/16dBatt_no_interference_coldstart.ubx") else {
+        return;
+    };
+    let outs: Vec<Vec<u8>> = ["1", "2", "5"]
+        .iter()
+        .map(|n| {
+            let out = tmp(&format!("threads-{n}.obs"));
+            succeeds(&ppkat(&[
+                "--threads",
+                n,
+                "convert",
+                "--in",
+                p(&log),
+                "-o",
+                p(&out),
+            ]));
+            std::fs::read(&out).unwrap()
+        })
+        .collect();
+    assert!(outs[0].len() > 100_000);
+    assert!(outs.iter().all(|o| *o == outs[0]));
+}
