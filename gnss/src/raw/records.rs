@@ -144,11 +144,11 @@ pub fn write_raw_epoch(
     e: &RawEpoch,
     types: &[(Constellation, Vec<ObsCode>)],
 ) {
-    use crate::rinex::write::{epoch_line, put_obs_field, sv_field};
+    use crate::rinex::write::{epoch_line, put_obs_field, sv_field, write_epoch};
     let start = text.len();
     epoch_line(text, t, 0);
     let body = text.len();
-    let mut n = 0usize;
+    let (mut n, mut wide) = (0usize, false);
     for s in &e.sats {
         let Some((_, ts)) = types.iter().find(|(sys, _)| *sys == s.sv.sys) else {
             continue;
@@ -174,7 +174,7 @@ pub fn write_raw_epoch(
                 };
                 let f = &mut text[cols + 16 * j..cols + 16 * (j + 1)];
                 if let Ok(f) = <&mut [u8; 16]>::try_from(f) {
-                    put_obs_field(f, if v == 0.0 { f64::NAN } else { v }, lli, 0);
+                    wide |= !put_obs_field(f, if v == 0.0 { f64::NAN } else { v }, lli, 0);
                 }
             }
         }
@@ -184,6 +184,12 @@ pub fn write_raw_epoch(
         } else {
             text.truncate(line);
         }
+    }
+    if wide {
+        // a value wider than its field: the epoch as the general writer lays it out
+        text.truncate(start);
+        let _ = write_epoch(text, t, &sat_records(e, types));
+        return;
     }
     match n {
         0 => text.truncate(start),
@@ -283,4 +289,100 @@ fn mark(m: &EventMark) -> RinexOut {
         vec![" Time mark is not valid".to_string()]
     };
     RinexOut::Event(gpst(m.week, m.tow), c)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::raw::ubx_obs::{RawSat, RawSignal};
+    use crate::sv::Sv;
+
+    /// `write_raw_epoch` gives the bytes of `sat_records` + `write_epoch`, on random epochs
+    /// with hostile values (zeros, ties, ±10⁹ and beyond, NaN, infinities, PRN ≥ 100).
+    #[test]
+    fn raw_epochs_print_as_their_records() {
+        let mut x: u64 = 0x853C_49E6_748F_EA9B;
+        let mut rnd = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        let special = [
+            0.0,
+            -0.0,
+            0.0625,
+            -999_999_999.999_6,
+            999_999_999.999_6,
+            -1_999_999_999.999_7,
+            1e15,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        let codes = [*b"1C", *b"2W", *b"5Q", *b"1X", *b"7Q"];
+        let types: Vec<(Constellation, Vec<ObsCode>)> =
+            [Constellation::Gps, Constellation::Galileo]
+                .into_iter()
+                .map(|sys| {
+                    let v = [*b"1C", *b"2W", *b"5Q", *b"7Q"]
+                        .iter()
+                        .flat_map(|c| b"CLDS".iter().map(move |k| ObsCode([*k, c[0], c[1]])))
+                        .collect();
+                    (sys, v)
+                })
+                .collect();
+        for k in 0..3000 {
+            let value = |r: u64| match r % 5 {
+                0 => special[(r >> 8) as usize % special.len()],
+                1 => (r >> 11) as f64 / (1u64 << 53) as f64 * 4e9 - 2e9,
+                _ => ((r >> 11) % 4_000_000_000) as f64 / 16.0,
+            };
+            let sats = (0..rnd() % 30)
+                .map(|_| {
+                    let sys = [
+                        Constellation::Gps,
+                        Constellation::Galileo,
+                        Constellation::BeiDou,
+                    ][rnd() as usize % 3];
+                    let mut sig = [None; 3];
+                    for g in sig.iter_mut() {
+                        if rnd() % 3 > 0 {
+                            *g = Some(RawSignal {
+                                code: codes[rnd() as usize % codes.len()],
+                                pr: value(rnd()),
+                                cp: value(rnd()),
+                                doppler: value(rnd()),
+                                cno: value(rnd()),
+                                lli: (rnd() % 4) as u8,
+                            });
+                        }
+                    }
+                    RawSat {
+                        sv: Sv::new(sys, (rnd() % 120) as u8),
+                        sig,
+                    }
+                })
+                .collect();
+            let e = RawEpoch {
+                week: 2300,
+                tow: k as f64 * 0.1,
+                sats,
+                glonass: Vec::new(),
+            };
+            let t = super::super::items::gpst(e.week, e.tow);
+            let mut fast = Vec::new();
+            write_raw_epoch(&mut fast, t, &e, &types);
+            let mut slow = Vec::new();
+            let recs = sat_records(&e, &types);
+            if !recs.is_empty() {
+                crate::rinex::write::write_epoch(&mut slow, t, &recs).unwrap();
+            }
+            assert_eq!(
+                String::from_utf8_lossy(&fast),
+                String::from_utf8_lossy(&slow),
+                "epoch {k}"
+            );
+        }
+    }
 }

@@ -155,7 +155,16 @@ pub fn write_epoch(w: &mut dyn Write, t: Epoch, sats: &[SatObs]) -> Result<()> {
     for s in sats {
         sv_field(&mut text, s.sv);
         for o in &s.obs {
-            text.extend_from_slice(&obs_field(o.value, o.lli, o.ssi));
+            let mut f = [b' '; 16];
+            if put_obs_field(&mut f, o.value, o.lli, o.ssi) {
+                text.extend_from_slice(&f);
+            } else {
+                // wider than F14.3 (a value rounding to ±10⁹): all of it, then the digits
+                let mut buf = [0u8; 32];
+                let n = f14_3(o.value % 1e9, &mut buf);
+                text.extend_from_slice(&buf[..n]);
+                text.extend_from_slice(&f[14..]);
+            }
         }
         text.push(b'\n');
     }
@@ -259,9 +268,12 @@ pub fn sv_field(text: &mut Vec<u8>, sv: crate::sv::Sv) {
 
 /// One observation as its 16 characters into `f`: F14.3 of the value modulo 10⁹ (blank when
 /// NaN), then the LLI and SSI digits (blank when 0). Written in place, digit by digit: a
-/// field put together elsewhere and copied over stalled on the copy.
-pub fn put_obs_field(f: &mut [u8; 16], value: f64, lli: u8, ssi: u8) {
+/// field put together elsewhere and copied over stalled on the copy. `false` when the value
+/// needs more than 14 characters (one rounding to −10⁹ prints as 15): `f` then holds only
+/// the digits, and the caller writes the value's whole text.
+pub fn put_obs_field(f: &mut [u8; 16], value: f64, lli: u8, ssi: u8) -> bool {
     f.fill(b' ');
+    let mut wide = false;
     if !value.is_nan() {
         let v = if value.abs() < 1e9 {
             value
@@ -291,23 +303,20 @@ pub fn put_obs_field(f: &mut [u8; 16], value: f64, lli: u8, ssi: u8) {
                 }
             }
             None => {
-                // F14.3 of |v| < 10⁹ (or of NaN from an infinite value) is 14 characters wide
                 let mut buf = [0u8; 32];
-                let n = f14_3(v, &mut buf).max(14);
-                f[..14].copy_from_slice(&buf[n - 14..n]);
+                let n = f14_3(v, &mut buf);
+                if n > 14 {
+                    wide = true;
+                } else {
+                    f[14 - n..14].copy_from_slice(&buf[..n]);
+                }
             }
         }
     }
     let digit = |d: u8| if d == 0 { b' ' } else { b'0' + d.min(9) };
     f[14] = digit(lli);
     f[15] = digit(ssi);
-}
-
-/// [`put_obs_field`] into a new array.
-pub fn obs_field(value: f64, lli: u8, ssi: u8) -> [u8; 16] {
-    let mut f = [b' '; 16];
-    put_obs_field(&mut f, value, lli, ssi);
-    f
+    !wide
 }
 
 /// `v` as F14.3 into `buf`, exactly as `format!("{v:14.3}")` prints it (ties to even on the
@@ -474,6 +483,9 @@ mod tests {
             -1e9,
             1e15 + 0.5,
             f64::INFINITY,
+            -999_999_999.999_6,
+            -1_999_999_999.999_7,
+            999_999_999.999_6,
         ];
         for k in 0..200_000 {
             x ^= x << 13;
@@ -491,13 +503,16 @@ mod tests {
             vals.push(v);
         }
         for &v in &vals {
-            // the in-place field equals the formatter's text of the value modulo 10⁹
-            let field = super::obs_field(v, 1, 0);
-            if !v.is_nan() {
-                let s = format!("{:14.3}", v % 1e9);
+            // the in-place field equals the formatter's text of the value modulo 10⁹, or says
+            // that text is wider
+            let mut field = [0u8; 16];
+            let fits = super::put_obs_field(&mut field, v, 1, 0);
+            let s = format!("{:14.3}", v % 1e9);
+            assert_eq!(fits, s.len() == 14, "{v}");
+            if fits {
                 assert_eq!(std::str::from_utf8(&field[..14]).unwrap(), s, "{v}");
-                assert_eq!(&field[14..], b"1 ");
             }
+            assert_eq!(&field[14..], b"1 ");
         }
         for v in vals {
             let n = f14_3(v, &mut buf);
