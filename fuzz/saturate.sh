@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Run each named target (default: all) in rounds of CHUNK seconds from its corpus until a round
-# finds no new coverage edge after loading the corpus (libFuzzer's "cov"), or CAP seconds in
-# all have run. Prints one line per round and a verdict per target; logs in logs/TARGET.rN.log.
+# finds no coverage edge beyond the best seen (libFuzzer's "cov": for the first round, the
+# count after loading the corpus; after it, the largest of the earlier rounds), or CAP seconds
+# in all have run. Prints one line per round and a verdict per target; logs in logs/TARGET.rN.log.
 # Same settings as run.sh (one job, -O, 2 GiB RSS limit, 10 s per input, 64 KiB inputs).
 set -u
 cd "$(dirname "$0")"
@@ -13,7 +14,7 @@ mkdir -p logs
 for t in "${targets[@]}"; do
     mkdir -p "corpus/$t"
     cp -n seeds/"$t"/* "corpus/$t/" 2>/dev/null
-    spent=0 round=0 runs_all=0 verdict="not saturated after ${CAP} s"
+    spent=0 round=0 runs_all=0 best="" verdict="not saturated after ${CAP} s"
     while [ "$spent" -lt "$CAP" ]; do
         round=$((round + 1))
         log=logs/$t.r$round.log
@@ -29,10 +30,13 @@ for t in "${targets[@]}"; do
         runs_all=$((runs_all + ${runs:-0}))
         echo "$t round $round: exit $rc, ${runs:-?} runs, cov ${inited:-?} -> ${final:-?}, ${spent} s in all"
         if [ "$rc" -ne 0 ]; then verdict="stopped: exit $rc (see $log)"; break; fi
-        if [ -n "${inited:-}" ] && [ "${inited}" = "${final}" ]; then
-            verdict="saturated: round $round (${CHUNK} s, ${runs} runs) found no new edge"
+        # the corpus load may count fewer edges than the round before reached
+        [ -z "$best" ] && best=${inited:-}
+        if [ -n "$best" ] && [ -n "${final:-}" ] && [ "$final" -le "$best" ]; then
+            verdict="saturated: round $round (${CHUNK} s, ${runs} runs) found no edge beyond $best"
             break
         fi
+        [ -n "${final:-}" ] && best=$final
     done
     echo "$t: $verdict; $runs_all runs in $spent s; cov ${final:-?}"
 done
