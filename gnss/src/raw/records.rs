@@ -6,7 +6,7 @@
 //! the header's types and span from a [`Scan`].
 
 use super::items::{gpst, EventMark, RawItem};
-use super::ubx_obs::RawEpoch;
+use super::ubx_obs::{RawEpoch, RawSignal};
 use crate::error::{Error, Result};
 use crate::rinex::{Obs, ObsCode, SatObs};
 use crate::sv::Constellation;
@@ -96,6 +96,22 @@ const RINEX_ORDER: [Constellation; 7] = [
     Constellation::Irnss,
 ];
 
+/// A signal's observation of `kind` (C, L, D or S): blank (NaN) where the value is 0, the
+/// LLI on phase only.
+fn observation(g: &RawSignal, kind: u8) -> Obs {
+    let (v, lli) = match kind {
+        b'C' => (g.pr, 0),
+        b'L' => (g.cp, g.lli & 3),
+        b'D' => (g.doppler, 0),
+        _ => (g.cno, 0),
+    };
+    Obs {
+        value: if v == 0.0 { f64::NAN } else { v },
+        lli,
+        ssi: 0,
+    }
+}
+
 /// One epoch's satellites aligned with the header's types; satellites with none are left out
 /// (an epoch left with none is not a RINEX record).
 pub fn sat_records(e: &RawEpoch, types: &[(Constellation, Vec<ObsCode>)]) -> Vec<SatObs> {
@@ -115,17 +131,7 @@ pub fn sat_records(e: &RawEpoch, types: &[(Constellation, Vec<ObsCode>)]) -> Vec
                     .find(|g| g.code == [t.band(), t.attribute()]);
                 let Some(g) = g else { return Obs::MISSING };
                 any = true;
-                let (v, lli) = match t.kind() {
-                    b'C' => (g.pr, 0),
-                    b'L' => (g.cp, g.lli & 3),
-                    b'D' => (g.doppler, 0),
-                    _ => (g.cno, 0),
-                };
-                Obs {
-                    value: if v == 0.0 { f64::NAN } else { v },
-                    lli,
-                    ssi: 0,
-                }
+                observation(g, t.kind())
             })
             .collect();
         if any {
@@ -144,7 +150,7 @@ pub fn write_raw_epoch(
     e: &RawEpoch,
     types: &[(Constellation, Vec<ObsCode>)],
 ) {
-    use crate::rinex::write::{epoch_line, put_obs_field, sv_field, write_epoch};
+    use crate::rinex::write::{count3, epoch_line, put_obs_field, sv_field, write_epoch};
     let start = text.len();
     epoch_line(text, t, 0);
     let body = text.len();
@@ -166,15 +172,10 @@ pub fn write_raw_epoch(
                     continue;
                 }
                 any = true;
-                let (v, lli) = match ty.kind() {
-                    b'C' => (g.pr, 0),
-                    b'L' => (g.cp, g.lli & 3),
-                    b'D' => (g.doppler, 0),
-                    _ => (g.cno, 0),
-                };
+                let o = observation(g, ty.kind());
                 let f = &mut text[cols + 16 * j..cols + 16 * (j + 1)];
                 if let Ok(f) = <&mut [u8; 16]>::try_from(f) {
-                    wide |= !put_obs_field(f, if v == 0.0 { f64::NAN } else { v }, lli, 0);
+                    wide |= !put_obs_field(f, o.value, o.lli, o.ssi);
                 }
             }
         }
@@ -195,8 +196,7 @@ pub fn write_raw_epoch(
         0 => text.truncate(start),
         1..=999 => {
             // the count field of the opening line, 3 wide after `> date  0`
-            let c = format!("{n:3}");
-            text[start + 32..start + 35].copy_from_slice(c.as_bytes());
+            text[start + 32..start + 35].copy_from_slice(&count3(n));
         }
         _ => {
             let sats = text.split_off(body);

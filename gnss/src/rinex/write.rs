@@ -179,22 +179,8 @@ pub fn epoch_line(text: &mut Vec<u8>, t: Epoch, n: usize) {
         Ok(ns) if n < 1000 => {
             text.extend_from_slice(b"> ");
             gpst_fields(text, ns);
-            text.extend_from_slice(&[
-                b' ',
-                b' ',
-                b'0',
-                if n >= 100 {
-                    b'0' + (n / 100) as u8
-                } else {
-                    b' '
-                },
-                if n >= 10 {
-                    b'0' + (n / 10 % 10) as u8
-                } else {
-                    b' '
-                },
-                b'0' + (n % 10) as u8,
-            ]);
+            text.extend_from_slice(b"  0");
+            text.extend_from_slice(&count3(n));
             text.extend_from_slice(&[b' '; 21]);
             text.push(b'\n');
         }
@@ -202,6 +188,16 @@ pub fn epoch_line(text: &mut Vec<u8>, t: Epoch, n: usize) {
             let _ = writeln!(text, "> {}  0{:3}{:21}", epoch_fields(t), n, "");
         }
     }
+}
+
+/// `n` (< 1000) as `{n:3}`: the satellite count of an epoch line.
+pub fn count3(n: usize) -> [u8; 3] {
+    let digit = |d: usize| b'0' + (d % 10) as u8;
+    [
+        if n >= 100 { digit(n / 100) } else { b' ' },
+        if n >= 10 { digit(n / 10) } else { b' ' },
+        digit(n),
+    ]
 }
 
 /// [`epoch_fields`] of the GPST time `ns` nanoseconds after the GPS epoch (1980-01-06): the
