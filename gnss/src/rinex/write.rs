@@ -277,27 +277,7 @@ pub fn put_obs_field(f: &mut [u8; 16], value: f64, lli: u8, ssi: u8) -> bool {
             value % 1e9
         };
         match thousandths(v.abs()).filter(|&n| n > 0 && n < 1_000_000_000_000) {
-            Some(n) => {
-                // n < 10¹²: three groups of four digits, each two pairs, worked out side by
-                // side (a digit at a time is one long chain of divisions)
-                let (c, r) = (n / 100_000_000, n % 100_000_000);
-                let (b, a) = (r / 10_000, r % 10_000);
-                let mut d = [0u8; 12];
-                for (k, g) in [c, b, a].into_iter().enumerate() {
-                    let (hi, lo) = ((g / 100) as usize * 2, (g % 100) as usize * 2);
-                    d[4 * k..4 * k + 2].copy_from_slice(&PAIRS[hi..hi + 2]);
-                    d[4 * k + 2..4 * k + 4].copy_from_slice(&PAIRS[lo..lo + 2]);
-                }
-                // integer digits: all of n's above the three decimals, at least one
-                let int = POW10[4..].iter().filter(|&&p| n >= p).count() + 1;
-                f[1..10].copy_from_slice(&d[..9]);
-                f[10] = b'.';
-                f[11..14].copy_from_slice(&d[9..]);
-                f[1..10 - int].fill(b' ');
-                if v < 0.0 {
-                    f[9 - int] = b'-';
-                }
-            }
+            Some(n) => put_digits14(&mut f[..14], n, v < 0.0),
             None => {
                 let mut buf = [0u8; 32];
                 let n = f14_3(v, &mut buf);
@@ -321,8 +301,9 @@ pub fn put_obs_field(f: &mut [u8; 16], value: f64, lli: u8, ssi: u8) -> bool {
 /// tie), the standard formatter otherwise: observation files are mostly these numbers, and
 /// the standard formatter's exact path costs half of a conversion.
 pub fn f14_3(v: f64, buf: &mut [u8; 32]) -> usize {
-    if let Some(n) = thousandths(v.abs()).filter(|&n| n > 0) {
-        return put_fixed3(n, v < 0.0, buf);
+    if let Some(n) = thousandths(v.abs()).filter(|&n| n > 0 && n < 1_000_000_000_000) {
+        put_digits14(&mut buf[..14], n, v < 0.0);
+        return 14;
     }
     let s = format!("{v:14.3}");
     let n = s.len().min(buf.len());
@@ -372,41 +353,27 @@ const PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
 6061626364656667686970717273747576777879\
 8081828384858687888990919293949596979899";
 
-/// `n` thousandths (n > 0) as F14.3 (wider when it does not fit) with a sign; the length.
-fn put_fixed3(n: u64, negative: bool, buf: &mut [u8; 32]) -> usize {
-    // digits right-aligned in `d`, at least four (0.001 is 0001)
-    let mut d = [b'0'; 20];
-    let mut k = d.len();
-    let mut m = n;
-    while m >= 100 {
-        let p = (m % 100) as usize * 2;
-        m /= 100;
-        k -= 2;
-        d[k..k + 2].copy_from_slice(&PAIRS[p..p + 2]);
+/// `n` thousandths (0 < n < 10¹²) as F14.3 with its sign into `f` (14 bytes). Three groups
+/// of four digits, each two pairs, worked out side by side (a digit at a time is one long
+/// chain of divisions), written in place.
+fn put_digits14(f: &mut [u8], n: u64, negative: bool) {
+    let (c, r) = (n / 100_000_000, n % 100_000_000);
+    let (b, a) = (r / 10_000, r % 10_000);
+    let mut d = [0u8; 12];
+    for (k, g) in [c, b, a].into_iter().enumerate() {
+        let (hi, lo) = ((g / 100) as usize * 2, (g % 100) as usize * 2);
+        d[4 * k..4 * k + 2].copy_from_slice(&PAIRS[hi..hi + 2]);
+        d[4 * k + 2..4 * k + 4].copy_from_slice(&PAIRS[lo..lo + 2]);
     }
-    if m >= 10 {
-        let p = m as usize * 2;
-        k -= 2;
-        d[k..k + 2].copy_from_slice(&PAIRS[p..p + 2]);
-    } else {
-        k -= 1;
-        d[k] = b'0' + m as u8;
-    }
-    let k = k.min(d.len() - 4);
-    let len = d.len() - k + 1 + usize::from(negative);
-    let pad = 14usize.saturating_sub(len);
-    buf[..pad].fill(b' ');
-    let mut i = pad;
+    // integer digits: all of n's above the three decimals, at least one
+    let int = POW10[4..].iter().filter(|&&p| n >= p).count() + 1;
+    f[1..10].copy_from_slice(&d[..9]);
+    f[10] = b'.';
+    f[11..14].copy_from_slice(&d[9..]);
+    f[..10 - int].fill(b' ');
     if negative {
-        buf[i] = b'-';
-        i += 1;
+        f[9 - int] = b'-';
     }
-    let int = &d[k..d.len() - 3];
-    buf[i..i + int.len()].copy_from_slice(int);
-    i += int.len();
-    buf[i] = b'.';
-    buf[i + 1..i + 4].copy_from_slice(&d[d.len() - 3..]);
-    i + 4
 }
 
 /// Write a flag-5 (external event) record at `t`, followed by `comments` as COMMENT lines.
