@@ -21,6 +21,30 @@ pub fn gpst(year: i32, month: u8, day: u8, hour: u8, minute: u8, second: u8, nan
     )
 }
 
+/// A GPST epoch from calendar fields read from a file: `None` when they are not a date and
+/// time (30 February, second 60 — GPST has no leap seconds), where [`gpst`] would panic.
+pub fn try_gpst(
+    year: i32,
+    month: u8,
+    day: u8,
+    hour: u8,
+    minute: u8,
+    second: u8,
+    nanos: u32,
+) -> Option<Epoch> {
+    let e = Epoch::maybe_from_gregorian(
+        year,
+        month,
+        day,
+        hour,
+        minute,
+        second,
+        nanos,
+        TimeScale::GPST,
+    );
+    e.ok().filter(|_| second < 60)
+}
+
 /// Express any epoch in GPST (the scale used everywhere inside).
 pub fn to_gpst(e: Epoch) -> Epoch {
     e.to_time_scale(TimeScale::GPST)

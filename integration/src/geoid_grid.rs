@@ -158,7 +158,7 @@ fn pgm(path: &Path, b: &[u8]) -> Result<GeoidGrid> {
         ));
     };
     let need = rows.checked_mul(cols).and_then(|n| n.checked_mul(2));
-    if !(256..=65535).contains(&max) || need.is_none_or(|n| at + n > b.len()) {
+    if !(256..=65535).contains(&max) || need.is_none_or(|n| n > b.len().saturating_sub(at)) {
         return Err(Error::input(
             path,
             format!(
@@ -228,6 +228,16 @@ fn gtx(path: &Path, b: &[u8]) -> Result<GeoidGrid> {
     })
 }
 
+/// The first value of a sorted, deduplicated `axis` that is not `axis[0]` plus a whole number
+/// of `step`s, its index apart.
+fn irregular(axis: &[f64], step: f64) -> Option<f64> {
+    let tol = 1e-6 * step.abs().max(1e-9);
+    axis.iter()
+        .enumerate()
+        .find(|&(i, &v)| (v - axis[0] - i as f64 * step).abs() > tol)
+        .map(|(_, &v)| v)
+}
+
 /// The text layout: `LAT LON N` per line, a full regular grid.
 fn text(path: &Path, b: &[u8]) -> Result<GeoidGrid> {
     let s = std::str::from_utf8(b)
@@ -267,6 +277,27 @@ fn text(path: &Path, b: &[u8]) -> Result<GeoidGrid> {
         ));
     }
     let (dlat, dlon) = (lats[1] - lats[0], lons[1] - lons[0]);
+    for (axis, step, what) in [(&lats, dlat, "latitudes"), (&lons, dlon, "longitudes")] {
+        if let Some(v) = irregular(axis, step) {
+            return Err(Error::input(
+                path,
+                format!("the {what} are not evenly spaced ({v} is off the step of {step}° from {}): give a full regular grid", axis[0]),
+            ));
+        }
+    }
+    // Checked before allocating: a few diagonal lines must not ask for a grid of billions.
+    if lats.len().checked_mul(lons.len()) != Some(pts.len()) {
+        return Err(Error::input(
+            path,
+            format!(
+                "{} latitudes × {} longitudes make {} nodes but the file gives {}: nodes are missing or given twice",
+                lats.len(),
+                lons.len(),
+                lats.len().saturating_mul(lons.len()),
+                pts.len()
+            ),
+        ));
+    }
     let mut n = vec![f32::NAN; lats.len() * lons.len()];
     for &(line, lat, lon, v) in &pts {
         let (y, x) = ((lat - lats[0]) / dlat, (lon - lons[0]) / dlon);
@@ -274,7 +305,15 @@ fn text(path: &Path, b: &[u8]) -> Result<GeoidGrid> {
         if off(y) || off(x) {
             return Err(Error::parse(path, line, format!("{lat} {lon} is off the regular grid (steps {dlat}°, {dlon}° from the smallest values)")));
         }
-        let at = y.round() as usize * lons.len() + x.round() as usize;
+        let (yi, xi) = (y.round() as usize, x.round() as usize);
+        if yi >= lats.len() || xi >= lons.len() {
+            return Err(Error::parse(
+                path,
+                line,
+                format!("{lat} {lon} is off the grid"),
+            ));
+        }
+        let at = yi * lons.len() + xi;
         if !n[at].is_nan() {
             return Err(Error::parse(
                 path,
@@ -336,6 +375,26 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("missing"));
+    }
+
+    #[test]
+    fn hostile_grids_are_errors_not_panics_or_huge_allocations() {
+        // Uneven latitudes {0, 0.5, 1e6}: the node at 1e6 was indexed past the grid.
+        let p = tmp("uneven.txt", b"1000000 0 1\n0 0 1\n0.5 0 1\n0 1 1\n");
+        let e = GeoidGrid::read(&p).unwrap_err().to_string();
+        assert!(e.contains("not evenly spaced"), "{e}");
+        // 50,000 diagonal nodes asked for a 2.5e9-node grid (10 GB) before the count check.
+        let diag: String = (0..50_000).map(|k| format!("{k} {k} 0\n")).collect();
+        let e = GeoidGrid::read(&tmp("diag.txt", diag.as_bytes()))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("2500000000 nodes"), "{e}");
+        // A PGM whose size makes `at + n` wrap past usize::MAX.
+        let huge = b"P5\n# Offset 0\n# Scale 1\n4611686018427387903 2\n65535\n\0\0";
+        let e = GeoidGrid::read(&tmp("huge.pgm", huge))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("shorter"), "{e}");
     }
 
     #[test]

@@ -351,7 +351,15 @@ fn finish(
     for (j, s) in scale.iter().enumerate() {
         a.column_mut(j).scale_mut(1.0 / s);
     }
-    let Ok(x) = a.svd(true, true).solve(&b, 1e-14) else {
+    // Values near 1e300 (a hostile file) overflow r⁶ to inf and the scaling to NaN, on which
+    // nalgebra's SVD, unbounded by default, never ends: refuse them, and bound the iterations.
+    if !(a.iter().chain(b.iter()).all(|v| v.is_finite())) {
+        return exact;
+    }
+    let Some(svd) = a.try_svd(true, true, f64::EPSILON, 10_000) else {
+        return exact;
+    };
+    let Ok(x) = svd.solve(&b, 1e-14) else {
         return exact;
     };
     let mut fitted = cam;

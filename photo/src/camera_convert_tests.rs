@@ -202,3 +202,24 @@ fn bad_models_are_errors() {
         .to_camera(1e-6)
         .is_err());
 }
+
+#[test]
+fn huge_principal_points_end_in_a_camera_not_an_endless_svd() {
+    // fx ≠ fy asks for the distortion fit; cx = 1e300 overflowed r⁶ to inf and the column
+    // scaling to NaN, on which nalgebra's SVD (no iteration bound) never returned.
+    let done = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let flag = done.clone();
+    let worker = std::thread::spawn(move || {
+        let r = colmap("PINHOLE", &[3000.0, 2900.0, 1e300, 1500.0]).to_camera(1e-6);
+        flag.store(true, std::sync::atomic::Ordering::SeqCst);
+        r.map(|c| c.camera.k)
+    });
+    let start = std::time::Instant::now();
+    while !done.load(std::sync::atomic::Ordering::SeqCst) {
+        assert!(start.elapsed().as_secs() < 30, "the conversion hangs");
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    if let Ok(k) = worker.join().expect("no panic") {
+        assert_eq!(k, [0.0; 3], "no fitted distortion from overflowed values");
+    }
+}

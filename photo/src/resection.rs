@@ -57,6 +57,10 @@ fn align(from: &[Vector3<f64>], to: &[Vector3<f64>]) -> Option<Matrix3<f64>> {
     for (a, b) in from.iter().zip(to) {
         h += b * a.transpose();
     }
+    // nalgebra's SVD has no iteration bound: on NaN (huge coordinates overflowed) it never ends.
+    if !h.iter().all(|v| v.is_finite()) {
+        return None;
+    }
     let svd = h.svd(true, true);
     let (u, vt) = (svd.u?, svd.v_t?);
     let d = (u * vt).determinant().signum();

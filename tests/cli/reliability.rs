@@ -255,3 +255,36 @@ fn a_fuzzed_pos_with_an_infinite_second_is_refused_at_its_line() {
         &["pos-infinite-second.pos:6", "unreadable date/time"],
     );
 }
+
+#[test]
+fn project_tables_refuse_a_zero_sigma_and_a_week_beyond_any_log() {
+    let dir = tmp("rel-tables");
+    succeeds(&ppkat(&[
+        "simulate",
+        "--builtin",
+        "classic-block",
+        "-o",
+        p(&dir),
+    ]));
+    let project = dir.join("project.toml");
+    let edit = |name: &str, from: &str, to: &str| {
+        let f = dir.join(name);
+        let text = std::fs::read_to_string(&f).unwrap();
+        assert!(text.contains(from), "{name}: {from}");
+        std::fs::write(&f, text.replacen(from, to, 1)).unwrap();
+        text
+    };
+    // A σ of 0 px weighted its observation infinitely (a division by zero in the solver).
+    let kept = edit("image_observations.csv", ",0.5\n", ",0\n");
+    let o = ppkat(&["adjust", "--project", p(&project), "-o", p(&dir.join("o1"))]);
+    fails_with(
+        &o,
+        &["image_observations.csv, line 2", "σ must be positive"],
+    );
+    std::fs::write(dir.join("image_observations.csv"), kept).unwrap();
+    // A week of 10⁹ saturated to 4294967295 and placed the antenna in year 82 million.
+    edit("antennas.csv", "\n101,2314,", "\n101,1000000000,");
+    let o = ppkat(&["adjust", "--project", p(&project), "-o", p(&dir.join("o2"))]);
+    fails_with(&o, &["antennas.csv, line 3", "week"]);
+    assert!(!dir.join("o1").exists() && !dir.join("o2").exists());
+}

@@ -320,7 +320,7 @@ fn valid_time(line: &[u8]) -> Option<Epoch> {
         return None;
     }
     let whole = s.floor();
-    Some(crate::time::gpst(
+    crate::time::try_gpst(
         *y as i32,
         *mo as u8,
         *d as u8,
@@ -328,7 +328,7 @@ fn valid_time(line: &[u8]) -> Option<Epoch> {
         *mi as u8,
         whole as u8,
         ((s - whole) * 1e9).round().min(999_999_999.0) as u32,
-    ))
+    )
 }
 
 #[cfg(test)]

@@ -17,7 +17,7 @@ pub use precise::{ClockSource, MergeReport, PreciseOrbits, Unavailable};
 pub use sp3::Sp3;
 
 use crate::frame::Ecef;
-use crate::rinex::nav::{Klobuchar, NavFile, NavKind};
+use crate::rinex::nav::{Klobuchar, NavFile, NavKind, NavRecord};
 use crate::sv::{Constellation, Sv};
 use hifitime::Epoch;
 use std::collections::BTreeMap;
@@ -115,6 +115,49 @@ pub struct Ephemerides {
     pub stats: EphStats,
 }
 
+/// Why a broadcast record cannot be a satellite's orbit and clock, if it cannot: a value that
+/// is not a finite number (a raw log's NaN, a corrupted file), or, for Keplerian elements, an
+/// orbit no navigation satellite flies or clock terms seconds off. Such a record would put NaN
+/// or nonsense into every solution it touched; it is counted as skipped instead.
+fn implausible(r: &NavRecord) -> Option<String> {
+    if !r.clock.iter().chain(&r.orbit).all(|v| v.is_finite()) {
+        return Some("a value is not a finite number".into());
+    }
+    let o = &r.orbit;
+    match r.kind {
+        NavKind::Kepler if o.len() >= 24 => {
+            // √A of MEO, IGSO and GEO navigation satellites: 5,100–6,500 √m.
+            if !(3000.0..=8000.0).contains(&o[7]) {
+                return Some(format!(
+                    "√A = {} √m is no navigation satellite's orbit",
+                    o[7]
+                ));
+            }
+            if !(0.0..0.5).contains(&o[5]) {
+                return Some(format!(
+                    "eccentricity {} is no navigation satellite's",
+                    o[5]
+                ));
+            }
+            let [a0, a1, a2] = r.clock;
+            if a0.abs() > 1.0 || a1.abs() > 1e-3 || a2.abs() > 1e-6 || o[22].abs() > 1e-3 {
+                return Some("clock terms or group delay seconds off".into());
+            }
+            None
+        }
+        NavKind::Glonass if o.len() >= 9 => {
+            let km = (o[0] * o[0] + o[4] * o[4] + o[8] * o[8]).sqrt();
+            if !(10_000.0..=50_000.0).contains(&km) || r.clock[0].abs() > 1.0 {
+                return Some(format!(
+                    "position {km:.0} km from the geocentre or clock seconds off"
+                ));
+            }
+            None
+        }
+        _ => None,
+    }
+}
+
 impl Ephemerides {
     /// Index the ephemerides of navigation files (one satellite's records sorted by toe).
     pub fn from_nav(navs: &[NavFile]) -> Self {
@@ -129,6 +172,15 @@ impl Ephemerides {
             }
             for r in &nav.records {
                 e.stats.records += 1;
+                if let Some(why) = implausible(r) {
+                    e.stats.skipped.push(format!(
+                        "{}:{}: record of {} not used: {why}",
+                        nav.path.display(),
+                        r.line,
+                        r.sv
+                    ));
+                    continue;
+                }
                 let eph = match r.kind {
                     NavKind::Kepler => KeplerEph::from_record(r).map(Eph::Kepler),
                     NavKind::Glonass => GlonassEph::from_record(r).map(Eph::Glonass),

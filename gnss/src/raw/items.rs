@@ -97,15 +97,18 @@ impl LogNav {
             bds_iono: self.bds_iono,
             leap_seconds: self.leap_seconds,
             skipped: Vec::new(),
+            skipped_unlisted: 0,
         }
     }
 }
 
-/// GPST epoch of a week and time of week.
+/// GPST epoch of a week and time of week. Out-of-range inputs from a hostile log (a week of
+/// 65535, a time of week of 10¹¹ s or ±inf; NaN counts as 0) saturate at the ends of the GPST
+/// nanosecond range instead of overflowing.
 pub fn gpst(week: u16, tow: f64) -> Epoch {
     let ticks = (tow * 1e7).round() as i64; // 100 ns, as RINEX prints
-    let ns = week as i64 * 604_800_000_000_000 + ticks * 100;
-    Epoch::from_gpst_nanoseconds(ns.max(0) as u64)
+    let ns = i128::from(week) * 604_800_000_000_000 + i128::from(ticks) * 100;
+    Epoch::from_gpst_nanoseconds(ns.clamp(0, i128::from(u64::MAX)) as u64)
 }
 
 /// Hands decoded epochs on in file order, counting them and the time jumps (an epoch not
@@ -230,7 +233,7 @@ fn marks(t: &Tm2, leap: i8) -> Vec<EventMark> {
             tow += leap as f64;
             if tow >= 604_800.0 {
                 tow -= 604_800.0;
-                week += 1;
+                week = week.saturating_add(1);
             }
         }
         v.push(EventMark {

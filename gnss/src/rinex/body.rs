@@ -25,7 +25,7 @@ pub(crate) struct Body {
 }
 
 /// Cap on stored warnings so that a file of garbage cannot exhaust memory; the count goes on.
-const MAX_WARNINGS: usize = 1000;
+pub(super) const MAX_WARNINGS: usize = 1000;
 
 impl Body {
     pub fn new_plain(src: Lines) -> Self {
@@ -189,7 +189,7 @@ impl Body {
         time: Epoch,
         line_no: usize,
     ) -> Result<ObsEpoch> {
-        let mut sats = Vec::with_capacity(head.nsat);
+        let mut sats = Vec::with_capacity(head.nsat.min(64));
         for i in 0..head.nsat {
             let Some(ln) = self.fetch()? else {
                 self.warn(
@@ -256,7 +256,7 @@ impl Body {
         line_no: usize,
     ) -> Result<ObsEpoch> {
         // Satellite list: 12 per line, continuation lines for more.
-        let mut svs: Vec<Option<Sv>> = Vec::with_capacity(head.nsat);
+        let mut svs: Vec<Option<Sv>> = Vec::with_capacity(head.nsat.min(64));
         let mut first = true;
         while svs.len() < head.nsat {
             if !first && self.fetch()?.is_none() {

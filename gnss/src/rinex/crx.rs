@@ -231,10 +231,13 @@ impl Crx {
         let mut present = Vec::with_capacity(nsat);
         for (i, sv) in svs.iter().enumerate() {
             let Some(data) = self.src.next_line()?.map(|l| l.to_vec()) else {
-                warnings.push(Warning {
-                    line: self.qline,
-                    what: format!("CRINEX epoch truncated after {i} of {nsat} satellites"),
-                });
+                push_capped(
+                    warnings,
+                    Warning {
+                        line: self.qline,
+                        what: format!("CRINEX epoch truncated after {i} of {nsat} satellites"),
+                    },
+                );
                 break;
             };
             let Some(sv) = *sv else {
@@ -432,13 +435,16 @@ fn decode_fields(
         pos = end + 1;
         let v = field.take(f).unwrap_or_else(|()| {
             field.live = false;
-            warnings.push(Warning {
-                line: line_no,
-                what: format!(
-                    "CRINEX value '{}' of {sv} cannot be decoded: left missing",
-                    String::from_utf8_lossy(f)
-                ),
-            });
+            push_capped(
+                warnings,
+                Warning {
+                    line: line_no,
+                    what: format!(
+                        "CRINEX value '{}' of {sv} cannot be decoded: left missing",
+                        String::from_utf8_lossy(f)
+                    ),
+                },
+            );
             None
         });
         values.push(v);
@@ -457,6 +463,14 @@ fn push_value(l: &mut Vec<u8>, v: Option<i64>, flags: &[u8], k: usize) {
     }
     l.push(fl(2 * k));
     l.push(fl(2 * k + 1));
+}
+
+/// Keep a warning unless `warnings` already holds the body's cap of them (a file of garbage
+/// must not fill memory with messages about itself).
+fn push_capped(warnings: &mut Vec<Warning>, w: Warning) {
+    if warnings.len() < super::body::MAX_WARNINGS {
+        warnings.push(w);
+    }
 }
 
 #[cfg(test)]

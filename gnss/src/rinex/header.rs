@@ -297,13 +297,22 @@ fn read_header_line(
     Ok(())
 }
 
+/// A header's count of observation types when it is one a file can hold: 0 to 999 (RINEX 3's
+/// three digits; no receiver logs more than about a hundred for one system). A negative or
+/// larger count would size every satellite's record, so it is refused.
+fn type_count(n: i64) -> Option<usize> {
+    usize::try_from(n).ok().filter(|&n| n <= 999)
+}
+
 /// A RINEX 2 `# / TYPES OF OBSERV` line (the first gives the count, nine types a line).
 fn read_v2_types(types: &mut TypeLists, line: &[u8], bad: impl Fn(&str) -> Error) -> Result<()> {
     if types.v2.is_empty() {
-        types.v2_count = parse_int(cols(line, 0, 6))
+        let n = parse_int(cols(line, 0, 6))
             .ok()
             .flatten()
-            .ok_or_else(|| bad("missing count"))? as usize;
+            .ok_or_else(|| bad("missing count"))?;
+        types.v2_count =
+            type_count(n).ok_or_else(|| bad("count of observation types not in 0..=999"))?;
     }
     for k in 0..9 {
         let t = cols(line, 10 + 6 * k, 12 + 6 * k);
@@ -329,8 +338,9 @@ fn read_v3_types(
         let n = parse_int(cols(line, 3, 6))
             .ok()
             .flatten()
-            .ok_or_else(|| bad("missing count"))? as usize;
-        h.obs_types.insert(sys, Vec::with_capacity(n));
+            .ok_or_else(|| bad("missing count"))?;
+        let n = type_count(n).ok_or_else(|| bad("count of observation types not in 0..=999"))?;
+        h.obs_types.insert(sys, Vec::with_capacity(n.min(64)));
         types.v3_sys = Some((sys, n));
     }
     let Some((sys, n)) = types.v3_sys else {

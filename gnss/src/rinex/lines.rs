@@ -7,6 +7,10 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
+/// The longest line read, end-of-line included (1 MiB). A RINEX 3 observation line with 999
+/// types is 16 kB; Hatanaka lines are shorter.
+pub const MAX_LINE: usize = 1 << 20;
+
 /// A text file read line by line, transparently gunzipped when it starts with the gzip magic.
 pub struct Lines {
     inner: Box<dyn BufRead + Send>,
@@ -56,10 +60,12 @@ impl Lines {
     }
 
     /// The next line without its end-of-line characters, or `None` at the end of the file.
+    /// A line longer than [`MAX_LINE`] is an error: no text format read here has one, and
+    /// reading on would hold a whole file of garbage (or of gzip) in one buffer.
     pub fn next_line(&mut self) -> Result<Option<&[u8]>> {
         self.buf.clear();
-        let n = self
-            .inner
+        let n = (&mut self.inner)
+            .take(MAX_LINE as u64 + 1)
             .read_until(b'\n', &mut self.buf)
             .map_err(Error::io(&self.path))?;
         if n == 0 {
@@ -67,6 +73,17 @@ impl Lines {
         }
         self.bytes += n as u64;
         self.line_no += 1;
+        if n > MAX_LINE {
+            return Err(Error::parse(
+                &self.path,
+                self.line_no,
+                format!(
+                    "line longer than {} KiB: not a text file of the expected kind (RINEX, SP3, \
+                     clock or ANTEX); check that the right file was given",
+                    MAX_LINE >> 10
+                ),
+            ));
+        }
         while matches!(self.buf.last(), Some(b'\n' | b'\r')) {
             self.buf.pop();
         }
@@ -111,7 +128,8 @@ pub fn label(line: &[u8]) -> &[u8] {
 }
 
 /// Parse a Fortran real (`F`, `E` or `D` exponent) from a fixed-width field.
-/// Blank → `Ok(None)`; anything else unparseable → `Err(())`.
+/// Blank → `Ok(None)`; anything else unparseable, or not finite (`NaN`, `inf`, `1D+999`),
+/// → `Err(())`.
 #[allow(clippy::result_unit_err)]
 pub fn parse_real(field: &[u8]) -> std::result::Result<Option<f64>, ()> {
     let s = trim(field);
@@ -132,7 +150,10 @@ pub fn parse_real(field: &[u8]) -> std::result::Result<Option<f64>, ()> {
             }
         })
         .collect();
-    txt.parse::<f64>().map(Some).map_err(|_| ())
+    match txt.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(Some(v)),
+        _ => Err(()),
+    }
 }
 
 /// Fixed-point decimal without exponent, e.g. `-12345.678`, parsed exactly to the nearest f64.

@@ -64,8 +64,25 @@ pub struct NavFile {
     pub bds_iono: Option<Klobuchar>,
     /// Leap seconds, when given.
     pub leap_seconds: Option<i32>,
-    /// Records skipped with the reason (line, what).
+    /// Records skipped with the reason (line, what): the first [`MAX_LISTED_SKIPS`], then one
+    /// entry with the count of the others.
     pub skipped: Vec<(usize, String)>,
+    /// Skipped records beyond the first [`MAX_LISTED_SKIPS`] (counted, not listed).
+    pub skipped_unlisted: usize,
+}
+
+/// Skipped records listed one by one; a file of garbage must not become a list of millions.
+pub const MAX_LISTED_SKIPS: usize = 1000;
+
+impl NavFile {
+    /// Note a skipped record: listed while fewer than [`MAX_LISTED_SKIPS`] are, counted after.
+    fn skip(&mut self, line: usize, what: String) {
+        if self.skipped.len() < MAX_LISTED_SKIPS {
+            self.skipped.push((line, what));
+        } else {
+            self.skipped_unlisted += 1;
+        }
+    }
 }
 
 fn toc_scale(sys: Constellation) -> TimeScale {
@@ -176,6 +193,13 @@ impl NavFile {
             read_body_v2(&mut src, v2_sys, &mut nav)?;
         } else {
             read_body_v3(&mut src, &mut nav, &mut iono)?;
+        }
+        if nav.skipped_unlisted > 0 {
+            let n = nav.skipped_unlisted;
+            nav.skipped.push((
+                src.line_no,
+                format!("and {n} more unreadable records (not listed)"),
+            ));
         }
         nav.gps_iono = iono.gps();
         nav.bds_iono = iono.bds();
@@ -294,7 +318,7 @@ fn read_body_v2(src: &mut Lines, sys: Constellation, nav: &mut NavFile) -> Resul
                 orbit,
                 line: ln,
             }),
-            _ => nav.skipped.push((ln, "unreadable ephemeris record".into())),
+            _ => nav.skip(ln, "unreadable ephemeris record".into()),
         }
     }
     Ok(())
@@ -415,8 +439,7 @@ fn read_ephemeris_v3(
     nav: &mut NavFile,
 ) -> Result<Option<(Vec<u8>, usize)>> {
     let Some(sv) = Sv::parse(cols(line, 0, 3)) else {
-        nav.skipped
-            .push((ln, "unreadable satellite identifier".into()));
+        nav.skip(ln, "unreadable satellite identifier".into());
         return Ok(None);
     };
     let toc = TOC_V3.epoch(line, toc_scale(sv.sys));
@@ -445,9 +468,7 @@ fn read_ephemeris_v3(
             orbit,
             line: ln,
         }),
-        _ => nav
-            .skipped
-            .push((ln, format!("unreadable ephemeris record of {sv}"))),
+        _ => nav.skip(ln, format!("unreadable ephemeris record of {sv}")),
     }
     Ok(next)
 }

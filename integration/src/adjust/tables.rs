@@ -224,6 +224,12 @@ pub(super) fn read_measurements(
             Some(c) if !t.text(row, c).is_empty() => t.num(*line, row, c)?,
             _ => cam.sigma_px,
         };
+        if sigma_px.is_nan() || sigma_px <= 0.0 {
+            return Err(bad(
+                *line,
+                format!("sigma_px {sigma_px} of point `{point}` in image `{im}`: a σ must be positive (pixels)"),
+            ));
+        }
         out.push(Measurement {
             image: i,
             point,
@@ -513,9 +519,14 @@ pub(super) fn read_antennas(path: &Path, scale: f64) -> Result<Vec<Antenna>, Adj
             ),
             None => None,
         };
+        let time = gnss::time::checked_week_tow(v[0], v[1]).map_err(|what| AdjustError::Input {
+            path: path.display().to_string(),
+            line: *line,
+            what,
+        })?;
         out.push(Antenna {
             image: t.text(row, need[0]),
-            time: gnss::time::from_week_tow(v[0] as u32, v[1]),
+            time,
             pos: Geodetic::from_degrees(v[2], v[3], v[4]).to_ecef(),
             cov_enu: cov,
             segment: match seg {

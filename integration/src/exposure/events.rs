@@ -269,9 +269,9 @@ fn parse_iso(s: &str, scale: TimeScale) -> Option<Epoch> {
     let whole = sec.floor();
     let ns = ((sec - whole) * 1e9).round() as u32;
     Epoch::maybe_from_gregorian(
-        d[0] as i32,
-        d[1] as u8,
-        d[2] as u8,
+        i32::try_from(d[0]).ok()?,
+        u8::try_from(d[1]).ok()?,
+        u8::try_from(d[2]).ok()?,
         h,
         m,
         whole as u8,

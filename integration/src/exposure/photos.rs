@@ -42,13 +42,14 @@ fn exif_seconds(s: &str) -> Option<f64> {
     if d.len() != 3 || t.len() != 3 {
         return None;
     }
+    let u = |v: i64| u8::try_from(v).ok();
     let e = hifitime::Epoch::maybe_from_gregorian(
-        d[0] as i32,
-        d[1] as u8,
-        d[2] as u8,
-        t[0] as u8,
-        t[1] as u8,
-        t[2] as u8,
+        i32::try_from(d[0]).ok()?,
+        u(d[1])?,
+        u(d[2])?,
+        u(t[0])?,
+        u(t[1])?,
+        u(t[2])?,
         0,
         hifitime::TimeScale::UTC,
     )

@@ -186,6 +186,10 @@ fn similarity(
         cov += (b - mt) * (a - mf).transpose();
         var += (a - mf).norm_squared();
     }
+    // nalgebra's SVD has no iteration bound: on NaN (huge coordinates overflowed) it never ends.
+    if !cov.iter().all(|v| v.is_finite()) {
+        return None;
+    }
     let svd = cov.svd(true, true);
     let (u, vt) = (svd.u?, svd.v_t?);
     let mut s = Matrix3::identity();

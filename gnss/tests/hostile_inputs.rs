@@ -1,0 +1,164 @@
+//! Hostile inputs found by reading the parsers (issue 19's audit): each once panicked, hung or
+//! allocated without bound, and must now be a counted skip or an error naming file and line.
+
+use gnss::model::antex::Antex;
+use gnss::orbit::Ephemerides;
+use gnss::rinex::nav::{NavFile, NavKind, NavRecord};
+use gnss::rinex::ObsFile;
+use gnss::sv::{Constellation, Sv};
+use std::path::PathBuf;
+
+fn file(name: &str, text: &[u8]) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("ppkat-hostile-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let p = d.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// A header line: `content` padded to column 60, then the label.
+fn hl(content: &str, label: &str) -> String {
+    format!("{content:<60}{label}\n")
+}
+
+#[test]
+fn a_negative_count_of_observation_types_is_an_error_at_its_line() {
+    for count in ["-1", "-99"] {
+        let text = hl(
+            "     3.04           OBSERVATION DATA    G",
+            "RINEX VERSION / TYPE",
+        ) + &hl(&format!("G {count:>4} C1C"), "SYS / # / OBS TYPES")
+            + &hl("", "END OF HEADER");
+        let p = file(&format!("count{count}.rnx"), text.as_bytes());
+        let e = ObsFile::read(&p).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!("count{count}.rnx:2")) && e.contains("0..=999"),
+            "{count}: {e}"
+        );
+    }
+}
+
+#[test]
+fn a_line_of_megabytes_is_an_error_not_a_buffer_of_the_whole_file() {
+    let mut text = hl(
+        "     3.04           OBSERVATION DATA    G",
+        "RINEX VERSION / TYPE",
+    )
+    .into_bytes();
+    text.extend(vec![b'A'; 3 << 20]);
+    let p = file("long-line.rnx", &text);
+    let e = ObsFile::read(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("long-line.rnx:2") && e.contains("longer than 1024 KiB"),
+        "{e}"
+    );
+}
+
+#[test]
+fn an_antex_validity_date_that_is_no_date_is_an_error() {
+    for (name, date) in [
+        ("feb30", "  2021     2    30     0     0    0.0000000"),
+        ("sec60", "  2021     1     1     0     0   60.2000000"),
+    ] {
+        let text = hl(
+            "     1.4            M                                       ",
+            "ANTEX VERSION / SYST",
+        ) + &hl("", "END OF HEADER")
+            + &hl("", "START OF ANTENNA")
+            + &hl(
+                "BLOCK IIF           G01                 G063      2010-022A ",
+                "TYPE / SERIAL NO",
+            )
+            + &hl(date, "VALID FROM")
+            + &hl("", "END OF ANTENNA");
+        let p = file(&format!("{name}.atx"), text.as_bytes());
+        let e = Antex::read(&p).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!("{name}.atx:")) && e.contains("validity date"),
+            "{e}"
+        );
+    }
+}
+
+/// A GPS record with the elements of a real satellite (G01, 2020-06-25).
+fn gps_record(line: usize) -> NavRecord {
+    let mut orbit = vec![0.0; 28];
+    orbit[..17].copy_from_slice(&[
+        62.0, -52.0, 4.3e-9, 1.2, -2.7e-6, 0.0089, 8.1e-6, 5153.7, 345_600.0, 1.1e-7, -1.3,
+        -5.6e-8, 0.97, 220.0, 0.81, -8.0e-9, 1.0e-10,
+    ]);
+    orbit[22] = 5.1e-9;
+    NavRecord {
+        sv: Sv::new(Constellation::Gps, 1),
+        kind: NavKind::Kepler,
+        toc: gnss::time::gpst(2020, 6, 25, 0, 0, 0, 0),
+        clock: [-1.7e-4, -1.1e-11, 0.0],
+        orbit,
+        line,
+    }
+}
+
+#[test]
+fn non_finite_or_impossible_ephemerides_are_skipped_and_named() {
+    let mut nan_toe = gps_record(9);
+    nan_toe.orbit[8] = f64::NAN;
+    let mut blank = gps_record(17);
+    blank.orbit.iter_mut().for_each(|v| *v = 0.0);
+    let mut inf_clock = gps_record(25);
+    inf_clock.clock[0] = f64::INFINITY;
+    let mut nan_health = gps_record(33);
+    nan_health.orbit[21] = f64::NAN;
+    let nav = NavFile {
+        path: PathBuf::from("hostile.nav"),
+        version: 3.04,
+        records: vec![gps_record(1), nan_toe, blank, inf_clock, nan_health],
+        ..NavFile::default()
+    };
+    let e = Ephemerides::from_nav(&[nav]);
+    assert_eq!(e.stats.records, 5);
+    let lines: Vec<&str> = e.stats.skipped.iter().map(String::as_str).collect();
+    assert_eq!(lines.len(), 4, "{lines:?}");
+    for (k, l) in [9, 17, 25, 33].iter().enumerate() {
+        assert!(
+            lines[k].starts_with(&format!("hostile.nav:{l}: record of G01")),
+            "{lines:?}"
+        );
+    }
+    assert!(lines[1].contains("√A = 0"), "{lines:?}");
+    // The real record stays, and gives a finite position.
+    let sv = Sv::new(Constellation::Gps, 1);
+    let t = gnss::time::gpst(2020, 6, 25, 1, 0, 0, 0);
+    let eph = e.select(sv, t).expect("the good record");
+    let (p, clock) = eph.position_clock(t);
+    assert!(p.0.norm() > 2.0e7 && p.0.norm() < 3.0e7 && clock.is_finite());
+}
+
+#[test]
+fn rinex_numbers_that_are_not_finite_are_unreadable() {
+    use gnss::rinex::lines::parse_real;
+    for s in ["NaN", "inf", "-inf", "1.0D+999", "  1e400"] {
+        assert_eq!(parse_real(s.as_bytes()), Err(()), "{s}");
+    }
+    assert_eq!(parse_real(b" 1.5D+02"), Ok(Some(150.0)));
+}
+
+#[test]
+fn raw_log_times_out_of_range_saturate_instead_of_overflowing() {
+    use gnss::raw::items::gpst;
+    let end = gpst(u16::MAX, 604_799.0);
+    assert!(end > gpst(15_250, 0.0), "week 65535 lies after week 15250");
+    for tow in [9.3e10, f64::INFINITY, f64::NEG_INFINITY, f64::NAN, -1e12] {
+        let _ = gpst(u16::MAX, tow);
+        let _ = gpst(0, tow);
+    }
+    assert_eq!(
+        gpst(0, -5.0),
+        gpst(0, 0.0),
+        "before the GPS epoch clamps to it"
+    );
+    assert_eq!(
+        gpst(2315, 345_600.5),
+        gnss::time::gpst(2024, 5, 23, 0, 0, 0, 500_000_000),
+        "ordinary times unchanged"
+    );
+}
