@@ -43,9 +43,9 @@ fn check(name: &str) {
         assert_eq!(e.sats.len(), 2);
         let g05 = &e.sats[0];
         assert_eq!(g05.sv, Sv::new(Constellation::Gps, 5));
-        assert!((g05.obs[0].value - (21000000.123 + 100.0 * k as f64)).abs() < 1e-6);
-        assert!((g05.obs[3].value - (85991234.567 + 100.0 * k as f64)).abs() < 1e-6);
-        assert_eq!(g05.obs[0].ssi, 7);
+        assert!((g05.get(0).value - (21000000.123 + 100.0 * k as f64)).abs() < 1e-6);
+        assert!((g05.get(3).value - (85991234.567 + 100.0 * k as f64)).abs() < 1e-6);
+        assert_eq!(g05.get(0).ssi, 7);
     }
 }
 
@@ -59,7 +59,7 @@ fn rinex_211_events() {
     check("events_v211.rnx");
     let f = ObsFile::read(&fixture("events_v211.rnx")).unwrap();
     // The loss-of-lock indicator of G09 L1 survives.
-    assert_eq!(f.epochs[0].sats[1].obs[1].lli, 1);
+    assert_eq!(f.epochs[0].sats[1].get(1).lli, 1);
 }
 
 /// A hand-made CRINEX 1 file of the same data (written to the format of Hatanaka 2008:
@@ -89,6 +89,6 @@ fn crinex_1_events_and_differences() {
         }
     }
     // The fourth epoch continues the linear trend through second and third differences.
-    assert!((f.epochs[3].sats[1].obs[3].value - (90086963.0 + 300.0)).abs() < 1e-6);
-    assert_eq!(f.epochs[3].sats[1].obs[1].lli, 1);
+    assert!((f.epochs[3].sats[1].get(3).value - (90086963.0 + 300.0)).abs() < 1e-6);
+    assert_eq!(f.epochs[3].sats[1].get(1).lli, 1);
 }

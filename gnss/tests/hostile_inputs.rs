@@ -162,3 +162,47 @@ fn raw_log_times_out_of_range_saturate_instead_of_overflowing() {
         "ordinary times unchanged"
     );
 }
+
+#[test]
+fn short_records_under_a_header_of_999_types_cost_their_size_not_the_header_s() {
+    // 999 types, then epochs of 12 satellites each holding one value: before, every record
+    // kept 999 slots (16 kB for a line of 20 bytes, 800 times the file).
+    let mut text = hl(
+        "     3.04           OBSERVATION DATA    G",
+        "RINEX VERSION / TYPE",
+    );
+    let codes: Vec<String> = (0..999)
+        .map(|k| format!("C{}{}", 1 + k % 9, (b'A' + (k / 9 % 26) as u8) as char))
+        .collect();
+    for (i, chunk) in codes.chunks(13).enumerate() {
+        let head = if i == 0 {
+            "G  999".to_string()
+        } else {
+            " ".repeat(6)
+        };
+        text += &hl(
+            &format!("{head} {}", chunk.join(" ")),
+            "SYS / # / OBS TYPES",
+        );
+    }
+    text += &hl("", "END OF HEADER");
+    for e in 0..50 {
+        text += &format!("> 2024 01 01 00 00 {:>2}.0000000  0 12\n", e);
+        for prn in 1..=12 {
+            text += &format!("G{prn:02}  20000000.000\n");
+        }
+    }
+    let f = ObsFile::read(&file("999types.rnx", text.as_bytes())).unwrap();
+    assert_eq!(f.epochs.len(), 50);
+    assert_eq!(f.header.types_of(Constellation::Gps).len(), 999);
+    for s in f.epochs.iter().flat_map(|e| &e.sats) {
+        assert_eq!(
+            s.obs.len(),
+            1,
+            "the blank fields after the value are not kept"
+        );
+        assert!(s.obs.capacity() < 8, "nor their room: {}", s.obs.capacity());
+        assert_eq!(s.get(0).value, 20_000_000.0);
+        assert!(!s.get(998).is_present());
+    }
+}

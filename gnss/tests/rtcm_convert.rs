@@ -140,7 +140,7 @@ fn value(f: &ObsFile, e: usize, sv: Sv, code: [u8; 2], kind: u8) -> (f64, u8) {
         .position(|t| *t == ObsCode([kind, code[0], code[1]]))
         .unwrap_or_else(|| panic!("{sv:?} {kind} {code:?} not in header"));
     let s = f.epochs[e].sats.iter().find(|s| s.sv == sv).unwrap();
-    (s.obs[i].value, s.obs[i].lli)
+    (s.get(i).value, s.get(i).lli)
 }
 
 fn check(f: &ObsFile, exp: &[Expect]) {

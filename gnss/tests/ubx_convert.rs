@@ -64,7 +64,7 @@ fn compare(reference: &Path, ours: &Path) -> Cmp {
                 c.ref_obs += 1;
                 let Some(os) = os else { continue };
                 let j = o.header.types_of(rs.sv.sys).iter().position(|x| x == t);
-                let Some(oo) = j.map(|j| os.obs[j]) else {
+                let Some(oo) = j.map(|j| os.get(j)) else {
                     continue;
                 };
                 let d = (oo.value - ro.value).abs();
@@ -157,7 +157,7 @@ fn coldstart_log_matches_convbin_over_the_common_span() {
         let first = o.epochs.iter().position(|e| {
             e.sats
                 .iter()
-                .any(|s| s.sv.to_string() == *sv && s.obs[1].is_present())
+                .any(|s| s.sv.to_string() == *sv && s.get(1).is_present())
         });
         assert_eq!(first, Some(*k), "{sv}: not its first phase");
     }

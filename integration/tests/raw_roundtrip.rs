@@ -159,7 +159,7 @@ fn ppk_from_sbf_logs_equals_ppk_from_rinex() {
                 let Some(j) = tx.iter().position(|u| u == t) else {
                     panic!("{t:?} missing")
                 };
-                let (u, v) = (x.obs[j], y.obs[k]);
+                let (u, v) = (x.get(j), y.get(k));
                 match t.kind() {
                     b'C' => worst_pr = worst_pr.max((u.value - v.value).abs()),
                     b'L' => {

@@ -39,7 +39,7 @@ fn observations_match_the_models_with_errors_off() {
             .or_else(|| truth.last().map(|t| t.pos))
             .unwrap();
         for sat in &e.sats {
-            let p = sat.obs[0].value;
+            let p = sat.get(0).value;
             let t0 = e.time - hifitime::Duration::from_seconds(p / C);
             let first = orbits.sat(sat.sv, t0, b'1').unwrap();
             let s2 = orbits
@@ -59,7 +59,7 @@ fn observations_match_the_models_with_errors_off() {
             let model = (sp - rx).norm() - C * s2.clock;
             worst_p = worst_p.max((p - model).abs());
             let lam = C / 1575.42e6;
-            worst_l = worst_l.max((sat.obs[1].value * lam - p).abs());
+            worst_l = worst_l.max((sat.get(1).value * lam - p).abs());
             n += 1;
         }
     }

@@ -140,20 +140,20 @@ pub fn extract(
                 continue;
             };
             m.freq[k] = f;
-            let l = s.obs[c.phase];
+            let l = s.get(c.phase);
             if l.is_present() && l.value != 0.0 {
                 m.l[k] = l.value;
                 m.lli[k] = l.lli;
                 any = true;
             }
             if let Some(ci) = c.code {
-                let p = s.obs[ci].value;
+                let p = s.get(ci).value;
                 if p.is_finite() && p > 1.0e7 {
                     m.p[k] = p;
                 }
             }
             if let Some(di) = c.doppler {
-                m.d[k] = s.obs[di].value;
+                m.d[k] = s.get(di).value;
             }
         }
         if any {

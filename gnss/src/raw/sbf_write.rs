@@ -90,7 +90,7 @@ impl Arcs {
     ) -> Vec<Sig> {
         let mut out = Vec::new();
         for (code, cols) in codes {
-            let val = |k: usize| cols[k].map(|c| s.obs[c]).filter(|o| o.is_present());
+            let val = |k: usize| cols[k].map(|c| s.get(c)).filter(|o| o.is_present());
             let (c, l, d, n) = (val(0), val(1), val(2), val(3));
             let (Some(sig), Some(freq)) = (
                 signal_number(s.sv.sys, *code),

@@ -77,7 +77,7 @@ struct RawxWriter {
 impl RawxWriter {
     fn meas(&mut self, s: &SatObs, t: Epoch, band: u8, cols: &[Option<usize>; 4]) -> Option<Meas> {
         let (gnss, sig) = ubx_signal(s.sv.sys, band)?;
-        let val = |k: usize| cols[k].map(|c| s.obs[c]).filter(|o| o.is_present());
+        let val = |k: usize| cols[k].map(|c| s.get(c)).filter(|o| o.is_present());
         let (c, l, d, n) = (val(0), val(1), val(2), val(3));
         if c.is_none() && l.is_none() {
             return None;

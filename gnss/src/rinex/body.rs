@@ -24,6 +24,17 @@ pub(crate) struct Body {
     pub stats: IngestStats,
 }
 
+/// A satellite's observations without the blank fields that end its record, in a buffer of
+/// their size: a header may list up to 999 types, and a short line must not cost memory for
+/// all of them (`SatObs::get` reads the missing ones).
+fn without_trailing_blanks(mut obs: Vec<Obs>) -> Vec<Obs> {
+    while obs.last().is_some_and(Obs::is_blank) {
+        obs.pop();
+    }
+    obs.shrink_to_fit();
+    obs
+}
+
 /// Cap on stored warnings so that a file of garbage cannot exhaust memory; the count goes on.
 pub(super) const MAX_WARNINGS: usize = 1000;
 
@@ -237,7 +248,10 @@ impl Body {
                 );
                 continue;
             }
-            sats.push(SatObs { sv, obs });
+            sats.push(SatObs {
+                sv,
+                obs: without_trailing_blanks(obs),
+            });
         }
         Ok(ObsEpoch {
             time,
@@ -308,7 +322,10 @@ impl Body {
                 }
             }
             match sv {
-                Some(sv) if !bad => sats.push(SatObs { sv: *sv, obs }),
+                Some(sv) if !bad => sats.push(SatObs {
+                    sv: *sv,
+                    obs: without_trailing_blanks(obs),
+                }),
                 _ => {
                     self.stats.dropped_sat_records += 1;
                     let what = match sv {

@@ -62,6 +62,10 @@ impl Obs {
     pub fn is_present(&self) -> bool {
         !self.value.is_nan()
     }
+    /// Whether the field is blank: no value, no loss-of-lock indicator, no strength.
+    pub fn is_blank(&self) -> bool {
+        self.value.is_nan() && self.lli == 0 && self.ssi == 0
+    }
 }
 
 /// All observations of one satellite in one epoch, aligned with [`ObsHeader::types_of`](super::ObsHeader::types_of).
@@ -69,8 +73,18 @@ impl Obs {
 pub struct SatObs {
     /// The satellite.
     pub sv: Sv,
-    /// Observations in the header's order for its system.
+    /// Observations in the header's order for its system. Read from a file, the blank
+    /// fields that end a record are left out: read them with [`SatObs::get`].
     pub obs: Vec<Obs>,
+}
+
+impl SatObs {
+    /// The observation of the `k`-th type of the satellite's system ([`Obs::MISSING`] when
+    /// the record ends before it).
+    #[inline]
+    pub fn get(&self, k: usize) -> Obs {
+        self.obs.get(k).copied().unwrap_or(Obs::MISSING)
+    }
 }
 
 /// One observation epoch (flag 0 or 1).

@@ -109,7 +109,7 @@ fn measurement(
     }
     let types = header.types_of(sys);
     let k = find_code(types, primary_codes(sys)).ok_or(Rejection::NoCode)?;
-    let pr = s.obs[k].value;
+    let pr = s.get(k).value;
     if !(pr.is_finite() && pr > 1.0e7 && pr < 6.0e7) {
         return Err(Rejection::NoCode);
     }
