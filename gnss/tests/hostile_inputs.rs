@@ -206,3 +206,26 @@ fn short_records_under_a_header_of_999_types_cost_their_size_not_the_header_s() 
         assert!(!s.get(998).is_present());
     }
 }
+
+#[test]
+fn sp3_epochs_without_positions_cannot_ask_for_gigabytes() {
+    // 100,000 epoch lines, then one position for each of 600 satellites: 60 million slots
+    // (1.9 GB) for a file of 3 MB.
+    let mut text = String::from("#dP2020  6 25  0  0  0.00000000     96 ORBIT IGS14 HLM  IGS\n");
+    for k in 0..100_000 {
+        text += &format!("*  2020  6 25  0  0 {:>2}.{:08}\n", k % 60, k);
+    }
+    for sys in ['G', 'E', 'C', 'R', 'J', 'I'] {
+        for prn in 1..=99 {
+            text += &format!(
+                "P{sys}{prn:02}  -1000.000000  20000.000000  15000.000000      1.000000\n"
+            );
+        }
+    }
+    let p = file("sparse.sp3", text.as_bytes());
+    let e = gnss::orbit::sp3::Sp3::read(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("sparse.sp3:") && e.contains("not a usable SP3"),
+        "{e}"
+    );
+}

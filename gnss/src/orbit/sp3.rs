@@ -43,6 +43,10 @@ pub struct Sp3 {
     pub sats: BTreeMap<Sv, Vec<(Vector3<f64>, f64)>>,
 }
 
+/// Slots (satellite × epoch, 32 bytes each) allowed beyond four per position record read:
+/// 32 MB for files where some satellites are absent at most epochs.
+const MAX_SPARE_SLOTS: usize = 1_000_000;
+
 impl Sp3 {
     /// Read an SP3 file (versions a to d, plain or gzip).
     pub fn read(path: &Path) -> Result<Sp3> {
@@ -72,6 +76,7 @@ impl Sp3 {
         let mut scale = TimeScale::GPST;
         // The first `%c` line names the time system (SP3-d headers grow with the satellites).
         let mut time_system_read = false;
+        let mut records = 0usize;
         loop {
             let ln = src.line_no + 1;
             let Some(line) = src.next_line()? else { break };
@@ -89,7 +94,25 @@ impl Sp3 {
                         .ok_or_else(|| Error::parse(path, ln, "unreadable SP3 epoch line"))?;
                     sp3.epochs.push(e);
                 }
-                Some(b'P') if !sp3.epochs.is_empty() => sp3.position_record(line, ln)?,
+                Some(b'P') if !sp3.epochs.is_empty() => {
+                    records += 1;
+                    // Every satellite holds a slot per epoch: bounded by the records read, so
+                    // that epoch lines without positions cannot ask for gigabytes.
+                    let slots = (sp3.sats.len() + 1).saturating_mul(sp3.epochs.len());
+                    if slots > 4 * records + MAX_SPARE_SLOTS {
+                        return Err(Error::parse(
+                            path,
+                            ln,
+                            format!(
+                                "{} epochs and {} satellites so far but only {records} positions: \
+                                 not a usable SP3 file (epochs without positions?)",
+                                sp3.epochs.len(),
+                                sp3.sats.len() + 1
+                            ),
+                        ));
+                    }
+                    sp3.position_record(line, ln)?
+                }
                 Some(b'E') if line.starts_with(b"EOF") => break,
                 _ => {}
             }

@@ -106,9 +106,14 @@ impl LogNav {
 /// 65535, a time of week of 10¹¹ s or ±inf; NaN counts as 0) saturate at the ends of the GPST
 /// nanosecond range instead of overflowing.
 pub fn gpst(week: u16, tow: f64) -> Epoch {
+    Epoch::from_gpst_nanoseconds(gpst_ns(week, tow))
+}
+
+/// The GPST nanoseconds [`gpst`] gives (for ordering without the time library).
+pub fn gpst_ns(week: u16, tow: f64) -> u64 {
     let ticks = (tow * 1e7).round() as i64; // 100 ns, as RINEX prints
     let ns = i128::from(week) * 604_800_000_000_000 + i128::from(ticks) * 100;
-    Epoch::from_gpst_nanoseconds(ns.clamp(0, i128::from(u64::MAX)) as u64)
+    ns.clamp(0, i128::from(u64::MAX)) as u64
 }
 
 /// Hands decoded epochs on in file order, counting them and the time jumps (an epoch not

@@ -5,7 +5,7 @@
 //! What enters: [`RawItem`]s in file order. What leaves: [`RinexOut`]s in RINEX order, and
 //! the header's types and span from a [`Scan`].
 
-use super::items::{gpst, EventMark, RawItem};
+use super::items::{gpst, gpst_ns, EventMark, RawItem};
 use super::ubx_obs::{RawEpoch, RawSignal};
 use crate::error::{Error, Result};
 use crate::rinex::{Obs, ObsCode, SatObs};
@@ -234,7 +234,11 @@ pub enum RinexOut {
 /// convbin; SBF: every event) goes before the first epoch not earlier than it; every edge is kept in `marks` for the CSV.
 #[derive(Default)]
 pub struct RinexOrder {
-    pending: Vec<EventMark>,
+    /// Events not yet written, by time (GPST ns) and arrival: released in O(log n) each, so a
+    /// log of many future-dated marks does not cost marks × epochs.
+    pending: BTreeMap<(u64, u64), EventMark>,
+    /// Events received so far (the arrival part of `pending`'s key).
+    arrivals: u64,
     /// Every time-mark edge, in file order.
     pub marks: Vec<EventMark>,
 }
@@ -250,20 +254,21 @@ impl RinexOrder {
             RawItem::Event(ev) => {
                 self.marks.push(ev);
                 if ev.record {
-                    self.pending.push(ev);
+                    self.arrivals += 1;
+                    let key = (gpst_ns(ev.week, ev.tow), self.arrivals);
+                    self.pending.insert(key, ev);
                 }
             }
             RawItem::Ephemeris(_) | RawItem::GpsIono(..) | RawItem::BdsIono(_) => {}
             RawItem::Epoch(e) => {
                 let t = gpst(e.week, e.tow);
-                let (now, later): (Vec<_>, Vec<_>) = self
-                    .pending
-                    .drain(..)
-                    .partition(|m| gpst(m.week, m.tow) <= t);
-                for m in &now {
-                    out(mark(m))?;
+                let t_ns = gpst_ns(e.week, e.tow);
+                while let Some(due) = self.pending.first_entry() {
+                    if due.key().0 > t_ns {
+                        break;
+                    }
+                    out(mark(&due.remove()))?;
                 }
-                self.pending = later;
                 out(RinexOut::Epoch(t, e))?;
             }
         }
@@ -275,7 +280,7 @@ impl RinexOrder {
         &mut self,
         out: &mut impl FnMut(RinexOut) -> std::result::Result<(), E>,
     ) -> std::result::Result<(), E> {
-        for m in std::mem::take(&mut self.pending) {
+        for m in std::mem::take(&mut self.pending).into_values() {
             out(mark(&m))?;
         }
         Ok(())
@@ -296,6 +301,67 @@ mod tests {
     use super::*;
     use crate::raw::ubx_obs::{RawSat, RawSignal};
     use crate::sv::Sv;
+
+    /// Marks go before the first epoch not earlier than them, by time; 50,000 marks dated
+    /// after every epoch wait without being looked at per epoch (they cost marks × epochs).
+    #[test]
+    fn marks_are_released_in_time_before_their_epoch() {
+        let mark = |tow: f64| {
+            RawItem::Event(EventMark {
+                week: 2300,
+                tow,
+                edge: crate::raw::items::Edge::Falling,
+                count: 0,
+                valid: true,
+                record: true,
+            })
+        };
+        let epoch = |tow: f64| {
+            RawItem::Epoch(RawEpoch {
+                week: 2300,
+                tow,
+                sats: Vec::new(),
+                glonass: Vec::new(),
+            })
+        };
+        let mut order = RinexOrder::default();
+        let mut got: Vec<(char, f64)> = Vec::new();
+        let mut out = |o: RinexOut| -> std::result::Result<(), ()> {
+            let (c, t) = match o {
+                RinexOut::Epoch(t, _) => ('E', t),
+                RinexOut::Event(t, _) => ('M', t),
+            };
+            got.push((c, crate::time::week_tow(t).1));
+            Ok(())
+        };
+        for it in [mark(10.5), mark(9.5), mark(30.0), epoch(10.0), epoch(11.0)] {
+            order.item(it, &mut out).unwrap();
+        }
+        for k in 0..50_000 {
+            order.item(mark(500_000.0 + k as f64), &mut out).unwrap();
+        }
+        for k in 0..50_000 {
+            order
+                .item(epoch(12.0 + k as f64 * 0.001), &mut out)
+                .unwrap();
+        }
+        order.finish(&mut out).unwrap();
+        assert_eq!(
+            &got[..4],
+            &[('M', 9.5), ('E', 10.0), ('M', 10.5), ('E', 11.0)],
+            "released by time before the first epoch not earlier"
+        );
+        assert_eq!(got.len(), 4 + 50_000 + 1 + 50_000);
+        assert_eq!(got[4], ('E', 12.0));
+        let i = got.iter().position(|g| *g == ('M', 30.0)).unwrap();
+        assert!(got[i - 1].1 < 30.0 && got[i + 1].0 == 'E' && got[i + 1].1 >= 30.0);
+        let tail = &got[got.len() - 50_000..];
+        assert!(
+            tail[0] == ('M', 500_000.0),
+            "the future marks at the end, by time"
+        );
+        assert!(tail.windows(2).all(|w| w[0].1 < w[1].1 && w[1].0 == 'M'));
+    }
 
     /// `write_raw_epoch` gives the bytes of `sat_records` + `write_epoch`, on random epochs
     /// with hostile values (zeros, ties, ±10⁹ and beyond, NaN, infinities, PRN ≥ 100).

@@ -103,6 +103,7 @@ pub(super) fn read_images(
     );
     let times = t.col("week").zip(t.col("tow"));
     let mut out: Vec<ImageDef> = Vec::new();
+    let mut ids = std::collections::HashSet::new();
     for (line, row) in &t.rows {
         let id = t.text(row, ci);
         let camera = match cc {
@@ -120,7 +121,7 @@ pub(super) fn read_images(
             None if cameras.len() == 1 => 0,
             None => return Err(perr(path, "several cameras: a `camera` column is needed")),
         };
-        if out.iter().any(|x| x.id == id) {
+        if !ids.insert(id.clone()) {
             return Err(AdjustError::Input {
                 path: path.display().to_string(),
                 line: *line,
@@ -437,6 +438,7 @@ pub(super) fn read_ground(
         what,
     };
     let mut out = Vec::new();
+    let mut ids = std::collections::HashSet::new();
     for (line, row) in &t.rows {
         let id = t.text(row, cp);
         let kind_text = t.text(row, ck).to_ascii_lowercase().replace('_', "-");
@@ -463,7 +465,7 @@ pub(super) fn read_ground(
                 format!("control point {id}: σ must be positive"),
             ));
         }
-        if out.iter().any(|p: &GroundPoint| p.id == id) {
+        if !ids.insert(id.clone()) {
             return Err(bad(*line, format!("point {id} listed twice")));
         }
         out.push(GroundPoint {

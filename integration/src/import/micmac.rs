@@ -12,7 +12,7 @@
 use super::{ferr, CameraOut, GroundFrame, GroundOut, ImportError, ProjectOut, StartOut, Summary};
 use nalgebra::{Matrix3, Vector3};
 use photo::camera_convert::MicMacCalibration;
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::{BTreeMap, BTreeSet, HashSet};
 use std::path::{Path, PathBuf};
 
 /// What `ppkat import micmac` reads.
@@ -51,25 +51,31 @@ type Orientation = (Option<String>, Vector3<f64>, Matrix3<f64>);
 struct Xml {
     path: PathBuf,
     text: String,
+    /// Byte offsets of the line ends of the text, for line numbers in O(log n) (roxmltree's
+    /// `text_pos_at` scans from the start: quadratic over a file of measurements).
+    newlines: Vec<usize>,
 }
 
 impl Xml {
     fn read(path: &Path) -> Result<Xml, ImportError> {
         let text = std::fs::read_to_string(path)
             .map_err(|e| ferr(path, None, format!("cannot read: {e}")))?;
+        let newlines = text.match_indices('\n').map(|(i, _)| i).collect();
         Ok(Xml {
             path: path.to_path_buf(),
             text,
+            newlines,
         })
     }
     fn doc(&self) -> Result<roxmltree::Document<'_>, ImportError> {
         roxmltree::Document::parse(self.text.trim_start())
             .map_err(|e| ferr(&self.path, None, format!("not well-formed XML: {e}")))
     }
-    fn line(&self, doc: &roxmltree::Document, n: roxmltree::Node) -> Option<usize> {
+    fn line(&self, _doc: &roxmltree::Document, n: roxmltree::Node) -> Option<usize> {
+        // The document is the text without its leading blanks: offsets shift by their length.
         let lead = self.text.len() - self.text.trim_start().len();
-        let skipped = self.text[..lead].matches('\n').count();
-        Some(doc.text_pos_at(n.range().start).row as usize + skipped)
+        let at = lead + n.range().start;
+        Some(self.newlines.partition_point(|&nl| nl < at) + 1)
     }
     fn err(&self, doc: &roxmltree::Document, n: roxmltree::Node, what: String) -> ImportError {
         ferr(&self.path, self.line(doc, n), what)
@@ -115,6 +121,7 @@ fn read_dico(path: &Path) -> Result<Vec<DicoPoint>, ImportError> {
     let x = Xml::read(path)?;
     let doc = x.doc()?;
     let mut out: Vec<DicoPoint> = Vec::new();
+    let mut names = HashSet::new();
     for n in doc.descendants().filter(|n| n.has_tag_name("OneAppuisDAF")) {
         let name = text_of(n, "NamePt").unwrap_or_default();
         if name.is_empty() {
@@ -136,7 +143,7 @@ fn read_dico(path: &Path) -> Result<Vec<DicoPoint>, ImportError> {
                 format!("point {name}: <Incertitude> must be positive"),
             ));
         }
-        if out.iter().any(|(id, ..)| *id == name) {
+        if !names.insert(name.clone()) {
             return Err(x.err(&doc, n, format!("point {name} is listed twice: keep one")));
         }
         out.push((name, Vector3::from(p), s));
@@ -156,6 +163,7 @@ fn read_mesures(path: &Path) -> Result<Vec<Mesure>, ImportError> {
     let x = Xml::read(path)?;
     let doc = x.doc()?;
     let mut out: Vec<Mesure> = Vec::new();
+    let mut seen = std::collections::HashSet::new();
     for im in doc
         .descendants()
         .filter(|n| n.has_tag_name("MesureAppuiFlottant1Im"))
@@ -168,7 +176,7 @@ fn read_mesures(path: &Path) -> Result<Vec<Mesure>, ImportError> {
             let pt = text_of(m, "NamePt").unwrap_or_default();
             let [c, r] = numbers::<2>(&x, &doc, m, "PtIm")?;
             let line = x.line(&doc, m).unwrap_or(0);
-            if out.iter().any(|o| o.0 == name && o.1 == pt) {
+            if !seen.insert((name.clone(), pt.clone())) {
                 return Err(x.err(
                     &doc,
                     m,
@@ -295,6 +303,7 @@ fn read_gnss(path: &Path, format: &str) -> Result<Vec<(String, Vector3<f64>, usi
     let text =
         std::fs::read_to_string(path).map_err(|e| ferr(path, None, format!("cannot read: {e}")))?;
     let mut out: Vec<(String, Vector3<f64>, usize)> = Vec::new();
+    let mut names = HashSet::new();
     for (i, l) in text.lines().enumerate() {
         let f: Vec<&str> = l.split_whitespace().collect();
         if f.is_empty() || f[0].starts_with('#') {
@@ -312,7 +321,7 @@ fn read_gnss(path: &Path, format: &str) -> Result<Vec<(String, Vector3<f64>, usi
                 format!("expected the columns '{format}'"),
             ));
         };
-        if out.iter().any(|o| o.0 == *name) {
+        if !names.insert(name.to_string()) {
             return Err(ferr(
                 path,
                 Some(i + 1),
@@ -338,6 +347,7 @@ fn add_points(
     sum.read.push((format!("{kind} points"), dico.len()));
     sum.read.push((format!("{kind} measurements"), mes.len()));
     let measured: BTreeSet<&str> = mes.iter().map(|m| m.1.as_str()).collect();
+    let mut ground_ids: HashSet<String> = out.ground.iter().map(|g| g.id.clone()).collect();
     for (id, p, s) in &dico {
         if !measured.contains(id.as_str()) {
             sum.skipped.push((
@@ -346,7 +356,7 @@ fn add_points(
             ));
             continue;
         }
-        if out.ground.iter().any(|g| g.id == *id) {
+        if !ground_ids.insert(id.clone()) {
             return Err(ferr(
                 gpath,
                 None,
@@ -361,6 +371,7 @@ fn add_points(
         });
     }
     let known: BTreeSet<&str> = dico.iter().map(|d| d.0.as_str()).collect();
+    let mut images: HashSet<String> = out.images.iter().map(|(i, _)| i.clone()).collect();
     for (im, pt, c, r, line) in mes {
         if !known.contains(pt.as_str()) {
             sum.skipped.push((
@@ -369,7 +380,7 @@ fn add_points(
             ));
             continue;
         }
-        if !out.images.iter().any(|(i, _)| *i == im) {
+        if images.insert(im.clone()) {
             out.images.push((im.clone(), "cam".into()));
         }
         out.measurements.push((im, pt, c, r));
@@ -499,8 +510,9 @@ fn read_orientations(
         }
     }
     let mut res = Vec::new();
+    let images: HashSet<&str> = out.images.iter().map(|(i, _)| i.as_str()).collect();
     for (im, path) in &found {
-        if !out.images.iter().any(|(i, _)| i == im) {
+        if !images.contains(im.as_str()) {
             sum.skipped.push((
                 format!("orientation {}", path.display()),
                 format!("image {im} has no measurement"),
@@ -538,8 +550,9 @@ fn add_gnss(
 ) -> Result<(), ImportError> {
     let rows = read_gnss(path, format)?;
     sum.read.push(("GNSS positions".into(), rows.len()));
+    let images: HashSet<String> = out.images.iter().map(|(i, _)| i.clone()).collect();
     for (name, p, line) in rows {
-        if !out.images.iter().any(|(i, _)| *i == name) {
+        if !images.contains(&name) {
             sum.skipped.push((
                 format!("GNSS position of {name} ({}:{line})", path.display()),
                 "image not measured".into(),
@@ -549,11 +562,12 @@ fn add_gnss(
         out.gnss
             .push((name, frame.to_ecef(&p), [sigma[0], sigma[0], sigma[1]]));
     }
+    let located: HashSet<&str> = out.gnss.iter().map(|g| g.0.as_str()).collect();
     let without: Vec<&str> = out
         .images
         .iter()
         .map(|(i, _)| i.as_str())
-        .filter(|i| !out.gnss.iter().any(|g| g.0 == *i))
+        .filter(|i| !located.contains(i))
         .collect();
     if !without.is_empty() {
         sum.notes.push(format!(

@@ -29,7 +29,7 @@ use super::{ferr, CameraOut, GroundFrame, GroundOut, ImportError, ProjectOut, Su
 use crate::adjust::camera_section::{camera_def, CameraSection, INTERIOR_NAMES};
 use nalgebra::{Vector2, Vector3};
 use photo::camera::Camera;
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 
 /// The units of PATB image coordinates.
@@ -134,6 +134,9 @@ fn number(path: &Path, line: usize, s: &str, expected: &str) -> Result<f64, Impo
 fn read_images(path: &Path, sum: &mut Summary) -> Result<Vec<Photo>, ImportError> {
     const EXPECT: &str = "`POINT x y` (or -99 to close the photo)";
     let mut photos: Vec<Photo> = Vec::new();
+    // First lines of the photos and of the current photo's points: duplicates found in O(1).
+    let mut photo_lines: HashMap<String, usize> = HashMap::new();
+    let mut point_lines: HashMap<String, usize> = HashMap::new();
     let mut open = false;
     let mut extra = (0usize, 0usize);
     for (line, f) in fields(path)? {
@@ -142,16 +145,17 @@ fn read_images(path: &Path, sum: &mut Summary) -> Result<Vec<Photo>, ImportError
             continue;
         }
         if !open {
-            if let Some(p) = photos.iter().find(|p| p.id == f[0]) {
+            if let Some(first) = photo_lines.insert(f[0].clone(), line) {
                 return Err(ferr(
                     path,
                     Some(line),
                     format!(
-                        "photo {} is listed again (first at line {}): give each photo one block",
-                        f[0], p.line
+                        "photo {} is listed again (first at line {first}): give each photo one block",
+                        f[0]
                     ),
                 ));
             }
+            point_lines.clear();
             extra.0 += usize::from(f.len() > 2);
             photos.push(Photo {
                 id: f[0].clone(),
@@ -181,13 +185,13 @@ fn read_images(path: &Path, sum: &mut Summary) -> Result<Vec<Photo>, ImportError
             number(path, line, &f[1], EXPECT)?,
             number(path, line, &f[2], EXPECT)?,
         );
-        if let Some(o) = photo.obs.iter().find(|o| o.0 == f[0]) {
+        if let Some(first) = point_lines.insert(f[0].clone(), line) {
             return Err(ferr(
                 path,
                 Some(line),
                 format!(
-                    "point {} is measured twice in photo {} (first at line {}): keep one",
-                    f[0], photo.id, o.3
+                    "point {} is measured twice in photo {} (first at line {first}): keep one",
+                    f[0], photo.id
                 ),
             ));
         }
@@ -219,6 +223,7 @@ fn kind_of(s: &str) -> Option<&'static str> {
 fn read_control(path: &Path) -> Result<Vec<Control>, ImportError> {
     const EXPECT: &str = "`ID X Y Z [σX σY σZ | σXY σZ] [gcp|gcp-xy|gcp-z|check]`";
     let mut out: Vec<Control> = Vec::new();
+    let mut point_lines: HashMap<String, usize> = HashMap::new();
     for (line, f) in fields(path)? {
         if f[0] == "-99" {
             continue;
@@ -265,13 +270,13 @@ fn read_control(path: &Path) -> Result<Vec<Control>, ImportError> {
         if sigma.is_some_and(|s| s.iter().any(|v| *v <= 0.0)) {
             return Err(ferr(path, Some(line), "σ must be positive"));
         }
-        if let Some(c) = out.iter().find(|c| c.0 == f[0]) {
+        if let Some(first) = point_lines.insert(f[0].clone(), line) {
             return Err(ferr(
                 path,
                 Some(line),
                 format!(
-                    "point {} is listed twice (first at line {}): keep one",
-                    f[0], c.4
+                    "point {} is listed twice (first at line {first}): keep one",
+                    f[0]
                 ),
             ));
         }
