@@ -1,11 +1,13 @@
 #![no_main]
-//! RINEX navigation files.
+//! RINEX navigation files, their ephemerides loaded and evaluated.
 
 use libfuzzer_sys::fuzz_target;
 use ppkat_fuzz::with_file;
 
 fuzz_target!(|data: &[u8]| {
     with_file("f.nav", data, |p| {
-        let _ = gnss::rinex::nav::NavFile::read(p);
+        if let Ok(nav) = gnss::rinex::nav::NavFile::read(p) {
+            ppkat_fuzz::evaluate(&[nav]);
+        }
     });
 });

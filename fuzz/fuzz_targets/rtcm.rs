@@ -8,9 +8,14 @@ use ppkat_fuzz::with_file;
 fuzz_target!(|data: &[u8]| {
     use gnss::raw::{items::for_each_item, RawFormat, TimeHint};
     with_file("f.rtcm3", data, |p| {
-        for hint in [None, Some(TimeHint::Year(2024)), Some(TimeHint::Date(2024, 3, 5))] {
+        for hint in [
+            None,
+            Some(TimeHint::Year(2024)),
+            Some(TimeHint::Date(2024, 3, 5)),
+        ] {
             let _ = for_each_item(p, Some(RawFormat::Rtcm3), hint, |_| {});
         }
+        ppkat_fuzz::use_items(p, RawFormat::Rtcm3, Some(TimeHint::Year(2024)));
     });
     // a payload on its own, as every decoder sees it
     let _ = gnss::raw::rtcm_msm::decode_msm(data);

@@ -7,9 +7,9 @@ use libfuzzer_sys::fuzz_target;
 use ppkat_fuzz::with_file;
 
 fuzz_target!(|data: &[u8]| {
-    use gnss::raw::{items::for_each_item, sbf, sbf_nav, RawFormat};
+    use gnss::raw::{sbf, sbf_nav, RawFormat};
     with_file("f.sbf", data, |p| {
-        let _ = for_each_item(p, Some(RawFormat::Sbf), None, |_| {});
+        ppkat_fuzz::use_items(p, RawFormat::Sbf, None);
     });
     // a block on its own, as every decoder sees it
     if let Some(m) = gnss::raw::sbf_meas::decode_meas_epoch(data) {

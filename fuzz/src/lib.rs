@@ -11,3 +11,34 @@ pub fn with_file<T>(name: &str, data: &[u8], f: impl FnOnce(&Path) -> T) -> T {
     std::fs::write(&path, data).expect("temporary file");
     f(&path)
 }
+
+/// What a command does with a raw log's items after decoding: time marks put in RINEX order
+/// among the epochs, and ephemerides loaded and evaluated as `spp`/`ppk` would.
+pub fn use_items(path: &Path, format: gnss::raw::RawFormat, hint: Option<gnss::raw::TimeHint>) {
+    use gnss::raw::items::{for_each_item, RawItem};
+    let mut order = gnss::raw::records::RinexOrder::default();
+    let mut nav = gnss::rinex::nav::NavFile::default();
+    let _ = for_each_item(path, Some(format), hint, |it| {
+        if let RawItem::Ephemeris(r) = &it {
+            if nav.records.len() < 256 {
+                nav.records.push(r.clone());
+            }
+        }
+        let _ = order.item(it, &mut |_| Ok::<(), ()>(()));
+    });
+    let _ = order.finish(&mut |_| Ok::<(), ()>(()));
+    evaluate(&[nav]);
+}
+
+/// Ephemerides of `navs` loaded, and every one evaluated at its toe and two hours around it.
+pub fn evaluate(navs: &[gnss::rinex::nav::NavFile]) {
+    let e = gnss::orbit::Ephemerides::from_nav(navs);
+    let svs: Vec<_> = e.satellites().copied().collect();
+    for sv in svs {
+        for eph in e.of(sv) {
+            for dt in [0.0, -7200.0, 7200.0] {
+                let _ = eph.position_clock(eph.toe() + hifitime::Duration::from_seconds(dt));
+            }
+        }
+    }
+}

@@ -100,6 +100,23 @@ fn jpeg(path: &Path, max_side: u32) -> Result<Decoded, String> {
     let info = d.info().ok_or("not a readable JPEG (no header)")?;
     let (w, h) = (info.width as u32, info.height as u32);
     check_size(w, h)?;
+    // A progressive JPEG is decoded from coefficients of the full image (2 bytes a component
+    // and pixel) whatever the reduction: held to the PNG decoder's 800 MB.
+    if info.coding_process == jpeg_decoder::CodingProcess::DctProgressive {
+        let comps = match info.pixel_format {
+            jpeg_decoder::PixelFormat::L8 | jpeg_decoder::PixelFormat::L16 => 1,
+            jpeg_decoder::PixelFormat::RGB24 => 3,
+            jpeg_decoder::PixelFormat::CMYK32 => 4,
+        };
+        let bytes = 2 * comps * w as u64 * h as u64;
+        if bytes > 4 * MAX_PIXELS {
+            return Err(format!(
+                "a progressive JPEG of {w} × {h} pixels needs {} MB to decode, more than the {} MB accepted",
+                bytes / 1_000_000,
+                4 * MAX_PIXELS / 1_000_000
+            ));
+        }
+    }
     let k = factor(w, h, max_side);
     let dct = k.min(8);
     let got = d
@@ -172,6 +189,24 @@ pub fn decode(path: &Path, max_side: u32) -> Result<Decoded, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_progressive_jpeg_too_large_to_decode_is_refused_from_its_header() {
+        // SOI, then a progressive frame header (SOF2) of 20000 × 9000 pixels, 3 components:
+        // 1.08 GB of coefficients for a file of 21 bytes.
+        let mut b = vec![0xFF, 0xD8, 0xFF, 0xC2, 0x00, 0x11, 8];
+        b.extend_from_slice(&9000u16.to_be_bytes());
+        b.extend_from_slice(&20000u16.to_be_bytes());
+        b.push(3);
+        for id in 1..=3u8 {
+            b.extend_from_slice(&[id, 0x11, 0]);
+        }
+        b.extend_from_slice(&[0xFF, 0xD9]);
+        let p = std::env::temp_dir().join(format!("ppkat-prog-{}.jpg", std::process::id()));
+        std::fs::write(&p, &b).unwrap();
+        let e = jpeg(&p, 1000).unwrap_err();
+        assert!(e.contains("progressive") && e.contains("1080 MB"), "{e}");
+    }
 
     #[test]
     fn factors_are_powers_of_two_up_to_eight() {
