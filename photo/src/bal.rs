@@ -132,17 +132,23 @@ impl BalProblem {
         let room = |n: usize, bytes: usize| n.min(text.len() / bytes + 1);
         let mut obs = Vec::with_capacity(room(no, 8));
         for k in 0..no {
-            let cam = next("an observation's camera")? as usize;
-            let pt = next("an observation's point")? as usize;
+            let (cam_v, pt_v) = (
+                next("an observation's camera")?,
+                next("an observation's point")?,
+            );
             let (u, v) = (next("an image x")?, next("an image y")?);
-            if cam >= nc || pt >= np {
+            // A negative or fractional index is no index (`as usize` made it camera 0).
+            let index = |x: f64, n: usize| {
+                (x >= 0.0 && x.fract() == 0.0 && x < n as f64).then_some(x as usize)
+            };
+            let (Some(cam), Some(pt)) = (index(cam_v, nc), index(pt_v, np)) else {
                 return Err(BalError::Format {
                     path: format!("{p}:{}", line.get()),
                     what: format!(
-                        "observation {k} names camera {cam} / point {pt} beyond {nc} / {np}"
+                        "observation {k} names camera {cam_v} / point {pt_v}: not indices below {nc} / {np}"
                     ),
                 });
-            }
+            };
             obs.push(BalObs {
                 cam,
                 pt,
@@ -506,6 +512,22 @@ mod run_tests {
              RMS reprojection error: 0.9155 px\n\
              final cost: 1.334429e4\n"
         );
+    }
+
+    #[test]
+    fn negative_or_fractional_indices_are_errors_not_camera_0() {
+        let cam = "0 0 0 0 0 0 1000 0 0\n";
+        for obs in ["-1 0 1.0 2.0", "0 0.5 1.0 2.0", "1 0 1.0 2.0"] {
+            let path =
+                std::env::temp_dir().join(format!("ppkat-bal-idx-{}.txt", std::process::id()));
+            std::fs::write(&path, format!("1 1 1\n{obs}\n{cam}0 0 5\n")).unwrap();
+            let e = BalProblem::read(&path).unwrap_err().to_string();
+            let _ = std::fs::remove_file(&path);
+            assert!(
+                e.contains(":2") && e.contains("not indices below 1 / 1"),
+                "{obs}: {e}"
+            );
+        }
     }
 
     #[test]

@@ -283,8 +283,13 @@ fn project_tables_refuse_a_zero_sigma_and_a_week_beyond_any_log() {
     );
     std::fs::write(dir.join("image_observations.csv"), kept).unwrap();
     // A week of 10⁹ saturated to 4294967295 and placed the antenna in year 82 million.
-    edit("antennas.csv", "\n101,2314,", "\n101,1000000000,");
+    let kept = edit("antennas.csv", "\n101,2314,", "\n101,1000000000,");
     let o = ppkat(&["adjust", "--project", p(&project), "-o", p(&dir.join("o2"))]);
     fails_with(&o, &["antennas.csv, line 3", "week"]);
-    assert!(!dir.join("o1").exists() && !dir.join("o2").exists());
+    // A segment of -1 became 0 (`as u32`), joining the trajectory's first segment.
+    std::fs::write(dir.join("antennas.csv"), kept).unwrap();
+    edit("antennas.csv", ",1,0\n", ",1,-1\n");
+    let o = ppkat(&["adjust", "--project", p(&project), "-o", p(&dir.join("o3"))]);
+    fails_with(&o, &["antennas.csv, line 3", "-1 in column segment"]);
+    assert!(!dir.join("o1").exists() && !dir.join("o2").exists() && !dir.join("o3").exists());
 }

@@ -65,6 +65,21 @@ impl Table {
                 what: format!("`{s}` is not a number (column {})", self.cols[c]),
             })
     }
+    /// A whole number from 0 to `max` (an index or a code: `as` would wrap or saturate).
+    fn whole(&self, line: usize, row: &[String], c: usize, max: f64) -> Result<f64, AdjustError> {
+        let v = self.num(line, row, c)?;
+        if v < 0.0 || v > max || v.fract() != 0.0 {
+            return Err(AdjustError::Input {
+                path: self.path.display().to_string(),
+                line,
+                what: format!(
+                    "{v} in column {} is not a whole number from 0 to {max}",
+                    self.cols[c]
+                ),
+            });
+        }
+        Ok(v)
+    }
     fn text(&self, row: &[String], c: usize) -> String {
         row.get(c).map(|s| s.trim().to_string()).unwrap_or_default()
     }
@@ -144,17 +159,14 @@ pub(super) fn read_images(
             Some((w, s)) if t.text(row, w).is_empty() && t.text(row, s).is_empty() => None,
             Some((w, s)) => {
                 let week = t.num(*line, row, w)?;
-                if !(0.0..10000.0).contains(&week) {
-                    return Err(AdjustError::Input {
+                let tow = t.num(*line, row, s)?;
+                Some(gnss::time::checked_week_tow(week, tow).map_err(|what| {
+                    AdjustError::Input {
                         path: path.display().to_string(),
                         line: *line,
-                        what: format!("GPS week {week} out of range"),
-                    });
-                }
-                Some(gnss::time::from_week_tow(
-                    week as u32,
-                    t.num(*line, row, s)?,
-                ))
+                        what,
+                    }
+                })?)
             }
             None => None,
         };
@@ -532,11 +544,11 @@ pub(super) fn read_antennas(path: &Path, scale: f64) -> Result<Vec<Antenna>, Adj
             pos: Geodetic::from_degrees(v[2], v[3], v[4]).to_ecef(),
             cov_enu: cov,
             segment: match seg {
-                Some(c) => t.num(*line, row, c)? as u32,
+                Some(c) => t.whole(*line, row, c, u32::MAX as f64)? as u32,
                 None => 0,
             },
             quality: match qcol {
-                Some(c) => t.num(*line, row, c)? as u8,
+                Some(c) => t.whole(*line, row, c, 255.0)? as u8,
                 None => 1,
             },
             rotation,
