@@ -293,3 +293,35 @@ fn project_tables_refuse_a_zero_sigma_and_a_week_beyond_any_log() {
     fails_with(&o, &["antennas.csv, line 3", "-1 in column segment"]);
     assert!(!dir.join("o1").exists() && !dir.join("o2").exists() && !dir.join("o3").exists());
 }
+
+/// A fuzzed times CSV (the fuzzer's timeout): a year of 5,262,210 walked hifitime's calendar
+/// year by year, 20 ms a line (10 s under the fuzzer's instrumentation); a file of such lines
+/// ran for hours. Years outside 1980–2200 are now an unreadable time at their line, as are
+/// huge years in a `.pos`.
+#[test]
+fn a_year_of_millions_is_an_unreadable_time_not_hours_of_calendar() {
+    let times = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/fuzz/times-year-5262210.csv");
+    let o = exposures(&tmp("year-csv.csv"), &["--times", p(&times)]);
+    fails_with(&o, &["times-year-5262210.csv:2", "unreadable time"]);
+    let pos = demo_dir().join("rover_ppk.pos");
+    let text = std::fs::read_to_string(&pos).unwrap();
+    let first = text.lines().find(|l| !l.starts_with('%')).unwrap();
+    let year = first.split('/').next().unwrap();
+    let bad = file(
+        "year-pos.pos",
+        text.replacen(first, &first.replacen(year, "52622100", 1), 1)
+            .as_bytes(),
+    );
+    let times = file("year-times.csv", TIMES.as_bytes());
+    let o = ppkat(&[
+        "exposures",
+        "--trajectory",
+        p(&bad),
+        "--times",
+        p(&times),
+        "-o",
+        p(&tmp("year-pos.csv")),
+    ]);
+    fails_with(&o, &["year-pos.pos", "unreadable date/time"]);
+}

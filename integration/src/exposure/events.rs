@@ -263,7 +263,9 @@ fn parse_iso(s: &str, scale: TimeScale) -> Option<Epoch> {
         tp.next()?.parse::<u8>().ok()?,
         tp.next()?.parse::<f64>().ok()?,
     );
-    if d.len() != 3 || !(0.0..61.0).contains(&sec) {
+    // A year of millions is no exposure time, and hifitime's calendar walks it year by year
+    // (20 ms a line: a file of such lines would run for hours).
+    if d.len() != 3 || !(1980..=2200).contains(&d[0]) || !(0.0..61.0).contains(&sec) {
         return None;
     }
     let whole = sec.floor();

@@ -39,7 +39,8 @@ fn exif_seconds(s: &str) -> Option<f64> {
         .split(':')
         .map(|x| x.parse().ok())
         .collect::<Option<_>>()?;
-    if d.len() != 3 || t.len() != 3 {
+    // A year of millions is no capture time, and hifitime's calendar walks it year by year.
+    if d.len() != 3 || t.len() != 3 || !(1900..=2200).contains(&d[0]) {
         return None;
     }
     let u = |v: i64| u8::try_from(v).ok();
