@@ -343,9 +343,8 @@ fn parse_time(date: &str, time: &str) -> Option<Epoch> {
         tp.next()?.parse::<f64>().ok()?,
     );
     // Fields out of their ranges (an infinite or huge second among them) are no time.
-    // A year of millions is no date either, and hifitime's calendar walks it year by year.
     let in_range = d.len() == 3
-        && (1980..=2200).contains(&d[0])
+        && crate::time::file_year(d[0])
         && (1..=12).contains(&d[1])
         && (1..=31).contains(&d[2])
         && (0..=23).contains(&h)

@@ -7,18 +7,10 @@ pub const WEEK_SECONDS: f64 = 604_800.0;
 /// BeiDou time is GPST − 14 s.
 pub const BDT_MINUS_GPST_S: f64 = -14.0;
 
-/// A GPST epoch from calendar fields; `nanos` is the sub-second part in nanoseconds.
+/// A GPST epoch from calendar fields; `nanos` is the sub-second part in nanoseconds. Panics
+/// when they are no date and time: for fields from a file, use [`try_gpst`].
 pub fn gpst(year: i32, month: u8, day: u8, hour: u8, minute: u8, second: u8, nanos: u32) -> Epoch {
-    Epoch::from_gregorian(
-        year,
-        month,
-        day,
-        hour,
-        minute,
-        second,
-        nanos,
-        TimeScale::GPST,
-    )
+    try_gpst(year, month, day, hour, minute, second, nanos).expect("a valid GPST date and time")
 }
 
 /// A GPST epoch from calendar fields read from a file: `None` when they are not a date and
@@ -43,6 +35,12 @@ pub fn try_gpst(
         TimeScale::GPST,
     );
     e.ok().filter(|_| second < 60)
+}
+
+/// Whether `year` is one a GNSS file can carry (1980–2200). Checked before the calendar:
+/// hifitime walks a year of millions one year at a time (20 ms a date).
+pub fn file_year(year: i64) -> bool {
+    (1980..=2200).contains(&year)
 }
 
 /// Express any epoch in GPST (the scale used everywhere inside).

@@ -172,31 +172,30 @@ impl Ephemerides {
             }
             for r in &nav.records {
                 e.stats.records += 1;
-                if let Some(why) = implausible(r) {
-                    e.stats.skipped.push(format!(
-                        "{}:{}: record of {} not used: {why}",
-                        nav.path.display(),
-                        r.line,
-                        r.sv
-                    ));
+                if matches!(r.kind, NavKind::Sbas | NavKind::Other) {
+                    e.stats.unused += 1;
                     continue;
                 }
-                let eph = match r.kind {
-                    NavKind::Kepler => KeplerEph::from_record(r).map(Eph::Kepler),
-                    NavKind::Glonass => GlonassEph::from_record(r).map(Eph::Glonass),
-                    NavKind::Sbas | NavKind::Other => {
-                        e.stats.unused += 1;
+                // Checked before the record is read: a NaN toe panics in the time library.
+                let eph = match implausible(r) {
+                    Some(why) => Err(why),
+                    None => match r.kind {
+                        NavKind::Kepler => KeplerEph::from_record(r).map(Eph::Kepler),
+                        _ => GlonassEph::from_record(r).map(Eph::Glonass),
+                    }
+                    .ok_or_else(|| "incomplete".to_string()),
+                };
+                let eph = match eph {
+                    Ok(eph) => eph,
+                    Err(why) => {
+                        e.stats.skipped.push(format!(
+                            "{}:{}: record of {} not used: {why}",
+                            nav.path.display(),
+                            r.line,
+                            r.sv
+                        ));
                         continue;
                     }
-                };
-                let Some(eph) = eph else {
-                    e.stats.skipped.push(format!(
-                        "{}:{}: incomplete record of {}",
-                        nav.path.display(),
-                        r.line,
-                        r.sv
-                    ));
-                    continue;
                 };
                 if !eph.healthy() {
                     e.stats.unhealthy += 1;

@@ -137,7 +137,7 @@ impl TimeHint {
         let parts: Vec<&str> = s.trim().split('-').collect();
         let num = |t: &str| t.parse::<i32>().map_err(|_| bad());
         let y = num(parts[0])?;
-        if !(1980..=2200).contains(&y) {
+        if !crate::time::file_year(y.into()) {
             return Err(bad());
         }
         match parts.len() {

@@ -387,7 +387,7 @@ pub(crate) fn make_epoch(
     sec: &[u8],
     ts: TimeScale,
 ) -> Option<Epoch> {
-    if !(1980..=2200).contains(&y)
+    if !crate::time::file_year(y)
         || !(1..=12).contains(&mo)
         || !(1..=31).contains(&d)
         || !(0..=23).contains(&hh)

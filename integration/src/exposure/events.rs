@@ -263,9 +263,7 @@ fn parse_iso(s: &str, scale: TimeScale) -> Option<Epoch> {
         tp.next()?.parse::<u8>().ok()?,
         tp.next()?.parse::<f64>().ok()?,
     );
-    // A year of millions is no exposure time, and hifitime's calendar walks it year by year
-    // (20 ms a line: a file of such lines would run for hours).
-    if d.len() != 3 || !(1980..=2200).contains(&d[0]) || !(0.0..61.0).contains(&sec) {
+    if d.len() != 3 || !gnss::time::file_year(d[0]) || !(0.0..61.0).contains(&sec) {
         return None;
     }
     let whole = sec.floor();
