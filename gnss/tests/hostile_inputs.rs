@@ -21,13 +21,19 @@ fn hl(content: &str, label: &str) -> String {
     format!("{content:<60}{label}\n")
 }
 
+/// The first line of a RINEX 3.04 GPS observation file.
+fn version_line() -> String {
+    hl(
+        "     3.04           OBSERVATION DATA    G",
+        "RINEX VERSION / TYPE",
+    )
+}
+
 #[test]
 fn a_negative_count_of_observation_types_is_an_error_at_its_line() {
     for count in ["-1", "-99"] {
-        let text = hl(
-            "     3.04           OBSERVATION DATA    G",
-            "RINEX VERSION / TYPE",
-        ) + &hl(&format!("G {count:>4} C1C"), "SYS / # / OBS TYPES")
+        let text = version_line()
+            + &hl(&format!("G {count:>4} C1C"), "SYS / # / OBS TYPES")
             + &hl("", "END OF HEADER");
         let p = file(&format!("count{count}.rnx"), text.as_bytes());
         let e = ObsFile::read(&p).unwrap_err().to_string();
@@ -40,11 +46,7 @@ fn a_negative_count_of_observation_types_is_an_error_at_its_line() {
 
 #[test]
 fn a_line_of_megabytes_is_an_error_not_a_buffer_of_the_whole_file() {
-    let mut text = hl(
-        "     3.04           OBSERVATION DATA    G",
-        "RINEX VERSION / TYPE",
-    )
-    .into_bytes();
+    let mut text = version_line().into_bytes();
     text.extend(vec![b'A'; 3 << 20]);
     let p = file("long-line.rnx", &text);
     let e = ObsFile::read(&p).unwrap_err().to_string();
@@ -167,10 +169,7 @@ fn raw_log_times_out_of_range_saturate_instead_of_overflowing() {
 fn short_records_under_a_header_of_999_types_cost_their_size_not_the_header_s() {
     // 999 types, then epochs of 12 satellites each holding one value: before, every record
     // kept 999 slots (16 kB for a line of 20 bytes, 800 times the file).
-    let mut text = hl(
-        "     3.04           OBSERVATION DATA    G",
-        "RINEX VERSION / TYPE",
-    );
+    let mut text = version_line();
     let codes: Vec<String> = (0..999)
         .map(|k| format!("C{}{}", 1 + k % 9, (b'A' + (k / 9 % 26) as u8) as char))
         .collect();

@@ -71,14 +71,14 @@ impl Xml {
         roxmltree::Document::parse(self.text.trim_start())
             .map_err(|e| ferr(&self.path, None, format!("not well-formed XML: {e}")))
     }
-    fn line(&self, _doc: &roxmltree::Document, n: roxmltree::Node) -> Option<usize> {
+    fn line(&self, n: roxmltree::Node) -> Option<usize> {
         // The document is the text without its leading blanks: offsets shift by their length.
         let lead = self.text.len() - self.text.trim_start().len();
         let at = lead + n.range().start;
         Some(self.newlines.partition_point(|&nl| nl < at) + 1)
     }
-    fn err(&self, doc: &roxmltree::Document, n: roxmltree::Node, what: String) -> ImportError {
-        ferr(&self.path, self.line(doc, n), what)
+    fn err(&self, n: roxmltree::Node, what: String) -> ImportError {
+        ferr(&self.path, self.line(n), what)
     }
 }
 
@@ -93,13 +93,11 @@ fn text_of(n: roxmltree::Node, tag: &str) -> Option<String> {
 /// `k` numbers of the child `tag` of `n`, or an error naming the element.
 fn numbers<const K: usize>(
     x: &Xml,
-    doc: &roxmltree::Document,
     n: roxmltree::Node,
     tag: &str,
 ) -> Result<[f64; K], ImportError> {
     let t = text_of(n, tag).ok_or_else(|| {
         x.err(
-            doc,
             n,
             format!("<{}> has no <{tag}>: add it", n.tag_name().name()),
         )
@@ -109,7 +107,7 @@ fn numbers<const K: usize>(
         .filter_map(|s| s.parse::<f64>().ok().filter(|v| v.is_finite()))
         .collect();
     if v.len() != K || t.split_whitespace().count() != K {
-        return Err(x.err(doc, n, format!("<{tag}>{t}</{tag}>: expected {K} numbers")));
+        return Err(x.err(n, format!("<{tag}>{t}</{tag}>: expected {K} numbers")));
     }
     let mut out = [0.0; K];
     out.copy_from_slice(&v);
@@ -125,26 +123,18 @@ fn read_dico(path: &Path) -> Result<Vec<DicoPoint>, ImportError> {
     for n in doc.descendants().filter(|n| n.has_tag_name("OneAppuisDAF")) {
         let name = text_of(n, "NamePt").unwrap_or_default();
         if name.is_empty() {
-            return Err(x.err(
-                &doc,
-                n,
-                "<OneAppuisDAF> without <NamePt>: name the point".into(),
-            ));
+            return Err(x.err(n, "<OneAppuisDAF> without <NamePt>: name the point".into()));
         }
-        let p = numbers::<3>(&x, &doc, n, "Pt")?;
+        let p = numbers::<3>(&x, n, "Pt")?;
         let s = match child(n, "Incertitude") {
-            Some(_) => numbers::<3>(&x, &doc, n, "Incertitude")?,
+            Some(_) => numbers::<3>(&x, n, "Incertitude")?,
             None => [1.0; 3],
         };
         if s.iter().any(|v| *v <= 0.0) {
-            return Err(x.err(
-                &doc,
-                n,
-                format!("point {name}: <Incertitude> must be positive"),
-            ));
+            return Err(x.err(n, format!("point {name}: <Incertitude> must be positive")));
         }
         if !names.insert(name.clone()) {
-            return Err(x.err(&doc, n, format!("point {name} is listed twice: keep one")));
+            return Err(x.err(n, format!("point {name} is listed twice: keep one")));
         }
         out.push((name, Vector3::from(p), s));
     }
@@ -170,15 +160,14 @@ fn read_mesures(path: &Path) -> Result<Vec<Mesure>, ImportError> {
     {
         let name = text_of(im, "NameIm").unwrap_or_default();
         if name.is_empty() {
-            return Err(x.err(&doc, im, "<MesureAppuiFlottant1Im> without <NameIm>".into()));
+            return Err(x.err(im, "<MesureAppuiFlottant1Im> without <NameIm>".into()));
         }
         for m in im.children().filter(|n| n.has_tag_name("OneMesureAF1I")) {
             let pt = text_of(m, "NamePt").unwrap_or_default();
-            let [c, r] = numbers::<2>(&x, &doc, m, "PtIm")?;
-            let line = x.line(&doc, m).unwrap_or(0);
+            let [c, r] = numbers::<2>(&x, m, "PtIm")?;
+            let line = x.line(m).unwrap_or(0);
             if !seen.insert((name.clone(), pt.clone())) {
                 return Err(x.err(
-                    &doc,
                     m,
                     format!("point {pt} is measured twice in image {name}: keep one"),
                 ));
@@ -207,15 +196,14 @@ pub fn read_calibration(path: &Path) -> Result<MicMacCalibration, ImportError> {
     if let Some(k) = text_of(c, "KnownConv") {
         if k != "eConvApero_DistM2C" {
             return Err(x.err(
-                &doc,
                 c,
                 format!("<KnownConv>{k}: only eConvApero_DistM2C is supported"),
             ));
         }
     }
-    let pp = numbers::<2>(&x, &doc, c, "PP")?;
-    let [f] = numbers::<1>(&x, &doc, c, "F")?;
-    let sz = numbers::<2>(&x, &doc, c, "SzIm")?;
+    let pp = numbers::<2>(&x, c, "PP")?;
+    let [f] = numbers::<1>(&x, c, "F")?;
+    let sz = numbers::<2>(&x, c, "SzIm")?;
     let mut cal = MicMacCalibration {
         pp,
         f,
@@ -226,32 +214,31 @@ pub fn read_calibration(path: &Path) -> Result<MicMacCalibration, ImportError> {
         b: [0.0; 2],
     };
     let dist =
-        child(c, "CalibDistortion").ok_or_else(|| x.err(&doc, c, "no <CalibDistortion>".into()))?;
+        child(c, "CalibDistortion").ok_or_else(|| x.err(c, "no <CalibDistortion>".into()))?;
     let (rad, std) = if let Some(r) = child(dist, "ModRad") {
         (r, None)
     } else if let Some(s) = child(dist, "ModPhgrStd") {
         let r = child(s, "RadialePart")
-            .ok_or_else(|| x.err(&doc, s, "<ModPhgrStd> without <RadialePart>".into()))?;
+            .ok_or_else(|| x.err(s, "<ModPhgrStd> without <RadialePart>".into()))?;
         (r, Some(s))
     } else {
         return Err(x.err(
-            &doc,
             dist,
             "only <ModRad> and <ModPhgrStd> distortions are supported".into(),
         ));
     };
-    cal.cdist = numbers::<2>(&x, &doc, rad, "CDist")?;
+    cal.cdist = numbers::<2>(&x, rad, "CDist")?;
     for k in rad.children().filter(|n| n.has_tag_name("CoeffDist")) {
         let t = k.text().unwrap_or("").trim();
         let v = t
             .parse::<f64>()
             .ok()
             .filter(|v| v.is_finite())
-            .ok_or_else(|| x.err(&doc, k, format!("<CoeffDist>{t}: not a number")))?;
+            .ok_or_else(|| x.err(k, format!("<CoeffDist>{t}: not a number")))?;
         cal.radial.push(v);
     }
     if let Some(s) = std {
-        let one = |tag: &str| numbers::<1>(&x, &doc, s, tag).map(|v| v[0]);
+        let one = |tag: &str| numbers::<1>(&x, s, tag).map(|v| v[0]);
         cal.p = [one("P1")?, one("P2")?];
         cal.b = [one("b1")?, one("b2")?];
     }
@@ -266,21 +253,20 @@ fn read_orientation(path: &Path) -> Result<Orientation, ImportError> {
         .descendants()
         .find(|n| n.has_tag_name("OrientationConique"))
         .ok_or_else(|| ferr(path, None, "no <OrientationConique>"))?;
-    let ext = child(o, "Externe").ok_or_else(|| x.err(&doc, o, "no <Externe>".into()))?;
-    let centre = Vector3::from(numbers::<3>(&x, &doc, ext, "Centre")?);
+    let ext = child(o, "Externe").ok_or_else(|| x.err(o, "no <Externe>".into()))?;
+    let centre = Vector3::from(numbers::<3>(&x, ext, "Centre")?);
     let m = ext
         .descendants()
         .find(|n| n.has_tag_name("CodageMatr"))
         .ok_or_else(|| {
             x.err(
-                &doc,
                 ext,
                 "no <ParamRotation><CodageMatr>: only matrix rotations are supported".into(),
             )
         })?;
     let rows: Vec<[f64; 3]> = ["L1", "L2", "L3"]
         .iter()
-        .map(|t| numbers::<3>(&x, &doc, m, t))
+        .map(|t| numbers::<3>(&x, m, t))
         .collect::<Result<_, _>>()?;
     let r = Matrix3::from_row_slice(&rows.concat());
     let file = text_of(o, "FileInterne");

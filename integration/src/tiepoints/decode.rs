@@ -13,6 +13,9 @@ use std::path::Path;
 /// Largest photograph decoded, pixels (a 200-megapixel photo is no drone camera's).
 pub const MAX_PIXELS: u64 = 200_000_000;
 
+/// Most memory a decoder may take for one photograph, bytes (800 MB).
+const MAX_DECODE_BYTES: u64 = 4 * MAX_PIXELS;
+
 /// A reduced grey image and how it relates to the photograph.
 #[derive(Clone, Debug)]
 pub struct Decoded {
@@ -109,11 +112,11 @@ fn jpeg(path: &Path, max_side: u32) -> Result<Decoded, String> {
             jpeg_decoder::PixelFormat::CMYK32 => 4,
         };
         let bytes = 2 * comps * w as u64 * h as u64;
-        if bytes > 4 * MAX_PIXELS {
+        if bytes > MAX_DECODE_BYTES {
             return Err(format!(
                 "a progressive JPEG of {w} × {h} pixels needs {} MB to decode, more than the {} MB accepted",
                 bytes / 1_000_000,
-                4 * MAX_PIXELS / 1_000_000
+                MAX_DECODE_BYTES / 1_000_000
             ));
         }
     }
@@ -147,7 +150,7 @@ fn other(path: &Path, max_side: u32) -> Result<Decoded, String> {
         .with_guessed_format()
         .map_err(|e| format!("cannot read: {e}"))?;
     let mut lim = image::Limits::default();
-    lim.max_alloc = Some(4 * MAX_PIXELS);
+    lim.max_alloc = Some(MAX_DECODE_BYTES);
     r.limits(lim);
     let (w, h) = r
         .into_dimensions()
