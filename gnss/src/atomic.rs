@@ -255,8 +255,7 @@ mod tests {
 
     #[test]
     fn a_folder_is_swapped_whole_and_leftovers_are_cleaned() {
-        let base = std::env::temp_dir().join(format!("ppkat-atomic-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&base);
+        let base = testkit::scratch_dir("atomic");
         let out = base.join("out");
         std::fs::create_dir_all(&out).unwrap();
         std::fs::write(out.join("a"), "old a").unwrap();

@@ -392,7 +392,7 @@ mod tests {
 
     /// A `.pos` with the header `write_pos` writes and RTKLIB's base line for `format`.
     fn written(format: PosFormat, base: &Ecef, name: &str) -> String {
-        let path = std::env::temp_dir().join(format!("ppkat-refpos-{}-{name}", std::process::id()));
+        let path = testkit::scratch_path(&format!("refpos-{name}"));
         let t = Epoch::from_gregorian_hms(2005, 4, 2, 0, 0, 0, hifitime::TimeScale::GPST);
         let rec = PosRecord {
             time: t,

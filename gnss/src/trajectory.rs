@@ -398,8 +398,7 @@ mod tests {
             x.age = 0.4;
         }
         let t = Trajectory::new(e, SegmentSource::Filter);
-        let dir = std::env::temp_dir().join(format!("ppkat-traj-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = testkit::scratch_dir("trajectory");
         for format in [PosFormat::Llh, PosFormat::Xyz] {
             let path = dir.join("t.pos");
             t.write_pos(&path, &["test".to_string()], format).unwrap();

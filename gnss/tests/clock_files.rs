@@ -9,17 +9,12 @@ use gnss::Error;
 use hifitime::{Duration, Epoch};
 use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
+use testkit::scratch_path as tmp;
 
 fn fixture(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../fixtures")
         .join(name)
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ppkat-clk-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
 }
 
 fn g(prn: u8) -> Sv {

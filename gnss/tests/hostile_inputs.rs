@@ -9,9 +9,7 @@ use gnss::sv::{Constellation, Sv};
 use std::path::PathBuf;
 
 fn file(name: &str, text: &[u8]) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ppkat-hostile-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    let p = d.join(name);
+    let p = testkit::scratch_path(name);
     std::fs::write(&p, text).unwrap();
     p
 }

@@ -14,16 +14,11 @@ use gnss::rinex::{ObsCode, ObsFile};
 use gnss::signal::frequency;
 use gnss::sv::{Constellation, Sv};
 use std::path::PathBuf;
+use testkit::scratch_path as tmp;
 
 const WEEK: i64 = 2300;
 const TOW0_MS: i64 = 345_600_000;
 const STATION: [f64; 3] = [4_027_893.654_2, 307_045.743_1, 4_919_474.910_4];
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ppkat-rtcm-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
-}
 
 /// A satellite of the plan: system, id, signals (MSM id, band), GLONASS channel.
 type Planned = (Constellation, u8, &'static [(u8, u8)], Option<i8>);

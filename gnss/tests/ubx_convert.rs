@@ -10,13 +10,8 @@ use gnss::raw::ubx::frame;
 use gnss::rinex::ObsFile;
 use gnss::time::gpst;
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ppkat-ubx-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
-}
+use std::path::Path;
+use testkit::scratch_path as tmp;
 
 fn obs_only(obs: &Path) -> Outputs<'_> {
     Outputs {

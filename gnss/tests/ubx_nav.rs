@@ -10,13 +10,7 @@ use gnss::raw::convert::{convert, Outputs};
 use gnss::rinex::nav::NavFile;
 use gnss::sv::Constellation;
 use hifitime::Duration;
-use std::path::PathBuf;
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ppkat-ubxnav-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
-}
+use testkit::scratch_path as tmp;
 
 fn iode(e: &Eph) -> f64 {
     match e {

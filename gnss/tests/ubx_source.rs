@@ -12,13 +12,8 @@ use gnss::raw::RawFormat;
 use gnss::rinex::nav::NavFile;
 use gnss::rinex::ObsFile;
 use gnss::spp::{self, SppOptions};
-use std::path::{Path, PathBuf};
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ppkat-ubxsrc-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
-}
+use std::path::Path;
+use testkit::scratch_path as tmp;
 
 /// The log read directly and its conversion read back.
 fn both(log: &Path, name: &str) -> (ObsFile, ObsFile) {

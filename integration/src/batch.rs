@@ -325,9 +325,8 @@ mod tests {
 
     #[test]
     fn files_are_told_apart_by_content_and_the_base_by_name() {
-        let d = std::env::temp_dir().join(format!("ppkat-batch-{}", std::process::id()));
+        let d = testkit::scratch_dir("batch");
         let f = d.join("flight-1");
-        let _ = std::fs::remove_dir_all(&d);
         std::fs::create_dir_all(f.join("photos")).unwrap();
         std::fs::write(f.join("ROVR0010.25o"), obs_header('O')).unwrap();
         std::fs::write(f.join("base_ab.rnx"), obs_header('O')).unwrap();

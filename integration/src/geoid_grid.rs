@@ -350,9 +350,7 @@ mod tests {
     use super::*;
 
     fn tmp(name: &str, bytes: &[u8]) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("ppkat-geoid-{}", std::process::id()));
-        std::fs::create_dir_all(&d).unwrap();
-        let p = d.join(name);
+        let p = testkit::scratch_path(&format!("geoid-{name}"));
         std::fs::write(&p, bytes).unwrap();
         p
     }

@@ -214,9 +214,7 @@ mod tests {
         t += "G05  21000000.123 7 110356789.123 7\n";
         t += "R05  21000000.123 7 110356789.123 7\n";
         t += "R07  21000000.123 7 110356789.123 7\n";
-        let d = std::env::temp_dir().join(format!("ppkat-orbits-{}", std::process::id()));
-        std::fs::create_dir_all(&d).unwrap();
-        let p = d.join("glonass.rnx");
+        let p = testkit::scratch_path("glonass.rnx");
         std::fs::write(&p, t).unwrap();
         ObsFile::read(&p).unwrap()
     }

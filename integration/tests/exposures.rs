@@ -14,9 +14,7 @@ use integration::simulate::{self, SimReport};
 use nalgebra::{Matrix3, Vector3};
 use std::path::{Path, PathBuf};
 
-fn tmp(name: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("ppkat-exp-{}-{name}", std::process::id()))
-}
+use testkit::scratch_path as tmp;
 
 fn csv(path: &Path) -> Vec<Vec<f64>> {
     std::fs::read_to_string(path)

@@ -60,8 +60,7 @@ fn check_3d(r: &results::Results) -> f64 {
 
 #[test]
 fn tight_coupling_fixes_the_strip_starts_gnss_alone_leaves_float() {
-    let dir = std::env::temp_dir().join(format!("ppkat_hard_sky_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = testkit::scratch_path("hard_sky");
     let h = hard_sky::run(&dir).expect("hard-sky simulates");
     assert!(
         h.stations_float * 5 > h.stations,
@@ -148,8 +147,7 @@ fn tight_coupling_fixes_the_strip_starts_gnss_alone_leaves_float() {
 /// the exposures the PPK fixed.
 #[test]
 fn tight_and_loose_agree_where_the_ppk_is_fixed() {
-    let dir = std::env::temp_dir().join(format!("ppkat_tight_demo_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = testkit::scratch_path("tight_demo");
     let scenario = integration::simulate::builtin("demo").expect("demo");
     hard_sky::run_scenario(&dir, &scenario).expect("demo simulates");
     let truth = true_centres(&dir);

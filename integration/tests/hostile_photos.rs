@@ -6,14 +6,9 @@ use gnss::solution::Quality;
 use integration::exposure::photos;
 use integration::exposure::{AttitudeSource, CameraStation};
 use nalgebra::Matrix3;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ppkat-hostile-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use testkit::scratch_dir as tmp;
 
 /// The hostile photos of `tests/fixtures/exif` (see its README), by name.
 fn hostile() -> Vec<(&'static str, Vec<u8>)> {

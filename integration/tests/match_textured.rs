@@ -8,11 +8,8 @@ use gnss::frame::Enu;
 use integration::simulate::textured::{textured_block, TexturedSpec, Truth};
 use integration::tiepoints::{self, project, MatchJob, PairMode};
 use nalgebra::Vector2;
-use std::path::PathBuf;
 
-fn tmp(name: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("ppkat-match-{}-{name}", std::process::id()))
-}
+use testkit::scratch_path as tmp;
 
 /// (tracks, tracks with every measurement within 2 px, RMS of the measurements' errors in px,
 /// images in the block).

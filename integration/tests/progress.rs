@@ -7,7 +7,6 @@ use gnss::solution::PosFormat;
 use integration::pipeline::{self, PpkJob, SppJob};
 use integration::simulate;
 use integration::vector::TrajectoryFormat;
-use std::path::PathBuf;
 use std::sync::Mutex;
 
 /// Every call, in order: (stage, length, steps counted in it).
@@ -26,11 +25,7 @@ impl Progress for Record {
     fn finish(&self) {}
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ppkat-progress-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
-}
+use testkit::scratch_path as tmp;
 
 fn stages(r: &Record) -> Vec<(String, u64, u64)> {
     r.0.lock().unwrap().clone()

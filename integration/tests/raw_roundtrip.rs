@@ -17,11 +17,8 @@ use gnss::raw::RawFormat;
 use gnss::rinex::nav::NavFile;
 use integration::demo::SimInputs;
 use integration::simulate;
-use std::path::PathBuf;
 
-fn tmp(name: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("ppkat-rawrt-{}-{name}", std::process::id()))
-}
+use testkit::scratch_path as tmp;
 
 /// The demo flight cut to one 1-km strip, simulated into `dir`.
 fn short_flight(dir: &str) -> simulate::SimReport {

@@ -9,11 +9,8 @@ use gnss::rinex::ObsFile;
 use gnss::solution::Quality;
 use integration::demo::{read_truth, truth_at, SimInputs};
 use integration::simulate::{self, ErrorModel, Scenario, SimError};
-use std::path::PathBuf;
 
-fn tmp(name: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("ppkat-sim-{}-{name}", std::process::id()))
-}
+use testkit::scratch_path as tmp;
 
 const OMEGA_E: f64 = 7.292_115_146_7e-5;
 

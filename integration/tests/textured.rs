@@ -14,9 +14,7 @@ use photo::camera::Pose;
 use photo::rotation::Angles;
 use std::path::{Path, PathBuf};
 
-fn tmp(name: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("ppkat-textured-{}-{name}", std::process::id()))
-}
+use testkit::scratch_path as tmp;
 
 /// The rows of a CSV file (comments and header skipped), split at commas.
 fn rows(path: &Path) -> Vec<Vec<String>> {

@@ -518,8 +518,7 @@ mod run_tests {
     fn negative_or_fractional_indices_are_errors_not_camera_0() {
         let cam = "0 0 0 0 0 0 1000 0 0\n";
         for obs in ["-1 0 1.0 2.0", "0 0.5 1.0 2.0", "1 0 1.0 2.0"] {
-            let path =
-                std::env::temp_dir().join(format!("ppkat-bal-idx-{}.txt", std::process::id()));
+            let path = testkit::scratch_path("bal-idx.txt");
             std::fs::write(&path, format!("1 1 1\n{obs}\n{cam}0 0 5\n")).unwrap();
             let e = BalProblem::read(&path).unwrap_err().to_string();
             let _ = std::fs::remove_file(&path);
@@ -532,11 +531,11 @@ mod run_tests {
 
     #[test]
     fn a_malformed_file_is_named() {
-        let path = std::env::temp_dir().join(format!("ppkat-bal-run-{}.txt", std::process::id()));
+        let path = testkit::scratch_path("bal-run.txt");
         std::fs::write(&path, "1 1 1\n0 0 1.0 x\n").unwrap();
         let e = run(&path, &LmOptions::default()).unwrap_err();
         let _ = std::fs::remove_file(&path);
         assert!(matches!(e, BalError::Format { .. }), "{e}");
-        assert!(e.to_string().contains("ppkat-bal-run-"), "{e}");
+        assert!(e.to_string().contains("bal-run.txt"), "{e}");
     }
 }

@@ -234,8 +234,7 @@ fn bad_problems_give_clear_errors() {
 
 #[test]
 fn bal_files_with_bad_numbers_are_refused() {
-    let dir = std::env::temp_dir().join(format!("ppkat-bal-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = testkit::scratch_dir("bad_numbers");
     let f = dir.join("nan.txt");
     std::fs::write(&f, "1 1 1\n0 0 1.0 NaN\n0 0 0 0 0 -1 500 0 0\n1 2 3\n").unwrap();
     let e = photo::bal::BalProblem::read(&f).unwrap_err().to_string();

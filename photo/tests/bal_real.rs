@@ -1,23 +1,7 @@
 //! The BAL problems of the shared data: final cost against the reference solver's.
 
 use photo::bal::{solve, BalProblem, LmOptions};
-use std::path::PathBuf;
-
-fn data(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
-        .join(rel);
-    if p.exists() {
-        return Some(p);
-    }
-    assert!(
-        std::env::var("CI").map(|v| v != "true").unwrap_or(true),
-        "{} missing on CI",
-        p.display()
-    );
-    eprintln!("skipped: {} not found (shared data absent)", p.display());
-    None
-}
+use testkit::shared_data as data;
 
 #[test]
 fn ladybug_49_cameras_reach_the_reference_cost() {

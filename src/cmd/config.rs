@@ -282,8 +282,7 @@ mod tests {
 
     #[test]
     fn toml_keys_become_flags_and_the_command_line_wins() {
-        let dir = std::env::temp_dir().join(format!("ppkat-config-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = testkit::scratch_dir("config");
         let f = dir.join("flight.toml");
         std::fs::write(
             &f,

@@ -65,12 +65,8 @@ fn fails_with(o: &Output, needles: &[&str]) {
     }
 }
 
-/// A path in this test run's own temporary folder.
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ppkat-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
-}
+/// A path in this test run's own scratch folder.
+use testkit::scratch_path as tmp;
 
 /// A file of the repository's `fixtures/`.
 fn fixture(name: &str) -> PathBuf {
@@ -81,21 +77,7 @@ fn fixture(name: &str) -> PathBuf {
 
 /// A file of `../shared/data`, or `None` (with a "skipped" message) when it is absent;
 /// panics on CI, where the data must be present.
-fn shared(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/data")
-        .join(rel);
-    if p.exists() {
-        return Some(p);
-    }
-    assert!(
-        std::env::var("CI").map(|v| v != "true").unwrap_or(true),
-        "{} missing on CI",
-        p.display()
-    );
-    eprintln!("skipped: {} not found (shared data absent)", p.display());
-    None
-}
+use testkit::shared_data as shared;
 
 /// Several files of `../shared/data` (see [`shared`]): all of them, or `None`.
 fn shared_all<const N: usize>(rel: [&str; N]) -> Option<[PathBuf; N]> {

@@ -220,9 +220,7 @@ mod tests {
     }
 
     fn read_text(name: &str, t: &str) -> Result<Sp3> {
-        let d = std::env::temp_dir().join(format!("ppkat-sp3-{}", std::process::id()));
-        std::fs::create_dir_all(&d).unwrap();
-        let p = d.join(name);
+        let p = testkit::scratch_path(name);
         std::fs::write(&p, t).unwrap();
         Sp3::read(&p)
     }

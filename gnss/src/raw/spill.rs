@@ -262,8 +262,7 @@ mod tests {
 
     #[test]
     fn records_come_back_bit_for_bit() {
-        let dir = std::env::temp_dir().join(format!("ppkat-spill-test-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = testkit::scratch_dir("spill");
         let sig = |pr: f64| RawSignal {
             code: *b"1C",
             pr,

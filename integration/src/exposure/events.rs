@@ -346,9 +346,9 @@ pub fn mrk_ecef(m: &MrkInfo) -> Ecef {
 mod tests {
     use super::*;
 
-    /// `text` written to `name` in a folder of its own under the temporary directory.
+    /// `text` written to `name` in the scratch folder `folder`.
     fn temp_file(folder: &str, name: &str, text: &str) -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!("ppkat-{folder}-{}", std::process::id()));
+        let dir = testkit::scratch_path(folder);
         std::fs::create_dir_all(&dir).unwrap();
         let p = dir.join(name);
         std::fs::write(&p, text).unwrap();

@@ -4,22 +4,7 @@
 use super::*;
 use photo::camera::Pose;
 
-/// `../shared/data/…` beside the repository, or `None` (skipped) when absent; fails on CI.
-fn shared(rel: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
-        .join(rel);
-    if p.exists() {
-        return Some(p);
-    }
-    assert!(
-        std::env::var("CI").map(|v| v != "true").unwrap_or(true),
-        "{} missing on CI",
-        p.display()
-    );
-    eprintln!("skipped: {} not found (shared data absent)", p.display());
-    None
-}
+use testkit::shared_data as shared;
 
 #[test]
 fn saisies_projection_matches_micmac() {

@@ -5,10 +5,7 @@ use super::*;
 
 /// A fresh temporary folder for one test.
 fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ppkat-patb-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    testkit::scratch_dir(&format!("patb-{name}"))
 }
 
 /// A job on `images` (text) with a 100 × 80 px camera of 10 µm pixels and `control` (text).

@@ -205,7 +205,7 @@ mod tests {
             b.extend_from_slice(&[id, 0x11, 0]);
         }
         b.extend_from_slice(&[0xFF, 0xD9]);
-        let p = std::env::temp_dir().join(format!("ppkat-prog-{}.jpg", std::process::id()));
+        let p = testkit::scratch_path("progressive.jpg");
         std::fs::write(&p, &b).unwrap();
         let e = jpeg(&p, 1000).unwrap_err();
         assert!(e.contains("progressive") && e.contains("1080 MB"), "{e}");

@@ -104,8 +104,7 @@ mod tests {
 
     #[test]
     fn antenna_and_exposure_tables_are_read() {
-        let dir = std::env::temp_dir().join(format!("ppkat-pos-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = testkit::scratch_dir("positions");
         let a = dir.join("antennas.csv");
         std::fs::write(&a, "# x\nid,week,tow,lat,lon,h,c_ee,c_en,c_eu,c_nn,c_nu,c_uu\nI1,0,0,47.1,8.2,500.5,4e-4,0,0,9e-4,0,0.0016\n").unwrap();
         let p = read(&a).unwrap();

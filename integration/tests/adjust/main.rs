@@ -15,11 +15,7 @@ use integration::adjust::{self, results::Results};
 use integration::simulate::block::{self, BlockSpec, BlockTruth};
 use std::path::PathBuf;
 
-pub fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ppkat-adjust-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
+pub use testkit::scratch_path as tmp;
 
 pub fn run(spec: &BlockSpec, name: &str) -> (BlockTruth, Results) {
     let dir = tmp(name);

@@ -7,25 +7,11 @@ use gnss::orbit::{Ephemerides, Orbits};
 use gnss::ppk::{self, BasePosition, PpkOptions, PpkResult};
 use gnss::rinex::nav::NavFile;
 use gnss::rinex::ObsFile;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-/// The shared data folder, or `None` (with a message) when it is absent outside CI.
+/// The shared data folder `rel`, or `None` (with a message) when it is absent outside CI.
 /// On CI (`CI=true`) its absence is a failure.
-pub fn data(rel: &str) -> Option<PathBuf> {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data");
-    let p = root.join(rel);
-    if p.exists() {
-        return Some(p);
-    }
-    if std::env::var("CI").map(|v| v == "true").unwrap_or(false) {
-        panic!(
-            "{} is missing on CI: the shared data must be present",
-            p.display()
-        );
-    }
-    eprintln!("skipped: {} not found (shared data absent)", p.display());
-    None
-}
+pub use testkit::shared_data as data;
 
 pub fn rms(v: &[f64]) -> f64 {
     (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
