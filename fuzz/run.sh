@@ -6,7 +6,7 @@ set -u
 cd "$(dirname "$0")"
 SECS=${SECS:-60}
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(rinex_obs rinex_nav sp3 clk antex mrk times_csv attitude_csv project_toml patb bal exif pos ubx rtcm sbf xmp photo_meta project_tables micmac colmap rtklib_conf geoid)
+[ ${#targets[@]} -eq 0 ] && targets=(rinex_obs rinex_nav sp3 clk antex mrk times_csv attitude_csv project_toml patb bal exif pos ubx rtcm sbf xmp photo_meta project_tables micmac colmap rtklib_conf geoid positions names)
 # Real files of ../shared/data (beside the repository) seed the newer targets when present;
 # they are copied into corpus/ only (cut to the 64 KiB inputs are limited to), never into seeds/.
 SHARED=../../shared/data/photo

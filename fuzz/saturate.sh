@@ -9,7 +9,7 @@ cd "$(dirname "$0")"
 CHUNK=${CHUNK:-600}
 CAP=${CAP:-3600}
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(rinex_obs rinex_nav sp3 clk antex mrk times_csv attitude_csv project_toml patb bal exif pos ubx rtcm sbf xmp photo_meta project_tables micmac colmap rtklib_conf geoid)
+[ ${#targets[@]} -eq 0 ] && targets=(rinex_obs rinex_nav sp3 clk antex mrk times_csv attitude_csv project_toml patb bal exif pos ubx rtcm sbf xmp photo_meta project_tables micmac colmap rtklib_conf geoid positions names)
 mkdir -p logs
 for t in "${targets[@]}"; do
     mkdir -p "corpus/$t"
