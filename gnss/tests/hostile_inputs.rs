@@ -7,12 +7,7 @@ use gnss::rinex::nav::{NavFile, NavKind, NavRecord};
 use gnss::rinex::ObsFile;
 use gnss::sv::{Constellation, Sv};
 use std::path::PathBuf;
-
-fn file(name: &str, text: &[u8]) -> PathBuf {
-    let p = testkit::scratch_path(name);
-    std::fs::write(&p, text).unwrap();
-    p
-}
+use testkit::scratch_file as file;
 
 /// A header line: `content` padded to column 60, then the label.
 fn hl(content: &str, label: &str) -> String {

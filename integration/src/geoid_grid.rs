@@ -350,9 +350,7 @@ mod tests {
     use super::*;
 
     fn tmp(name: &str, bytes: &[u8]) -> PathBuf {
-        let p = testkit::scratch_path(&format!("geoid-{name}"));
-        std::fs::write(&p, bytes).unwrap();
-        p
+        testkit::scratch_file(&format!("geoid-{name}"), bytes)
     }
 
     #[test]

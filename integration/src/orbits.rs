@@ -214,9 +214,7 @@ mod tests {
         t += "G05  21000000.123 7 110356789.123 7\n";
         t += "R05  21000000.123 7 110356789.123 7\n";
         t += "R07  21000000.123 7 110356789.123 7\n";
-        let p = testkit::scratch_path("glonass.rnx");
-        std::fs::write(&p, t).unwrap();
-        ObsFile::read(&p).unwrap()
+        ObsFile::read(&testkit::scratch_file("glonass.rnx", t)).unwrap()
     }
 
     #[test]

@@ -521,7 +521,6 @@ mod run_tests {
             let path = testkit::scratch_path("bal-idx.txt");
             std::fs::write(&path, format!("1 1 1\n{obs}\n{cam}0 0 5\n")).unwrap();
             let e = BalProblem::read(&path).unwrap_err().to_string();
-            let _ = std::fs::remove_file(&path);
             assert!(
                 e.contains(":2") && e.contains("not indices below 1 / 1"),
                 "{obs}: {e}"
@@ -534,7 +533,6 @@ mod run_tests {
         let path = testkit::scratch_path("bal-run.txt");
         std::fs::write(&path, "1 1 1\n0 0 1.0 x\n").unwrap();
         let e = run(&path, &LmOptions::default()).unwrap_err();
-        let _ = std::fs::remove_file(&path);
         assert!(matches!(e, BalError::Format { .. }), "{e}");
         assert!(e.to_string().contains("bal-run.txt"), "{e}");
     }

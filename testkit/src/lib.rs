@@ -1,7 +1,7 @@
 //! What the tests of every ppkat crate share (a dev-dependency only):
 //! - [`shared_data`] finds a set of `../shared/data` beside the repository, skipping a test with
 //!   a message when it is absent and failing it on CI (`CI=true`), where it must be present;
-//! - [`scratch_dir`] and [`scratch_path`] give a test its files in the build folder
+//! - [`scratch_dir`], [`scratch_path`] and [`scratch_file`] give a test its files in the build folder
 //!   (`target/tmp/<test binary>/`), not the system's temporary folder: each test binary empties
 //!   its folder when it first asks for one, so a run leaves only its own files — there for a
 //!   look after a failure — and the next run replaces them. Before, every run left ~300 MB of
@@ -42,6 +42,18 @@ pub fn scratch_dir(name: &str) -> PathBuf {
 /// the process began; `name` itself is not created.
 pub fn scratch_path(name: &str) -> PathBuf {
     root().join(name)
+}
+
+/// `bytes` written to the file `name` (which may hold folders) of this test binary's scratch
+/// folder; its path.
+pub fn scratch_file(name: &str, bytes: impl AsRef<[u8]>) -> PathBuf {
+    let p = root().join(name);
+    let made = p
+        .parent()
+        .map_or(Ok(()), std::fs::create_dir_all)
+        .and_then(|()| std::fs::write(&p, bytes));
+    made.unwrap_or_else(|e| panic!("cannot write the scratch file {}: {e}", p.display()));
+    p
 }
 
 /// `<target>/tmp/<test binary>`, emptied at the first call of the process. The test binary

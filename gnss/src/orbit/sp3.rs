@@ -220,9 +220,7 @@ mod tests {
     }
 
     fn read_text(name: &str, t: &str) -> Result<Sp3> {
-        let p = testkit::scratch_path(name);
-        std::fs::write(&p, t).unwrap();
-        Sp3::read(&p)
+        Sp3::read(&testkit::scratch_file(name, t))
     }
 
     #[test]

@@ -348,11 +348,7 @@ mod tests {
 
     /// `text` written to `name` in the scratch folder `folder`.
     fn temp_file(folder: &str, name: &str, text: &str) -> std::path::PathBuf {
-        let dir = testkit::scratch_path(folder);
-        std::fs::create_dir_all(&dir).unwrap();
-        let p = dir.join(name);
-        std::fs::write(&p, text).unwrap();
-        p
+        testkit::scratch_file(&format!("{folder}/{name}"), text)
     }
 
     #[test]

@@ -276,11 +276,7 @@ mod tests {
     }
 
     fn temp_file(name: &str, text: &str) -> PathBuf {
-        let dir = testkit::scratch_path("names");
-        std::fs::create_dir_all(&dir).unwrap();
-        let p = dir.join(name);
-        std::fs::write(&p, text).unwrap();
-        p
+        testkit::scratch_file(&format!("names/{name}"), text)
     }
 
     #[test]
