@@ -39,7 +39,9 @@ for t in "${targets[@]}"; do
     mkdir -p "corpus/$t"
     cp -n seeds/"$t"/* "corpus/$t/" 2>/dev/null
     [ -d "$SHARED" ] && shared_seeds "$t"
-    cargo +nightly fuzz run -O "$t" "corpus/$t" -- \
+    dict=()
+    [ -f "dicts/$t.dict" ] && dict=(-dict="dicts/$t.dict")
+    cargo +nightly fuzz run -O "$t" "corpus/$t" -- "${dict[@]}" \
         -max_total_time="$SECS" -rss_limit_mb=2048 -timeout=10 -max_len=65536 \
         >"logs/$t.log" 2>&1
     rc=$?

@@ -3,7 +3,8 @@
 # finds no coverage edge beyond the best seen (libFuzzer's "cov": for the first round, the
 # count after loading the corpus; after it, the largest of the earlier rounds), or CAP seconds
 # in all have run. Prints one line per round and a verdict per target; logs in logs/TARGET.rN.log.
-# Same settings as run.sh (one job, -O, 2 GiB RSS limit, 10 s per input, 64 KiB inputs).
+# Same settings as run.sh (one job, -O, 2 GiB RSS limit, 10 s per input, 64 KiB inputs, the
+# dictionary dicts/TARGET.dict where there is one).
 set -u
 cd "$(dirname "$0")"
 CHUNK=${CHUNK:-600}
@@ -19,7 +20,9 @@ for t in "${targets[@]}"; do
         round=$((round + 1))
         log=logs/$t.r$round.log
         start=$(date +%s)
-        cargo +nightly fuzz run -O "$t" "corpus/$t" -- \
+        dict=()
+        [ -f "dicts/$t.dict" ] && dict=(-dict="dicts/$t.dict")
+        cargo +nightly fuzz run -O "$t" "corpus/$t" -- "${dict[@]}" \
             -max_total_time="$CHUNK" -rss_limit_mb=2048 -timeout=10 -max_len=65536 \
             >"$log" 2>&1
         rc=$?

@@ -5,11 +5,30 @@ use std::path::{Path, PathBuf};
 
 /// Write `data` to a file of this process named `name` and run `f` on its path.
 pub fn with_file<T>(name: &str, data: &[u8], f: impl FnOnce(&Path) -> T) -> T {
+    static SWEPT: std::sync::Once = std::sync::Once::new();
+    SWEPT.call_once(sweep_dead);
     let dir = std::env::temp_dir().join(format!("ppkat-fuzz-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temporary folder");
     let path: PathBuf = dir.join(name);
     std::fs::write(&path, data).expect("temporary file");
     f(&path)
+}
+
+/// Remove the folders of fuzzing processes that have ended (a fuzzer ends by exiting, so it
+/// cannot remove its own): each is named by a process id that `/proc` no longer lists.
+fn sweep_dead() {
+    let Ok(entries) = std::fs::read_dir(std::env::temp_dir()) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name();
+        let Some(pid) = name.to_str().and_then(|n| n.strip_prefix("ppkat-fuzz-")) else {
+            continue;
+        };
+        if pid.parse::<u32>().is_ok() && !Path::new("/proc").join(pid).exists() {
+            let _ = std::fs::remove_dir_all(e.path());
+        }
+    }
 }
 
 /// What a command does with a raw log's items after decoding: time marks put in RINEX order
