@@ -71,14 +71,14 @@ impl Xml {
         roxmltree::Document::parse(self.text.trim_start())
             .map_err(|e| ferr(&self.path, None, format!("not well-formed XML: {e}")))
     }
-    fn line(&self, n: roxmltree::Node) -> Option<usize> {
+    fn line(&self, n: roxmltree::Node) -> usize {
         // The document is the text without its leading blanks: offsets shift by their length.
         let lead = self.text.len() - self.text.trim_start().len();
         let at = lead + n.range().start;
-        Some(self.newlines.partition_point(|&nl| nl < at) + 1)
+        self.newlines.partition_point(|&nl| nl < at) + 1
     }
     fn err(&self, n: roxmltree::Node, what: String) -> ImportError {
-        ferr(&self.path, self.line(n), what)
+        ferr(&self.path, Some(self.line(n)), what)
     }
 }
 
@@ -165,7 +165,7 @@ fn read_mesures(path: &Path) -> Result<Vec<Mesure>, ImportError> {
         for m in im.children().filter(|n| n.has_tag_name("OneMesureAF1I")) {
             let pt = text_of(m, "NamePt").unwrap_or_default();
             let [c, r] = numbers::<2>(&x, m, "PtIm")?;
-            let line = x.line(m).unwrap_or(0);
+            let line = x.line(m);
             if !seen.insert((name.clone(), pt.clone())) {
                 return Err(x.err(
                     m,
