@@ -4,9 +4,10 @@
 # (`cargo install cargo-fuzz`). Crashes land in artifacts/TARGET/.
 set -u
 cd "$(dirname "$0")"
+. ./common.sh
 SECS=${SECS:-60}
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(rinex_obs rinex_nav sp3 clk antex mrk times_csv attitude_csv project_toml patb bal exif pos ubx rtcm sbf xmp photo_meta project_tables micmac colmap rtklib_conf geoid positions names)
+[ ${#targets[@]} -eq 0 ] && targets=("${ALL_TARGETS[@]}")
 # Real files of ../shared/data (beside the repository) seed the newer targets when present;
 # they are copied into corpus/ only (cut to the 64 KiB inputs are limited to), never into seeds/.
 SHARED=../../shared/data/photo
@@ -39,11 +40,7 @@ for t in "${targets[@]}"; do
     mkdir -p "corpus/$t"
     cp -n seeds/"$t"/* "corpus/$t/" 2>/dev/null
     [ -d "$SHARED" ] && shared_seeds "$t"
-    dict=()
-    [ -f "dicts/$t.dict" ] && dict=(-dict="dicts/$t.dict")
-    cargo +nightly fuzz run -O "$t" "corpus/$t" -- "${dict[@]}" \
-        -max_total_time="$SECS" -rss_limit_mb=2048 -timeout=10 -max_len=65536 \
-        >"logs/$t.log" 2>&1
+    fuzz_run "$t" "$SECS" "logs/$t.log"
     rc=$?
     done_line=$(grep -E '^Done [0-9]+ runs' "logs/$t.log" | tail -1)
     echo "$t: exit $rc; ${done_line:-no summary (see logs/$t.log)}"

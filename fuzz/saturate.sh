@@ -3,14 +3,14 @@
 # finds no coverage edge beyond the best seen (libFuzzer's "cov": for the first round, the
 # count after loading the corpus; after it, the largest of the earlier rounds), or CAP seconds
 # in all have run. Prints one line per round and a verdict per target; logs in logs/TARGET.rN.log.
-# Same settings as run.sh (one job, -O, 2 GiB RSS limit, 10 s per input, 64 KiB inputs, the
-# dictionary dicts/TARGET.dict where there is one).
+# Same settings as run.sh (`fuzz_run` of common.sh).
 set -u
 cd "$(dirname "$0")"
+. ./common.sh
 CHUNK=${CHUNK:-600}
 CAP=${CAP:-3600}
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(rinex_obs rinex_nav sp3 clk antex mrk times_csv attitude_csv project_toml patb bal exif pos ubx rtcm sbf xmp photo_meta project_tables micmac colmap rtklib_conf geoid positions names)
+[ ${#targets[@]} -eq 0 ] && targets=("${ALL_TARGETS[@]}")
 mkdir -p logs
 for t in "${targets[@]}"; do
     mkdir -p "corpus/$t"
@@ -20,11 +20,7 @@ for t in "${targets[@]}"; do
         round=$((round + 1))
         log=logs/$t.r$round.log
         start=$(date +%s)
-        dict=()
-        [ -f "dicts/$t.dict" ] && dict=(-dict="dicts/$t.dict")
-        cargo +nightly fuzz run -O "$t" "corpus/$t" -- "${dict[@]}" \
-            -max_total_time="$CHUNK" -rss_limit_mb=2048 -timeout=10 -max_len=65536 \
-            >"$log" 2>&1
+        fuzz_run "$t" "$CHUNK" "$log"
         rc=$?
         spent=$((spent + $(date +%s) - start))
         inited=$(grep -oE 'INITED cov: [0-9]+' "$log" | grep -oE '[0-9]+$' | tail -1)
