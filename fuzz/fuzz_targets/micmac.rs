@@ -1,6 +1,7 @@
 #![no_main]
-//! MicMac XML: the input read as a calibration, as ground points, as image measurements and
-//! as an orientation (the others small valid files), and as OriConvert GNSS text.
+//! MicMac XML: the input read as a calibration (and converted to a ppkat camera), as ground
+//! points, as image measurements and as an orientation (the others small valid files), and as
+//! OriConvert GNSS text.
 
 use libfuzzer_sys::fuzz_target;
 use ppkat_fuzz::with_file;
@@ -12,7 +13,10 @@ const CALIB: &str = "<ExportAPERO><CalibrationInternConique><KnownConv>eConvAper
 fuzz_target!(|data: &[u8]| {
     use integration::import::micmac::{import, read_calibration, MicMacJob};
     with_file("fuzzed.xml", data, |p| {
-        let _ = read_calibration(p);
+        if let Ok(cal) = read_calibration(p) {
+            // Converted as `import` converts the calibration it is given (the fixed one below).
+            let _ = cal.to_camera(4e-6);
+        }
         let dir = p.parent().expect("a folder").to_path_buf();
         // Written once per process: they never change, and writing them is a third of a run.
         let fixed = |name: &str, text: &str| {
