@@ -61,3 +61,53 @@ pub fn evaluate(navs: &[gnss::rinex::nav::NavFile]) {
         }
     }
 }
+
+/// The CSV tables a project names (images, measurements, ground points, antennas), each a
+/// small valid one.
+pub const PROJECT_TABLES: [(&str, &str); 4] = [
+    ("images.csv", "image,strip\n1,1\n2,1\n"),
+    (
+        "image_observations.csv",
+        "image,point,x_px,y_px,sigma_px\n1,G1,983.8,1698.6,0.5\n2,G1,130.2,1669.5,0.5\n1,T1,10,20,0.5\n2,T1,30,40,0.5\n",
+    ),
+    (
+        "ground_points.csv",
+        "point,kind,lat_deg,lon_deg,h,sigma_xy,sigma_z\nG1,gcp,47.2911,8.5423,492.1,0.02,0.03\n",
+    ),
+    (
+        "antennas.csv",
+        "id,week,tow,lat,lon,h,c_ee,c_en,c_eu,c_nn,c_nu,c_uu,quality,segment\n1,2318,291695.3,47.2913,8.5431,830.09,9.6e-6,0,0,1.3e-5,0,1e-4,1,2\n2,2318,291695.9,47.2915,8.5432,830.08,9.6e-6,0,0,1.3e-5,0,1e-4,1,2\n",
+    ),
+];
+
+/// The other files a project may name (measured distances, start orientations, PATB image
+/// points, a trajectory), each a small valid one.
+pub const PROJECT_EXTRAS: [(&str, &str); 4] = [
+    ("distances.csv", "point_a,point_b,distance,sigma\nG1,T1,12.5,0.01\n"),
+    (
+        "start.csv",
+        "image,lat,lon,h,omega,phi,kappa\n1,47.2913,8.5431,830.0,0,0,90\n2,47.2915,8.5432,830.0,0,0,90\n",
+    ),
+    (
+        "image_observations.im",
+        "1\nG1 0.25 0.1\nT1 -0.5 -0.4\n-99\n2\nG1 0.3 0.2\nT1 -0.4 -0.3\n-99\n",
+    ),
+    (
+        "trajectory.pos",
+        "%  GPST                      latitude(deg) longitude(deg)  height(m)   Q  ns   sdn(m)   sde(m)   sdu(m)  sdne(m)  sdeu(m)  sdun(m) age(s)  ratio\n\
+         2024/06/12 08:59:59.999800   47.277514885    8.554361153   482.4890   1  11   0.0052   0.0044   0.0149  -0.0017   0.0050   0.0030   0.00  999.9\n\
+         2024/06/12 09:00:00.999800   47.277514861    8.554361176   482.4960   1  11   0.0037   0.0031   0.0105  -0.0012   0.0035   0.0021   0.00  999.9\n\
+         2024/06/12 09:00:01.999800   47.277514875    8.554361215   482.5105   2  11   0.0037   0.0031   0.0105  -0.0012   0.0035   0.0021   0.00  999.9\n",
+    ),
+];
+
+/// Write every table and file a project may name into `dir`, once per process (they never
+/// change).
+pub fn write_project_files(dir: &Path) {
+    static WRITTEN: std::sync::Once = std::sync::Once::new();
+    WRITTEN.call_once(|| {
+        for (name, text) in PROJECT_TABLES.iter().chain(&PROJECT_EXTRAS) {
+            std::fs::write(dir.join(name), text).expect("temporary file");
+        }
+    });
+}
