@@ -101,13 +101,14 @@ pub const PROJECT_EXTRAS: [(&str, &str); 4] = [
     ),
 ];
 
-/// Write every table and file a project may name into `dir`, once per process (they never
-/// change).
-pub fn write_project_files(dir: &Path) {
-    static WRITTEN: std::sync::Once = std::sync::Once::new();
-    WRITTEN.call_once(|| {
-        for (name, text) in PROJECT_TABLES.iter().chain(&PROJECT_EXTRAS) {
-            std::fs::write(dir.join(name), text).expect("temporary file");
+/// Write each `(name, text)` of `files` into `dir` unless it is already there, and return
+/// their paths: fixed inputs beside the fuzzed one are written once per process, not per run.
+pub fn write_fixed<const N: usize>(dir: &Path, files: &[(&str, &str); N]) -> [PathBuf; N] {
+    files.map(|(name, text)| {
+        let f = dir.join(name);
+        if !f.exists() {
+            std::fs::write(&f, text).expect("temporary file");
         }
-    });
+        f
+    })
 }
