@@ -10,9 +10,11 @@ targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=("${ALL_TARGETS[@]}")
 # Real files of ../shared/data (beside the repository) seed the newer targets when present;
 # they are copied into corpus/ only (cut to the 64 KiB inputs are limited to), never into seeds/.
-SHARED=../../shared/data/photo
+DATA=../../shared/data
+SHARED=$DATA/photo
+GNSS=$DATA/gnss
 shared_seeds() {
-    local t=$1 c=corpus/$1 f k
+    local t=$1 c=corpus/$1 f k logs
     case $t in
     xmp)
         for f in "$SHARED"/brighton-beach/DJI_001[89].JPG; do
@@ -33,13 +35,17 @@ shared_seeds() {
             [ -f "$f" ] && { printf "\\x0$k"; head -c 65000 "$f"; } >"$c/shared-$(basename "$f")"
             k=$((k + 1))
         done ;;
+    ubx)
+        # GPS and Galileo subframes as the bare payloads the target also decodes
+        logs=("$GNSS"/ubx-navsol-*/*.ubx)
+        [ -f "${logs[0]}" ] && python3 sfrbx_seeds.py "$c" "${logs[@]}" ;;
     esac
 }
 mkdir -p logs
 for t in "${targets[@]}"; do
     mkdir -p "corpus/$t"
     cp -n seeds/"$t"/* "corpus/$t/" 2>/dev/null
-    [ -d "$SHARED" ] && shared_seeds "$t"
+    [ -d "$DATA" ] && shared_seeds "$t"
     fuzz_run "$t" "$SECS" "logs/$t.log"
     rc=$?
     done_line=$(grep -E '^Done [0-9]+ runs' "logs/$t.log" | tail -1)
