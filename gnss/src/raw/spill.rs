@@ -5,9 +5,12 @@
 //!
 //! What enters: the [`RinexOut`] records of a log in RINEX order, each kept with its length.
 //! What leaves: blocks of whole records, and each record decoded, bit for bit as it entered
-//! (blocks let the writing pass format their records on all threads). The file is a hidden
-//! sibling of the output (`.NAME.PID.spill`), removed from its folder as soon as it is
-//! opened where the system allows it (Unix), otherwise when the reader is dropped.
+//! (blocks let the writing pass format their records on all threads). The file lives in the
+//! output's folder: on Linux a file without a name (`O_TMPFILE`), which no kill can leave
+//! behind; elsewhere, or where the file system refuses that, a hidden sibling of the output
+//! (`.NAME.PID.spill`), removed from its folder as soon as it is opened where the system
+//! allows it (Unix), otherwise when the reader is dropped (a killed run's is removed by the
+//! next run writing the same output).
 
 use super::records::RinexOut;
 use super::ubx_obs::{RawEpoch, RawSat, RawSignal};
@@ -38,10 +41,33 @@ impl Drop for Leftover {
     }
 }
 
+/// A file without a name in folder `dir` (Linux `O_TMPFILE`: it never appears in the folder,
+/// and goes when closed, also when the process is killed); `None` where that is not to be had.
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn unnamed_in(dir: &Path) -> Option<File> {
+    use std::os::unix::fs::OpenOptionsExt;
+    File::options()
+        .read(true)
+        .write(true)
+        .custom_flags(libc::O_TMPFILE)
+        .mode(0o600)
+        .open(dir)
+        .ok()
+}
+
+/// A file without a name: not to be had on this system.
+#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+fn unnamed_in(_dir: &Path) -> Option<File> {
+    None
+}
+
 impl Spill {
     /// A new, empty spill file beside `out`.
     pub fn create(out: &Path) -> Result<Spill> {
         let path = crate::atomic::sibling(out, "spill");
+        if let Some(file) = path.parent().and_then(unnamed_in) {
+            return Ok(Spill::of(file, None));
+        }
         let file = File::options()
             .read(true)
             .write(true)
@@ -54,11 +80,16 @@ impl Spill {
         } else {
             Some(path)
         };
-        Ok(Spill {
+        Ok(Spill::of(file, path))
+    }
+
+    /// A spill writing to `file`, whose name (when it has one in a folder) is `path`.
+    fn of(file: File, path: Option<PathBuf>) -> Spill {
+        Spill {
             w: BufWriter::with_capacity(1 << 18, file),
             buf: Vec::with_capacity(4096),
             path: Leftover(path),
-        })
+        }
     }
 
     /// Keep one record.
@@ -312,6 +343,24 @@ mod tests {
         assert!(matches!(&back[3], RinexOut::Epoch(x, y) if *x == te && *y == e));
         // nothing left in the folder
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// On Linux the spill is opened without a name, so no kill between opening and unlinking
+    /// can leave it in the output's folder (as one did under load before).
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    #[test]
+    fn the_spill_never_has_a_name() {
+        use std::os::fd::AsRawFd;
+        let dir = testkit::scratch_dir("spill-unnamed");
+        let s = Spill::create(&dir.join("out.obs")).unwrap();
+        let fd = s.w.get_ref().as_raw_fd();
+        let link = std::fs::read_link(format!("/proc/self/fd/{fd}")).unwrap();
+        let link = link.to_string_lossy();
+        assert!(link.starts_with(&*dir.to_string_lossy()), "{link}");
+        assert!(!link.contains(".spill"), "opened under a name: {link}");
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+        drop(s);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
