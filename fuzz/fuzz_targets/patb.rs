@@ -5,6 +5,7 @@
 
 use libfuzzer_sys::fuzz_target;
 use ppkat_fuzz::{with_file, write_fixed};
+use std::path::Path;
 
 /// Image coordinates measuring the points of `CONTROL`; headers name the camera `cam`.
 const IMAGES: &str =
@@ -15,8 +16,8 @@ const CONTROL: &str = "P1 500100.0 5200200.0 430.0\nP2 500110.0 5200210.0 431.0 
 fuzz_target!(|data: &[u8]| {
     use integration::import::patb::{import, CameraNumbers, CameraSource, PatbJob, Units};
     with_file("f.patb", data, |p| {
-        let dir = p.parent().expect("a folder").to_path_buf();
-        let [images, control] = write_fixed(&dir, &[("i.patb", IMAGES), ("g.patb", CONTROL)]);
+        let dir = p.parent().expect("a folder");
+        let [images, control] = write_fixed(dir, &[("i.patb", IMAGES), ("g.patb", CONTROL)]);
         let numbers = CameraSource::Numbers(CameraNumbers {
             focal_mm: 35.0,
             pixel_um: 4.0,
@@ -24,16 +25,15 @@ fuzz_target!(|data: &[u8]| {
             height_px: Some(4000),
             sigma_px: 0.5,
         });
-        let job =
-            |images: &std::path::Path, camera, ground: &std::path::Path, check, crs| PatbJob {
-                images: images.to_path_buf(),
-                units: Units::Mm,
-                camera,
-                ground: Some(ground.to_path_buf()),
-                check,
-                ground_sigma: [0.02, 0.03],
-                crs,
-            };
+        let job = |images: &Path, camera, ground: &Path, check, crs| PatbJob {
+            images: images.to_path_buf(),
+            units: Units::Mm,
+            camera,
+            ground: Some(ground.to_path_buf()),
+            check,
+            ground_sigma: [0.02, 0.03],
+            crs,
+        };
         for units in [Units::Mm, Units::Px] {
             let _ = import(&PatbJob {
                 units,
