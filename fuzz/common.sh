@@ -15,3 +15,12 @@ fuzz_run() {
     cargo +nightly fuzz run -O "$1" "corpus/$1" -- "${dict[@]}" \
         -max_total_time="$2" -rss_limit_mb=2048 -timeout=10 -max_len=65536 >"$3" 2>&1
 }
+
+# generated_seeds TARGET: seeds that a script writes into corpus/TARGET (both scripts call it
+# after copying seeds/): project_toml's sections as positional arrays and its output projections
+# (project_seeds.py).
+generated_seeds() {
+    case $1 in
+    project_toml) python3 project_seeds.py "corpus/$1" ;;
+    esac
+}

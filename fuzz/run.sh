@@ -45,6 +45,7 @@ mkdir -p logs
 for t in "${targets[@]}"; do
     mkdir -p "corpus/$t"
     cp -n seeds/"$t"/* "corpus/$t/" 2>/dev/null
+    generated_seeds "$t"
     [ -d "$DATA" ] && shared_seeds "$t"
     fuzz_run "$t" "$SECS" "logs/$t.log"
     rc=$?

@@ -19,6 +19,7 @@ mkdir -p logs
 for t in "${targets[@]}"; do
     mkdir -p "corpus/$t"
     cp -n seeds/"$t"/* "corpus/$t/" 2>/dev/null
+    generated_seeds "$t"
     spent=0 round=0 runs_all=0 best="" verdict="not saturated after ${CAP} s"
     own="" best_own=""
     if [ -n "${OWN:-}" ]; then
