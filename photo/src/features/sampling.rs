@@ -50,15 +50,23 @@ impl Processing for Consistent {
         // Rows: horizontal pass into `tmp`.
         let mut tmp = vec![0f32; w * h];
         let mut line = vec![0f32; w + 2 * r as usize];
+        let ru = r as usize;
         for y in 0..h {
             let row = &src[y * w..(y + 1) * w];
-            for (j, v) in line.iter_mut().enumerate() {
-                *v = row[mirror(j as isize - r, w as isize)];
+            // Mirrored only at the two ends; the row itself is copied.
+            for j in (0..ru).chain(ru + w..line.len()) {
+                line[j] = row[mirror(j as isize - r, w as isize)];
             }
+            line[ru..ru + w].copy_from_slice(row);
+            // Tap after tap over the whole row (vectorised), each sample's sum in tap order.
             let out = &mut tmp[y * w..(y + 1) * w];
-            for (x, o) in out.iter_mut().enumerate() {
-                let win = &line[x..x + k.len()];
-                *o = win.iter().zip(&k).map(|(a, b)| a * b).sum();
+            for (o, v) in out.iter_mut().zip(&line[..w]) {
+                *o = k[0] * v;
+            }
+            for (t, kv) in k.iter().enumerate().skip(1) {
+                for (o, v) in out.iter_mut().zip(&line[t..t + w]) {
+                    *o += kv * v;
+                }
             }
         }
         // Columns: accumulate whole rows, so memory is read in order.
