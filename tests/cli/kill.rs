@@ -235,16 +235,11 @@ fn killed_match_leaves_the_earlier_folder_whole() {
     }
     let out = work.join("tie");
     let args = [
-        "match",
-        "--photos",
-        p(&input),
-        "--max-image-size",
-        "800",
-        "--max-features",
-        "1000",
-        "-o",
-        p(&out),
-    ];
+        &["match", "--photos", p(&input)][..],
+        &QUICK_MATCH,
+        &["-o", p(&out)],
+    ]
+    .concat();
     killed_runs_leave_the_folder_whole(&args, &work, &out, 6);
 }
 

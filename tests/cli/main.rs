@@ -88,6 +88,10 @@ fn shared_all<const N: usize>(rel: [&str; N]) -> Option<[PathBuf; N]> {
     Some(found.map(Option::unwrap))
 }
 
+/// `match` options that reduce a few real photos to a run of seconds, for tests of what is not
+/// the matching figure (messages, counts, outputs).
+const QUICK_MATCH: [&str; 4] = ["--max-image-size", "800", "--max-features", "1000"];
+
 /// The GEONET rover, base and navigation files of 2 April 2005 (120 rover epochs).
 const GEONET_ROVER: &str = "gnss/geonet-2005/07590920.05o";
 const GEONET_BASE: &str = "gnss/geonet-2005/30400920.05o";

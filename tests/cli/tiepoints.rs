@@ -73,18 +73,14 @@ fn bad_photos_cost_one_message_each_and_the_rest_are_matched() {
     std::fs::copy(png, photos.join("renamed_png.jpg")).unwrap();
     std::fs::write(photos.join("notes.txt"), "flight notes").unwrap();
     let out = tmp("match-bad-out");
-    // Reduced while decoded (as in `kill`): the messages and counts are what is tested.
-    let o = ppkat(&[
-        "match",
-        "--photos",
-        p(&photos),
-        "--max-image-size",
-        "800",
-        "--max-features",
-        "1000",
-        "-o",
-        p(&out),
-    ]);
+    let o = ppkat(
+        &[
+            &["match", "--photos", p(&photos)][..],
+            &QUICK_MATCH,
+            &["-o", p(&out)],
+        ]
+        .concat(),
+    );
     let t = text(&o);
     assert_eq!(o.status.code(), Some(3), "{t}");
     assert!(t.contains("cut.jpg:"), "{t}");
