@@ -35,20 +35,22 @@ SECTIONS = {
     "adjustment": ["20", "false", "0.001", "false", '"huber"'],
 }
 
-# Valid tables after the array, so that a section that deserialises goes on to load.
-TAIL = """
+# Valid tables after the array, so that a section that deserialises goes on to load (each
+# but the one the array gives).
+CAMERA = """
 [[camera]]
 id = "demo"
 focal_mm = 35.0
 pixel_um = 3.9
 width_px = 4000
 height_px = 6000
-
+"""
+IMAGES = """
 [images]
 list = "images.csv"
 measurements = "image_observations.csv"
 """
-
+TAIL = CAMERA + IMAGES
 
 OUTPUTS = ["geodetic", "utm", "utm:32N", "utm:32s", "utm:1", "utm:60", "utm:0", "utm:61",
            "utm:+7", "utm:-7", "utm:", "utm:N", "utm:999999999999", "gk:9", "gk:-3.5", "gk:+12",
@@ -66,12 +68,7 @@ def document(section, items):
     array = "[" + ", ".join(items) + "]"
     if section == "camera":
         array = "[" + array + "]"
-    tail = TAIL
-    if section == "camera":
-        tail = tail.split("[images]")[1]
-        tail = "\n[images]" + tail
-    elif section == "images":
-        tail = tail.split("[images]")[0]
+    tail = {"camera": IMAGES, "images": CAMERA}.get(section, TAIL)
     return f'name = "{section} as an array"\n{section} = {array}\n{tail}'
 
 
