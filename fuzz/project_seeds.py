@@ -1,42 +1,79 @@
 #!/usr/bin/env python3
-"""Write project_toml fuzz seeds: each section as a positional array, and the forms of
-`output` (a projection).
+"""Write project_toml fuzz seeds: every field of a project file given a value of every TOML
+kind, each section as a positional array, and the forms of `output` (a projection).
 
 Usage: project_seeds.py OUT_DIR
 
-serde fills a struct from a TOML array in field order. For every section of a project file
-(`[[camera]]`, `[images]`, `[ground]`, `[gnss]`, `[attitude]`, `[adjustment]`) this writes the
-section as its full array cut after each length (seq-SECTION-lenN.toml: the fields after the
-cut take their defaults, or a required one is missing) and as the full array with one element
-of the wrong type (seq-SECTION-badK.toml). Each reaches a different branch of the section's
-sequence visitor, which mutation finds only a few at a time. Valid `[[camera]]` and
-`[images]` tables follow, so a section that deserialises goes on to load.
+serde's derived code has a branch for each field and each kind of value that can stand there
+(a string where a number belongs, a date where a table belongs, an array one element short).
+Mutation finds these a few at a time, so this script writes all of them:
 
-`output` names a projection by text with numbers in it (a UTM zone, a central meridian, an
-EPSG code): output-K.toml gives each of OUTPUTS, valid and not, for the number parsers'
-branches.
+- seq-SECTION-lenN.toml: a section (`[[camera]]`, `[images]`, `[ground]`, `[gnss]`,
+  `[attitude]`, `[adjustment]`) as a positional array, serde filling the struct in field
+  order, cut after each length (the fields after the cut take their defaults, or a required
+  one is missing);
+- seq-SECTION-kK-J.toml: the full array with element K of kind J (KINDS);
+- tab-SECTION-FIELD-J.toml: the section as a table with FIELD of kind J; for a field that
+  holds an array, arr-SECTION-FIELD-*.toml give it each length and an element of each kind;
+  for a field that names a choice, enum-SECTION-FIELD-*.toml give each choice as a string
+  and as a one-key table;
+- top-KEY-J.toml: a key of the document (`name`, `mode`, `output`, or a whole section) of
+  kind J;
+- output-K.toml: each of OUTPUTS, valid and not, for the number parsers of `Projection`.
+
+Valid `[[camera]]` and `[images]` tables follow the section a seed varies, so a section that
+deserialises goes on to load.
 """
 import os
 import sys
 
 # Every field of each section in declaration order, with a value of its type.
 SECTIONS = {
-    "camera": ['"demo"', "35.0", "8974.0", "3.9", "4000", "6000", "[0.01, -0.02]",
-               "[2000.5, 3000.5]", "[0.02, 0.01]", "[2001.0, 2999.0]", "[1e-5, -2e-9, 0.0]",
-               "[1e-7, -1e-7]", "[1e-5, 0.0]", "0.7", '["all"]', '["k3", "b2"]'],
-    "images": ['"images.csv"', '"image_observations.csv"', '"image_observations.im"',
-               '"start.csv"', "90.0"],
-    "ground": ['"ground_points.csv"', '"utm:32N"', '["G1"]', '"distances.csv"'],
-    "gnss": ['"antennas.csv"', '"trajectory.pos"', "1.5", "[0.1, -0.05, 0.45]",
-             "[0.005, 0.005, 0.01]", "true", '"strip"', '"rate"', '"flight"', "0.01", "0.002",
-             '"loose"', '"rover.obs"', '"base.obs"', '["nav.rnx"]',
-             "[4331297.3, 567555.6, 4633133.8]", "2.0"],
-    "attitude": ["[0.05, 0.05, 0.2]", "true", "[1.0, 1.0, 1.0]"],
-    "adjustment": ["20", "false", "0.001", "false", '"huber"'],
+    "camera": [("id", '"demo"'), ("focal_mm", "35.0"), ("focal_px", "8974.0"),
+               ("pixel_um", "3.9"), ("width_px", "4000"), ("height_px", "6000"),
+               ("principal_point_mm", "[0.01, -0.02]"),
+               ("principal_point_px", "[2000.5, 3000.5]"),
+               ("distortion_centre_mm", "[0.02, 0.01]"),
+               ("distortion_centre_px", "[2001.0, 2999.0]"), ("k", "[1e-5, -2e-9, 0.0]"),
+               ("p", "[1e-7, -1e-7]"), ("b", "[1e-5, 0.0]"), ("sigma_px", "0.7"),
+               ("self_calibrate", '["all"]'), ("fixed", '["k3", "b2"]')],
+    "images": [("list", '"images.csv"'), ("measurements", '"image_observations.csv"'),
+               ("patb", '"image_observations.im"'), ("start", '"start.csv"'),
+               ("kappa_deg", "90.0")],
+    "ground": [("file", '"ground_points.csv"'), ("crs", '"utm:32N"'), ("as_check", '["G1"]'),
+               ("distances", '"distances.csv"')],
+    "gnss": [("antennas", '"antennas.csv"'), ("trajectory", '"trajectory.pos"'),
+             ("sigma_scale", "1.5"), ("lever_arm", "[0.1, -0.05, 0.45]"),
+             ("lever_arm_sigma", "[0.005, 0.005, 0.01]"), ("estimate_lever_arm", "true"),
+             ("drift", '"strip"'), ("drift_model", '"rate"'), ("latency", '"flight"'),
+             ("latency_sigma", "0.01"), ("latency_start", "0.002"), ("coupling", '"loose"'),
+             ("rover", '"rover.obs"'), ("base", '"base.obs"'), ("nav", '["nav.rnx"]'),
+             ("base_position", "[4331297.3, 567555.6, 4633133.8]"), ("iono_ppm", "2.0")],
+    "attitude": [("sigma_deg", "[0.05, 0.05, 0.2]"), ("boresight", "true"),
+                 ("boresight_sigma_deg", "[1.0, 1.0, 1.0]")],
+    "adjustment": [("max_iterations", "20"), ("snooping", "false"), ("alpha", "0.001"),
+                   ("variance_components", "false"), ("loss", '"huber"')],
 }
 
-# Valid tables after the array, so that a section that deserialises goes on to load (each
-# but the one the array gives).
+# The choices of each field that names one (serde enums).
+CHOICES = {
+    ("gnss", "drift"): ["auto", "none", "block", "strip", "segment"],
+    ("gnss", "drift_model"): ["offset", "linear", "rate"],
+    ("gnss", "latency"): ["none", "block", "flight"],
+    ("gnss", "coupling"): ["loose", "tight"],
+    ("top", "mode"): ["aerial", "close-range"],
+}
+
+# A value of each kind TOML has, and the edges of the numeric ones.
+KINDS = ['"x"', '""', "7", "-1", "0", "9223372036854775807", "7.5", "-0.0", "nan", "inf",
+         "true", "1979-05-27T07:32:00Z", "1979-05-27T07:32:00", "1979-05-27", "07:32:00",
+         "[]", "[1]", '["x"]', "[[1]]", "{}", "{ x = 1 }"]
+
+# Top-level keys other than the sections, with a valid value.
+TOP = [("name", '"kinds"'), ("mode", '"aerial"'), ("output", '"utm:32N"')]
+
+# Valid tables after the one a seed varies, so that a section that deserialises goes on to
+# load (each but the one the seed gives).
 CAMERA = """
 [[camera]]
 id = "demo"
@@ -59,33 +96,90 @@ OUTPUTS = ["geodetic", "utm", "utm:32N", "utm:32s", "utm:1", "utm:60", "utm:0", 
            "EPSG:65536", "EPSG:", "EPSG:+31467", "Epsg:3035", "UTM", "geodetic ", ""]
 
 
-def wrong(value):
-    """A value of another TOML type than `value`."""
-    return '{ x = 1 }' if value.startswith('"') else '"x"'
+def tail_after(section):
+    """The valid tables that follow a seed varying `section`."""
+    return {"camera": IMAGES, "images": CAMERA}.get(section, TAIL)
 
 
-def document(section, items):
-    array = "[" + ", ".join(items) + "]"
+def as_array(section, values):
+    """A document with `section` as a positional array of `values`."""
+    array = "[" + ", ".join(values) + "]"
     if section == "camera":
         array = "[" + array + "]"
-    tail = {"camera": IMAGES, "images": CAMERA}.get(section, TAIL)
-    return f'name = "{section} as an array"\n{section} = {array}\n{tail}'
+    return f'name = "{section} as an array"\n{section} = {array}\n{tail_after(section)}'
+
+
+def as_table(section, fields):
+    """A document with `section` as a table of `fields` (name, value)."""
+    header = f"[[{section}]]" if section == "camera" else f"[{section}]"
+    body = "\n".join(f"{k} = {v}" for k, v in fields)
+    return f'name = "{section} as a table"\n{header}\n{body}\n{tail_after(section)}'
+
+
+def replaced(fields, index, value):
+    """`fields` with the value of the one at `index` replaced."""
+    return fields[:index] + [(fields[index][0], value)] + fields[index + 1:]
+
+
+def array_forms(value):
+    """An array field's value at each length from 0 to one past its own, and with its first
+    and its last element of each kind."""
+    items = [v.strip() for v in value.strip("[]").split(",")]
+    forms = ["[" + ", ".join((items * 2)[:n]) + "]" for n in range(len(items) + 2)]
+    for kind in KINDS:
+        forms.append("[" + ", ".join([kind] + items[1:]) + "]")
+        forms.append("[" + ", ".join(items[:-1] + [kind]) + "]")
+    return forms
+
+
+def choice_forms(choices):
+    """A choice field's value as each choice, an unknown one, and each as a one-key table."""
+    if not choices:
+        return []
+    forms = [f'"{c}"' for c in choices] + ['"unknown"', f'"{choices[0].upper()}"']
+    for c in choices:
+        forms += [f'{{ {c} = {{}} }}', f'{{ {c} = 1 }}', f'{{ "{c}" = "{c}" }}']
+    return forms
+
+
+def seeds():
+    """Every seed as (file name, text)."""
+    out = []
+    for section, fields in SECTIONS.items():
+        values = [v for _, v in fields]
+        for n in range(len(values) + 1):
+            out.append((f"seq-{section}-len{n}.toml", as_array(section, values[:n])))
+        for k in range(len(values)):
+            for j, kind in enumerate(KINDS):
+                bad = values[:k] + [kind] + values[k + 1:]
+                out.append((f"seq-{section}-k{k}-{j}.toml", as_array(section, bad)))
+        for k, (field, value) in enumerate(fields):
+            for j, kind in enumerate(KINDS):
+                out.append((f"tab-{section}-{field}-{j}.toml",
+                            as_table(section, replaced(fields, k, kind))))
+            if value.startswith("["):
+                for j, form in enumerate(array_forms(value)):
+                    out.append((f"arr-{section}-{field}-{j}.toml",
+                                as_table(section, replaced(fields, k, form))))
+            for j, form in enumerate(choice_forms(CHOICES.get((section, field), []))):
+                out.append((f"enum-{section}-{field}-{j}.toml",
+                            as_table(section, replaced(fields, k, form))))
+    for key, value in TOP + [(s, None) for s in SECTIONS]:
+        forms = KINDS + (choice_forms(CHOICES[("top", key)]) if ("top", key) in CHOICES else [])
+        for j, form in enumerate(forms):
+            tail = tail_after(key) if value is None else TAIL
+            out.append((f"top-{key}-{j}.toml", f"{key} = {form}\n{tail}"))
+    for k, o in enumerate(OUTPUTS):
+        out.append((f"output-{k}.toml", f'name = "an output projection"\noutput = "{o}"\n{TAIL}'))
+    return out
 
 
 def main():
     out = sys.argv[1]
     os.makedirs(out, exist_ok=True)
-    for section, items in SECTIONS.items():
-        for n in range(len(items) + 1):
-            with open(os.path.join(out, f"seq-{section}-len{n}.toml"), "w") as f:
-                f.write(document(section, items[:n]))
-        for k, v in enumerate(items):
-            bad = items[:k] + [wrong(v)] + items[k + 1:]
-            with open(os.path.join(out, f"seq-{section}-bad{k}.toml"), "w") as f:
-                f.write(document(section, bad))
-    for k, o in enumerate(OUTPUTS):
-        with open(os.path.join(out, f"output-{k}.toml"), "w") as f:
-            f.write(f'name = "an output projection"\noutput = "{o}"\n{TAIL}')
+    for name, text in seeds():
+        with open(os.path.join(out, name), "w") as f:
+            f.write(text)
 
 
 if __name__ == "__main__":
