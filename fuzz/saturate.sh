@@ -8,11 +8,16 @@
 # census of the corpus before the first round and after each), for targets whose input runs
 # through a large dependency fuzzed upstream (the TOML parser) that goes on yielding edges of
 # its own; the line of each round shows both counts.
+# OWN=lines: the same, but the verdict counts the gap of own_edges.sh instead (ppkat's edges no
+# input reaches, by line: the standard library's code inlined into ppkat's functions left out);
+# a round that does not make it smaller is the last.
+# QUIET=N: the verdict after N rounds in a row without progress (default 1).
 set -u
 cd "$(dirname "$0")"
 . ./common.sh
 CHUNK=${CHUNK:-600}
 CAP=${CAP:-3600}
+QUIET=${QUIET:-1}
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=("${ALL_TARGETS[@]}")
 mkdir -p logs
@@ -20,11 +25,12 @@ for t in "${targets[@]}"; do
     mkdir -p "corpus/$t"
     cp -n seeds/"$t"/* "corpus/$t/" 2>/dev/null
     generated_seeds "$t"
-    spent=0 round=0 runs_all=0 best="" verdict="not saturated after ${CAP} s"
-    own="" best_own=""
+    spent=0 round=0 quiet=0 runs_all=0 best="" verdict="not saturated after ${CAP} s"
+    own="" best_own="" gap="" best_gap=""
     if [ -n "${OWN:-}" ]; then
         cargo +nightly fuzz build -O "$t" >/dev/null 2>&1
-        best_own=$(./own_edges.sh "$t" | cut -d' ' -f1)
+        census=$(./own_edges.sh "$t")
+        best_own=${census%% *} best_gap=${census##* }
     fi
     while [ "$spent" -lt "$CAP" ]; do
         round=$((round + 1))
@@ -37,24 +43,39 @@ for t in "${targets[@]}"; do
         final=$(grep -oE 'cov: [0-9]+' "$log" | grep -oE '[0-9]+$' | sort -n | tail -1)
         runs=$(grep -oE '^Done [0-9]+ runs' "$log" | grep -oE '[0-9]+' | tail -1)
         runs_all=$((runs_all + ${runs:-0}))
-        [ -n "${OWN:-}" ] && own=$(./own_edges.sh "$t" | cut -d' ' -f1)
-        echo "$t round $round: exit $rc, ${runs:-?} runs, cov ${inited:-?} -> ${final:-?}${own:+, own ${best_own} -> $own}, ${spent} s in all"
-        if [ "$rc" -ne 0 ]; then verdict="stopped: exit $rc (see $log)"; break; fi
         if [ -n "${OWN:-}" ]; then
-            if [ -n "$own" ] && [ "$own" -le "$best_own" ]; then
-                verdict="saturated in ppkat's own code: round $round (${CHUNK} s, ${runs} runs) found no edge of it beyond $best_own"
-                break
-            fi
-            [ -n "$own" ] && best_own=$own
+            census=$(./own_edges.sh "$t")
+            own=${census%% *} gap=${census##* }
+        fi
+        echo "$t round $round: exit $rc, ${runs:-?} runs, cov ${inited:-?} -> ${final:-?}${own:+, own ${best_own} -> $own, gap ${best_gap} -> $gap}, ${spent} s in all"
+        if [ "$rc" -ne 0 ]; then verdict="stopped: exit $rc (see $log)"; break; fi
+        # progress: the round made the count it is judged by better (or gave no count)
+        if [ "${OWN:-}" = lines ]; then
+            progress=$({ [ -z "$gap" ] || [ "$gap" -lt "$best_gap" ]; } && echo 1)
+            what="left ppkat's own-line gap at $best_gap"
+        elif [ -n "${OWN:-}" ]; then
+            progress=$({ [ -z "$own" ] || [ "$own" -gt "$best_own" ]; } && echo 1)
+            what="found no edge of ppkat's beyond $best_own"
+        else
+            # the corpus load may count fewer edges than the round before reached
+            [ -z "$best" ] && best=${inited:-}
+            progress=$({ [ -z "${final:-}" ] || [ -z "$best" ] || [ "$final" -gt "$best" ]; } && echo 1)
+            what="found no edge beyond $best"
+        fi
+        # the count not judged by is shown from round to round
+        [ "${OWN:-}" = lines ] && [ -n "$own" ] && best_own=$own
+        [ -n "${OWN:-}" ] && [ "$OWN" != lines ] && [ -n "$gap" ] && best_gap=$gap
+        if [ -n "$progress" ]; then
+            quiet=0
+            [ -n "$own" ] && best_own=$own best_gap=$gap
+            [ -n "${final:-}" ] && best=$final
             continue
         fi
-        # the corpus load may count fewer edges than the round before reached
-        [ -z "$best" ] && best=${inited:-}
-        if [ -n "$best" ] && [ -n "${final:-}" ] && [ "$final" -le "$best" ]; then
-            verdict="saturated: round $round (${CHUNK} s, ${runs} runs) found no edge beyond $best"
+        quiet=$((quiet + 1))
+        if [ "$quiet" -ge "$QUIET" ]; then
+            verdict="saturated: $quiet round(s) to round $round (${CHUNK} s each, the last ${runs} runs) $what"
             break
         fi
-        [ -n "${final:-}" ] && best=$final
     done
-    echo "$t: $verdict; $runs_all runs in $spent s; cov ${final:-?}${own:+, own $own}"
+    echo "$t: $verdict; $runs_all runs in $spent s; cov ${final:-?}${own:+, own $own, gap $gap}"
 done
