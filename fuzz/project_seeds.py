@@ -17,6 +17,8 @@ Mutation finds these a few at a time, so this script writes all of them:
   holds an array, arr-SECTION-FIELD-*.toml give it each length and an element of each kind;
   for a field that names a choice, enum-SECTION-FIELD-*.toml give each choice as a string
   and as a one-key table;
+- omit-SECTION-FIELD.toml and only-SECTION-FIELD.toml: the section without FIELD, and with
+  only FIELD beside the fields it needs (NEEDED);
 - top-KEY-J.toml: a key of the document (`name`, `mode`, `output`, or a whole section) of
   kind J;
 - output-K.toml: each of OUTPUTS, valid and not, for the number parsers of `Projection`.
@@ -62,6 +64,19 @@ CHOICES = {
     ("gnss", "latency"): ["none", "block", "flight"],
     ("gnss", "coupling"): ["loose", "tight"],
     ("top", "mode"): ["aerial", "close-range"],
+}
+
+# The fields each section needs (a camera needs one of its focal lengths, here `focal_mm`);
+# omit-SECTION-FIELD.toml gives the full section without FIELD, only-SECTION-FIELD.toml these
+# and FIELD, so that each optional field and each pair of exclusive ones (mm or px) is met
+# alone.
+NEEDED = {
+    "camera": ["id", "focal_mm", "pixel_um", "width_px", "height_px"],
+    "images": ["list", "measurements"],
+    "ground": ["file"],
+    "gnss": [],
+    "attitude": ["sigma_deg"],
+    "adjustment": [],
 }
 
 # A value of each kind TOML has, and the edges of the numeric ones.
@@ -161,6 +176,12 @@ def seeds():
                 for j, form in enumerate(array_forms(value)):
                     out.append((f"arr-{section}-{field}-{j}.toml",
                                 as_table(section, replaced(fields, k, form))))
+            out.append((f"omit-{section}-{field}.toml",
+                        as_table(section, fields[:k] + fields[k + 1:])))
+            needed = [f for f in fields if f[0] in NEEDED[section] and f[0] != field]
+            if field == "focal_px":
+                needed = [f for f in needed if f[0] != "focal_mm"]
+            out.append((f"only-{section}-{field}.toml", as_table(section, needed + [fields[k]])))
             for j, form in enumerate(choice_forms(CHOICES.get((section, field), []))):
                 out.append((f"enum-{section}-{field}-{j}.toml",
                             as_table(section, replaced(fields, k, form))))
