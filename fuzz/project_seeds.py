@@ -13,12 +13,14 @@ Mutation finds these a few at a time, so this script writes all of them:
   order, cut after each length (the fields after the cut take their defaults, or a required
   one is missing);
 - seq-SECTION-kK-J.toml: the full array with element K of kind J (KINDS);
-- tab-SECTION-FIELD-J.toml: the section as a table with FIELD of kind J; for a field that
+- tab-SECTION-FIELD-J.toml: the section as a table that loads (see `loading`) with FIELD of
+  kind J; for a field that
   holds an array, arr-SECTION-FIELD-*.toml give it each length and an element of each kind;
   for a field that names a choice, enum-SECTION-FIELD-*.toml give each choice as a string
   and as a one-key table;
 - omit-SECTION-FIELD.toml and only-SECTION-FIELD.toml: the section without FIELD, and with
-  only FIELD beside the fields it needs (NEEDED);
+  only FIELD beside the fields it needs to load (NEEDED; FIELD in place of its partner of
+  PARTNERS);
 - top-KEY-J.toml: a key of the document (`name`, `mode`, `output`, or a whole section) of
   kind J;
 - output-K.toml: each of OUTPUTS, valid and not, for the number parsers of `Projection`.
@@ -66,18 +68,51 @@ CHOICES = {
     ("top", "mode"): ["aerial", "close-range"],
 }
 
-# The fields each section needs (a camera needs one of its focal lengths, here `focal_mm`);
-# omit-SECTION-FIELD.toml gives the full section without FIELD, only-SECTION-FIELD.toml these
-# and FIELD, so that each optional field and each pair of exclusive ones (mm or px) is met
-# alone.
+# Pairs of fields of which a project may give one only (a camera's focal length, principal
+# point and distortion centre in mm or px; measurements as CSV or PATB; antenna positions as a
+# table or a trajectory).
+PARTNERS = [("camera", "focal_mm", "focal_px"),
+            ("camera", "principal_point_mm", "principal_point_px"),
+            ("camera", "distortion_centre_mm", "distortion_centre_px"),
+            ("images", "measurements", "patb"), ("gnss", "antennas", "trajectory")]
+
+
+def partner(section, field):
+    """The field `field` excludes, or None."""
+    for s, a, b in PARTNERS:
+        if s == section and field in (a, b):
+            return b if field == a else a
+    return None
+
+
+# The fields a section needs to load (the first of each pair of PARTNERS where one is
+# needed). Table seeds vary one field of a section that loads: every field of SECTIONS but
+# the second of each pair, with the field varied in place of its partner.
 NEEDED = {
     "camera": ["id", "focal_mm", "pixel_um", "width_px", "height_px"],
     "images": ["list", "measurements"],
     "ground": ["file"],
-    "gnss": [],
+    "gnss": ["antennas"],
     "attitude": ["sigma_deg"],
     "adjustment": [],
 }
+SECOND = {(s, b) for s, _, b in PARTNERS}
+
+
+def loading(section, field, value=None, keep=None):
+    """The fields of a `section` that loads, with `field` in it (of `value`, when given) and
+    its partner left out; `keep` (default: every field but the second of each pair) names
+    the others."""
+    other = partner(section, field)
+    fields = []
+    for name, v in SECTIONS[section]:
+        if name == field:
+            fields.append((name, v if value is None else value))
+        elif name != other and (name in keep if keep is not None else
+                                (section, name) not in SECOND):
+            fields.append((name, v))
+    return fields
+
 
 # A value of each kind TOML has, and the edges of the numeric ones.
 KINDS = ['"x"', '""', "7", "-1", "0", "9223372036854775807", "7.5", "-0.0", "nan", "inf",
@@ -168,23 +203,22 @@ def seeds():
             for j, kind in enumerate(KINDS):
                 bad = values[:k] + [kind] + values[k + 1:]
                 out.append((f"seq-{section}-k{k}-{j}.toml", as_array(section, bad)))
-        for k, (field, value) in enumerate(fields):
+        for field, value in fields:
             for j, kind in enumerate(KINDS):
                 out.append((f"tab-{section}-{field}-{j}.toml",
-                            as_table(section, replaced(fields, k, kind))))
+                            as_table(section, loading(section, field, kind))))
             if value.startswith("["):
                 for j, form in enumerate(array_forms(value)):
                     out.append((f"arr-{section}-{field}-{j}.toml",
-                                as_table(section, replaced(fields, k, form))))
-            out.append((f"omit-{section}-{field}.toml",
-                        as_table(section, fields[:k] + fields[k + 1:])))
-            needed = [f for f in fields if f[0] in NEEDED[section] and f[0] != field]
-            if field == "focal_px":
-                needed = [f for f in needed if f[0] != "focal_mm"]
-            out.append((f"only-{section}-{field}.toml", as_table(section, needed + [fields[k]])))
+                                as_table(section, loading(section, field, form))))
             for j, form in enumerate(choice_forms(CHOICES.get((section, field), []))):
                 out.append((f"enum-{section}-{field}-{j}.toml",
-                            as_table(section, replaced(fields, k, form))))
+                            as_table(section, loading(section, field, form))))
+            rest = loading(section, field)
+            out.append((f"omit-{section}-{field}.toml",
+                        as_table(section, [f for f in rest if f[0] != field])))
+            out.append((f"only-{section}-{field}.toml",
+                        as_table(section, loading(section, field, keep=NEEDED[section]))))
     for key, value in TOP + [(s, None) for s in SECTIONS]:
         forms = KINDS + (choice_forms(CHOICES[("top", key)]) if ("top", key) in CHOICES else [])
         for j, form in enumerate(forms):
