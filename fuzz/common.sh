@@ -17,8 +17,8 @@ fuzz_run() {
 }
 
 # generated_seeds TARGET: seeds that a script writes into corpus/TARGET (both scripts call it
-# after copying seeds/): project_toml's sections as positional arrays and its output projections
-# (project_seeds.py).
+# after copying seeds/): project_toml's fields with values of every TOML kind, its sections as
+# positional arrays and its output projections (project_seeds.py).
 generated_seeds() {
     case $1 in
     project_toml) python3 project_seeds.py "corpus/$1" ;;

@@ -51,10 +51,10 @@ for t in "${targets[@]}"; do
         if [ "$rc" -ne 0 ]; then verdict="stopped: exit $rc (see $log)"; break; fi
         # progress: the round made the count it is judged by better (or gave no count)
         if [ "${OWN:-}" = lines ]; then
-            progress=$({ [ -z "$gap" ] || [ "$gap" -lt "$best_gap" ]; } && echo 1)
+            progress=$({ [ -z "$gap" ] || [ -z "$best_gap" ] || [ "$gap" -lt "$best_gap" ]; } && echo 1)
             what="left ppkat's own-line gap at $best_gap"
         elif [ -n "${OWN:-}" ]; then
-            progress=$({ [ -z "$own" ] || [ "$own" -gt "$best_own" ]; } && echo 1)
+            progress=$({ [ -z "$own" ] || [ -z "$best_own" ] || [ "$own" -gt "$best_own" ]; } && echo 1)
             what="found no edge of ppkat's beyond $best_own"
         else
             # the corpus load may count fewer edges than the round before reached
