@@ -25,6 +25,8 @@ Mutation finds these a few at a time, so this script writes all of them:
   kind J;
 - output-K.toml: each of OUTPUTS, valid and not, for the number parsers of `Projection`.
 
+A seed with the text of one before it is not written again.
+
 Valid `[[camera]]` and `[images]` tables follow the section a seed varies, so a section that
 deserialises goes on to load.
 """
@@ -232,7 +234,11 @@ def seeds():
 def main():
     out = sys.argv[1]
     os.makedirs(out, exist_ok=True)
+    seen = set()
     for name, text in seeds():
+        if text in seen:
+            continue
+        seen.add(text)
         with open(os.path.join(out, name), "w") as f:
             f.write(text)
 
