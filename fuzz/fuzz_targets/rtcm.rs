@@ -1,13 +1,22 @@
 #![no_main]
 //! RTCM 3 logs: frames, MSM observations, ephemerides (1019, 1020, 1042, 1044, 1045, 1046),
 //! station messages (1005–1008, 1033) and the week's resolution with and without a hint.
+//! A mutation rarely keeps a frame's CRC-24Q right, so through the log the items of frames
+//! the seeds did not hold were never reached: the log is read a second time with each frame's
+//! CRC recomputed.
 
 use libfuzzer_sys::fuzz_target;
 use ppkat_fuzz::with_file;
 
 fuzz_target!(|data: &[u8]| {
     use gnss::raw::{items::for_each_item, RawFormat, TimeHint};
+    // the input as it is: frames with their CRCs, good or bad, and what lies between them
     with_file("f.rtcm3", data, |p| {
+        let _ = for_each_item(p, Some(RawFormat::Rtcm3), None, |_| {});
+    });
+    // and with every frame's CRC made right, so that a mutated payload reaches the log's
+    // items (the week's resolution, the station, GLONASS channels, ephemerides evaluated)
+    with_file("f.rtcm3", &crcs_made_right(data), |p| {
         for hint in [
             None,
             Some(TimeHint::Year(2024)),
@@ -27,3 +36,25 @@ fuzz_target!(|data: &[u8]| {
     let _ = st.add(data);
     let _ = st.rinex();
 });
+
+/// `data` with the CRC of each frame recomputed: from the start, a `D3` with six zero bits
+/// after it begins a frame of the length it announces (when the input holds all of it); the
+/// search resumes after that frame, or one byte on.
+fn crcs_made_right(data: &[u8]) -> Vec<u8> {
+    use gnss::raw::rtcm::{payload_len, PREAMBLE};
+    let mut out = data.to_vec();
+    let mut i = 0;
+    while i + 6 <= out.len() {
+        if out[i] == PREAMBLE && out[i + 1] & 0xfc == 0 {
+            let end = i + 3 + payload_len(&out[i..]);
+            if end + 3 <= out.len() {
+                let c = gnss::raw::bits::crc24q(&out[i..end]).to_be_bytes();
+                out[end..end + 3].copy_from_slice(&c[1..]);
+                i = end + 3;
+                continue;
+            }
+        }
+        i += 1;
+    }
+    out
+}
