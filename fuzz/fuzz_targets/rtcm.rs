@@ -16,7 +16,12 @@ fuzz_target!(|data: &[u8]| {
     });
     // and with every frame's CRC made right, so that a mutated payload reaches the log's
     // items (the week's resolution, the station, GLONASS channels, ephemerides evaluated)
-    with_file("f.rtcm3", &crcs_made_right(data), |p| {
+    let right = ppkat_fuzz::checks_made_right::<gnss::raw::rtcm::Rtcm3>(data, |f| {
+        let n = f.len();
+        let c = gnss::raw::bits::crc24q(&f[..n - 3]).to_be_bytes();
+        f[n - 3..].copy_from_slice(&c[1..]);
+    });
+    with_file("f.rtcm3", &right, |p| {
         for hint in [
             None,
             Some(TimeHint::Year(2024)),
@@ -36,25 +41,3 @@ fuzz_target!(|data: &[u8]| {
     let _ = st.add(data);
     let _ = st.rinex();
 });
-
-/// `data` with the CRC of each frame recomputed: from the start, a `D3` with six zero bits
-/// after it begins a frame of the length it announces (when the input holds all of it); the
-/// search resumes after that frame, or one byte on.
-fn crcs_made_right(data: &[u8]) -> Vec<u8> {
-    use gnss::raw::rtcm::{payload_len, PREAMBLE};
-    let mut out = data.to_vec();
-    let mut i = 0;
-    while i + 6 <= out.len() {
-        if out[i] == PREAMBLE && out[i + 1] & 0xfc == 0 {
-            let end = i + 3 + payload_len(&out[i..]);
-            if end + 3 <= out.len() {
-                let c = gnss::raw::bits::crc24q(&out[i..end]).to_be_bytes();
-                out[end..end + 3].copy_from_slice(&c[1..]);
-                i = end + 3;
-                continue;
-            }
-        }
-        i += 1;
-    }
-    out
-}

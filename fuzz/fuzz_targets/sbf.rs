@@ -1,14 +1,24 @@
 #![no_main]
 //! Septentrio SBF logs: blocks, MeasEpoch (Type-1/Type-2 sub-blocks), the navigation blocks
 //! (GPSNav, GALNav, BDSNav, GLONav, each decoded record written back), GPSIon/GPSUtc and
-//! ExtEvent.
+//! ExtEvent; the log read as it is and with every block's CRC made right.
 
 use libfuzzer_sys::fuzz_target;
 use ppkat_fuzz::with_file;
 
 fuzz_target!(|data: &[u8]| {
     use gnss::raw::{sbf, sbf_nav, RawFormat};
+    // the input as it is: blocks with their CRCs, good or bad
     with_file("f.sbf", data, |p| {
+        let _ = gnss::raw::items::for_each_item(p, Some(RawFormat::Sbf), None, |_| {});
+    });
+    // and with every block's CRC made right, so that a mutated block reaches the log's items
+    // (epochs, events in RINEX order, ephemerides evaluated)
+    let right = ppkat_fuzz::checks_made_right::<sbf::Sbf>(data, |b| {
+        let c = sbf::crc16(&b[4..]).to_le_bytes();
+        b[2..4].copy_from_slice(&c);
+    });
+    with_file("f.sbf", &right, |p| {
         ppkat_fuzz::use_items(p, RawFormat::Sbf, None);
     });
     // a block on its own, as every decoder sees it

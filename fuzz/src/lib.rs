@@ -31,6 +31,32 @@ fn sweep_dead() {
     }
 }
 
+/// `data` with the checksum of each frame of format `F` made right by `fix` (given the whole
+/// frame): from the start, a header begins a frame of the length it announces when the input
+/// holds all of it, and the search resumes after that frame, or one byte on. A mutation
+/// rarely keeps a checksum right, so without this a log's items come only from the seeds'
+/// own frames.
+pub fn checks_made_right<F: gnss::raw::frames::Framing>(
+    data: &[u8],
+    fix: impl Fn(&mut [u8]),
+) -> Vec<u8> {
+    let mut out = data.to_vec();
+    let mut i = 0;
+    while i + F::HEADER <= out.len() {
+        if out[i] == F::SYNC {
+            if let Some(n) = F::frame_len(&out[i..i + F::HEADER]) {
+                if n >= F::HEADER && i + n <= out.len() {
+                    fix(&mut out[i..i + n]);
+                    i += n;
+                    continue;
+                }
+            }
+        }
+        i += 1;
+    }
+    out
+}
+
 /// What a command does with a raw log's items after decoding: time marks put in RINEX order
 /// among the epochs, and ephemerides loaded and evaluated as `spp`/`ppk` would.
 pub fn use_items(path: &Path, format: gnss::raw::RawFormat, hint: Option<gnss::raw::TimeHint>) {
