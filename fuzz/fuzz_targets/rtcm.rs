@@ -10,17 +10,20 @@ use ppkat_fuzz::with_file;
 
 fuzz_target!(|data: &[u8]| {
     use gnss::raw::{items::for_each_item, RawFormat, TimeHint};
-    // the input as it is: frames with their CRCs, good or bad, and what lies between them
-    with_file("f.rtcm3", data, |p| {
-        let _ = for_each_item(p, Some(RawFormat::Rtcm3), None, |_| {});
-    });
-    // and with every frame's CRC made right, so that a mutated payload reaches the log's
-    // items (the week's resolution, the station, GLONASS channels, ephemerides evaluated)
+    // with every frame's CRC made right, so that a mutated payload reaches the log's items
+    // (the week's resolution, the station, GLONASS channels, ephemerides evaluated)
     let right = ppkat_fuzz::checks_made_right::<gnss::raw::rtcm::Rtcm3>(data, |f| {
         let n = f.len();
-        let c = gnss::raw::bits::crc24q(&f[..n - 3]).to_be_bytes();
-        f[n - 3..].copy_from_slice(&c[1..]);
+        let good = gnss::raw::rtcm::frame(&f[3..n - 3]);
+        f[n - 3..].copy_from_slice(&good[n - 3..]);
     });
+    // the input as it is (frames with bad CRCs, and what lies between frames), when that
+    // differs: an input whose CRCs were all right is read below
+    if right != data {
+        with_file("f.rtcm3", data, |p| {
+            let _ = for_each_item(p, Some(RawFormat::Rtcm3), None, |_| {});
+        });
+    }
     with_file("f.rtcm3", &right, |p| {
         for hint in [
             None,
