@@ -157,7 +157,14 @@ fn pgm(path: &Path, b: &[u8]) -> Result<GeoidGrid> {
             "a PGM without '# Offset' and '# Scale' lines is no GeographicLib geoid grid",
         ));
     };
+    // A size of 0 needs no bytes, so it is refused here: 10¹³ empty rows ran for hours.
     let need = rows.checked_mul(cols).and_then(|n| n.checked_mul(2));
+    if rows < 2 || cols < 2 {
+        return Err(Error::input(
+            path,
+            format!("the PGM says {cols} × {rows} samples: a grid needs at least 2 × 2"),
+        ));
+    }
     if !(256..=65535).contains(&max) || need.is_none_or(|n| n > b.len().saturating_sub(at)) {
         return Err(Error::input(
             path,
@@ -179,8 +186,8 @@ fn pgm(path: &Path, b: &[u8]) -> Result<GeoidGrid> {
         path: path.to_path_buf(),
         lat0: -90.0,
         lon0: 0.0,
-        dlat: 180.0 / (rows.max(2) - 1) as f64,
-        dlon: 360.0 / cols.max(1) as f64,
+        dlat: 180.0 / (rows - 1) as f64,
+        dlon: 360.0 / cols as f64,
         rows,
         cols,
         n,
@@ -391,6 +398,12 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("shorter"), "{e}");
+        // 0 columns need no bytes: 4.4·10¹³ empty rows ran for hours (the fuzzer's timeout).
+        let empty = b"P5\n# Offset 0\n# Scale 1\n0 44444444444443\n6554";
+        let e = GeoidGrid::read(&tmp("empty.pgm", empty))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("0 × 44444444444443 samples"), "{e}");
     }
 
     #[test]

@@ -325,3 +325,21 @@ fn a_year_of_millions_is_an_unreadable_time_not_hours_of_calendar() {
     ]);
     fails_with(&o, &["year-pos.pos", "unreadable date/time"]);
 }
+
+/// A fuzzed geoid grid (the `geoid` target's timeout): a PGM of 0 columns and 4.4·10¹² rows
+/// needs no sample bytes, so it passed the size check and its rows were walked for hours.
+/// Now it is refused before a single exposure is written.
+#[test]
+fn a_geoid_pgm_of_zero_columns_is_refused_not_walked_for_hours() {
+    let grid = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/fuzz/geoid-pgm-zero-columns.pgm");
+    let times = file("times-geoid.csv", TIMES.as_bytes());
+    let spec = format!("geoid:{}", p(&grid));
+    let out = tmp("geoid-zero.csv");
+    let o = exposures(&out, &["--times", p(&times), "--height", &spec]);
+    fails_with(
+        &o,
+        &["geoid-pgm-zero-columns.pgm", "0 × 4444444444443 samples"],
+    );
+    assert!(!out.exists());
+}
