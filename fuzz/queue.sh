@@ -4,7 +4,8 @@
 # a target that saturates early gives its core to the next. saturate.sh's settings (CHUNK,
 # CAP, QUIET, OWN) pass through; each lane's output goes to logs/lane.N.txt, one line per
 # round as saturate.sh prints it. An argument may put settings for its target alone before
-# it, in one word: queue.sh 'OWN=1 patb' names. Ends when the queue is empty and every lane has finished.
+# it, in one word: queue.sh 'OWN=1 patb' names. Ends when the queue is empty and every lane
+# has finished.
 set -u
 cd "$(dirname "$0")"
 [ $# -eq 0 ] && { echo "usage: queue.sh TARGET…" >&2; exit 2; }
