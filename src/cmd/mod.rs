@@ -177,9 +177,13 @@ pub fn height_arg(s: &str) -> std::result::Result<String, String> {
 }
 
 /// The heights of a checked `--height` value, its grid read (a grid that cannot be read is a
-/// failure naming the file, exit code 1).
+/// failure naming the file once, exit code 1: the reader's error already names it).
 pub fn heights(s: &str) -> Result<integration::height::Heights> {
-    integration::height::Heights::parse(s).map_err(|e| anyhow::anyhow!("--height {s}: {e}"))
+    use integration::height::{Heights, HeightsError};
+    Heights::parse(s).map_err(|e| match e {
+        HeightsError::File(e) => anyhow::anyhow!("--height: {e}"),
+        HeightsError::Usage(m) => anyhow::anyhow!("{m}"),
+    })
 }
 
 /// A flag's number: finite (NaN and infinities are refused as bad usage, exit code 2).

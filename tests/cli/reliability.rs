@@ -342,5 +342,11 @@ fn a_geoid_pgm_of_zero_columns_is_refused_not_walked_for_hours() {
         &o,
         &["geoid-pgm-zero-columns.pgm", "0 × 4444444444443 samples"],
     );
+    let t = text(&o);
+    assert_eq!(
+        t.matches("geoid-pgm-zero-columns.pgm").count(),
+        1,
+        "named once: {t}"
+    );
     assert!(!out.exists());
 }
