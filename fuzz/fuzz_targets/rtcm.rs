@@ -19,11 +19,7 @@ fuzz_target!(|data: &[u8]| {
     });
     // the input as it is (frames with bad CRCs, and what lies between frames), when that
     // differs: an input whose CRCs were all right is read below
-    if right != data {
-        with_file("f.rtcm3", data, |p| {
-            let _ = for_each_item(p, Some(RawFormat::Rtcm3), None, |_| {});
-        });
-    }
+    ppkat_fuzz::read_as_is_when_changed("f.rtcm3", data, &right, RawFormat::Rtcm3);
     with_file("f.rtcm3", &right, |p| {
         for hint in [
             None,

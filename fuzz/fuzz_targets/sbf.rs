@@ -15,11 +15,7 @@ fuzz_target!(|data: &[u8]| {
         b[2..4].copy_from_slice(&c);
     });
     // the input as it is (blocks with bad CRCs), when that differs
-    if right != data {
-        with_file("f.sbf", data, |p| {
-            let _ = gnss::raw::items::for_each_item(p, Some(RawFormat::Sbf), None, |_| {});
-        });
-    }
+    ppkat_fuzz::read_as_is_when_changed("f.sbf", data, &right, RawFormat::Sbf);
     with_file("f.sbf", &right, |p| {
         ppkat_fuzz::use_items(p, RawFormat::Sbf, None);
     });

@@ -16,11 +16,7 @@ fuzz_target!(|data: &[u8]| {
         f[n - 2..].copy_from_slice(&good[n - 2..]);
     });
     // the input as it is (frames with bad checksums), when that differs
-    if right != data {
-        with_file("f.ubx", data, |p| {
-            let _ = gnss::raw::items::for_each_item(p, Some(RawFormat::Ubx), None, |_| {});
-        });
-    }
+    ppkat_fuzz::read_as_is_when_changed("f.ubx", data, &right, RawFormat::Ubx);
     with_file("f.ubx", &right, |p| {
         ppkat_fuzz::use_items(p, RawFormat::Ubx, None);
     });

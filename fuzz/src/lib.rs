@@ -57,6 +57,23 @@ pub fn checks_made_right<F: gnss::raw::frames::Framing>(
     out
 }
 
+/// Read `data` as a raw log of `format` (named `name`) when it differs from `right`, its copy
+/// with every frame's check made right ([`checks_made_right`]): frames with bad checks, and
+/// what lies between frames, as a log reader meets them. An input whose checks were all right
+/// is left to the caller, which reads `right`.
+pub fn read_as_is_when_changed(
+    name: &str,
+    data: &[u8],
+    right: &[u8],
+    format: gnss::raw::RawFormat,
+) {
+    if right != data {
+        with_file(name, data, |p| {
+            let _ = gnss::raw::items::for_each_item(p, Some(format), None, |_| {});
+        });
+    }
+}
+
 /// What a command does with a raw log's items after decoding: time marks put in RINEX order
 /// among the epochs, and ephemerides loaded and evaluated as `spp`/`ppk` would.
 pub fn use_items(path: &Path, format: gnss::raw::RawFormat, hint: Option<gnss::raw::TimeHint>) {
