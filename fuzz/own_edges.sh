@@ -3,7 +3,8 @@
 # library sources (files of this repository outside fuzz/; the standard library and the crates
 # of the registry left out), as "COVERED of INSTRUMENTED; gap GAP". With a second argument,
 # one line per source file first. ROOT is the repository the target was built from (default:
-# this one). Loads the corpus once with the built target (`cargo +nightly fuzz build -O` first).
+# this one). CORPUS is the folder loaded (default: corpus/TARGET). Loads the corpus once with
+# the built target (`cargo +nightly fuzz build -O` first).
 #
 # An edge counts as ppkat's when its function is in ppkat's sources, and the compiler inlines
 # the standard library into those functions (number parsing, Vec growth): such an edge is the
@@ -18,7 +19,7 @@ root=${ROOT:-$(cd .. && pwd)}
 root=${root%/}/
 bin=target/x86_64-unknown-linux-gnu/release/$1
 [ -x "$bin" ] || { echo "own_edges.sh: no $bin; run 'cargo +nightly fuzz build -O $1' first" >&2; exit 2; }
-"$bin" -runs=0 -max_len=65536 -print_coverage=1 "corpus/$1" 2>&1 |
+"$bin" -runs=0 -max_len=65536 -print_coverage=1 "${CORPUS:-corpus/$1}" 2>&1 |
     awk -v root="$root" -v by_file="${2:-}" '
     function ours(path) { return index(path, root) == 1 && index(path, root "fuzz/") != 1 }
     /^(UN)?COVERED_FUNC:/ {
