@@ -2,7 +2,8 @@
 # Run each named target (default: all) in rounds of CHUNK seconds from its corpus until a round
 # finds no coverage edge beyond the best seen (libFuzzer's "cov": for the first round, the
 # count after loading the corpus; after it, the largest of the earlier rounds), or CAP seconds
-# in all have run. Prints one line per round and a verdict per target; logs in logs/TARGET.rN.log.
+# in all have run. Prints one line per round and a verdict per target; logs in logs/TARGET.rN.log
+# (an earlier run's moved to logs/earlier/TARGET.DATE-TIME/ first).
 # Same settings as run.sh (`fuzz_run` of common.sh).
 # OWN=1: the verdict counts only the edges in ppkat's own library sources (own_edges.sh, a
 # census of the corpus before the first round and after each), for targets whose input runs
@@ -32,6 +33,11 @@ for t in "${targets[@]}"; do
     mkdir -p "corpus/$t"
     cp -n seeds/"$t"/* "corpus/$t/" 2>/dev/null
     generated_seeds "$t"
+    # the round logs of an earlier run of this target kept, not overwritten
+    if compgen -G "logs/$t.r*.log" >/dev/null; then
+        keep=logs/earlier/$t.$(date +%Y%m%d-%H%M%S)
+        mkdir -p "$keep" && mv logs/"$t".r*.log "$keep"/
+    fi
     spent=0 round=0 quiet=0 runs_all=0 best="" verdict="not saturated after ${CAP} s"
     own="" best_own="" gap="" best_gap=""
     census_on=$({ [ -n "${OWN:-}" ] || [ "${CENSUS:-1}" != 0 ]; } && echo 1)
