@@ -83,11 +83,13 @@ for t in "${targets[@]}"; do
         fi
         # the count not judged by is shown from round to round
         [ "${OWN:-}" = lines ] && [ -n "$own" ] && best_own=$own
-        [ "${OWN:-}" != lines ] && [ -n "$gap" ] && best_gap=$gap
+        [ -n "${OWN:-}" ] && [ "$OWN" != lines ] && [ -n "$gap" ] && best_gap=$gap
         if [ -n "$progress" ]; then
             quiet=0
-            [ -n "$own" ] && best_gap=$gap
-            [ -n "$own" ] && { [ -z "$best_own" ] || [ "$own" -gt "$best_own" ]; } && best_own=$own
+            if [ -n "$own" ]; then
+                best_gap=$gap
+                { [ -z "$best_own" ] || [ "$own" -gt "$best_own" ]; } && best_own=$own
+            fi
             [ -n "${final:-}" ] && best=$final
             continue
         fi
