@@ -24,3 +24,44 @@ generated_seeds() {
     project_toml) python3 project_seeds.py "corpus/$1" ;;
     esac
 }
+
+# shared_seeds TARGET: real files of ../shared/data (beside the repository) seed some targets
+# when present (both scripts call it after copying seeds/); they are copied into corpus/ only
+# (cut to the 64 KiB inputs are limited to), never into seeds/.
+DATA=../../shared/data
+SHARED=$DATA/photo
+GNSS=$DATA/gnss
+shared_seeds() {
+    local t=$1 c=corpus/$1 f k logs
+    [ -d "$DATA" ] || return 0
+    case $t in
+    rinex_obs)
+        # RINEX 2, 3 and Hatanaka heads, each also gzipped
+        python3 obs_seeds.py "$c" "$GNSS"/bell-ebre-2002-030/bell0300.02o "$GNSS"/onsa-2005-224/onsa2240.05o \
+            "$GNSS"/cssrlib-2021-265/SEPT265G.21O "$GNSS"/spirent-rose-2023/Rover-dynamic_MO_Spirent.obs \
+            "$GNSS"/esbc-2020-177/ESBC00DNK_R_20201770000_01D_30S_MO.crx.gz "$GNSS"/ubx-navsol-2025/F9T-L2-5min_convbin.obs ;;
+    xmp)
+        for f in "$SHARED"/brighton-beach/DJI_001[89].JPG; do
+            [ -f "$f" ] && python3 -c 'import sys; d=open(sys.argv[1],"rb").read(); a=d.find(b"<x:xmpmeta"); b=d.find(b"</x:xmpmeta>"); sys.stdout.buffer.write(d[a:b+12] if a>=0<b else b"")' "$f" >"$c/shared-$(basename "$f").xmp"
+        done ;;
+    photo_meta)
+        for f in "$SHARED"/brighton-beach/DJI_001[89].JPG; do
+            [ -f "$f" ] && head -c 65536 "$f" >"$c/shared-$(basename "$f")"
+        done ;;
+    micmac)
+        for f in "$SHARED"/micmac-formats/*.xml "$SHARED"/micmac-formats/Saisies-MMV1/*.xml "$SHARED"/micmac-formats/Saisies-MMV1/Ori-Ground_mm3d/*.xml; do
+            [ -f "$f" ] && cp "$f" "$c/shared-$(basename "$f")"
+        done ;;
+    colmap)
+        k=0
+        for f in cameras.txt images.txt points3D.txt; do
+            f=$SHARED/brighton-beach/colmap-3.8/$f
+            [ -f "$f" ] && { printf "\\x0$k"; head -c 65000 "$f"; } >"$c/shared-$(basename "$f")"
+            k=$((k + 1))
+        done ;;
+    ubx)
+        # GPS and Galileo subframes as the bare payloads the target also decodes
+        logs=("$GNSS"/ubx-navsol-*/*.ubx)
+        [ -f "${logs[0]}" ] && python3 sfrbx_seeds.py "$c" "${logs[@]}" ;;
+    esac
+}
