@@ -16,9 +16,9 @@ fuzz_run() {
         -max_total_time="$2" -rss_limit_mb=2048 -timeout=10 -max_len=65536 >"$3" 2>&1
 }
 
-# generated_seeds TARGET: seeds that a script writes into corpus/TARGET (both scripts call it
-# after copying seeds/): project_toml's fields with values of every TOML kind, its sections as
-# positional arrays and its output projections (project_seeds.py).
+# generated_seeds TARGET: seeds that a script writes into corpus/TARGET (by fill_corpus):
+# project_toml's fields with values of every TOML kind, its sections as positional arrays and
+# its output projections (project_seeds.py).
 generated_seeds() {
     case $1 in
     project_toml) python3 project_seeds.py "corpus/$1" ;;
@@ -26,8 +26,8 @@ generated_seeds() {
 }
 
 # shared_seeds TARGET: real files of ../shared/data (beside the repository) seed some targets
-# when present (both scripts call it after copying seeds/); they are copied into corpus/ only
-# (cut to the 64 KiB inputs are limited to), never into seeds/.
+# when present (by fill_corpus); they are copied into corpus/ only (cut to the 64 KiB inputs
+# are limited to), never into seeds/.
 DATA=../../shared/data
 SHARED=$DATA/photo
 GNSS=$DATA/gnss
@@ -64,4 +64,13 @@ shared_seeds() {
         logs=("$GNSS"/ubx-navsol-*/*.ubx)
         [ -f "${logs[0]}" ] && python3 sfrbx_seeds.py "$c" "${logs[@]}" ;;
     esac
+}
+
+# fill_corpus TARGET: corpus/TARGET made if need be, and given seeds/TARGET (files already there
+# kept), the generated seeds and the shared data's; both scripts call it before fuzzing.
+fill_corpus() {
+    mkdir -p "corpus/$1"
+    cp -n seeds/"$1"/* "corpus/$1/" 2>/dev/null
+    generated_seeds "$1"
+    shared_seeds "$1"
 }

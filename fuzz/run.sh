@@ -10,10 +10,7 @@ targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=("${ALL_TARGETS[@]}")
 mkdir -p logs
 for t in "${targets[@]}"; do
-    mkdir -p "corpus/$t"
-    cp -n seeds/"$t"/* "corpus/$t/" 2>/dev/null
-    generated_seeds "$t"
-    shared_seeds "$t"
+    fill_corpus "$t"
     fuzz_run "$t" "$SECS" "logs/$t.log"
     rc=$?
     done_line=$(grep -E '^Done [0-9]+ runs' "logs/$t.log" | tail -1)

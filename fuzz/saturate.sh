@@ -30,10 +30,7 @@ targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=("${ALL_TARGETS[@]}")
 mkdir -p logs
 for t in "${targets[@]}"; do
-    mkdir -p "corpus/$t"
-    cp -n seeds/"$t"/* "corpus/$t/" 2>/dev/null
-    generated_seeds "$t"
-    shared_seeds "$t"
+    fill_corpus "$t"
     # the round logs of an earlier run of this target kept, not overwritten
     if compgen -G "logs/$t.r*.log" >/dev/null; then
         keep=logs/earlier/$t.$(date +%Y%m%d-%H%M%S)
