@@ -31,8 +31,8 @@ def main():
     out = sys.argv[1]
     for path in sys.argv[2:]:
         name = os.path.basename(path)
-        with open(path, "rb") as f:
-            data = f.read(4 * LIMIT) if not path.endswith(".gz") else gzip.open(path).read(4 * LIMIT)
+        with (gzip.open if path.endswith(".gz") else open)(path, "rb") as f:
+            data = f.read(4 * LIMIT)
         if name.endswith(".gz"):
             name = name[:-3]
         h = head(data, 2 * LIMIT if data.startswith(b"1.0 ") or data.startswith(b"3.0 ") else LIMIT)
