@@ -43,8 +43,9 @@ pub fn checks_made_right<F: gnss::raw::frames::Framing>(
     let mut out = data.to_vec();
     let mut i = 0;
     while i + F::HEADER <= out.len() {
-        if out[i] == F::SYNC {
-            if let Some(n) = F::frame_len(&out[i..i + F::HEADER]) {
+        if F::is_sync(out[i]) {
+            let look = (out.len() - i).min(F::LOOKAHEAD);
+            if let Some(n) = F::frame_len(&out[i..i + look]) {
                 if n >= F::HEADER && i + n <= out.len() {
                     fix(&mut out[i..i + n]);
                     i += n;

@@ -8,7 +8,9 @@
 use gnss::obs::{read_obs, ObsFormat};
 use gnss::raw::convert::{convert, Outputs};
 use gnss::raw::rtcm_msm::WEEK_MS;
-use gnss::raw::rtcm_write::{channel_1020, msm, station_1005, week_1019, MsmSat, MsmSignal};
+use gnss::raw::rtcm_write::{
+    channel_1020, msm, station_1005, week_1019, week_1046, MsmSat, MsmSignal,
+};
 use gnss::raw::{RawFormat, TimeHint};
 use gnss::rinex::{ObsCode, ObsFile};
 use gnss::signal::frequency;
@@ -193,7 +195,8 @@ fn msm_round_trip_through_the_observation_seam_and_convert() {
     let input = read_obs(&log, None, None).unwrap();
     assert_eq!(input.format, ObsFormat::Raw(RawFormat::Rtcm3));
     let st = input.raw.as_ref().unwrap();
-    assert_eq!(st.checksum_failures, 1, "{st}");
+    // The corrupted Galileo MSM, and the NMEA line whose checksum is wrong.
+    assert_eq!(st.checksum_failures, 2, "{st}");
     assert_eq!(st.epochs, 3, "{st}");
     assert!(st.dropped.is_empty(), "{st}");
     let pos = st.station.arp.unwrap();
@@ -208,6 +211,7 @@ fn msm_round_trip_through_the_observation_seam_and_convert() {
         obs: &out,
         nav: None,
         events: None,
+        nmea: None,
     };
     let st2 = convert(&log, None, None, outs).unwrap();
     assert_eq!(st2.epochs, 3);
@@ -237,13 +241,33 @@ fn msm_without_a_week_is_refused_unless_a_date_is_given() {
 
 #[test]
 fn a_date_hint_contradicting_the_log_is_refused() {
+    // A GPS-only log dates itself weakly (week modulo 1024): the hint wins, with a warning.
     let (log, _) = write_log("other.rtcm3");
-    let e = read_obs(&log, None, Some(TimeHint::Date(2020, 1, 1)))
+    let weak = read_obs(&log, None, Some(TimeHint::Date(2020, 1, 1))).unwrap();
+    let st = weak.raw.unwrap();
+    assert!(
+        st.warnings
+            .iter()
+            .any(|w| w.contains("--date-hint 2020-01-01 taken over")),
+        "{st}"
+    );
+    assert_eq!(gnss::time::week_tow(weak.obs.epochs[0].time).0, 2086);
+    // A Galileo ephemeris of the observations' time dates it strongly: the hint is refused,
+    // naming both weeks.
+    let mut bytes = std::fs::read(&log).unwrap();
+    bytes.extend(week_1046(7, WEEK as u16, (TOW0_MS / 1000) as u32 - 1800));
+    let strong = tmp("strong.rtcm3");
+    std::fs::write(&strong, bytes).unwrap();
+    let e = read_obs(&strong, None, Some(TimeHint::Date(2020, 1, 1)))
         .unwrap_err()
         .to_string();
-    assert!(e.contains("contradicts"), "{e}");
+    assert!(
+        e.contains("contradicts") && e.contains("2086") && e.contains("2300"),
+        "{e}"
+    );
     // the log's own week agrees with a hint of its own day
     let day = gnss::time::from_week_tow(WEEK as u32, TOW0_MS as f64 / 1000.0);
     let (y, m, d, ..) = day.to_gregorian(hifitime::TimeScale::GPST);
+    assert!(read_obs(&strong, None, Some(TimeHint::Date(y, m, d))).is_ok());
     assert!(read_obs(&log, None, Some(TimeHint::Date(y, m, d))).is_ok());
 }

@@ -18,6 +18,7 @@ fn obs_only(obs: &Path) -> Outputs<'_> {
         obs,
         nav: None,
         events: None,
+        nmea: None,
     }
 }
 
@@ -205,6 +206,7 @@ fn time_marks_become_flag5_records_and_csv() {
         obs: &out,
         nav: None,
         events: Some(&csv),
+        nmea: None,
     };
     let st = convert(&input, None, None, outs).unwrap();
     assert_eq!((st.epochs, st.events, st.truncated_frames), (2, 2, 1));

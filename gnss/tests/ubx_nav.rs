@@ -29,6 +29,7 @@ fn sfrbx_ephemerides_match_convbin_nav() {
         obs: &obs,
         nav: Some(&nav),
         events: None,
+        nmea: None,
     };
     let st = convert(
         &dir.join("16dBatt_no_interference_coldstart.ubx"),
@@ -141,6 +142,7 @@ fn failed_parity_and_crc_are_counted_not_fatal() {
         obs: &obs,
         nav: Some(&nav),
         events: None,
+        nmea: None,
     };
     let st = convert(&input, None, None, outs).unwrap();
     assert_eq!(st.checksum_failures, 0);

@@ -22,6 +22,7 @@ fn both(log: &Path, name: &str) -> (ObsFile, ObsFile) {
         obs: &out,
         nav: None,
         events: None,
+        nmea: None,
     };
     convert(log, None, None, outs).unwrap();
     let direct = read_obs(log, None, None).unwrap();

@@ -120,6 +120,7 @@ fn convert_bench(path: &Path, format: gnss::raw::RawFormat) -> Result<ConvertBen
             obs: &obs,
             nav: None,
             events: None,
+            nmea: None,
         },
     );
     let with_nav = first.as_ref().is_ok_and(|s| s.nav.ephemerides > 0);
@@ -127,6 +128,7 @@ fn convert_bench(path: &Path, format: gnss::raw::RawFormat) -> Result<ConvertBen
         obs: &obs,
         nav: with_nav.then_some(nav.as_path()),
         events: None,
+        nmea: None,
     };
     let (t, cpu0) = (Instant::now(), thread_cpu_seconds());
     let mut runs = 0;

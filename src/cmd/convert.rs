@@ -12,9 +12,11 @@ pub enum FormatArg {
     /// Recognise the format from the file's content (UBX, RTCM 3 or SBF frames with a valid
     /// checksum)
     Auto,
-    /// u-blox UBX (RXM-RAWX measurements, TIM-TM2 time marks)
+    /// u-blox UBX (RXM-RAWX measurements, TIM-TM2 time marks); RTCM 3 and NMEA frames in the
+    /// same log are read too
     Ubx,
-    /// RTCM 3 (MSM4/5/6/7 observations, 1020 GLONASS channels, 1005/1006 station position)
+    /// RTCM 3 (MSM4/5/6/7 observations, 1020 GLONASS channels, 1005/1006 station position);
+    /// the same reader as ubx: a log may mix UBX, RTCM 3 and NMEA
     Rtcm3,
     /// Septentrio SBF (MeasEpoch measurements, GPSNav/GALNav/BDSNav/GLONav, ExtEvent)
     Sbf,
@@ -34,7 +36,13 @@ pub enum FormatArg {
 /// codes as RTKLIB and Septentrio's converter name them: GPS C1C/C2W/C2L/C5Q, Galileo
 /// C1C/C5Q/C7Q …; loss of lock from the lock time and the half-cycle flag), the decoded
 /// navigation blocks (GPSNav, GALNav, BDSNav, GLONav) for --nav, and ExtEvent time marks as
-/// flag-5 events. The format is recognised from the content, not the file name. Prints what was read and everything skipped: checksum failures, truncated
+/// flag-5 events. A log may mix UBX, RTCM 3 and NMEA (a u-blox base logging RXM-RAWX beside
+/// the corrections it sends): every frame is read as its protocol, observations come from
+/// RXM-RAWX when there are any (else from the MSMs), the station from 1005/1006/1033, and GGA
+/// gives the receiver's own solution for --nmea. MSM observations carry the time of week
+/// only: the week is the consensus of the log's ephemerides of the observations' time
+/// (Galileo and BeiDou weeks are whole, GPS/QZSS ones modulo 1024); stale ephemerides of other
+/// days are counted, named and not used. The format is recognised from the content, not the file name. Prints what was read and everything skipped: checksum failures, truncated
 /// frames, unused message types with their counts, dropped measurements by reason.
 #[derive(clap::Args)]
 pub struct Args {
@@ -54,6 +62,13 @@ pub struct Args {
     /// navigation subframes (RXM-SFRBX: GPS/QZSS LNAV, Galileo I/NAV, BeiDou D1/D2, GLONASS).
     #[arg(long, value_name = "OUT.nav")]
     nav: Option<PathBuf>,
+    /// RTKLIB .pos (lat/lon/ellipsoidal height, GPST) of the receiver's own solution read from
+    /// the log's NMEA GGA sentences, to compare ppkat's with: height = altitude + the geoid
+    /// separation GGA states; Q 1 where GGA says RTK fixed (4), 2 RTK float (5), 5 any other
+    /// fix; GGA gives the UTC time of day, placed on the log's day and moved to GPST by the
+    /// leap seconds.
+    #[arg(long, value_name = "OUT.pos")]
+    nmea: Option<PathBuf>,
     #[command(flatten)]
     time: super::TimeHintArgs,
 }
@@ -70,15 +85,21 @@ pub fn run(a: Args) -> Result<()> {
         obs: &a.out,
         nav: a.nav.as_deref(),
         events: a.events.as_deref(),
+        nmea: a.nmea.as_deref(),
     };
     let bar = super::progress::Bar::new();
     let st = convert_with_progress(&a.input, format, a.time.hint(), outs, &bar);
     drop(bar);
     let st = st?;
     print!("{st}");
-    for p in [Some(&a.out), a.nav.as_ref(), a.events.as_ref()]
-        .into_iter()
-        .flatten()
+    for p in [
+        Some(&a.out),
+        a.nav.as_ref(),
+        a.events.as_ref(),
+        a.nmea.as_ref(),
+    ]
+    .into_iter()
+    .flatten()
     {
         println!("wrote {}", p.display());
     }

@@ -110,13 +110,16 @@ impl From<ObsFormatArg> for Option<ObsFormat> {
 #[derive(clap::Args, Clone, Copy)]
 pub struct TimeHintArgs {
     /// Year an RTCM 3 log was recorded: picks the 1024-week cycle of its GPS and QZSS
-    /// ephemeris weeks (without it: the cycle from 2019-04-07 to 2038-11-20). Not enough when
-    /// the log carries no ephemeris: then give --date-hint.
+    /// ephemeris weeks when no Galileo or BeiDou ephemeris dates the log (without it: the
+    /// cycle from 2019-04-07 to 2038-11-20). Not enough when the log carries no ephemeris of
+    /// the observations' time: then give --date-hint.
     #[arg(long, value_name = "YYYY", value_parser = clap::value_parser!(i32).range(1980..=2200), conflicts_with = "date_hint")]
     year_hint: Option<i32>,
     /// Day (GPST) an RTCM 3 log begins, within 3 days: places its observations in their GPS
-    /// week. Needed when the log carries no ephemeris message giving the week (1019, 1042,
-    /// 1044, 1045, 1046); checked against them otherwise (a contradiction is an error).
+    /// week. Needed when the log carries no ephemeris of the observations' time (1019, 1042,
+    /// 1044, 1045, 1046). It wins over a week that only GPS/QZSS ephemerides (weeks modulo
+    /// 1024) point at, with a warning when they differ; a contradiction with Galileo or
+    /// BeiDou ephemerides of the observations' time is an error naming both weeks.
     #[arg(long, value_name = "YYYY-MM-DD", value_parser = date_hint)]
     date_hint: Option<TimeHint>,
 }

@@ -120,7 +120,7 @@ fn base_marker(base: &ObsFile, base_pos: BasePosition, warnings: &mut Vec<String
                 Error::input(&base.path, "no base position: give --base-pos X,Y,Z or --base-llh LAT,LON,H (the header has none either)")
             })?;
             warnings.push(format!(
-                "BASE POSITION TAKEN FROM THE HEADER of {} ({:.3} {:.3} {:.3}): its error goes straight into every rover position; give --base-pos or --base-llh",
+                "BASE POSITION TAKEN FROM THE HEADER of {} ({:.3} {:.3} {:.3}; of a raw log, its RTCM 1005/1006 station message): its error goes straight into every rover position; give --base-pos or --base-llh",
                 base.path.display(),
                 p.0.x,
                 p.0.y,

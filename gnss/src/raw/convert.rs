@@ -10,6 +10,7 @@
 //! the log's size.
 
 use super::items::{for_each_item, Edge, LogNav, RawItem};
+use super::nmea::NmeaFix;
 use super::records::{span, write_raw_epoch, RinexOrder, RinexOut, Scan};
 use super::spill::{self, Spill};
 use super::{RawFormat, RawStats, TimeHint};
@@ -17,7 +18,7 @@ use crate::error::{Error, Result};
 use crate::rinex::write::{self, HeaderOut};
 use crate::rinex::write_nav::{write_nav, NavHeaderOut};
 use crate::rinex::ObsCode;
-use crate::solution::write_atomic;
+use crate::solution::{write_atomic, write_pos, PosFormat, PosRecord};
 use crate::sv::Constellation;
 use std::path::Path;
 
@@ -30,6 +31,8 @@ pub struct Outputs<'a> {
     pub nav: Option<&'a Path>,
     /// CSV of every time-mark edge.
     pub events: Option<&'a Path>,
+    /// RTKLIB `.pos` of the receiver's own fixes (NMEA GGA).
+    pub nmea: Option<&'a Path>,
 }
 
 /// Convert `input` to the RINEX 3.04 files and the event CSV of `outs`; `hint` settles RTCM 3
@@ -63,9 +66,13 @@ pub fn convert_with_progress(
     let mut spill = Spill::create(out).map_err(spill_err)?;
     let mut kept: std::io::Result<()> = Ok(());
     let mut order = RinexOrder::default();
+    let mut fixes = Vec::new();
     progress.set_len("reading the log, epoch", 0);
     let st = for_each_item(input, format, hint, |it| {
         lognav.add(&it);
+        if let RawItem::Fix(fix) = &it {
+            fixes.push(*fix);
+        }
         if let RawItem::Epoch(e) = &it {
             scan.add(e);
             progress.inc(1);
@@ -87,6 +94,9 @@ pub fn convert_with_progress(
     progress.set_len("writing RINEX records", records);
     if let Some(p) = outs.nav {
         write_nav_file(input, p, &lognav, &st)?;
+    }
+    if let Some(p) = outs.nmea {
+        write_nmea_pos(input, p, &fixes)?;
     }
     let (first, last) = span(&scan, input)?;
     let station = st.station.rinex();
@@ -195,6 +205,40 @@ fn write_nav_file(input: &Path, path: &Path, nav: &LogNav, st: &RawStats) -> Res
     };
     write_atomic(path, |w| write_nav(w, &h, &nav.records))?;
     Ok(())
+}
+
+/// The receiver's own fixes as an RTKLIB `.pos` (llh); an error when the log has none.
+fn write_nmea_pos(input: &Path, path: &Path, fixes: &[NmeaFix]) -> Result<()> {
+    if fixes.is_empty() {
+        return Err(Error::input(
+            input,
+            "no NMEA GGA sentence with a fix in the log: enable GGA output on the receiver \
+             (u-blox CFG-MSGOUT-NMEA_ID_GGA) or leave out --nmea",
+        ));
+    }
+    let records: Vec<PosRecord> = fixes
+        .iter()
+        .map(|f| PosRecord {
+            time: f.time,
+            pos: f.pos,
+            quality: f.quality,
+            nsat: f.nsat,
+            cov: nalgebra::Matrix3::zeros(),
+            age: 0.0,
+            ratio: 0.0,
+        })
+        .collect();
+    let header = vec![
+        format!(
+            "program   : ppkat convert --nmea: the receiver's own solution (NMEA GGA) of {}",
+            input.file_name().unwrap_or_default().to_string_lossy()
+        ),
+        "GGA in UTC is written in GPST (+ the leap seconds); height = altitude + geoid \
+         separation; Q 1 from GGA quality 4 (RTK fixed), 2 from 5 (RTK float), 5 from any \
+         other fix; GGA has no sigmas (written as 0)"
+            .to_string(),
+    ];
+    write_pos(path, &header, &records, PosFormat::Llh)
 }
 
 /// One record as RINEX text; an epoch without a satellite of the header's types is none.

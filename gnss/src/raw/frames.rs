@@ -15,10 +15,14 @@ use std::marker::PhantomData;
 pub trait Framing {
     /// Bytes of header needed to know a frame's length.
     const HEADER: usize;
-    /// The first byte of every frame (a short tail starting with it is a cut frame).
-    const SYNC: u8;
-    /// The whole frame's length (header, payload, checksum) from a header, or `None` when
-    /// the bytes are not a header.
+    /// Bytes handed to [`Self::frame_len`] when the input has them (at least `HEADER`): a
+    /// format whose length is found by searching for a terminator (NMEA) looks further.
+    const LOOKAHEAD: usize = Self::HEADER;
+    /// Whether a frame may start with this byte (a short tail starting with it is a cut
+    /// frame).
+    fn is_sync(b: u8) -> bool;
+    /// The whole frame's length (header, payload, checksum) from a header (`HEADER` to
+    /// `LOOKAHEAD` bytes), or `None` when the bytes are not a header.
     fn frame_len(header: &[u8]) -> Option<usize>;
     /// Whether the checksum of a whole frame holds.
     fn check(frame: &[u8]) -> bool;
@@ -72,7 +76,7 @@ impl<R: Read, F: Framing> FrameScanner<R, F> {
             let avail = self.fill(F::HEADER, stats)?;
             if avail < F::HEADER {
                 if avail > 0 {
-                    if self.buf[self.start] == F::SYNC {
+                    if F::is_sync(self.buf[self.start]) {
                         stats.truncated_frames += 1;
                     }
                     stats.skipped_bytes += avail as u64;
@@ -80,7 +84,8 @@ impl<R: Read, F: Framing> FrameScanner<R, F> {
                 }
                 return Ok(None);
             }
-            let Some(len) = F::frame_len(&self.buf[self.start..self.start + F::HEADER]) else {
+            let look = self.fill(F::LOOKAHEAD, stats)?.min(F::LOOKAHEAD);
+            let Some(len) = F::frame_len(&self.buf[self.start..self.start + look]) else {
                 self.start += 1;
                 stats.skipped_bytes += 1;
                 continue;

@@ -6,16 +6,14 @@
 //! bounded), and the [`RawStats`] of everything read and dropped. Used by
 //! [`super::convert`] (RINEX files) and [`super::source`] (observations in memory).
 
-use super::rtcm_msm::WEEK_MS;
-use super::ubx::{self, FrameReader, Tm2};
-use super::ubx_nav::{NavDecoder, NavOut};
-use super::ubx_obs::{RawEpoch, RawxConverter};
+use super::ubx::Tm2;
+use super::ubx_obs::RawEpoch;
 use super::{detect, RawFormat, RawStats, TimeHint};
 use crate::error::{Error, Result};
 use crate::rinex::nav::{Klobuchar, NavFile, NavRecord};
 use hifitime::Epoch;
 use std::fs::File;
-use std::io::{BufReader, Read};
+use std::io::Read;
 use std::path::Path;
 
 /// Which edge of a time-mark pulse.
@@ -58,6 +56,8 @@ pub enum RawItem {
     GpsIono(Klobuchar, i32),
     /// BeiDou Klobuchar parameters from the navigation message.
     BdsIono(Klobuchar),
+    /// The receiver's own position fix (NMEA GGA).
+    Fix(super::nmea::NmeaFix),
 }
 
 /// The navigation data of a log, gathered from its items.
@@ -142,19 +142,17 @@ pub fn for_each_item(
     path: &Path,
     format: Option<RawFormat>,
     hint: Option<TimeHint>,
-    mut f: impl FnMut(RawItem),
+    f: impl FnMut(RawItem),
 ) -> Result<RawStats> {
     let io = Error::io(path);
-    let mut file = BufReader::new(File::open(path).map_err(io)?);
     let format = match format {
         Some(fm) => fm,
         None => {
             let mut head = Vec::new();
-            (&mut file)
-                .take(1 << 16)
-                .read_to_end(&mut head)
+            File::open(path)
+                .and_then(|file| file.take(1 << 16).read_to_end(&mut head))
                 .map_err(io)?;
-            let fm = detect(&head).ok_or_else(|| {
+            detect(&head).ok_or_else(|| {
                 Error::input(
                     path,
                     "no UBX frame (B5 62 with a valid checksum), RTCM 3 frame (D3 with a valid \
@@ -162,68 +160,17 @@ pub fn for_each_item(
                      log ppkat reads; give a UBX, RTCM 3 or SBF log, or --format \
                      ubx|rtcm3|sbf to read it anyway",
                 )
-            })?;
-            file = BufReader::new(File::open(path).map_err(io)?);
-            fm
+            })?
         }
     };
     match format {
-        RawFormat::Rtcm3 => return super::rtcm_items::for_each_rtcm(path, hint, f),
-        RawFormat::Sbf => return super::sbf_items::for_each_sbf(path, f),
-        RawFormat::Ubx => {}
+        RawFormat::Sbf => super::sbf_items::for_each_sbf(path, f),
+        RawFormat::Ubx | RawFormat::Rtcm3 => super::log_items::for_each_log_item(path, hint, f),
     }
-    let mut r = FrameReader::new(file);
-    let mut st = RawStats::default();
-    let mut conv = RawxConverter::new();
-    let mut nav = NavDecoder::new();
-    let mut now_ms = None;
-    let mut leap = 18i8;
-    let mut order = EpochOrder::default();
-    while let Some(fr) = r.next_frame(&mut st).map_err(io)? {
-        match (fr.class, fr.id) {
-            (0x02, 0x15) => {
-                let Some(x) = ubx::decode_rawx(fr.payload) else {
-                    *st.malformed.entry("RXM-RAWX".into()).or_default() += 1;
-                    continue;
-                };
-                if x.leap_valid {
-                    leap = x.leap_s;
-                }
-                if x.week != 0 {
-                    now_ms = Some(
-                        x.week as i64 * WEEK_MS
-                            + (x.rcv_tow.clamp(0.0, 604_800.0) * 1000.0).round() as i64,
-                    );
-                }
-                if let Some(e) = conv.epoch(&x, &mut st) {
-                    order.emit(e, &mut st, &mut f);
-                }
-            }
-            (0x0d, 0x03) => {
-                let Some(t) = ubx::decode_tm2(fr.payload) else {
-                    *st.malformed.entry("TIM-TM2".into()).or_default() += 1;
-                    continue;
-                };
-                for ev in marks(&t, leap) {
-                    st.events += 1;
-                    f(RawItem::Event(ev));
-                }
-            }
-            (0x02, 0x13) => match nav.push(fr.payload, now_ms, &mut st) {
-                Some(NavOut::Ephemeris(r)) => f(RawItem::Ephemeris(r)),
-                Some(NavOut::GpsIono(k, l)) => f(RawItem::GpsIono(k, l)),
-                Some(NavOut::BdsIono(k)) => f(RawItem::BdsIono(k)),
-                None => {}
-            },
-            (c, i) => *st.unused.entry(ubx::type_name(c, i)).or_default() += 1,
-        }
-    }
-    nav.finish(&mut st);
-    Ok(st)
 }
 
 /// The new edges of a TIM-TM2 message as events in GPST.
-fn marks(t: &Tm2, leap: i8) -> Vec<EventMark> {
+pub(crate) fn marks(t: &Tm2, leap: i8) -> Vec<EventMark> {
     let mut v = Vec::new();
     for (new, edge, (week, tow)) in [
         (t.new_rising, Edge::Rising, t.rising),

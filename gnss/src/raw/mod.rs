@@ -29,13 +29,16 @@ pub mod glo_nav;
 pub mod inav;
 pub mod items;
 pub mod lnav;
+pub mod log_items;
+pub mod mixed;
+pub mod nmea;
 pub mod records;
 pub mod rtcm;
 pub mod rtcm_eph;
 pub mod rtcm_eph_write;
-pub mod rtcm_items;
 pub mod rtcm_msm;
 pub mod rtcm_station;
+pub mod rtcm_week;
 pub mod rtcm_write;
 pub mod sbf;
 pub mod sbf_eph_write;
@@ -189,8 +192,10 @@ pub struct RawStats {
     pub checksum_failures: u64,
     /// A frame cut off by the end of the file.
     pub truncated_frames: u64,
-    /// Bytes outside any valid frame (noise, NMEA, other protocols).
+    /// Bytes outside any valid frame (noise, other protocols).
     pub skipped_bytes: u64,
+    /// Frames per protocol (`UBX`, `RTCM 3`, `NMEA`) of a log that may mix them.
+    pub protocols: BTreeMap<String, u64>,
     /// Frames of types the converter does not use, counted by type name.
     pub unused: BTreeMap<String, u64>,
     /// Frames of a used type whose payload is too short for what it announces.
@@ -212,6 +217,10 @@ pub struct RawStats {
     pub station: rtcm_station::Station,
     /// Where the GPS week of the observations came from (RTCM 3: a message or a hint).
     pub time_source: Option<String>,
+    /// Receiver fixes read from NMEA GGA.
+    pub nmea_fixes: u64,
+    /// What the user should know of the decoding (a hint taken over the log's evidence).
+    pub warnings: Vec<String>,
 }
 
 /// What became of the navigation messages of a log: every subframe or page that failed a
@@ -243,6 +252,11 @@ pub struct NavStats {
     pub ephemerides: u64,
     /// Satellites whose last parts never formed an ephemeris by the end of the log.
     pub incomplete: u64,
+    /// Ephemerides whose time of clock lies far from the log's time (kept by the receiver
+    /// from an earlier day): not used.
+    pub stale: u64,
+    /// The first of them, named (satellite, message, time of clock, days from the log).
+    pub stale_named: Vec<String>,
 }
 
 impl RawStats {
@@ -254,9 +268,19 @@ impl RawStats {
 
 impl fmt::Display for RawStats {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let by_protocol = if self.protocols.len() > 1 {
+            let parts: Vec<String> = self
+                .protocols
+                .iter()
+                .map(|(k, v)| format!("{v} {k}"))
+                .collect();
+            format!(" ({})", parts.join(", "))
+        } else {
+            String::new()
+        };
         writeln!(
             f,
-            "read {} bytes: {} frames, {} checksum failures, {} truncated, {} bytes outside frames",
+            "read {} bytes: {} frames{by_protocol}, {} checksum failures, {} truncated, {} bytes outside frames",
             self.bytes,
             self.frames,
             self.checksum_failures,
@@ -292,9 +316,28 @@ impl fmt::Display for RawStats {
                 n.incomplete
             )?;
         }
+        if n.stale > 0 {
+            writeln!(
+                f,
+                "{} stale ephemerides not used (time of clock far from the log's): {}{}",
+                n.stale,
+                n.stale_named.join(", "),
+                if n.stale as usize > n.stale_named.len() {
+                    ", …"
+                } else {
+                    ""
+                }
+            )?;
+        }
         write!(f, "{}", self.station)?;
         if let Some(t) = &self.time_source {
             writeln!(f, "GPS week: {t}")?;
+        }
+        if self.nmea_fixes > 0 {
+            writeln!(f, "{} receiver fixes (NMEA GGA)", self.nmea_fixes)?;
+        }
+        for w in &self.warnings {
+            writeln!(f, "warning: {w}")?;
         }
         if !self.unused.is_empty() {
             writeln!(f, "not used: {}", list(&self.unused))?;

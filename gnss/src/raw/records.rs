@@ -259,7 +259,10 @@ impl RinexOrder {
                     self.pending.insert(key, ev);
                 }
             }
-            RawItem::Ephemeris(_) | RawItem::GpsIono(..) | RawItem::BdsIono(_) => {}
+            RawItem::Ephemeris(_)
+            | RawItem::GpsIono(..)
+            | RawItem::BdsIono(_)
+            | RawItem::Fix(_) => {}
             RawItem::Epoch(e) => {
                 let t = gpst(e.week, e.tow);
                 let t_ns = gpst_ns(e.week, e.tow);

@@ -53,7 +53,9 @@ pub struct Rtcm3;
 
 impl Framing for Rtcm3 {
     const HEADER: usize = 3;
-    const SYNC: u8 = PREAMBLE;
+    fn is_sync(b: u8) -> bool {
+        b == PREAMBLE
+    }
     fn frame_len(h: &[u8]) -> Option<usize> {
         (h[0] == PREAMBLE && h[1] & 0xfc == 0).then(|| payload_len(h) + 6)
     }

@@ -108,17 +108,20 @@ pub fn gps_week(wn10: u32, reference: Option<i64>) -> i64 {
     }
 }
 
-/// `week` moved by one when the instant `week`/`sow` (GPST, plus `offset_ms`) lies more than
-/// half a week from `now`.
+/// `week` moved by one when the instant `week`/`sow` (GPST, plus `offset_ms`) lies between
+/// half a week and a week and a half from `now`: the week of transmission beside a toe of
+/// the next or the last week. An instant farther away is a stale ephemeris kept from
+/// another week, left as it is.
 fn week_near(week: i64, sow: f64, offset_ms: i64, now: Option<i64>) -> i64 {
     let Some(now) = now else { return week };
     let t = week * WEEK_MS + (sow * 1000.0) as i64 + offset_ms;
-    if t - now > WEEK_MS / 2 {
-        week - 1
-    } else if now - t > WEEK_MS / 2 {
-        week + 1
-    } else {
+    let off = t - now;
+    if off.abs() <= WEEK_MS / 2 || off.abs() > 3 * WEEK_MS / 2 {
         week
+    } else if off > 0 {
+        week - 1
+    } else {
+        week + 1
     }
 }
 

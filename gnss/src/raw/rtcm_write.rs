@@ -229,6 +229,22 @@ pub fn week_1019(week: u16, toc_s: u32) -> Vec<u8> {
     frame(&w.buf)
 }
 
+/// A Galileo I/NAV ephemeris frame (1046) of satellite `prn` carrying only the GST week
+/// (GPS week − 1024, 12 bits) and time of clock, the fields the decoder dates a log by; the
+/// orbit fields are zero.
+pub fn week_1046(prn: u8, gps_week: u16, toc_s: u32) -> Vec<u8> {
+    let mut w = Writer {
+        buf: vec![0; 63],
+        pos: 0,
+    };
+    w.put(12, 1046);
+    w.put(6, prn as i64);
+    w.put(12, (gps_week.saturating_sub(1024) % 4096) as i64);
+    w.pos = 62;
+    w.put(14, (toc_s / 60) as i64);
+    frame(&w.buf)
+}
+
 /// A GLONASS ephemeris frame (1020) carrying only the slot and frequency channel.
 pub fn channel_1020(slot: u8, channel: i8) -> Vec<u8> {
     let mut w = Writer {

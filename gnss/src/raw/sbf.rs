@@ -200,7 +200,9 @@ pub struct Sbf;
 
 impl Framing for Sbf {
     const HEADER: usize = 8;
-    const SYNC: u8 = SYNC1;
+    fn is_sync(b: u8) -> bool {
+        b == SYNC1
+    }
     fn frame_len(h: &[u8]) -> Option<usize> {
         header_len(h)
     }

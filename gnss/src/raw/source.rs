@@ -55,7 +55,10 @@ pub fn read_log(path: &Path, format: Option<RawFormat>, hint: Option<TimeHint>) 
                 items.push(RawItem::Epoch(e));
             }
             RawItem::Event(_) => items.push(it),
-            RawItem::Ephemeris(_) | RawItem::GpsIono(..) | RawItem::BdsIono(_) => {}
+            RawItem::Ephemeris(_)
+            | RawItem::GpsIono(..)
+            | RawItem::BdsIono(_)
+            | RawItem::Fix(_) => {}
         }
     })?;
     span(&scan, path)?;

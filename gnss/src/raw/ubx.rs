@@ -99,7 +99,9 @@ pub struct Ubx;
 
 impl Framing for Ubx {
     const HEADER: usize = 6;
-    const SYNC: u8 = SYNC1;
+    fn is_sync(b: u8) -> bool {
+        b == SYNC1
+    }
     fn frame_len(h: &[u8]) -> Option<usize> {
         let len = u16::from_le_bytes([h[4], h[5]]) as usize;
         (h[0] == SYNC1 && h[1] == SYNC2 && len <= MAX_PAYLOAD).then_some(len + 8)
