@@ -2,7 +2,8 @@
 //!
 //! - Candidates: SD ambiguity states of non-GLONASS satellites (GLONASS SD ambiguities absorb
 //!   inter-frequency biases and stay float) locked for `min_lock` epochs, observed this epoch
-//!   above the AR elevation mask.
+//!   above the AR elevation mask, whose phase carries no unresolved half cycle at either
+//!   receiver (such a phase may be half a cycle off: it stays float and is never held).
 //! - Double differences per system and slot ([`DdGroup`]); pivot = the highest satellite among
 //!   those locked for `mature_lock` epochs (a freshly reset pivot would make every DD of its
 //!   group uncertain). The DD operator D maps the state to the DD ambiguities: +1 on the
@@ -152,7 +153,13 @@ fn constrain(
     true
 }
 
-/// The ambiguities that may be fixed this epoch, in state order.
+/// Whether either receiver's phase of `slot` carries an unresolved half-cycle ambiguity.
+pub(super) fn half_cycle(p: &Pair, slot: usize) -> bool {
+    p.r.half_cycle(slot) || p.b.half_cycle(slot)
+}
+
+/// The ambiguities that may be fixed this epoch, in state order: locked long enough, above
+/// the AR mask, and (with `half_cycle_float`) without an unresolved half cycle.
 fn candidates(st: &State, o: &PpkOptions, pairs: &[Pair]) -> Vec<Candidate> {
     let mut cands = Vec::new();
     for (state, s) in st.sats() {
@@ -168,6 +175,9 @@ fn candidates(st: &State, o: &PpkOptions, pairs: &[Pair]) -> Vec<Candidate> {
         else {
             continue;
         };
+        if o.half_cycle_float && half_cycle(p, amb.slot) {
+            continue;
+        }
         if p.el >= o.ar_elev_mask {
             cands.push(Candidate {
                 state,

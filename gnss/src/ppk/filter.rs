@@ -425,13 +425,21 @@ impl<'a> Filter<'a> {
         }
     }
 
-    /// Lock counts and last-seen epochs of the states observed this epoch.
+    /// Lock counts and last-seen epochs of the states observed this epoch; ambiguities kept
+    /// float for a half cycle counted.
     fn count_locks(&mut self, t: Epoch, pairs: &[Pair]) {
+        let mut half = 0;
         for (key, track) in self.state.tracks_mut() {
-            if pairs.iter().any(|p| observes(p, key)) {
+            if let Some(p) = pairs.iter().find(|p| observes(p, key)) {
                 track.lock += 1;
                 track.last = t;
+                if let StateKey::Ambiguity(a) = key {
+                    half += usize::from(ar::half_cycle(p, a.slot));
+                }
             }
+        }
+        if self.opts.half_cycle_float {
+            self.stats.half_cycle_float += half;
         }
     }
 

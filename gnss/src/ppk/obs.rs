@@ -37,6 +37,8 @@ pub struct SlotCols {
     pub code: Option<usize>,
     /// Column of the Doppler, when present.
     pub doppler: Option<usize>,
+    /// Column of the carrier-to-noise density (S), when present.
+    pub snr: Option<usize>,
     /// The phase observation code.
     pub phase_code: ObsCode,
 }
@@ -67,11 +69,13 @@ impl SignalPlan {
                 let code = find(b'C', attr).or_else(|| attrs.iter().find_map(|&a| find(b'C', a)));
                 let doppler =
                     find(b'D', attr).or_else(|| attrs.iter().find_map(|&a| find(b'D', a)));
+                let snr = find(b'S', attr).or_else(|| attrs.iter().find_map(|&a| find(b'S', a)));
                 row[k] = Some(SlotCols {
                     band: *band,
                     phase,
                     code,
                     doppler,
+                    snr,
                     phase_code: types[phase],
                 });
             }
@@ -94,11 +98,23 @@ pub struct SatMeas {
     pub p: [f64; NF],
     /// Doppler, Hz.
     pub d: [f64; NF],
-    /// Loss-of-lock indicator of the phase per slot.
+    /// Loss-of-lock indicator of the phase per slot (bit 0: a slip since the last epoch; bit
+    /// 1: the half-cycle ambiguity not resolved, so the phase may be half a cycle off).
     pub lli: [u8; NF],
+    /// Carrier-to-noise density per slot, dB-Hz (NaN when the file has none).
+    pub snr: [f64; NF],
 }
 
+/// Loss-of-lock bit of an unresolved half-cycle ambiguity (RINEX LLI bit 1).
+pub const LLI_HALF_CYCLE: u8 = 2;
+
 impl SatMeas {
+    /// Whether the phase of slot `f` may be half a cycle off (its half-cycle ambiguity not
+    /// yet resolved by the receiver).
+    pub fn half_cycle(&self, f: usize) -> bool {
+        self.lli[f] & LLI_HALF_CYCLE != 0
+    }
+
     /// Wavelength of slot `f`, metres.
     pub fn wavelength(&self, f: usize) -> f64 {
         crate::orbit::C / self.freq[f]
@@ -132,6 +148,7 @@ pub fn extract(
             p: [f64::NAN; NF],
             d: [f64::NAN; NF],
             lli: [0; NF],
+            snr: [f64::NAN; NF],
         };
         let mut any = false;
         for (k, c) in row.iter().enumerate().take(nf) {
@@ -154,6 +171,10 @@ pub fn extract(
             }
             if let Some(di) = c.doppler {
                 m.d[k] = s.get(di).value;
+            }
+            if let Some(si) = c.snr {
+                let v = s.get(si).value;
+                m.snr[k] = if v > 0.0 { v } else { f64::NAN };
             }
         }
         if any {

@@ -132,6 +132,12 @@ pub struct PpkOptions {
     pub max_fixed_sigma: f64,
     /// Fewest double-difference ambiguities for a fix.
     pub min_fix_ambiguities: usize,
+    /// Keep float the ambiguity of a phase whose half-cycle ambiguity the receiver has not
+    /// resolved (RINEX LLI bit 1; u-blox trkStat halfCyc not set, MSM and SBF half-cycle
+    /// flags): such a phase may be half a cycle off, so its double differences are not
+    /// integers and fixing them gives wrong integers. On by default; off only to show what it
+    /// prevents.
+    pub half_cycle_float: bool,
     /// Variance of the fix-and-hold constraint, cycles².
     pub hold_variance: f64,
     /// Estimate a single-difference slant ionospheric delay per satellite (the
@@ -195,6 +201,7 @@ impl Default for PpkOptions {
             min_success_rate: 0.999,
             max_fixed_sigma: 0.08,
             min_fix_ambiguities: 4,
+            half_cycle_float: true,
             hold_variance: 0.001,
             iono: Estimate::Auto,
             iono_sigma_per_km: 0.004,

@@ -77,6 +77,9 @@ pub struct PassStats {
     /// Smoothed fixes rejected because the data before or after the epoch alone fixed an
     /// ambiguity to another integer.
     pub smoothed_fixes_rejected: usize,
+    /// Ambiguity-epochs kept float because a receiver had not resolved the half-cycle
+    /// ambiguity of the phase.
+    pub half_cycle_float: usize,
     /// Post-fit double-difference phase residuals of the float solution, metres.
     pub phase_residuals: Spread,
     /// Post-fit double-difference code residuals of the float solution, metres.

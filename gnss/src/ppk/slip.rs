@@ -10,7 +10,7 @@
 //! 0.1 s apart is mostly noise: extrapolating with it raised false slips at 10 Hz). At 1 s
 //! the threshold is about 5 cm; at 30 s 8 cm (extrapolated) or 20 cm (plain).
 
-use super::obs::{SatMeas, NF};
+use super::obs::{SatMeas, LLI_HALF_CYCLE, NF};
 use crate::orbit::C;
 use crate::sv::Sv;
 use hifitime::Epoch;
@@ -79,6 +79,9 @@ pub enum SlipCause {
     Doppler,
     /// A gap longer than the limit.
     Gap,
+    /// The receiver resolved (or lost) the half-cycle ambiguity of the phase (RINEX LLI bit
+    /// 1 changed): the phase may have stepped by half a cycle.
+    HalfCycle,
 }
 
 #[derive(Clone, Debug)]
@@ -243,6 +246,11 @@ impl SlipDetector {
                         let flag = if self.backward { h.lli[f] } else { m.lli[f] };
                         if flag & 1 != 0 {
                             *o = Some(SlipCause::LossOfLock);
+                        } else if (h.lli[f] ^ m.lli[f]) & LLI_HALF_CYCLE != 0
+                            && m.l[f].is_finite()
+                            && h.l[f].is_finite()
+                        {
+                            *o = Some(SlipCause::HalfCycle);
                         }
                     }
                     if self.gf_jump(t, gf, h) {
@@ -390,6 +398,44 @@ mod tests {
         assert_eq!(others, 2, "{b:?}");
     }
 
+    /// The half-cycle flag appearing or clearing breaks the arc in both directions (the
+    /// receiver may step the phase by half a cycle when it resolves it); a flag held over an
+    /// arc breaks nothing.
+    #[test]
+    fn half_cycle_flag_changes_break_the_arc() {
+        let t0 = crate::time::gpst(2024, 1, 1, 0, 0, 0, 0);
+        let times: Vec<Epoch> = (0..8)
+            .map(|k| t0 + Duration::from_seconds(k as f64))
+            .collect();
+        let meas: Vec<Vec<SatMeas>> = (0..8)
+            .map(|k| {
+                let mut s = sat(1, k as f64, 300.0, 0.0);
+                // unresolved at epochs 0–3, resolved (half a cycle subtracted) from 4 on
+                if k < 4 {
+                    s.lli[0] = LLI_HALF_CYCLE;
+                } else {
+                    s.l[0] -= 0.5;
+                }
+                let mut held = sat(2, k as f64, -200.0, 0.0);
+                held.lli[0] = LLI_HALF_CYCLE;
+                vec![
+                    s,
+                    held,
+                    sat(3, k as f64, 50.0, 0.0),
+                    sat(4, k as f64, -500.0, 0.0),
+                ]
+            })
+            .collect();
+        let b = arc_breaks(&times, &meas, 10.0, true);
+        let g = |prn| Sv::new(Constellation::Gps, prn);
+        assert_eq!(
+            b[4].get(&g(1)).map(|c| c[0]),
+            Some(Some(SlipCause::HalfCycle))
+        );
+        let all: usize = b.iter().map(|e| e.len()).sum();
+        assert_eq!(all, 1, "{b:?}");
+    }
+
     fn sat(prn: u8, t: f64, rate: f64, clock_m: f64) -> SatMeas {
         let f = 1575.42e6;
         let lam = C / f;
@@ -401,6 +447,7 @@ mod tests {
             p: [range + clock_m, f64::NAN, f64::NAN],
             d: [-rate / lam, f64::NAN, f64::NAN],
             lli: [0; NF],
+            snr: [f64::NAN; NF],
         }
     }
 

@@ -550,14 +550,19 @@ impl fmt::Display for PpkReport {
                 .collect();
             writeln!(
                 f,
-                "  {name}: ambiguity resets {} [{}], post-fit outliers {}, innovations rejected {} [{}], satellite-epochs below mask {}, without orbit {}",
+                "  {name}: ambiguity resets {} [{}], post-fit outliers {}, innovations rejected {} [{}], satellite-epochs below mask {}, without orbit {}{}",
                 s.slips.values().sum::<usize>(),
                 slips.join(", "),
                 s.outlier_resets,
                 s.rejected_innovations(),
                 gated.join(", "),
                 s.below_mask,
-                s.no_orbit
+                s.no_orbit,
+                if s.half_cycle_float > 0 {
+                    format!(", ambiguity-epochs kept float for an unresolved half cycle {}", s.half_cycle_float)
+                } else {
+                    String::new()
+                }
             )?;
         }
         if let Some(st) = &r.static_solution {
