@@ -26,6 +26,7 @@ pub mod closerange;
 pub mod constellation;
 mod error;
 pub mod flight;
+mod glonass_nav;
 pub mod gnss_obs;
 mod ground_points;
 mod io;
