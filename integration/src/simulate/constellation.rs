@@ -1,19 +1,26 @@
-//! A documented synthetic constellation written as a RINEX 3.04 navigation file, so the
+//! Documented synthetic constellations written as a RINEX 3.04 navigation file, so the
 //! simulator needs no external data: GPS-like (6 planes × 4, i = 55°, a = 26 560 km) and
 //! Galileo-like (3 planes × 8, i = 56°, a = 29 600 km) circular-ish Keplerian orbits with no
-//! perturbation terms, broadcast every two hours, plus Klobuchar parameters.
+//! perturbation terms, broadcast every two hours, plus Klobuchar parameters; on request a
+//! QZSS-like set (three quasi-zenith satellites on one figure-eight centred on 135° E and a
+//! geostationary one at 127° E, Keplerian LNAV records broadcast every hour, as ppkat uses a
+//! QZSS record within ±1 h of toe) and a GLONASS-like one (state-vector records every 30 min,
+//! [`super::glonass_nav`]).
 //!
 //! The simulator computes every satellite position from this file as read back by our own
-//! reader, so simulated observations and processing use the very same numbers. Every value
-//! lies on the grid of the broadcast messages (semicircles 2^-31, e 2^-33, √A 2^-19, clock
-//! terms at GPS or Galileo resolution), as a satellite's would: encoding the file as RTCM 3
-//! (`simulate --raw rtcm3`) or navigation words then loses nothing.
+//! reader, so simulated observations and processing use the very same numbers. Every
+//! Keplerian value lies on the grid of the broadcast messages (semicircles 2^-31, e 2^-33, √A
+//! 2^-19, clock terms at GPS or Galileo resolution), as a satellite's would: encoding the file
+//! as RTCM 3 (`simulate --raw rtcm3`) or navigation words then loses nothing. (GLONASS values
+//! are not on the RTCM grid: see [`super::glonass_nav`].)
 //!
-//! Enters: the GPST span of the flight and a seed. Leaves: the text of the navigation file
-//! (times of ephemeris every 2 h, GPST; angles radians; lengths metres as RINEX has them).
+//! Enters: the GPST span of the flight, a seed and the systems. Leaves: the text of the
+//! navigation file (times of ephemeris every 2 h for GPS and Galileo, 1 h for QZSS, GPST;
+//! GLONASS every 30 min, UTC; angles radians; lengths metres as RINEX has them).
 
 use super::rng::Rng;
-use gnss::time::{from_week_tow, week_tow, WEEK_SECONDS};
+use gnss::sv::Constellation;
+use gnss::time::{from_week_tow, week_tow};
 use hifitime::Epoch;
 use std::f64::consts::PI;
 use std::fmt::Write;
@@ -97,10 +104,94 @@ fn sats(rng: &mut Rng) -> Vec<Sat> {
     out
 }
 
-/// RINEX 3.04 navigation text covering `[start − 2 h, end + 2 h]`.
+/// Ground-track centre (east longitude, degrees) of the QZSS-like quasi-zenith satellites, and
+/// the longitude of the geostationary one.
+const QZSS_CENTRE_DEG: f64 = 135.0;
+const QZSS_GEO_DEG: f64 = 127.0;
+
+/// The QZSS-like satellites: J02, J03, J04 on quasi-zenith orbits (geosynchronous, e = 0.075,
+/// i = 41°, ω = 270° so that apogee is over the north; nodes 120° apart and mean anomalies
+/// 120° the other way, so all three follow one figure-eight centred on 135° E, 8 h apart),
+/// and J07 geostationary at 127° E. Elements fixed; clocks drawn from `rng`.
+fn qzss_sats(rng: &mut Rng) -> Vec<Sat> {
+    let mu = 3.986_005e14;
+    let we = gnss::frame::OMEGA_E;
+    // Geosynchronous: mean motion = Earth rotation rate.
+    let a: f64 = (mu / (we * we)).cbrt();
+    let mut out = Vec::new();
+    let mut add = |prn: u8, e: f64, inc: f64, raan: f64, omega: f64, centre: f64| {
+        let m_ref = wrap(centre.to_radians() - omega.to_radians() - raan.to_radians());
+        out.push(Sat {
+            sys: 'J',
+            prn,
+            sqrt_a: grid(a.sqrt(), -19),
+            e: grid(e, -33),
+            i0: grid_angle(inc.to_radians(), -31),
+            raan: raan.to_radians(),
+            omega: grid_angle(wrap(omega.to_radians()), -31),
+            m_ref,
+            mu,
+            af0: rng.range(-2e-4, 2e-4),
+            af1: grid(rng.range(-5e-12, 5e-12), clock_exp('J').1),
+        });
+    };
+    for (k, prn) in [2u8, 3, 4].into_iter().enumerate() {
+        add(prn, 0.075, 41.0, 120.0 * k as f64, 270.0, QZSS_CENTRE_DEG);
+    }
+    add(7, 0.0002, 0.05, 0.0, 0.0, QZSS_GEO_DEG);
+    out
+}
+
+/// The RINEX letter of a system the simulator broadcasts.
+fn letter_in(systems: &[Constellation], c: char) -> bool {
+    systems.iter().any(|s| s.letter() == c)
+}
+
+/// RINEX 3.04 navigation text of the GPS-like and Galileo-like constellations covering
+/// `[start − 2 h, end + 2 h]` (what [`navigation_text_of`] writes for `G` and `E`).
 pub fn navigation_text(start: Epoch, end: Epoch, seed: u64) -> String {
+    navigation_text_of(
+        start,
+        end,
+        seed,
+        &[Constellation::Gps, Constellation::Galileo],
+    )
+}
+
+/// RINEX 3.04 navigation text of the synthetic constellations of `systems` (any of GPS,
+/// Galileo, GLONASS, QZSS) covering `[start − 2 h, end + 2 h]`: GPS and Galileo records every
+/// 2 h, QZSS every hour, then GLONASS every 30 min ([`super::glonass_nav`]). The GPS and
+/// Galileo values do not depend on which other systems are asked for.
+pub fn navigation_text_of(
+    start: Epoch,
+    end: Epoch,
+    seed: u64,
+    systems: &[Constellation],
+) -> String {
     let mut rng = Rng::new(seed).fork(0x6e6176);
-    let sats = sats(&mut rng);
+    let sats: Vec<Sat> = sats(&mut rng)
+        .into_iter()
+        .filter(|s| letter_in(systems, s.sys))
+        .collect();
+    let mut s = header();
+    // Reference epoch of the orbits: the start of the GPS week of `start`.
+    let (week0, _) = week_tow(start);
+    let t_ref = from_week_tow(week0, 0.0);
+    let first = start - hifitime::Duration::from_seconds(2.0 * 3600.0);
+    let last = end + hifitime::Duration::from_seconds(2.0 * 3600.0);
+    kepler_records(&mut s, &sats, first, last, t_ref, 7200.0);
+    if letter_in(systems, 'J') {
+        let qzss = qzss_sats(&mut Rng::new(seed).fork(0x717a7373));
+        kepler_records(&mut s, &qzss, first, last, t_ref, 3600.0);
+    }
+    if letter_in(systems, 'R') {
+        s += &super::glonass_nav::records(first, last, t_ref, seed);
+    }
+    s
+}
+
+/// The header: version, program, comment, GPS Klobuchar parameters, leap seconds.
+fn header() -> String {
     let mut s = String::new();
     let line = |s: &mut String, a: &str, b: &str| {
         let _ = writeln!(s, "{a:<60}{b}");
@@ -129,71 +220,85 @@ pub fn navigation_text(start: Epoch, end: Epoch, seed: u64) -> String {
     );
     line(&mut s, "    18", "LEAP SECONDS");
     line(&mut s, "", "END OF HEADER");
-    // Reference epoch of the orbits: the start of the GPS week of `start`.
-    let (week0, _) = week_tow(start);
-    let t_ref = from_week_tow(week0, 0.0);
-    let first = start - hifitime::Duration::from_seconds(2.0 * 3600.0);
-    let last = end + hifitime::Duration::from_seconds(2.0 * 3600.0);
-    let (w, tow) = week_tow(first);
-    let mut toe = from_week_tow(w, (tow / 7200.0).floor() * 7200.0);
-    while toe <= last {
-        let (week, sow) = week_tow(toe);
-        let dt_ref = (toe - t_ref).to_seconds();
-        let week_start = from_week_tow(week, 0.0);
-        let dweek = (week_start - t_ref).to_seconds();
-        let (y, mo, d, h, mi, sec, _) = toe.to_gregorian(hifitime::TimeScale::GPST);
-        for sat in &sats {
-            let n = (sat.mu / sat.sqrt_a.powi(6)).sqrt();
-            let m0 = grid_angle(wrap(sat.m_ref + n * dt_ref), -31);
-            // Ω(t) = RAAN − ωe·(t − t_ref): broadcast Ω0 refers to the record's week start.
-            let omega0 = grid_angle(wrap(sat.raan - gnss::frame::OMEGA_E * dweek), -31);
-            let af0 = grid(sat.af0 + sat.af1 * dt_ref, clock_exp(sat.sys).0);
-            let _ = writeln!(
-                s,
-                "{}{:02} {y:04} {mo:02} {d:02} {h:02} {mi:02} {sec:02}{}{}{}",
-                sat.sys,
-                sat.prn,
-                d19(af0),
-                d19(sat.af1),
-                d19(0.0)
-            );
-            let rows: [[f64; 4]; 7] = [
-                [(dt_ref / 7200.0).rem_euclid(256.0).floor(), 0.0, 0.0, m0],
-                [0.0, sat.e, 0.0, sat.sqrt_a],
-                [sow, 0.0, omega0, 0.0],
-                [sat.i0, 0.0, sat.omega, 0.0],
-                [
-                    0.0,
-                    if sat.sys == 'E' { 517.0 } else { 1.0 },
-                    week as f64,
-                    0.0,
-                ],
-                // Accuracy, health, group delays zero (Galileo's second BGD sits where GPS has IODC).
-                [
-                    2.0,
-                    0.0,
-                    0.0,
-                    if sat.sys == 'E' {
-                        0.0
-                    } else {
-                        (dt_ref / 7200.0).rem_euclid(256.0).floor()
-                    },
-                ],
-                [sow - 3600.0_f64.min(sow), 4.0, 0.0, 0.0],
-            ];
-            for r in rows {
-                let _ = writeln!(
-                    s,
-                    "    {}{}{}{}",
-                    d19(r[0]),
-                    d19(r[1]),
-                    d19(r[2]),
-                    d19(r[3])
-                );
-            }
-        }
-        toe += hifitime::Duration::from_seconds(7200.0);
-        let _ = WEEK_SECONDS;
-    }
     s
+}
+
+/// The records of Keplerian satellites `sats` for every toe on the grid of `period` seconds
+/// (of the GPS week) from the last one at or before `first` to `last`; the orbits refer to
+/// `t_ref`, and the issue of data counts periods since it.
+fn kepler_records(
+    s: &mut String,
+    sats: &[Sat],
+    first: Epoch,
+    last: Epoch,
+    t_ref: Epoch,
+    period: f64,
+) {
+    if sats.is_empty() {
+        return;
+    }
+    let (w, tow) = week_tow(first);
+    let mut toe = from_week_tow(w, (tow / period).floor() * period);
+    while toe <= last {
+        for sat in sats {
+            kepler_record(s, sat, toe, t_ref, period);
+        }
+        toe += hifitime::Duration::from_seconds(period);
+    }
+}
+
+/// One LNAV-like (or Galileo) record of `sat` at `toe`, with the issue of data counted in
+/// `period`s since `t_ref`.
+fn kepler_record(s: &mut String, sat: &Sat, toe: Epoch, t_ref: Epoch, period: f64) {
+    let (week, sow) = week_tow(toe);
+    let dt_ref = (toe - t_ref).to_seconds();
+    let week_start = from_week_tow(week, 0.0);
+    let dweek = (week_start - t_ref).to_seconds();
+    let (y, mo, d, h, mi, sec, _) = toe.to_gregorian(hifitime::TimeScale::GPST);
+    let n = (sat.mu / sat.sqrt_a.powi(6)).sqrt();
+    let m0 = grid_angle(wrap(sat.m_ref + n * dt_ref), -31);
+    // Ω(t) = RAAN − ωe·(t − t_ref): broadcast Ω0 refers to the record's week start.
+    let omega0 = grid_angle(wrap(sat.raan - gnss::frame::OMEGA_E * dweek), -31);
+    let af0 = grid(sat.af0 + sat.af1 * dt_ref, clock_exp(sat.sys).0);
+    let iod = (dt_ref / period).rem_euclid(256.0).floor();
+    let _ = writeln!(
+        s,
+        "{}{:02} {y:04} {mo:02} {d:02} {h:02} {mi:02} {sec:02}{}{}{}",
+        sat.sys,
+        sat.prn,
+        d19(af0),
+        d19(sat.af1),
+        d19(0.0)
+    );
+    let rows: [[f64; 4]; 7] = [
+        [iod, 0.0, 0.0, m0],
+        [0.0, sat.e, 0.0, sat.sqrt_a],
+        [sow, 0.0, omega0, 0.0],
+        [sat.i0, 0.0, sat.omega, 0.0],
+        [
+            0.0,
+            if sat.sys == 'E' { 517.0 } else { 1.0 },
+            week as f64,
+            0.0,
+        ],
+        // Accuracy, health, group delays zero (Galileo's second BGD sits where GPS has IODC).
+        [2.0, 0.0, 0.0, if sat.sys == 'E' { 0.0 } else { iod }],
+        // Transmission time; fit interval: GPS 4 h, QZSS the flag 0 (2 h).
+        [
+            sow - 3600.0_f64.min(sow),
+            if sat.sys == 'J' { 0.0 } else { 4.0 },
+            0.0,
+            0.0,
+        ],
+    ];
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "    {}{}{}{}",
+            d19(r[0]),
+            d19(r[1]),
+            d19(r[2]),
+            d19(r[3])
+        );
+    }
 }

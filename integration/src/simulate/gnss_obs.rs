@@ -1,27 +1,30 @@
 //! Simulated GNSS observations (RINEX 3.04): geometric range with light time and Earth
-//! rotation, satellite and receiver clocks, troposphere, frequency-scaled ionosphere,
-//! elevation-dependent code and phase noise, multipath, integer ambiguities, cycle slips and
-//! data gaps — each switchable — and flag-5 event records at exposure times.
+//! rotation, satellite and receiver clocks, troposphere, ionosphere scaled to each signal's
+//! frequency, elevation-dependent code and phase noise, multipath, integer ambiguities, cycle
+//! slips and data gaps — each switchable — a GLONASS inter-channel bias per receiver (a hook,
+//! off by default), and flag-5 event records at exposure times.
 //!
 //! Enters: a [`Receiver`] (true position as a function of true GPST, clock model, rate,
-//! event times), the ephemerides read back from the synthetic navigation file, its Klobuchar
-//! parameters and the [`ErrorModel`]. Leaves: the RINEX text (C, L, D, S on L1 and L2/E5a;
-//! time tags in receiver time = true time + clock offset) and [`ObsStats`]. Uses
-//! `gnss::orbit`, `gnss::model` and `gnss::frame`.
+//! event times, GLONASS inter-channel biases), the ephemerides read back from the synthetic
+//! navigation file (their satellites are the ones simulated, GLONASS channels from their
+//! records), its Klobuchar parameters and the [`ErrorModel`]. Leaves: the RINEX text (C, L,
+//! D, S on two signals: GPS L1/L2, GLONASS L1/L2 at 1602 + 0.5625·k and 1246 + 0.4375·k MHz,
+//! Galileo E1/E5a, QZSS L1/L2; time tags in receiver time = true time + clock offset; written
+//! by `obs_text`) and [`ObsStats`]. Uses `gnss::orbit`, `gnss::model` and `gnss::frame`.
 
+pub use super::obs_text::SatObs;
+use super::obs_text::{header, write_epoch, write_event, HeaderInfo};
 use super::rng::Rng;
 use super::scenario::ErrorModel;
 use gnss::frame::{az_el, rotate_to_reception, Ecef};
 use gnss::model::{klobuchar_gps, troposphere};
 use gnss::orbit::{Ephemerides, C};
 use gnss::rinex::nav::Klobuchar;
-use gnss::rinex::write::epoch_fields;
 use gnss::sv::{Constellation, Sv};
 use gnss::time::week_tow;
-use hifitime::{Duration, Epoch, TimeScale};
+use hifitime::{Duration, Epoch};
 use nalgebra::Vector3;
 use std::collections::HashMap;
-use std::fmt::Write as _;
 
 const F1: f64 = 1575.42e6;
 /// Second frequency: GPS L2, Galileo E5a.
@@ -30,6 +33,17 @@ fn f2(sys: Constellation) -> f64 {
         1176.45e6
     } else {
         1227.60e6
+    }
+}
+/// The two carrier frequencies (Hz) simulated for a satellite of `sys` on GLONASS channel
+/// `chan`: L1 and L2 (GPS, QZSS), E1 and E5a (Galileo), GLONASS L1 and L2 of the channel;
+/// `None` for a GLONASS satellite without a channel.
+fn frequencies(sys: Constellation, chan: Option<i8>) -> Option<[f64; 2]> {
+    if sys == Constellation::Glonass {
+        let k = chan? as f64;
+        Some([1602.0e6 + 0.5625e6 * k, 1246.0e6 + 0.4375e6 * k])
+    } else {
+        Some([F1, f2(sys)])
     }
 }
 /// Elevation below which the simulated receivers track nothing.
@@ -55,17 +69,11 @@ pub struct Receiver<'a> {
     pub faults: bool,
     /// True times at which the receiver loses lock on every satellite (sorted).
     pub lose_lock: &'a [Epoch],
-}
-
-/// One satellite as observed (before formatting).
-#[derive(Clone, Copy, Debug)]
-pub struct SatObs {
-    /// The satellite.
-    pub sv: Sv,
-    /// C1 (m), L1 (cycles), D1 (Hz), S1 (dB-Hz), C2, L2, D2, S2.
-    pub v: [f64; 8],
-    /// Loss-of-lock indicator of L1 and L2 (1: a slip before this epoch).
-    pub lli: [u8; 2],
+    /// GLONASS inter-channel phase bias, metres per frequency channel number: both phases of
+    /// a satellite on channel k carry k times this (0: none).
+    pub glonass_phase_icb: f64,
+    /// GLONASS inter-channel code bias, metres per frequency channel number, as the phase one.
+    pub glonass_code_icb: f64,
 }
 
 /// Per-satellite persistent state of a receiver.
@@ -197,6 +205,14 @@ pub fn simulate(
     rng: &Rng,
 ) -> (String, ObsStats) {
     let sats: Vec<Sv> = eph.satellites().copied().collect();
+    let chans: Vec<Option<i8>> = sats
+        .iter()
+        .map(|sv| {
+            (sv.sys == Constellation::Glonass)
+                .then(|| eph.glonass_channel(sv.prn))
+                .flatten()
+        })
+        .collect();
     let n_epochs = ((rx.end - rx.start).to_seconds() / rx.interval).floor() as usize + 1;
     let mut rng_fault = rng.fork(2);
     let faults = if rx.faults {
@@ -210,6 +226,7 @@ pub fn simulate(
         klob,
         err,
         sats,
+        chans,
         tracks: HashMap::new(),
         rng_noise: rng.fork(1),
         rng_fault,
@@ -250,7 +267,22 @@ pub fn simulate(
     for &e in &events[ev_i..] {
         write_event(&mut body, e);
     }
-    let header = header(rx, first_pos.unwrap_or(Ecef::new(0.0, 0.0, 0.0)));
+    let mut systems: Vec<Constellation> = sim.sats.iter().map(|sv| sv.sys).collect();
+    systems.dedup();
+    let glonass: Vec<(u8, i8)> = sim
+        .sats
+        .iter()
+        .zip(&sim.chans)
+        .filter_map(|(sv, ch)| Some((sv.prn, (*ch)?)))
+        .collect();
+    let header = header(&HeaderInfo {
+        name: rx.name,
+        interval: rx.interval,
+        start: rx.start,
+        pos: first_pos.unwrap_or(Ecef::new(0.0, 0.0, 0.0)),
+        systems: &systems,
+        glonass: &glonass,
+    });
     let text = header + &body;
     let mut stats = sim.stats;
     stats.bytes = text.len();
@@ -276,6 +308,8 @@ struct Sim<'a> {
     err: &'a ErrorModel,
     /// Every satellite of the ephemerides, in order (faults refer to their indices).
     sats: Vec<Sv>,
+    /// GLONASS frequency channel of each of `sats` (`None` for other systems).
+    chans: Vec<Option<i8>>,
     /// Satellites in view and their state.
     tracks: HashMap<Sv, Track>,
     /// Noise, ambiguities and multipath.
@@ -308,6 +342,9 @@ impl Sim<'_> {
                 self.stats.gap_records += 1;
                 continue;
             }
+            let Some(freqs) = frequencies(sv.sys, self.chans[si]) else {
+                continue;
+            };
             let Some((rho, rate, dts, dts_rate, sp)) = geometry(self.eph, sv, t, &p.0, &vel) else {
                 continue;
             };
@@ -353,6 +390,7 @@ impl Sim<'_> {
             } else {
                 0.0
             };
+            let k = self.chans[si].unwrap_or(0) as f64;
             let signal = Signal {
                 base: rho + C * (dtr - dts),
                 rate: rate + C * (err.receiver_clock as u8 as f64 * rx.clock.1 - dts_rate),
@@ -360,8 +398,11 @@ impl Sim<'_> {
                 i1,
                 mp,
                 el,
+                freqs,
+                code_bias: k * rx.glonass_code_icb,
+                phase_bias: k * rx.glonass_phase_icb,
             };
-            let v = signal.observables(sv.sys, &tr.amb, err, &mut self.rng_noise);
+            let v = signal.observables(&tr.amb, err, &mut self.rng_noise);
             recs.push(SatObs { sv, v, lli });
         }
         (p, recs)
@@ -382,18 +423,17 @@ struct Signal {
     mp: f64,
     /// Elevation, radians.
     el: f64,
+    /// Carrier frequencies of the two signals, Hz.
+    freqs: [f64; 2],
+    /// Receiver bias of the code and of the phase (both signals), metres.
+    code_bias: f64,
+    phase_bias: f64,
 }
 
 impl Signal {
     /// Code (m), phase (cycles, with the ambiguities `amb`), Doppler (Hz) and SNR (dB-Hz) on
-    /// L1 and the system's second frequency, with elevation-dependent noise drawn from `rng`.
-    fn observables(
-        &self,
-        sys: Constellation,
-        amb: &[f64; 2],
-        err: &ErrorModel,
-        rng: &mut Rng,
-    ) -> [f64; 8] {
+    /// the two signals, with elevation-dependent noise drawn from `rng`.
+    fn observables(&self, amb: &[f64; 2], err: &ErrorModel, rng: &mut Rng) -> [f64; 8] {
         let se = self.el.sin();
         let noise = |sigma: f64, r: &mut Rng| {
             if sigma > 0.0 {
@@ -404,11 +444,12 @@ impl Signal {
         };
         let (base, trop, mp) = (self.base, self.trop, self.mp);
         let mut v = [0.0; 8];
-        for (f, freq) in [F1, f2(sys)].into_iter().enumerate() {
+        for (f, freq) in self.freqs.into_iter().enumerate() {
             let lam = C / freq;
             let i = self.i1 * (F1 / freq).powi(2);
-            let code = base + trop + i + 0.5 * mp + noise(err.code_noise, rng);
-            let phase = base + trop - i + 0.005 * mp + noise(err.phase_noise, rng);
+            let code = base + trop + i + 0.5 * mp + noise(err.code_noise, rng) + self.code_bias;
+            let phase =
+                base + trop - i + 0.005 * mp + noise(err.phase_noise, rng) + self.phase_bias;
             v[4 * f] = code;
             v[4 * f + 1] = phase / lam + amb[f];
             v[4 * f + 2] = -self.rate / lam
@@ -421,82 +462,4 @@ impl Signal {
         }
         v
     }
-}
-
-/// A flag-5 (external event) record at receiver time `t`.
-fn write_event(body: &mut String, t: Epoch) {
-    let _ = writeln!(body, "> {}  5  0", epoch_fields(t));
-}
-
-/// An observation epoch: the epoch line, then one line per satellite (SSI from the SNR on
-/// code and phase, LLI on the phases).
-fn write_epoch(body: &mut String, tag: Epoch, recs: &[SatObs]) {
-    let _ = writeln!(body, "> {}  0{:3}", epoch_fields(tag), recs.len());
-    for r in recs {
-        let _ = write!(body, "{}", r.sv);
-        let ssi = char::from(b'0' + ((r.v[3].min(54.0) / 6.0) as u8).clamp(1, 9));
-        for (j, val) in r.v.iter().enumerate() {
-            let lli = match j {
-                1 if r.lli[0] > 0 => char::from(b'0' + r.lli[0]),
-                5 if r.lli[1] > 0 => char::from(b'0' + r.lli[1]),
-                _ => ' ',
-            };
-            let ssi = if j % 4 < 2 { ssi } else { ' ' };
-            let _ = write!(body, "{val:14.3}{lli}{ssi}");
-        }
-        body.push('\n');
-    }
-}
-
-fn header(rx: &Receiver, p: Ecef) -> String {
-    let mut s = String::new();
-    let mut line = |a: String, b: &str| {
-        let _ = writeln!(s, "{a:<60}{b}");
-    };
-    line(
-        "     3.04           OBSERVATION DATA    M".into(),
-        "RINEX VERSION / TYPE",
-    );
-    line("ppkat simulate      ppkat".into(), "PGM / RUN BY / DATE");
-    line(
-        "Simulated by ppkat: synthetic constellation, exact truth".into(),
-        "COMMENT",
-    );
-    line(rx.name.to_string(), "MARKER NAME");
-    line(format!("{:<20}{:<20}", "SIM", "PPKAT"), "OBSERVER / AGENCY");
-    line(
-        format!("{:<20}{:<20}{:<20}", "1", "PPKAT SIMULATOR", "1.0"),
-        "REC # / TYPE / VERS",
-    );
-    line(
-        format!("{:<20}{:<20}", "1", "PPKATSIM        NONE"),
-        "ANT # / TYPE",
-    );
-    line(
-        format!("{:14.4}{:14.4}{:14.4}", p.0.x, p.0.y, p.0.z),
-        "APPROX POSITION XYZ",
-    );
-    line(
-        format!("{:14.4}{:14.4}{:14.4}", 0.0, 0.0, 0.0),
-        "ANTENNA: DELTA H/E/N",
-    );
-    line(
-        "G    8 C1C L1C D1C S1C C2W L2W D2W S2W".into(),
-        "SYS / # / OBS TYPES",
-    );
-    line(
-        "E    8 C1C L1C D1C S1C C5Q L5Q D5Q S5Q".into(),
-        "SYS / # / OBS TYPES",
-    );
-    line(format!("{:10.3}", rx.interval), "INTERVAL");
-    let (y, mo, d, h, mi, sec, ns) = rx.start.to_gregorian(TimeScale::GPST);
-    line(
-        format!(
-            "{y:6}{mo:6}{d:6}{h:6}{mi:6}{:13.7}     GPS",
-            sec as f64 + ns as f64 * 1e-9
-        ),
-        "TIME OF FIRST OBS",
-    );
-    line(String::new(), "END OF HEADER");
-    s
 }

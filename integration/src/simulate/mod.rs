@@ -1,6 +1,7 @@
 //! The flight simulator. Enters: a [`Scenario`] (TOML or built-in) and a folder. Leaves, in
 //! that folder: base and rover RINEX 3.04 observations with flag-5 exposure events
-//! ([`gnss_obs`]), a navigation file of a synthetic constellation ([`constellation`]), the
+//! ([`gnss_obs`]), a navigation file of synthetic constellations ([`constellation`]: GPS-
+//! and Galileo-like by default, GLONASS- and QZSS-like when the scenario asks), the
 //! exact truth (antenna trajectory, projection centres and attitudes, ground points, image
 //! observations, blunders; written by `truth`) and a [`SimReport`]. Uses `gnss` (frames,
 //! orbits, models, the navigation reader) and [`crate::exposure::attitude`]; `demo` and the
@@ -26,15 +27,19 @@ pub mod closerange;
 pub mod constellation;
 mod error;
 pub mod flight;
+mod glonass_nav;
 pub mod gnss_obs;
 mod ground_points;
 mod io;
+mod obs_text;
 pub mod rng;
 mod scenario;
 mod site;
 mod truth;
 pub use error::SimError;
-pub use scenario::{BaseSpec, CameraToml, ErrorModel, FlightSpec, GroundSpec, Scenario, Site};
+pub use scenario::{
+    BaseSpec, CameraToml, ErrorModel, FlightSpec, GnssSpec, GroundSpec, Scenario, SimSystem, Site,
+};
 
 use camera::{CameraSpec, Exposure, GroundPoint, ImageObs};
 use flight::Flight;
@@ -131,7 +136,7 @@ pub fn run(s: &Scenario, dir: &Path) -> Result<SimReport, SimError> {
     let flight = Flight::new(&plan, &mut rng.fork(3));
     let duration = flight.duration();
     let end = start + Duration::from_seconds(duration);
-    let (nav_path, eph, klob) = broadcast_orbits(dir, start, end, s.seed)?;
+    let (nav_path, eph, klob) = broadcast_orbits(dir, start, end, s)?;
     let cam = s.camera();
     let exps = camera::exposures(
         &flight,
@@ -157,6 +162,8 @@ pub fn run(s: &Scenario, dir: &Path) -> Result<SimReport, SimError> {
         events: &event_times,
         faults: true,
         lose_lock: &lose_lock_times(s, &flight, start, &mut rng.fork(7)),
+        glonass_phase_icb: s.errors.glonass_icb_m_per_channel[0],
+        glonass_code_icb: s.errors.glonass_code_icb_m_per_channel[0],
     };
     let base_ecef = site.to_ecef(&s.base_enu());
     let base_pos = move |_t: Epoch| base_ecef;
@@ -170,6 +177,8 @@ pub fn run(s: &Scenario, dir: &Path) -> Result<SimReport, SimError> {
         events: &[],
         faults: false,
         lose_lock: &[],
+        glonass_phase_icb: s.errors.glonass_icb_m_per_channel[1],
+        glonass_code_icb: s.errors.glonass_code_icb_m_per_channel[1],
     };
     let (rtext, rstats) = gnss_obs::simulate(&rover, &eph, &klob, &s.errors, &rng.fork(5));
     let (btext, bstats) = gnss_obs::simulate(&base, &eph, &klob, &s.errors, &rng.fork(6));
@@ -219,8 +228,8 @@ fn lose_lock_times(s: &Scenario, flight: &Flight, start: Epoch, rng: &mut Rng) -
 
 /// The rover and base of a simulation also as u-blox UBX logs (`rover.ubx`, `base.ubx`:
 /// RXM-RAWX per epoch, TIM-TM2 per exposure), made from the RINEX files it wrote: their paths
-/// and how many measurements UBX could not carry (none for the simulator's GPS L1/L2 and
-/// Galileo E1/E5a).
+/// and how many measurements UBX could not carry (none for the simulator's GPS L1/L2,
+/// Galileo E1/E5a and QZSS L1/L2; all of GLONASS, which the UBX writer does not encode).
 pub fn write_ubx(rep: &SimReport) -> Result<(PathBuf, PathBuf, u64), SimError> {
     write_logs(rep, "ubx", gnss::raw::ubx_write::ubx_from_obs)
 }
@@ -242,9 +251,10 @@ fn write_logs(
 }
 
 /// The rover and base of a simulation also as RTCM 3 logs (`rover.rtcm3`, `base.rtcm3`: 1005,
-/// the constellation's ephemerides as 1019 and 1046, then MSM7 per system and epoch), made
-/// from the RINEX files it wrote: their paths and how many measurements RTCM could not carry.
-/// RTCM has no camera events (DJI writes them to a separate `.MRK` file).
+/// the constellations' ephemerides as 1019, 1044, 1046 and 1020, then MSM7 per system and epoch),
+/// made from the RINEX files it wrote: their paths and how many measurements RTCM could not
+/// carry. RTCM has no camera events (DJI writes them to a separate `.MRK` file). GLONASS
+/// ephemerides come back rounded to the 1020 fields (positions 2⁻¹¹ km), unlike the others.
 pub fn write_rtcm(rep: &SimReport) -> Result<(PathBuf, PathBuf, u64), SimError> {
     let nav = NavFile::read(&rep.nav)?;
     write_logs(rep, "rtcm3", |f| {
@@ -256,7 +266,8 @@ pub fn write_rtcm(rep: &SimReport) -> Result<(PathBuf, PathBuf, u64), SimError> 
 /// the constellation's ephemerides as GPSNav and GALNav, its Klobuchar parameters as GPSIon
 /// and GPSUtc, then a MeasEpoch per epoch and an ExtEvent per exposure), made from the RINEX
 /// files it wrote: their paths and how many measurements SBF could not carry (none for the
-/// simulator's GPS L1/L2 and Galileo E1/E5a). SBF has no block for the station position or
+/// simulator's signals; GLONASS ephemerides as GLONav, none for QZSS, which the SBF writer
+/// has no block for). SBF has no block for the station position or
 /// antenna the RINEX header gives (a receiver logs them in its setup blocks, which ppkat does
 /// not read).
 pub fn write_sbf(rep: &SimReport) -> Result<(PathBuf, PathBuf, u64), SimError> {
@@ -267,16 +278,16 @@ pub fn write_sbf(rep: &SimReport) -> Result<(PathBuf, PathBuf, u64), SimError> {
     })
 }
 
-/// The synthetic constellation's navigation file for `[start, end]` (GPST), written to
-/// `dir/nav.rnx` and read back with our own reader: its path, the ephemerides and the GPS
-/// Klobuchar parameters the simulation uses.
+/// The navigation file of the scenario's synthetic constellations for `[start, end]` (GPST),
+/// written to `dir/nav.rnx` and read back with our own reader: its path, the ephemerides and
+/// the GPS Klobuchar parameters the simulation uses.
 fn broadcast_orbits(
     dir: &Path,
     start: Epoch,
     end: Epoch,
-    seed: u64,
+    s: &Scenario,
 ) -> Result<(PathBuf, Ephemerides, Klobuchar), SimError> {
-    let nav_text = constellation::navigation_text(start, end, seed);
+    let nav_text = constellation::navigation_text_of(start, end, s.seed, &s.systems());
     let nav_path = write(dir, "nav.rnx", &nav_text)?;
     let nav = NavFile::read(&nav_path)?;
     let klob = nav.gps_iono.unwrap_or(Klobuchar {

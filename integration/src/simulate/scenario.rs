@@ -11,6 +11,7 @@
 use super::camera::CameraSpec;
 use super::error::SimError;
 use super::flight::FlightPlan;
+use gnss::sv::Constellation;
 use hifitime::Epoch;
 use nalgebra::Vector3;
 use serde::Deserialize;
@@ -42,6 +43,9 @@ fn d_img() -> f64 {
 fn d_mask() -> f64 {
     5.0
 }
+fn d_systems() -> Vec<SimSystem> {
+    vec![SimSystem::Gps, SimSystem::Galileo]
+}
 
 /// A simulation scenario (every key is checked; unknown keys are errors).
 #[derive(Clone, Debug, Deserialize)]
@@ -67,6 +71,57 @@ pub struct Scenario {
     /// Which errors are simulated (all on by default).
     #[serde(default)]
     pub errors: ErrorModel,
+    /// Which satellite systems are simulated (GPS and Galileo by default).
+    #[serde(default)]
+    pub gnss: GnssSpec,
+}
+
+/// A satellite system the simulator can broadcast, named in the scenario by its RINEX letter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+pub enum SimSystem {
+    /// `G`: GPS-like, 24 satellites (6 planes × 4), L1 C/A and L2 P(Y).
+    #[serde(rename = "G")]
+    Gps,
+    /// `E`: Galileo-like, 24 satellites (3 planes × 8), E1 and E5a.
+    #[serde(rename = "E")]
+    Galileo,
+    /// `R`: GLONASS-like, 24 satellites (3 planes × 8) on FDMA channels −7…6, L1 and L2 C/A.
+    #[serde(rename = "R")]
+    Glonass,
+    /// `J`: QZSS-like, 3 quasi-zenith satellites and 1 geostationary one over Japan, L1 C/A
+    /// and L2C.
+    #[serde(rename = "J")]
+    Qzss,
+}
+
+impl SimSystem {
+    /// The system as `gnss` names it.
+    pub fn constellation(self) -> Constellation {
+        match self {
+            SimSystem::Gps => Constellation::Gps,
+            SimSystem::Galileo => Constellation::Galileo,
+            SimSystem::Glonass => Constellation::Glonass,
+            SimSystem::Qzss => Constellation::Qzss,
+        }
+    }
+}
+
+/// The satellite systems of a scenario (the optional section `[gnss]`).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GnssSpec {
+    /// Systems by RINEX letter, each at most once: any of `"G"`, `"E"`, `"R"`, `"J"` (default
+    /// `["G", "E"]`). QZSS is seen from East Asia and Oceania only.
+    #[serde(default = "d_systems")]
+    pub systems: Vec<SimSystem>,
+}
+
+impl Default for GnssSpec {
+    fn default() -> Self {
+        GnssSpec {
+            systems: d_systems(),
+        }
+    }
 }
 
 /// The site: origin of the local east-north-up frame.
@@ -202,6 +257,16 @@ pub struct ErrorModel {
     /// of its own (a float segment for GNSS alone).
     #[serde(default)]
     pub float_segment_s: Option<[f64; 2]>,
+    /// GLONASS inter-channel phase bias of the rover and of the base (in that order), metres
+    /// per frequency channel number: both phases of a satellite on channel k carry k·slope
+    /// metres. A hook for GLONASS ambiguity-resolution tests, off (0) by default.
+    #[serde(default)]
+    pub glonass_icb_m_per_channel: [f64; 2],
+    /// GLONASS inter-channel code bias of the rover and of the base (in that order), metres
+    /// per frequency channel number: both pseudoranges of a satellite on channel k carry
+    /// k·slope metres. A hook as the phase one, off (0) by default.
+    #[serde(default)]
+    pub glonass_code_icb_m_per_channel: [f64; 2],
 }
 
 impl Default for ErrorModel {
@@ -228,6 +293,8 @@ impl ErrorModel {
             rover_mask_deg: d_mask(),
             slips_at_turns: false,
             float_segment_s: None,
+            glonass_icb_m_per_channel: [0.0; 2],
+            glonass_code_icb_m_per_channel: [0.0; 2],
         }
     }
 }
@@ -377,7 +444,51 @@ impl Scenario {
             }
         }
         self.start_epoch()?;
+        self.validate_gnss()
+    }
+
+    /// Check the `[gnss]` section and the GLONASS bias hooks.
+    fn validate_gnss(&self) -> Result<(), SimError> {
+        let sys = &self.gnss.systems;
+        if sys.is_empty() || (1..sys.len()).any(|i| sys[..i].contains(&sys[i])) {
+            return Err(SimError::Key {
+                key: "gnss.systems",
+                what: "must name at least one system, each once (\"G\", \"E\", \"R\", \"J\")"
+                    .into(),
+            });
+        }
+        let e = &self.errors;
+        for (key, v) in [
+            (
+                "errors.glonass_icb_m_per_channel",
+                e.glonass_icb_m_per_channel,
+            ),
+            (
+                "errors.glonass_code_icb_m_per_channel",
+                e.glonass_code_icb_m_per_channel,
+            ),
+        ] {
+            if !v.iter().all(|x| x.is_finite() && x.abs() <= 1.0) {
+                return Err(SimError::Key {
+                    key,
+                    what: "must be [rover, base] metres per channel number, within ±1".into(),
+                });
+            }
+        }
         Ok(())
+    }
+
+    /// The systems simulated, in `gnss`'s order (GPS, GLONASS, Galileo, QZSS).
+    pub fn systems(&self) -> Vec<Constellation> {
+        let mut v: Vec<Constellation> = self
+            .gnss
+            .systems
+            .iter()
+            .map(|s| s.constellation())
+            .collect();
+        v.sort();
+        v.dedup();
+        v
     }
 
     /// The camera in SI units: metres, with the lever arm.
