@@ -30,10 +30,30 @@ pub struct RunObs {
 /// One line on what decoding a raw log counted.
 fn raw_note(path: &Path, format: &str, s: &RawStats) -> String {
     let dropped: u64 = s.dropped.values().sum();
+    // A log mixing protocols is named by what it holds (UBX + RTCM 3 + NMEA).
+    let format = if s.protocols.len() > 1 {
+        let names: Vec<&str> = ["UBX", "RTCM 3", "NMEA"]
+            .into_iter()
+            .filter(|p| s.protocols.contains_key(*p))
+            .collect();
+        names.join(" + ")
+    } else {
+        format.to_string()
+    };
+    let mut extra = String::new();
+    if s.nav.stale > 0 {
+        extra += &format!(", {} stale ephemerides not used", s.nav.stale);
+    }
+    if let Some(t) = &s.time_source {
+        extra += &format!("; GPS week {t}");
+    }
+    for w in &s.warnings {
+        extra += &format!("; {w}");
+    }
     format!(
         "{}: read as a {format} log: {} epochs ({} before the receiver knew the time, \
          skipped), {} checksum failures, {} truncated frames, {} measurements dropped; \
-         navigation messages: {} parity and {} CRC failures, {} ephemerides",
+         navigation messages: {} parity and {} CRC failures, {} ephemerides{extra}",
         path.display(),
         s.epochs,
         s.epochs_without_time,

@@ -23,6 +23,15 @@ use std::path::{Path, PathBuf};
 /// images.csv, project.toml (coupling = "loose": the PPK antenna positions) and
 /// project_tight.toml (coupling = "tight": the double-difference carrier phase itself).
 ///
+/// lowcost is the test bench of low-cost receivers, with exact truth: OUT/walk/ holds a u-blox
+/// M8P-like rover walking a river trail (20 min, 1 Hz, GPS/GLONASS/QZSS L1, under trees half
+/// the time: C/N0 falling, losses of lock, half cycles that clear after some seconds,
+/// multipath) as rover.ubx, against a base whose log base.ubx mixes UBX, RTCM 3 (1005, MSM7,
+/// 1230) and NMEA and lost epochs (gaps of 1–39 s), the GLONASS inter-channel biases of the two
+/// receivers unequal. Each folder has ppk.toml (`ppkat ppk --config OUT/walk/ppk.toml`),
+/// truth_trajectory.csv (the antenna at the true reception time of every rover epoch),
+/// nav.rnx, the RINEX of each receiver and README.txt with the figures simulated.
+///
 /// An adjustment project (--builtin classic-block, close-range, block1000, nav-block or
 /// textured-block: the classic 2-strip 1:8000 block, a close-range pair, a 1000-image block,
 /// a block with navigation-grade GPS, a 0.8 s latency and sparse control, a small block with
@@ -84,6 +93,13 @@ pub fn run(args: Args) -> Result<()> {
         .and_then(|b| block::builtin(b, &args.out))
     {
         println!("{}", r?);
+        return Ok(());
+    }
+    if args.builtin.as_deref() == Some("lowcost") {
+        if args.raw.is_some() {
+            bail!("--raw does not apply to lowcost: its folders hold the logs low-cost receivers write (u-blox UBX, a UBX + RTCM 3 + NMEA base log)");
+        }
+        print!("{}", simulate::lowcost::run(&args.out, 47)?);
         return Ok(());
     }
     if args.builtin.as_deref() == Some("hard-sky") && args.raw.is_none() {

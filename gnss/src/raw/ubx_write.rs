@@ -5,7 +5,8 @@
 //! gives back the same epochs, values (Doppler through the f32 of RAWX, C/N0 through its
 //! whole dB-Hz), loss-of-lock indicators and flag-5 events, and the count of what UBX cannot
 //! carry. Signals become u-blox signal ids by band (GPS L1 C/A, L2 CL, L5 I; Galileo E1 C,
-//! E5a I, E5b I; BeiDou B1I, B2I; QZSS L1 C/A, L2 CL, L5 I), so RINEX attributes become those
+//! E5a I, E5b I; BeiDou B1I, B2I; GLONASS L1OF, L2OF with the header's frequency channel as
+//! freqId; QZSS L1 C/A, L2 CL, L5 I), so RINEX attributes become those
 //! convbin writes (C2W → C2X, C5Q → C5X …). Loss of lock is written as it is read back: a
 //! slip restarts the lock time at 0, otherwise it grows with the time tracked.
 
@@ -28,6 +29,8 @@ fn ubx_signal(sys: Constellation, band: u8) -> Option<(u8, u8)> {
         (Galileo, b'7') => (2, 5),
         (BeiDou, b'2') => (3, 0),
         (BeiDou, b'7') => (3, 2),
+        (Glonass, b'1') => (6, 0),
+        (Glonass, b'2') => (6, 2),
         (Qzss, b'1') => (5, 0),
         (Qzss, b'2') => (5, 4),
         (Qzss, b'5') => (5, 8),
@@ -41,6 +44,8 @@ struct Meas {
     cp: f64,
     doppler: f32,
     ids: (u8, u8, u8),
+    /// GLONASS frequency channel + 7 (0 for other systems).
+    freq_id: u8,
     locktime: u16,
     cno: u8,
     trk: u8,
@@ -75,8 +80,20 @@ struct RawxWriter {
 }
 
 impl RawxWriter {
-    fn meas(&mut self, s: &SatObs, t: Epoch, band: u8, cols: &[Option<usize>; 4]) -> Option<Meas> {
+    fn meas(
+        &mut self,
+        s: &SatObs,
+        t: Epoch,
+        band: u8,
+        cols: &[Option<usize>; 4],
+        channel: Option<i8>,
+    ) -> Option<Meas> {
         let (gnss, sig) = ubx_signal(s.sv.sys, band)?;
+        let freq_id = match (s.sv.sys, channel) {
+            (Constellation::Glonass, Some(k)) => (k + 7) as u8,
+            (Constellation::Glonass, None) => return None,
+            _ => 0,
+        };
         let val = |k: usize| cols[k].map(|c| s.get(c)).filter(|o| o.is_present());
         let (c, l, d, n) = (val(0), val(1), val(2), val(3));
         if c.is_none() && l.is_none() {
@@ -95,6 +112,7 @@ impl RawxWriter {
             cp: l.map_or(0.0, |o| o.value),
             doppler: d.map_or(0.0, |o| o.value as f32),
             ids: (gnss, s.sv.prn, sig),
+            freq_id,
             locktime: lock.min(64_500) as u16,
             cno: n.map_or(0.0, |o| o.value.round().clamp(0.0, 255.0)) as u8,
             trk,
@@ -126,6 +144,7 @@ fn rawx_payload(t: Epoch, meas: &[Meas]) -> Vec<u8> {
         q[8..16].copy_from_slice(&m.cp.to_le_bytes());
         q[16..20].copy_from_slice(&m.doppler.to_le_bytes());
         (q[20], q[21], q[22]) = m.ids;
+        q[23] = m.freq_id;
         q[24..26].copy_from_slice(&m.locktime.to_le_bytes());
         q[26] = m.cno;
         q[28] = 1; // cpStdev: 0.004 cycles
@@ -176,7 +195,8 @@ pub fn ubx_from_obs(obs: &ObsFile) -> (Vec<u8>, u64) {
         let mut meas = Vec::new();
         for s in &e.sats {
             for (band, cols) in bands.get(&s.sv.sys).map_or(&[][..], |b| b.as_slice()) {
-                match w.meas(s, e.time, *band, cols) {
+                let channel = obs.header.glonass_channel(s.sv);
+                match w.meas(s, e.time, *band, cols, channel) {
                     Some(m) if meas.len() < 255 => meas.push(m),
                     Some(_) => dropped += 1,
                     None => dropped += u64::from(ubx_signal(s.sv.sys, *band).is_none()),

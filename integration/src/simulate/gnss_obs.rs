@@ -38,7 +38,7 @@ fn f2(sys: Constellation) -> f64 {
 /// The two carrier frequencies (Hz) simulated for a satellite of `sys` on GLONASS channel
 /// `chan`: L1 and L2 (GPS, QZSS), E1 and E5a (Galileo), GLONASS L1 and L2 of the channel;
 /// `None` for a GLONASS satellite without a channel.
-fn frequencies(sys: Constellation, chan: Option<i8>) -> Option<[f64; 2]> {
+pub(super) fn frequencies(sys: Constellation, chan: Option<i8>) -> Option<[f64; 2]> {
     if sys == Constellation::Glonass {
         let k = chan? as f64;
         Some([1602.0e6 + 0.5625e6 * k, 1246.0e6 + 0.4375e6 * k])
@@ -282,6 +282,7 @@ pub fn simulate(
         pos: first_pos.unwrap_or(Ecef::new(0.0, 0.0, 0.0)),
         systems: &systems,
         glonass: &glonass,
+        bands: 2,
     });
     let text = header + &body;
     let mut stats = sim.stats;

@@ -31,6 +31,7 @@ mod glonass_nav;
 pub mod gnss_obs;
 mod ground_points;
 mod io;
+pub mod lowcost;
 mod obs_text;
 pub mod rng;
 mod scenario;
@@ -229,7 +230,7 @@ fn lose_lock_times(s: &Scenario, flight: &Flight, start: Epoch, rng: &mut Rng) -
 /// The rover and base of a simulation also as u-blox UBX logs (`rover.ubx`, `base.ubx`:
 /// RXM-RAWX per epoch, TIM-TM2 per exposure), made from the RINEX files it wrote: their paths
 /// and how many measurements UBX could not carry (none for the simulator's GPS L1/L2,
-/// Galileo E1/E5a and QZSS L1/L2; all of GLONASS, which the UBX writer does not encode).
+/// GLONASS L1/L2, Galileo E1/E5a and QZSS L1/L2).
 pub fn write_ubx(rep: &SimReport) -> Result<(PathBuf, PathBuf, u64), SimError> {
     write_logs(rep, "ubx", gnss::raw::ubx_write::ubx_from_obs)
 }

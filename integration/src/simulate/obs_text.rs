@@ -48,6 +48,33 @@ pub(super) fn write_epoch(body: &mut String, tag: Epoch, recs: &[SatObs]) {
     }
 }
 
+/// An observation epoch of a receiver of `bands` bands (1: the first four values of each
+/// record, L1's; 2: all eight); missing values (NaN) are blank.
+pub(super) fn write_epoch_bands(body: &mut String, tag: Epoch, recs: &[SatObs], bands: usize) {
+    let _ = writeln!(body, "> {}  0{:3}", epoch_fields(tag), recs.len());
+    for r in recs {
+        let _ = write!(body, "{}", r.sv);
+        let ssi = char::from(b'0' + ((r.v[3].min(54.0) / 6.0) as u8).clamp(1, 9));
+        for (j, val) in r.v.iter().enumerate().take(4 * bands.clamp(1, 2)) {
+            if !val.is_finite() {
+                body.push_str("                ");
+                continue;
+            }
+            let lli = match j {
+                1 if r.lli[0] > 0 => char::from(b'0' + r.lli[0]),
+                5 if r.lli[1] > 0 => char::from(b'0' + r.lli[1]),
+                _ => ' ',
+            };
+            let ssi = if j % 4 < 2 { ssi } else { ' ' };
+            let _ = write!(body, "{val:14.3}{lli}{ssi}");
+        }
+        while body.ends_with(' ') {
+            body.pop();
+        }
+        body.push('\n');
+    }
+}
+
 /// What the observation header says besides the observations: the receiver's marker name,
 /// interval and first epoch, its position, the systems present (in `gnss`'s order) and the
 /// GLONASS slots with their frequency channels.
@@ -64,6 +91,8 @@ pub(super) struct HeaderInfo<'a> {
     pub systems: &'a [Constellation],
     /// GLONASS slots and their frequency channels, by slot.
     pub glonass: &'a [(u8, i8)],
+    /// Bands observed: 1 (the first signal's four types) or 2.
+    pub bands: usize,
 }
 
 /// The observation types of a system's records: the first and second signal's code, phase,
@@ -133,7 +162,15 @@ pub(super) fn header(h: &HeaderInfo) -> String {
         "ANTENNA: DELTA H/E/N",
     );
     for types in h.systems.iter().filter_map(|&sys| obs_types(sys)) {
-        line(types.into(), "SYS / # / OBS TYPES");
+        if h.bands == 1 {
+            // "G    8 C1C L1C D1C S1C …" → "G    4 C1C L1C D1C S1C"
+            line(
+                format!("{}4{}", &types[..5], &types[6..22]),
+                "SYS / # / OBS TYPES",
+            );
+        } else {
+            line(types.into(), "SYS / # / OBS TYPES");
+        }
     }
     line(format!("{:10.3}", h.interval), "INTERVAL");
     let (y, mo, d, hh, mi, sec, ns) = h.start.to_gregorian(TimeScale::GPST);

@@ -1,0 +1,353 @@
+//! A low-cost receiver as it tracks: C/N0 from elevation, lowered under trees; losses of lock
+//! when it falls and new arcs when it comes back; a half-cycle ambiguity unresolved for the
+//! first seconds of every arc (the phase then half a cycle off in half of them, the
+//! RINEX LLI bit 1 set until the receiver resolves it and removes the half cycle); the odd
+//! slip the receiver does not flag; code and phase noise and multipath that grow as C/N0
+//! falls, multipath correlated in time; GLONASS inter-channel biases of its own.
+//!
+//! Enters: the receiver ([`LowCost`]: where it is at a true time, its clock, rate, bands, the
+//! canopy over it, its [`Profile`]), the ephemerides and Klobuchar parameters of the
+//! synthetic constellation. Leaves: the RINEX 3.04 text of its observations (time tags in
+//! receiver time = true time + clock offset; the epochs `keep` lets through) and
+//! [`TrackStats`] (half-cycle shares per system, C/N0 percentiles, arcs and slips) to check
+//! the bench against the real figures it imitates.
+
+use super::super::gnss_obs::{frequencies, geometry};
+use super::super::obs_text::{header, write_epoch_bands, HeaderInfo, SatObs};
+use super::super::rng::Rng;
+use gnss::frame::{az_el, Ecef};
+use gnss::model::{klobuchar_gps, troposphere};
+use gnss::orbit::{Ephemerides, C};
+use gnss::rinex::nav::Klobuchar;
+use gnss::sv::{Constellation, Sv};
+use gnss::time::week_tow;
+use hifitime::{Duration, Epoch};
+use nalgebra::Vector3;
+use std::collections::BTreeMap;
+
+const F1: f64 = 1575.42e6;
+
+/// How a receiver tracks and how noisy it is.
+#[derive(Clone, Copy, Debug)]
+pub struct Profile {
+    /// C/N0 at the horizon and at the zenith under open sky, dB-Hz.
+    pub cn0: (f64, f64),
+    /// Mean loss under dense canopy, dB, and its spread (a Gauss–Markov process per
+    /// satellite, dB, correlation time s).
+    pub canopy_db: (f64, f64, f64),
+    /// C/N0 below which the phase is lost, and at or above which a lost phase is acquired
+    /// again, dB-Hz.
+    pub lock: (f64, f64),
+    /// Seconds an arc's half-cycle ambiguity stays unresolved (uniform in this range):
+    /// GPS/QZSS, GLONASS (whose strings mark the bit edges more often).
+    pub half_s: [(f64, f64); 2],
+    /// Slips the receiver does not flag, per second of tracking below 32 dB-Hz.
+    pub unflagged_slip_rate: f64,
+    /// Code noise and code multipath at 45 dB-Hz (metres; both grow as 10^((45 − C/N0)/20)),
+    /// multipath correlation time (s).
+    pub code: (f64, f64, f64),
+    /// Phase noise and phase multipath at 45 dB-Hz (metres, growing as the code's, the
+    /// multipath capped at 3 cm), multipath correlation time (s).
+    pub phase: (f64, f64, f64),
+    /// Doppler noise at 45 dB-Hz, Hz.
+    pub doppler: f64,
+    /// GLONASS inter-channel biases: phase, code (metres per frequency channel number).
+    pub glonass_icb: (f64, f64),
+}
+
+/// The receiver to simulate.
+pub struct LowCost<'a> {
+    /// Marker name.
+    pub name: &'a str,
+    /// Antenna position and velocity (ECEF, m and m/s) at a true GPST time.
+    pub at: &'a dyn Fn(Epoch) -> (Ecef, Vector3<f64>),
+    /// Canopy over the antenna (0 open … 1 dense) at seconds since `start`.
+    pub canopy: &'a dyn Fn(f64) -> f64,
+    /// Clock offset at the start (s) and drift (s/s).
+    pub clock: (f64, f64),
+    /// First and last epoch (receiver time, GPST) and the interval (s).
+    pub span: (Epoch, Epoch, f64),
+    /// Bands observed: 1 (L1) or 2 (L1 and L2).
+    pub bands: usize,
+    /// Elevation below which nothing is tracked, degrees.
+    pub mask_deg: f64,
+    /// How it tracks.
+    pub profile: Profile,
+}
+
+/// What a receiver's simulation holds, to compare the bench with the real cases.
+#[derive(Clone, Debug, Default)]
+pub struct TrackStats {
+    /// Epochs written.
+    pub epochs: usize,
+    /// Phase observations per system (L1), and how many carried an unresolved half cycle.
+    pub phases: BTreeMap<Constellation, (usize, usize)>,
+    /// Every L1 C/N0 written, dB-Hz.
+    pub cn0: Vec<f64>,
+    /// Satellites tracked per written epoch.
+    pub sats_per_epoch: Vec<usize>,
+    /// Arcs started after a loss of lock (the first arc of each satellite not counted).
+    pub reacquisitions: usize,
+    /// Slips the receiver did not flag.
+    pub unflagged_slips: usize,
+}
+
+impl TrackStats {
+    /// The `p`-th percentile (0–100) of the L1 C/N0 written.
+    pub fn cn0_percentile(&self, p: f64) -> f64 {
+        let mut v = self.cn0.clone();
+        v.sort_by(f64::total_cmp);
+        v.get(((v.len().max(1) - 1) as f64 * p / 100.0).round() as usize)
+            .copied()
+            .unwrap_or(f64::NAN)
+    }
+
+    /// Share (0–1) of a system's phases with an unresolved half cycle.
+    pub fn half_share(&self, sys: Constellation) -> f64 {
+        self.phases
+            .get(&sys)
+            .map_or(0.0, |&(n, h)| h as f64 / n.max(1) as f64)
+    }
+}
+
+/// A Gauss–Markov process of correlation time `tau` and standard deviation `sigma`.
+#[derive(Clone, Copy, Debug)]
+struct Markov {
+    x: f64,
+    sigma: f64,
+    tau: f64,
+}
+
+impl Markov {
+    fn new(sigma: f64, tau: f64, rng: &mut Rng) -> Markov {
+        Markov {
+            x: sigma * rng.normal(),
+            sigma,
+            tau,
+        }
+    }
+    fn step(&mut self, dt: f64, rng: &mut Rng) -> f64 {
+        let a = (-dt / self.tau).exp();
+        self.x = a * self.x + self.sigma * (1.0 - a * a).sqrt() * rng.normal();
+        self.x
+    }
+}
+
+/// One satellite as the receiver tracks it.
+struct Sat {
+    amb: [f64; 2],
+    locked: bool,
+    /// Locked at some time before.
+    ever: bool,
+    /// This epoch is the first of an arc (its phase carries LLI bit 0).
+    new_arc: bool,
+    /// Until when (s since start) the half cycle is unresolved, and the phase's offset then.
+    half: (f64, f64),
+    canopy: Markov,
+    code_mp: [Markov; 2],
+    phase_mp: [Markov; 2],
+}
+
+/// How far above 45 dB-Hz noise and multipath scale (amplitude).
+fn scale(cn0: f64) -> f64 {
+    10f64.powf((45.0 - cn0) / 20.0)
+}
+
+impl Sat {
+    fn new(p: &Profile, rng: &mut Rng) -> Sat {
+        Sat {
+            amb: [
+                (rng.uniform() * 2.0e6 - 1.0e6).round(),
+                (rng.uniform() * 2.0e6 - 1.0e6).round(),
+            ],
+            locked: false,
+            ever: false,
+            new_arc: false,
+            half: (0.0, 0.0),
+            canopy: Markov::new(p.canopy_db.1, p.canopy_db.2, rng),
+            code_mp: [
+                Markov::new(p.code.1, p.code.2, rng),
+                Markov::new(p.code.1, p.code.2, rng),
+            ],
+            phase_mp: [
+                Markov::new(p.phase.1, p.phase.2, rng),
+                Markov::new(p.phase.1, p.phase.2, rng),
+            ],
+        }
+    }
+
+    /// A new arc at `ts`: new ambiguities, a half cycle unresolved for a while.
+    fn acquire(&mut self, sys: Constellation, ts: f64, p: &Profile, rng: &mut Rng) {
+        self.locked = true;
+        self.new_arc = true;
+        for a in &mut self.amb {
+            *a += rng.range(-50.0, 50.0).round();
+        }
+        let (lo, hi) = p.half_s[usize::from(sys == Constellation::Glonass)];
+        let offset = if rng.uniform() < 0.5 { 0.5 } else { 0.0 };
+        self.half = (ts + rng.range(lo, hi), offset);
+    }
+}
+
+/// The simulation of one receiver in progress.
+struct Run<'a> {
+    rx: &'a LowCost<'a>,
+    eph: &'a Ephemerides,
+    klob: &'a Klobuchar,
+    sats: Vec<(Sv, Option<i8>)>,
+    state: BTreeMap<Sv, Sat>,
+    rng: Rng,
+    stats: TrackStats,
+}
+
+impl Run<'_> {
+    /// The observations of epoch `tag` (receiver time), the receiver's true position.
+    fn epoch(&mut self, tag: Epoch) -> (Ecef, Vec<SatObs>) {
+        let rx = self.rx;
+        let p = &rx.profile;
+        let (start, _, dt) = rx.span;
+        let ts = (tag - start).to_seconds();
+        let dtr = rx.clock.0 + rx.clock.1 * ts;
+        let t = tag - Duration::from_seconds(dtr);
+        let (pos, vel) = (rx.at)(t);
+        let g = pos.to_geodetic();
+        let (_, tow) = week_tow(t);
+        let canopy = (rx.canopy)(ts);
+        let mut out = Vec::new();
+        for &(sv, chan) in &self.sats {
+            let Some(freqs) = frequencies(sv.sys, chan) else {
+                continue;
+            };
+            let Some((rho, rate, dts, dts_rate, sp)) = geometry(self.eph, sv, t, &pos.0, &vel)
+            else {
+                continue;
+            };
+            let (az, el) = az_el(&pos, &g, &Ecef(sp));
+            if el < rx.mask_deg.to_radians() {
+                self.state.remove(&sv);
+                continue;
+            }
+            let rng = &mut self.rng;
+            let s = self.state.entry(sv).or_insert_with(|| Sat::new(p, rng));
+            // C/N0: elevation, canopy (worse through more foliage at low elevation), noise.
+            let open = p.cn0.0 + (p.cn0.1 - p.cn0.0) * el.sin();
+            let loss = canopy
+                * (p.canopy_db.0 + s.canopy.step(dt, &mut self.rng)).max(0.0)
+                * (1.0 + 0.5 * el.cos());
+            let cn0 = (open - loss + 0.7 * self.rng.normal()).round();
+            if s.locked && cn0 < p.lock.0 {
+                s.locked = false;
+            } else if !s.locked && cn0 >= p.lock.1 {
+                self.stats.reacquisitions += usize::from(s.ever);
+                s.ever = true;
+                s.acquire(sv.sys, ts, p, &mut self.rng);
+            }
+            if cn0 < p.lock.0 - 6.0 {
+                continue; // nothing tracked, not even code
+            }
+            if s.locked && cn0 < 32.0 && self.rng.uniform() < p.unflagged_slip_rate * dt {
+                s.amb[0] += if self.rng.uniform() < 0.5 { 1.0 } else { -1.0 };
+                self.stats.unflagged_slips += 1;
+            }
+            let half = s.locked && ts < s.half.0;
+            let k = f64::from(chan.unwrap_or(0));
+            let icb = (k * p.glonass_icb.0, k * p.glonass_icb.1);
+            let trop = troposphere(&g, el);
+            let i1 = klobuchar_gps(self.klob, &g, az, el, tow);
+            let base = rho + C * (dtr - dts);
+            let range_rate = rate + C * (rx.clock.1 - dts_rate);
+            let mut v = [f64::NAN; 8];
+            let sc = scale(cn0);
+            for (b, f) in freqs.iter().enumerate().take(rx.bands) {
+                let lam = C / f;
+                let iono = i1 * (F1 / f).powi(2);
+                let code_mp = s.code_mp[b].step(dt, &mut self.rng) * sc;
+                let phase_mp = (s.phase_mp[b].step(dt, &mut self.rng) * sc).clamp(-0.03, 0.03);
+                v[4 * b] = base + trop + iono + icb.1 + code_mp + p.code.0 * sc * self.rng.normal();
+                if s.locked {
+                    let phase =
+                        base + trop - iono + icb.0 + phase_mp + p.phase.0 * sc * self.rng.normal();
+                    let offset = if half { s.half.1 } else { 0.0 };
+                    v[4 * b + 1] = phase / lam + s.amb[b] + offset;
+                }
+                v[4 * b + 2] = -range_rate / lam + p.doppler * sc * self.rng.normal();
+                v[4 * b + 3] = cn0;
+            }
+            let lli_b = u8::from(s.locked && s.new_arc) | if half { 2 } else { 0 };
+            s.new_arc = false;
+            if v[1].is_finite() {
+                let e = self.stats.phases.entry(sv.sys).or_default();
+                e.0 += 1;
+                e.1 += usize::from(half);
+            }
+            self.stats.cn0.push(cn0);
+            out.push(SatObs {
+                sv,
+                v,
+                lli: [lli_b, if rx.bands > 1 { lli_b } else { 0 }],
+            });
+        }
+        (pos, out)
+    }
+}
+
+/// Simulate `rx` against the constellation: RINEX 3.04 text of the epochs `keep` lets
+/// through (by epoch index: a log that lost epochs), and what was simulated.
+pub fn simulate(
+    rx: &LowCost,
+    eph: &Ephemerides,
+    klob: &Klobuchar,
+    seed: &Rng,
+    keep: &dyn Fn(usize) -> bool,
+) -> (String, TrackStats) {
+    let sats: Vec<(Sv, Option<i8>)> = eph
+        .satellites()
+        .map(|&sv| {
+            let chan = (sv.sys == Constellation::Glonass)
+                .then(|| eph.glonass_channel(sv.prn))
+                .flatten();
+            (sv, chan)
+        })
+        .collect();
+    let (start, end, dt) = rx.span;
+    let n = ((end - start).to_seconds() / dt).floor() as usize + 1;
+    let mut run = Run {
+        rx,
+        eph,
+        klob,
+        sats,
+        state: BTreeMap::new(),
+        rng: seed.clone(),
+        stats: TrackStats::default(),
+    };
+    let mut body = String::with_capacity(n * 400);
+    let mut first = None;
+    for k in 0..n {
+        let tag = start + Duration::from_seconds(k as f64 * dt);
+        let (pos, recs) = run.epoch(tag);
+        if !keep(k) || recs.is_empty() {
+            continue;
+        }
+        first.get_or_insert(pos);
+        run.stats.epochs += 1;
+        run.stats.sats_per_epoch.push(recs.len());
+        write_epoch_bands(&mut body, tag, &recs, rx.bands);
+    }
+    let mut systems: Vec<Constellation> = run.sats.iter().map(|s| s.0.sys).collect();
+    systems.dedup();
+    let glonass: Vec<(u8, i8)> = run
+        .sats
+        .iter()
+        .filter_map(|&(sv, ch)| Some((sv.prn, ch?)))
+        .collect();
+    let head = header(&HeaderInfo {
+        name: rx.name,
+        interval: dt,
+        start,
+        pos: first.unwrap_or(Ecef::new(0.0, 0.0, 0.0)),
+        systems: &systems,
+        glonass: &glonass,
+        bands: rx.bands,
+    });
+    (head + &body, run.stats)
+}
