@@ -191,6 +191,11 @@ pub fn run(s: &Scenario, dir: &Path) -> Result<SimReport, SimError> {
         exposures: &exps,
         points: &points,
         obs: &obs,
+        rover_clock: if s.errors.receiver_clock {
+            rover.clock
+        } else {
+            (0.0, 0.0)
+        },
     };
     truth::write_all(dir, s, &site, &truth)?;
     Ok(SimReport {

@@ -27,6 +27,10 @@ pub(super) struct Truth<'a> {
     pub points: &'a [GroundPoint],
     /// The image observations (with their blunders).
     pub obs: &'a [ImageObs],
+    /// The rover's clock: offset at the start (s) and drift (s/s), zero when not simulated.
+    /// Its epoch tagged k/rate seconds after the start was measured at that minus the
+    /// offset: the truth is written at those instants.
+    pub rover_clock: (f64, f64),
 }
 
 /// Write every truth file of a run into `dir`.
@@ -39,7 +43,7 @@ pub(super) fn write_all(
     write(
         dir,
         "truth_trajectory.csv",
-        &trajectory(s, site, truth.flight, truth.start),
+        &trajectory(s, site, truth.flight, truth.start, truth.rover_clock),
     )?;
     write(
         dir,
@@ -58,21 +62,31 @@ pub(super) fn write_all(
     Ok(())
 }
 
-/// The antenna at the rover rate from the start to one sample past the end (so that every
-/// observation epoch lies inside the truth): ECEF position and velocity, NED attitude.
-fn trajectory(s: &Scenario, site: &SiteFrame, flight: &Flight, start: Epoch) -> String {
-    let mut traj = String::from("# antenna phase centre, true GPST; ECEF metres; velocity m/s; attitude degrees (NED body)\nweek,tow,x,y,z,vx,vy,vz,roll,pitch,yaw\n");
+/// The antenna at the true reception time of every rover epoch (its tag minus the clock
+/// offset), from the start to one sample past the end (so that every observation epoch lies
+/// inside the truth): ECEF position and velocity, NED attitude. A solution at its true
+/// reception time (as `.pos` files give it) is then compared with the truth at the same
+/// instant, not 0.2 ms away (1 cm at 55 m/s).
+fn trajectory(
+    s: &Scenario,
+    site: &SiteFrame,
+    flight: &Flight,
+    start: Epoch,
+    clock: (f64, f64),
+) -> String {
+    let mut traj = String::from("# antenna phase centre at the true reception time of each rover epoch (receiver tag − clock offset), GPST; ECEF metres; velocity m/s; attitude degrees (NED body)\nweek,tow,x,y,z,vx,vy,vz,roll,pitch,yaw\n");
     let n = (flight.duration() * s.flight.rate_hz).ceil() as usize + 1;
     let rot = gnss::frame::enu_rotation(&site.geo).transpose();
     for k in 0..=n {
-        let t = k as f64 / s.flight.rate_hz;
+        let tag = k as f64 / s.flight.rate_hz;
+        let t = tag - (clock.0 + clock.1 * tag);
         let st = flight.at(t);
         let p = site.to_ecef(&st.pos);
         let v = rot * st.vel;
         let (w, tow) = gnss::time::week_tow(start + Duration::from_seconds(t));
         let _ = writeln!(
             traj,
-            "{w},{tow:.3},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5}",
+            "{w},{tow:.9},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5}",
             p.0.x,
             p.0.y,
             p.0.z,
