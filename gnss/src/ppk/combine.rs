@@ -1,8 +1,13 @@
 //! Combination of the forward and backward passes (covariance-weighted smoothing).
 //!
 //! An epoch is fixed when at least one pass fixed it and the other pass agrees with that fix:
-//! two fixes within 4σ and 5 cm of each other, or a fix inside the 4σ ellipsoid of the other
-//! pass's float solution. Otherwise it is float (covariance-weighted mean of the two).
+//! two fixes within 4σ and 5 cm of each other; or a fix inside the 99.9 % ellipsoid of the
+//! other pass's float solution, when that test can tell a wrong fix (the float's largest σ at
+//! most [`DISCERNING`]) or the fix's ambiguity segment is *confirmed* (somewhere in it both
+//! passes were fixed and agreed: the data before and after both found those integers).
+//! Otherwise it is float (covariance-weighted mean of the two). A fix of single-frequency
+//! data one cycle off lies 5–30 cm away: a float of decimetres cannot refute it, so a fix
+//! that only such a float "agrees" with is not reported as fixed.
 
 use super::output::EpochSol;
 use crate::frame::Ecef;
@@ -43,8 +48,38 @@ pub fn checked(s: &EpochSol, b: Option<&EpochSol>) -> EpochSol {
     }
 }
 
-/// Combine the two passes' solutions of one epoch.
-pub fn combine(f: Option<&EpochSol>, b: Option<&EpochSol>) -> Option<EpochSol> {
+/// The largest σ (m) of a float solution that can refute a fix one L1 cycle off: a wrong
+/// integer moves the position 10 cm or more, 3.3σ of this.
+pub const DISCERNING: f64 = 0.03;
+
+/// χ² of 3 degrees of freedom at 99.9 %.
+const CHI2_3: f64 = 16.27;
+
+/// The segments of pass `a` confirmed by pass `b`: at some epoch of the segment both fixed and
+/// agreed (within 5 cm and the 99.9 % ellipsoid).
+pub fn confirmed_segments(
+    a: &[Option<EpochSol>],
+    b: &[Option<EpochSol>],
+) -> std::collections::BTreeSet<u32> {
+    a.iter()
+        .zip(b)
+        .filter_map(|(x, y)| Some((x.as_ref()?, y.as_ref()?)))
+        .filter(|(x, y)| x.quality == Quality::Fixed && y.quality == Quality::Fixed)
+        .filter(|(x, y)| {
+            let d = x.pos.0 - y.pos.0;
+            d.norm() < 0.05 && mahalanobis2(&d, &(x.cov + y.cov)) < CHI2_3
+        })
+        .map(|(x, _)| x.segment)
+        .collect()
+}
+
+/// Combine the two passes' solutions of one epoch; `confirmed`: whether each pass's fixed
+/// segment is confirmed by the other (see [`confirmed_segments`]).
+pub fn combine(
+    f: Option<&EpochSol>,
+    b: Option<&EpochSol>,
+    confirmed: (bool, bool),
+) -> Option<EpochSol> {
     let (f, b) = match (f, b) {
         (Some(f), Some(b)) => (f, b),
         (Some(x), None) | (None, Some(x)) => return Some(x.clone()),
@@ -68,8 +103,13 @@ pub fn combine(f: Option<&EpochSol>, b: Option<&EpochSol>) -> Option<EpochSol> {
             };
         }
         (true, false) | (false, true) => {
-            let (fx, fl) = if fixed(f) { (f, b) } else { (b, f) };
-            if mahalanobis2(&d, &(fl.cov + fx.cov)) < 16.0 * 3.0 {
+            let (fx, fl, sure) = if fixed(f) {
+                (f, b, confirmed.0)
+            } else {
+                (b, f, confirmed.1)
+            };
+            let discerning = fl.cov.symmetric_eigenvalues().max().sqrt() <= DISCERNING;
+            if (sure || discerning) && mahalanobis2(&d, &(fl.cov + fx.cov)) < CHI2_3 {
                 out = fx.clone();
                 out.nsat = f.nsat.max(b.nsat);
             } else {

@@ -68,6 +68,10 @@ struct Linearisation {
 /// Sigma of the predicted position (the code solution), metres.
 const POSITION_SIGMA: f64 = 30.0;
 
+/// Ambiguities an epoch's update may exclude for their post-fit residual before it keeps its
+/// solution (the rest are reset at the next epoch).
+const EXCLUSIONS: usize = 3;
+
 /// The filter of one pass.
 pub struct Filter<'a> {
     opts: &'a PpkOptions,
@@ -160,7 +164,7 @@ impl<'a> Filter<'a> {
         if self.record {
             self.recorded = Some(Prior::of(&self.state));
         }
-        let (used_sats, last) = self.measurement_update(&pairs)?;
+        let (used_sats, last) = self.update_excluding_slips(&pairs)?;
         self.post_fit_check(last);
         self.count_locks(t, &pairs);
         let smoothed = prior.and_then(|p| smooth::fuse(&self.state, p)).zip(prior);
@@ -264,6 +268,11 @@ impl<'a> Filter<'a> {
                 noise.push((s.key, o.tropo_process_noise.powi(2) * dt));
                 continue;
             }
+            if s.key == StateKey::GlonassCodeBias {
+                // a receiver's code biases drift with temperature, slowly
+                noise.push((s.key, 1e-8 * dt));
+                continue;
+            }
             let rs = slip_of(&slips.rover, s.key);
             let bs = slip_of(&slips.base, s.key);
             let gap = (t - s.track.last).to_seconds().abs() > o.max_gap;
@@ -323,6 +332,15 @@ impl<'a> Filter<'a> {
                 let n0 = (lr - lb) - (pr_r - pr_b) / lam;
                 self.state.add(key, t, n0, o.amb_init_sigma.powi(2));
             }
+        }
+        let glonass_code = pairs.iter().any(|p| {
+            p.r.sv.sys == crate::sv::Constellation::Glonass
+                && (0..o.nf).any(|f| p.r.p[f].is_finite() && p.b.p[f].is_finite())
+        });
+        if glonass_code && !self.state.has(StateKey::GlonassCodeBias) {
+            let sigma = o.glonass_code_bias_sigma;
+            self.state
+                .add(StateKey::GlonassCodeBias, t, 0.0, sigma * sigma);
         }
         if o.tropo == Estimate::On && !self.state.has(StateKey::Tropo) {
             self.state
@@ -392,6 +410,66 @@ impl<'a> Filter<'a> {
         let p = &self.state.p;
         self.state.p = (p + p.transpose()) * 0.5;
         Some((used_sats, last?))
+    }
+
+    /// The measurement update, redone without the ambiguity of the worst post-fit phase
+    /// residual beyond `max_phase_residual` (a slip no detector saw: its ambiguity is reset
+    /// now, so the epoch's solution does not carry it) up to [`EXCLUSIONS`] times. A residual
+    /// that most rows of a group share is the pivot's.
+    fn update_excluding_slips(&mut self, pairs: &[Pair]) -> Option<(usize, Linearisation)> {
+        let mut before = self.state.clone();
+        let mut out = self.measurement_update(pairs)?;
+        for _ in 0..EXCLUSIONS {
+            let Some(bad) = self.worst_phase_outlier(&out.1) else {
+                break;
+            };
+            before.remove(&[StateKey::Ambiguity(bad)]);
+            self.state = before.clone();
+            self.stats.outlier_resets += 1;
+            out = self.measurement_update(pairs)?;
+        }
+        Some(out)
+    }
+
+    /// The ambiguity of the worst post-fit phase residual beyond `max_phase_residual` (the
+    /// pivot's when most rows of its group exceed it), None when there is none.
+    fn worst_phase_outlier(&self, last: &Linearisation) -> Option<AmbKey> {
+        let o = self.opts;
+        let dx = &self.state.x - &last.at;
+        let post = |r: &measure::Row| {
+            r.innovation - r.h.entries().iter().map(|&(j, v)| v * dx[j]).sum::<f64>()
+        };
+        let phase =
+            |r: &&measure::Row| r.kind == ObsKind::Phase && r.innovation.abs() <= o.max_innovation;
+        let worst = last
+            .rows
+            .rows
+            .iter()
+            .filter(phase)
+            .map(|r| (r, post(r).abs()))
+            .filter(|(_, v)| *v > o.max_phase_residual)
+            .max_by(|a, b| a.1.total_cmp(&b.1))?
+            .0;
+        let group: Vec<&measure::Row> = last
+            .rows
+            .rows
+            .iter()
+            .filter(phase)
+            .filter(|r| r.group == worst.group)
+            .collect();
+        let over = group
+            .iter()
+            .filter(|r| post(r).abs() > o.max_phase_residual)
+            .count();
+        let sv = if group.len() >= 2 && 2 * over > group.len() {
+            worst.pivot
+        } else {
+            worst.sv
+        };
+        Some(AmbKey {
+            sv,
+            slot: worst.slot,
+        })
     }
 
     /// Post-fit phase residuals: one larger than `max_phase_residual` betrays an undetected

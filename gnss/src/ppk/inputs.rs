@@ -185,7 +185,8 @@ fn draw_chunk(
     }
 }
 
-/// Everything a pass reads: measurements, base pairing (base epochs without phase of the
+/// Everything a pass reads: measurements (with each one's C/N0 drop below its receiver's
+/// normal, `ppk::snr`; the base at `base_at`), base pairing (base epochs without phase of the
 /// processed systems skipped), start values and arc breaks (each receiver's Doppler in the
 /// slip test only when it follows its phase); what was skipped, ignored or left without a
 /// base goes to `warnings`. An error when no rover epoch pairs with a base epoch.
@@ -194,6 +195,7 @@ pub(super) fn prepare(
     (base, base_records): (&ObsFile, Records<'_>),
     orbits: &Orbits,
     opts: &PpkOptions,
+    base_at: &Ecef,
     warnings: &mut Vec<String>,
 ) -> Result<PassInputs> {
     let (rover_times, base_times) = (rover_records.times(), base_records.times());
@@ -201,7 +203,15 @@ pub(super) fn prepare(
         || draw(rover_records, &rover.header, orbits, opts, true),
         || draw(base_records, &base.header, orbits, opts, false),
     );
-    let (rover_meas, base_meas) = (rover_drawn.meas, base_drawn.meas);
+    let (mut rover_meas, mut base_meas) = (rover_drawn.meas, base_drawn.meas);
+    let starts = &rover_drawn.starts;
+    rayon::join(
+        || {
+            let at = |i: usize| starts.get(i).and_then(|s| s.as_ref().ok()).map(|s| s.0);
+            super::snr::mark_drops(&mut rover_meas, &rover_drawn.views, &at)
+        },
+        || super::snr::mark_drops(&mut base_meas, &base_drawn.views, &|_| Some(*base_at)),
+    );
     let usable: Vec<bool> = base_meas.iter().map(|m| !m.is_empty()).collect();
     let pairing = checks::pair_base_epochs(&rover_times, &base_times, &usable, opts.max_age);
     let systems: Vec<String> = opts

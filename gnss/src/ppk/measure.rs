@@ -14,8 +14,11 @@
 //!   ionosphere states when the model has them, m_w(el_s) − m_w(el_pivot) (Niell wet mapping at
 //!   the rover) on the zenith wet delay state when it has that.
 //! - Covariance: SD variance 2·σ²(el) (σ² = a² + (b/sin el)², code scaled by the code/phase
-//!   ratio²) plus the base age's (see `PpkOptions::age_error_rate`); DDs of one group share
-//!   their pivot's SD variance.
+//!   ratio²) plus each receiver's C/N0 term (`PpkOptions::snr_sigma`), the code's multiplied
+//!   by its correlation over the rover interval (`code_correlation_s`), plus the base age's
+//!   (see `PpkOptions::age_error_rate`); DDs of one group share their pivot's SD variance.
+//! - GLONASS code rows carry the inter-channel code bias state times the channel number
+//!   difference of the two satellites.
 //! - Row order: system (`Constellation::ALL`), slot, phase before code, then the pairs' order.
 
 use super::dd::DdGroup;
@@ -70,7 +73,8 @@ pub(super) struct Row {
 }
 
 /// Most non-zero entries of a design row: the position (3), two ambiguities, two
-/// ionosphere states and the zenith wet delay.
+/// ionosphere states and the zenith wet delay (a code row: the GLONASS code bias instead of
+/// the ambiguities).
 const ROW_ENTRIES: usize = 8;
 
 /// The non-zero entries of a design row, (state offset, value), without an allocation.
@@ -125,6 +129,63 @@ pub(super) struct Linearised {
 fn var_phase(el: f64, o: &PpkOptions) -> f64 {
     let s = el.sin().max(0.05);
     o.phase_sigma.0.powi(2) + (o.phase_sigma.1 / s).powi(2)
+}
+
+/// The C/N0 term of one receiver's variance (m²): the noise of a signal `drop` dB below the
+/// receiver's normal C/N0 in excess of a normal one, σ²·(10^(drop/10) − 1) (σ at 3 dB below,
+/// 5.5σ at 15 dB below; nothing when unknown).
+fn var_snr(drop: f64, sigma: f64) -> f64 {
+    if drop.is_nan() || drop <= 0.0 || sigma <= 0.0 {
+        return 0.0;
+    }
+    sigma * sigma * (10f64.powf(drop.min(40.0) / 10.0) - 1.0)
+}
+
+/// The single-difference variance (m²) of slot `f` of pair `p`, phase or code: elevation
+/// terms of both receivers (the code's scaled by the code/phase ratio), each receiver's C/N0
+/// term, the code's multiplied by its correlation over the rover interval, and the base age.
+fn sd_variance(p: &Pair, f: usize, phase: bool, o: &PpkOptions) -> f64 {
+    let el = 2.0 * var_phase(p.el, o);
+    let v = if phase {
+        // The excess of a weakened signal is multipath and diffraction (what lowers C/N0):
+        // as correlated in time as they are.
+        let snr = var_snr(p.r.snr_drop[f], o.snr_sigma.0) + var_snr(p.b.snr_drop[f], o.snr_sigma.0);
+        el + snr * correlation(o.phase_correlation_s, o)
+    } else {
+        let white = o.code_phase_ratio.powi(2) * el
+            + var_snr(p.r.snr_drop[f], o.snr_sigma.1)
+            + var_snr(p.b.snr_drop[f], o.snr_sigma.1);
+        white * correlation(o.code_correlation_s, o)
+    };
+    v + p.age_var
+}
+
+/// How much each epoch's variance grows for errors correlated over `tau` seconds (a
+/// first-order Gauss–Markov process sampled at the rover's interval Δt, lag-one correlation
+/// ρ = e^(−Δt/τ)): a filter that takes the epochs as independent gains from n of them what n·(1 − ρ)/(1 + ρ)
+/// independent ones would give, so each weighs as its variance times (1 + ρ)/(1 − ρ)
+/// (about 2τ/Δt for τ ≫ Δt; 1 for τ = 0).
+pub(super) fn correlation(tau: f64, o: &PpkOptions) -> f64 {
+    if o.interval_s > 0.0 && tau > 0.0 {
+        let rho = (-o.interval_s / tau).exp();
+        (1.0 + rho) / (1.0 - rho)
+    } else {
+        1.0
+    }
+}
+
+/// The GLONASS frequency channel number of slot `f` of a satellite (None for other
+/// systems or an unknown frequency).
+fn glonass_channel(m: &super::obs::SatMeas, f: usize) -> Option<f64> {
+    if m.sv.sys != Constellation::Glonass || !m.freq[f].is_finite() {
+        return None;
+    }
+    let (base, step) = if f == 0 {
+        (1602.0e6, 0.5625e6)
+    } else {
+        (1246.0e6, 0.4375e6)
+    };
+    Some(((m.freq[f] - base) / step).round())
 }
 
 /// SD model pieces of one pair at the linearisation point.
@@ -189,6 +250,7 @@ pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residu
     let pre = undifferenced(pairs, &rx);
     let offsets = StateOffsets::of(pairs, state, o.nf);
     let ztd = state.offset(StateKey::Tropo);
+    let glo_bias = state.offset(StateKey::GlonassCodeBias);
     let mut out = Residuals::default();
     for sys in Constellation::ALL {
         if !pairs.iter().any(|p| p.r.sv.sys == sys) {
@@ -221,12 +283,13 @@ pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residu
                         p.r.p[f] - p.b.p[f]
                     }
                 };
-                let fac = if phase {
-                    1.0
-                } else {
-                    o.code_phase_ratio.powi(2)
+                let sd_var = |i: usize| sd_variance(&pairs[i], f, phase, o);
+                // GLONASS code: the inter-channel bias of the channel.
+                let chan = |i: usize| {
+                    glo_bias
+                        .filter(|_| !phase)
+                        .and_then(|k| Some((k, glonass_channel(&pairs[i].r, f)?)))
                 };
-                let sd_var = |i: usize| 2.0 * fac * var_phase(pairs[i].el, o) + pairs[i].age_var;
                 // Ionosphere scale of this slot relative to the first (delays code, advances phase).
                 let mu = |i: usize| {
                     (pairs[i].r.freq[0] / pairs[i].r.freq[f]).powi(2)
@@ -243,6 +306,9 @@ pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residu
                     }
                     if let Some(k) = ztd {
                         m += pairs[i].map_wet * x[k];
+                    }
+                    if let Some((k, ch)) = chan(i) {
+                        m += ch * x[k];
                     }
                     m
                 };
@@ -262,6 +328,9 @@ pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residu
                     }
                     if let Some(k) = ztd {
                         hr.set(k, pairs[i].map_wet - pairs[refi].map_wet);
+                    }
+                    if let (Some((k, a)), Some((_, b))) = (chan(i), chan(refi)) {
+                        hr.set(k, a - b);
                     }
                     if phase {
                         if let (Some(ki), Some(kr)) = (amb(i), amb(refi)) {

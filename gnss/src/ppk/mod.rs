@@ -20,6 +20,7 @@ mod ar;
 mod checks;
 pub mod combine;
 mod dd;
+pub mod doppler;
 mod filter;
 pub(crate) mod geometry;
 mod inputs;
@@ -32,6 +33,7 @@ mod pair;
 mod segment;
 pub mod slip;
 mod smooth;
+mod snr;
 mod state;
 pub mod tight;
 mod update;
@@ -292,12 +294,20 @@ fn merge_passes(
             .zip(&b.sols)
             .map(|(a, b)| a.as_ref().map(|a| combine::checked(a, b.as_ref())))
             .collect(),
-        (Some(f), Some(b)) => f
-            .sols
-            .iter()
-            .zip(&b.sols)
-            .map(|(a, b)| combine::combine(a.as_ref(), b.as_ref()))
-            .collect(),
+        (Some(f), Some(b)) => {
+            let fc = combine::confirmed_segments(&f.sols, &b.sols);
+            let bc = combine::confirmed_segments(&b.sols, &f.sols);
+            let sure = |s: &Option<EpochSol>, c: &std::collections::BTreeSet<u32>| {
+                s.as_ref().is_some_and(|s| c.contains(&s.segment))
+            };
+            f.sols
+                .iter()
+                .zip(&b.sols)
+                .map(|(x, y)| {
+                    combine::combine(x.as_ref(), y.as_ref(), (sure(x, &fc), sure(y, &bc)))
+                })
+                .collect()
+        }
         (Some(f), None) => f.sols.clone(),
         (None, Some(b)) => b.sols.clone(),
         (None, None) => Vec::new(),
@@ -476,11 +486,15 @@ fn prepare_run(
     if opts.max_gap <= 0.0 {
         opts.max_gap = (5.0 * interval).max(5.0);
     }
+    if opts.interval_s <= 0.0 {
+        opts.interval_s = interval;
+    }
     let inputs = inputs::prepare(
         (rover, records.0),
         (base, records.1),
         orbits,
         &opts,
+        &base_arp,
         &mut warnings,
     )?;
     // Only epochs paired with a base epoch count: a cold start's wild code solutions where

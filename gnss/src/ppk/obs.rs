@@ -103,6 +103,9 @@ pub struct SatMeas {
     pub lli: [u8; NF],
     /// Carrier-to-noise density per slot, dB-Hz (NaN when the file has none).
     pub snr: [f64; NF],
+    /// How far (dB) that lies below the receiver's normal C/N0 for the satellite's elevation
+    /// (see `ppk::snr`; NaN unknown, 0 until measured).
+    pub snr_drop: [f64; NF],
 }
 
 /// Loss-of-lock bit of an unresolved half-cycle ambiguity (RINEX LLI bit 1).
@@ -149,6 +152,7 @@ pub fn extract(
             d: [f64::NAN; NF],
             lli: [0; NF],
             snr: [f64::NAN; NF],
+            snr_drop: [f64::NAN; NF],
         };
         let mut any = false;
         for (k, c) in row.iter().enumerate().take(nf) {

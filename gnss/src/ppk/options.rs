@@ -105,6 +105,26 @@ pub struct PpkOptions {
     pub phase_sigma: (f64, f64),
     /// Code sigma over phase sigma.
     pub code_phase_ratio: f64,
+    /// Carrier-to-noise weighting: the sigma (phase m, code m) of the noise a signal carries
+    /// in excess when its C/N0 lies d dB below what its receiver normally sees at that
+    /// elevation (learnt from the data, `ppk::snr`), σ²·(10^(d/10) − 1): σ at 3 dB below,
+    /// 5.5σ at 15 dB below (thermal noise, and the multipath and diffraction that lower C/N0
+    /// under trees). Nothing where a file has no C/N0 (the S observables).
+    pub snr_sigma: (f64, f64),
+    /// Correlation time of that excess phase noise (multipath), seconds: each epoch's excess
+    /// variance is multiplied by it over the rover's interval, as for the code.
+    pub phase_correlation_s: f64,
+    /// Correlation time of code errors (multipath), seconds: epochs closer than this are not
+    /// independent, so each epoch's code variance is multiplied by it over the rover's
+    /// interval (10 at 1 Hz for 10 s): the float solution then averages code as the errors
+    /// allow, not as white noise would (0: white).
+    pub code_correlation_s: f64,
+    /// The rover's nominal interval, seconds (0: taken from the data by the run).
+    pub interval_s: f64,
+    /// Prior sigma of the GLONASS inter-channel code bias between the two receivers, metres
+    /// per frequency channel number (estimated, one state, when GLONASS is processed: code
+    /// biases of different receivers differ by up to metres across the channels).
+    pub glonass_code_bias_sigma: f64,
     /// Growth of the single-difference sigma with the age of the base epoch, m/s per
     /// (1 + baseline/10 km): a rover epoch matched to a base epoch 30 s away on a 115 km
     /// baseline weighs as if its sigma were 0.37 m (the base's atmosphere of another moment);
@@ -190,6 +210,11 @@ impl Default for PpkOptions {
             max_gap: 0.0,
             phase_sigma: (0.003, 0.003),
             code_phase_ratio: 100.0,
+            snr_sigma: (0.005, 0.6),
+            phase_correlation_s: 2.0,
+            code_correlation_s: 10.0,
+            interval_s: 0.0,
+            glonass_code_bias_sigma: 0.3,
             age_error_rate: 0.001,
             amb_process_noise: 1e-4,
             amb_init_sigma: 30.0,

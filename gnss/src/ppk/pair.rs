@@ -46,6 +46,7 @@ pub(super) fn has_phase(p: &Pair, slot: usize) -> bool {
 pub(super) fn observes(p: &Pair, key: StateKey) -> bool {
     match key {
         StateKey::Position | StateKey::Tropo => true,
+        StateKey::GlonassCodeBias => p.r.sv.sys == crate::sv::Constellation::Glonass,
         StateKey::Ambiguity(a) => p.r.sv == a.sv && has_phase(p, a.slot),
         StateKey::Iono(sv) => p.r.sv == sv && (0..NF).any(|k| has_phase(p, k)),
     }

@@ -33,6 +33,11 @@ pub fn arc_breaks(
     max_gap: f64,
     doppler: bool,
 ) -> Vec<Slips> {
+    let noise = if doppler {
+        super::doppler::misfit_noise(times, meas, max_gap)
+    } else {
+        None
+    };
     let mut out: Vec<Slips> = vec![Slips::new(); times.len()];
     let mut merge = |i: usize, sv: Sv, causes: [Option<SlipCause>; NF]| {
         if causes.iter().any(Option::is_some) {
@@ -44,6 +49,7 @@ pub fn arc_breaks(
     };
     let mut forward = SlipDetector::new(max_gap, false);
     forward.doppler = doppler;
+    forward.noise = noise;
     for (i, (t, m)) in times.iter().zip(meas).enumerate() {
         for (sat, causes) in m.iter().zip(forward.check_epoch(*t, m)) {
             merge(i, sat.sv, causes);
@@ -53,6 +59,7 @@ pub fn arc_breaks(
     // forward time), where it is recorded.
     let mut backward = SlipDetector::new(max_gap, true);
     backward.doppler = doppler;
+    backward.noise = noise;
     let mut next: HashMap<Sv, usize> = HashMap::new();
     for i in (0..times.len()).rev() {
         let m = &meas[i];
@@ -120,6 +127,10 @@ pub struct SlipDetector {
     pub backward: bool,
     /// Whether the Doppler test runs.
     pub doppler: bool,
+    /// The receiver's measured misfit noise: the Doppler test's threshold is then 5 of its
+    /// sigmas (grown with the C/N0 drop and the interval), at least half a cycle, at most
+    /// `doppler_threshold` (see [`super::doppler`]).
+    pub noise: Option<super::doppler::MisfitNoise>,
 }
 
 impl SlipDetector {
@@ -136,7 +147,25 @@ impl SlipDetector {
             doppler_threshold: 3.0,
             backward,
             doppler: true,
+            noise: None,
         }
+    }
+
+    /// The Doppler test's threshold (cycles) for slot `f` of `m` over `dt` seconds, besides
+    /// the allowance for dynamics.
+    fn doppler_limit(&self, m: &SatMeas, f: usize, dt: f64) -> f64 {
+        let fixed = self.doppler_threshold + 0.5 * dt;
+        let Some(n) = self.noise else {
+            return fixed;
+        };
+        let drop = if m.snr_drop[f].is_finite() {
+            m.snr_drop[f]
+        } else {
+            0.0
+        };
+        let sigma =
+            n.sigma / m.wavelength(f) * 10f64.powf(drop / 20.0) * (dt / n.interval).max(1.0);
+        (5.0 * sigma).max(0.5).min(fixed)
     }
 
     /// Slips of every satellite of an epoch: [`Self::check`] per satellite, plus the
@@ -188,7 +217,7 @@ impl SlipDetector {
             for (k, m) in sats.iter().enumerate() {
                 for f in 0..NF {
                     let cycles = (misfit[k][f] - common) / m.wavelength(f);
-                    if cycles.abs() > self.doppler_threshold + 0.5 * dt_all + allowance[k][f] {
+                    if cycles.abs() > self.doppler_limit(m, f, dt_all) + allowance[k][f] {
                         out[k][f] = out[k][f].or(Some(SlipCause::Doppler));
                     }
                 }
@@ -448,6 +477,7 @@ mod tests {
             d: [-rate / lam, f64::NAN, f64::NAN],
             lli: [0; NF],
             snr: [f64::NAN; NF],
+            snr_drop: [f64::NAN; NF],
         }
     }
 

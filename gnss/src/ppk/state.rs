@@ -10,7 +10,10 @@
 //!         StateKey::Iono(sv)                        single-difference slant ionospheric delay
 //!                                                   on slot 0, metres (optional model)
 //!         StateKey::Tropo                           rover zenith wet delay residual, metres
-//!                                                   (optional model; one state, never reset) ]
+//!                                                   (optional model; one state, never reset)
+//!         StateKey::GlonassCodeBias                 GLONASS inter-channel code bias, rover
+//!                                                   − base, metres per channel number
+//!                                                   (with GLONASS; one state, never reset) ]
 //! ```
 //! The satellite part is built from the satellites in view: a state is added when its
 //! satellite is first seen (or seen again after a reset) and removed when it is reset, and the
@@ -49,6 +52,9 @@ pub(super) enum StateKey {
     Iono(Sv),
     /// Rover zenith wet delay on top of the a-priori model (relative to the base's), metres.
     Tropo,
+    /// GLONASS inter-channel code bias, rover minus base, metres per frequency channel
+    /// number (one state, never reset).
+    GlonassCodeBias,
 }
 
 /// Bookkeeping of a per-satellite state.

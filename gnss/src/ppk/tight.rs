@@ -173,6 +173,7 @@ pub fn double_differences(
         (base, inputs::Records::Borrowed(&base.epochs)),
         orbits,
         &opts,
+        &base_arp,
         &mut warnings,
     )?;
     let rover_arcs = Arcs::of(&inp.rover_breaks, &inp.rover_meas);

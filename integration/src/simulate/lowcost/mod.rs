@@ -65,27 +65,50 @@ const WALK_S: f64 = 1200.0;
 /// The walk's base, ENU metres from the site.
 const WALK_BASE: [f64; 3] = [40.0, 210.0, 3.0];
 
+/// What a walk's receivers do with half cycles: how long (s) a GPS/QZSS arc's half cycle
+/// stays unresolved, and the chance that its phase is half a cycle off meanwhile. The bench's
+/// walk is shaped after the real one ([`WalkHalfCycles::default`]); a test may make the half
+/// cycles longer and always off, to show what they do to a fix.
+#[derive(Clone, Copy, Debug)]
+pub struct WalkHalfCycles {
+    /// Seconds unresolved (uniform in this range), GPS and QZSS.
+    pub gps_s: (f64, f64),
+    /// The chance that the phase is half a cycle off while unresolved.
+    pub off_probability: f64,
+}
+
+impl Default for WalkHalfCycles {
+    /// 3–13 s, half of them off: 9.6 % of GPS phases flagged (the real walk: 8 %).
+    fn default() -> Self {
+        WalkHalfCycles {
+            gps_s: (3.0, 13.0),
+            off_probability: 0.5,
+        }
+    }
+}
+
 /// The M8P-like rover: C/N0 30/43/51 dB-Hz at p10/p50/p90 over the walk, half cycles on
 /// 6–9 % of the phases.
-fn walk_rover_profile() -> Profile {
+fn walk_rover_profile(half: &WalkHalfCycles) -> Profile {
     Profile {
-        cn0: (36.0, 53.0),
-        canopy_db: (7.0, 4.0, 6.0),
-        lock: (25.0, 28.0),
-        half_s: [(3.0, 13.0), (4.0, 19.0)],
-        unflagged_slip_rate: 0.01,
-        code: (0.3, 0.6, 15.0),
+        half_s: [half.gps_s, (4.0, 19.0)],
+        half_offset_probability: half.off_probability,
         phase: (0.0015, 0.004, 3.0),
+        unflagged_slip_rate: 0.01,
+        canopy_db: (7.0, 4.0, 6.0),
+        cn0: (36.0, 53.0),
+        lock: (25.0, 28.0),
+        code: (0.3, 0.6, 15.0),
         doppler: 0.06,
         glonass_icb: (0.011, 0.28),
     }
 }
 
 /// The base: the same receiver type under open sky, its GLONASS biases of its own.
-fn walk_base_profile() -> Profile {
+fn walk_base_profile(half: &WalkHalfCycles) -> Profile {
     Profile {
         glonass_icb: (-0.007, -0.17),
-        ..walk_rover_profile()
+        ..walk_rover_profile(half)
     }
 }
 
@@ -112,7 +135,8 @@ fn base_log_gaps(n: usize, rng: &mut Rng) -> Vec<bool> {
 pub fn run(dir: &Path, seed: u64) -> Result<LowCostReport, SimError> {
     let rng = Rng::new(seed);
     let walk_dir = dir.join("walk");
-    let (walk_rover, walk_base, walk_base_position) = run_walk(&walk_dir, &rng.fork(1))?;
+    let (walk_rover, walk_base, walk_base_position) =
+        walk(&walk_dir, &rng.fork(1), &WalkHalfCycles::default())?;
     Ok(LowCostReport {
         walk: walk_dir,
         walk_rover,
@@ -146,8 +170,22 @@ fn constellation(
     Ok((nav, eph))
 }
 
+/// The walk with its half cycles as `half` says, into `dir`: rover and base simulated, logs,
+/// truth and the configuration written; what the rover and base hold, and the base position.
+pub fn walk_into(
+    dir: &Path,
+    seed: u64,
+    half: &WalkHalfCycles,
+) -> Result<(TrackStats, TrackStats, Ecef), SimError> {
+    walk(dir, &Rng::new(seed).fork(1), half)
+}
+
 /// The walk: rover and base simulated, logs, truth and the configuration written.
-fn run_walk(dir: &Path, rng: &Rng) -> Result<(TrackStats, TrackStats, Ecef), SimError> {
+fn walk(
+    dir: &Path,
+    rng: &Rng,
+    half: &WalkHalfCycles,
+) -> Result<(TrackStats, TrackStats, Ecef), SimError> {
     let start = gpst(WALK_START)?;
     let site = Geodetic::from_degrees(WALK_SITE.0, WALK_SITE.1, WALK_SITE.2).to_ecef();
     let systems = [
@@ -175,7 +213,7 @@ fn run_walk(dir: &Path, rng: &Rng) -> Result<(TrackStats, TrackStats, Ecef), Sim
         span: (start, start + Duration::from_seconds(WALK_S), 1.0),
         bands: 1,
         mask_deg: 5.0,
-        profile: walk_rover_profile(),
+        profile: walk_rover_profile(half),
     };
     let open_sky = |_t: f64| 0.0;
     let base = LowCost {
@@ -186,7 +224,7 @@ fn run_walk(dir: &Path, rng: &Rng) -> Result<(TrackStats, TrackStats, Ecef), Sim
         span: (base_start, base_end, 1.0),
         bands: 1,
         mask_deg: 5.0,
-        profile: walk_base_profile(),
+        profile: walk_base_profile(half),
     };
     let (rtext, rstats) = receiver::simulate(&rover, &eph, &klob, &rng.fork(1), &|_| true);
     let n_base = 3684;

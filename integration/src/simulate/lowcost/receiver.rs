@@ -41,6 +41,9 @@ pub struct Profile {
     /// Seconds an arc's half-cycle ambiguity stays unresolved (uniform in this range):
     /// GPS/QZSS, GLONASS (whose strings mark the bit edges more often).
     pub half_s: [(f64, f64); 2],
+    /// The chance that an arc's phase is half a cycle off while its half cycle is unresolved
+    /// (the loop locked on the other polarity).
+    pub half_offset_probability: f64,
     /// Slips the receiver does not flag, per second of tracking below 32 dB-Hz.
     pub unflagged_slip_rate: f64,
     /// Code noise and code multipath at 45 dB-Hz (metres; both grow as 10^((45 − C/N0)/20)),
@@ -184,7 +187,11 @@ impl Sat {
             *a += rng.range(-50.0, 50.0).round();
         }
         let (lo, hi) = p.half_s[usize::from(sys == Constellation::Glonass)];
-        let offset = if rng.uniform() < 0.5 { 0.5 } else { 0.0 };
+        let offset = if rng.uniform() < p.half_offset_probability {
+            0.5
+        } else {
+            0.0
+        };
         self.half = (ts + rng.range(lo, hi), offset);
     }
 }
