@@ -149,8 +149,10 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     antex: Option<PathBuf>,
     /// Systems to use, letters separated by commas: G GPS, E Galileo, C BeiDou, J QZSS,
-    /// R GLONASS (float ambiguities only).
-    #[arg(long, value_name = "LIST", default_value = "G,E,C,J")]
+    /// R GLONASS (its ambiguities stay float: the inter-channel phase biases of two receivers
+    /// differ unless they are identical; its inter-channel code bias is estimated). GLONASS
+    /// adds geometry where satellites are few (under trees, in valleys).
+    #[arg(long, value_name = "LIST", default_value = "G,E,C,J,R")]
     systems: String,
     /// Options from a TOML file: each key a flag of this command without its dashes
     /// (`elev-mask = 15`, `nav = ["a.nav", "b.nav"]`, `base-from-ppp = true`); relative paths

@@ -126,7 +126,7 @@ fn an_rtklib_conf_gives_the_same_run_and_says_what_it_mapped() {
         "--nav",
         p(&nav),
         "--systems",
-        "G,E,C,J",
+        "G,E,C,J,R",
         "-o",
         p(&out),
     ]);

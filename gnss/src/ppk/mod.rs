@@ -185,6 +185,7 @@ fn choose_models(opts: &mut PpkOptions, longest: f64) -> Models {
         longest_baseline: longest,
         iono,
         tropo,
+        glonass_float: false,
     }
 }
 
@@ -506,7 +507,11 @@ fn prepare_run(
         })
         .collect();
     let longest = inputs::longest_baseline(&starts, &inputs.rover_times, &base_arp);
-    let models = choose_models(&mut opts, longest);
+    let mut models = choose_models(&mut opts, longest);
+    models.glonass_float = inputs.rover_meas.iter().any(|m| {
+        m.iter()
+            .any(|s| s.sv.sys == crate::sv::Constellation::Glonass)
+    });
     warnings.extend(checks::baseline_warning(longest));
     // A step longer than 2.5 nominal intervals between solved epochs starts a new segment.
     let segment_gap = 2.5 * interval;

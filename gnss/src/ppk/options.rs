@@ -200,7 +200,7 @@ impl Default for PpkOptions {
             motion: Motion::Kinematic,
             refer: Reference::Arp,
             elev_mask: 10f64.to_radians(),
-            systems: Constellation::CDMA.to_vec(),
+            systems: [Constellation::CDMA.as_slice(), &[Constellation::Glonass]].concat(),
             nf: 2,
             ar: ArMode::FixAndHold,
             filter: FilterMode::Combined,

@@ -150,6 +150,10 @@ pub struct Models {
     pub iono: bool,
     /// The rover's zenith wet delay was estimated.
     pub tropo: bool,
+    /// GLONASS was processed: its ambiguities stayed float (inter-channel phase biases of
+    /// two receivers differ unless they are identical; they are not calibrated) and its
+    /// inter-channel code bias was estimated.
+    pub glonass_float: bool,
 }
 
 /// Output of a carrier-phase run.

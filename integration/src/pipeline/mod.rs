@@ -521,12 +521,17 @@ impl fmt::Display for PpkReport {
         .collect();
         writeln!(
             f,
-            "  longest baseline {:.1} km; estimated: {}",
+            "  longest baseline {:.1} km; estimated: {}{}",
             m.longest_baseline / 1000.0,
             if estimated.is_empty() {
                 "no atmospheric delays (a-priori models only)".to_string()
             } else {
                 estimated.join(", ")
+            },
+            if m.glonass_float {
+                "; GLONASS ambiguities kept float (the receivers' inter-channel phase biases are not calibrated), its inter-channel code bias estimated"
+            } else {
+                ""
             }
         )?;
         let mut reasons: std::collections::BTreeMap<&str, (usize, Epoch)> = Default::default();
