@@ -28,7 +28,10 @@ use std::path::{Path, PathBuf};
 /// the time: C/N0 falling, losses of lock, half cycles that clear after some seconds,
 /// multipath) as rover.ubx, against a base whose log base.ubx mixes UBX, RTCM 3 (1005, MSM7,
 /// 1230) and NMEA and lost epochs (gaps of 1–39 s), the GLONASS inter-channel biases of the two
-/// receivers unequal. Each folder has ppk.toml (`ppkat ppk --config OUT/walk/ppk.toml`),
+/// receivers unequal. OUT/drone/ holds a DJI Phantom 4 RTK-like flight (5.7 min, 5 Hz,
+/// GPS/GLONASS/Galileo L1/L2) as PPKRAW.bin (RTCM 3 MSM7 opening with stale GPS ephemerides
+/// of other weeks) with Timestamp.MRK, against a CORS's base.obs. Each folder has ppk.toml
+/// (`ppkat ppk --config OUT/walk/ppk.toml`),
 /// truth_trajectory.csv (the antenna at the true reception time of every rover epoch),
 /// nav.rnx, the RINEX of each receiver and README.txt with the figures simulated.
 ///

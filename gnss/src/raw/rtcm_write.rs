@@ -275,6 +275,30 @@ pub fn station_1005(x: [f64; 3]) -> Vec<u8> {
     frame(&w.buf)
 }
 
+/// A receiver and antenna descriptor frame (1033) of station 0: antenna descriptor (IGS name
+/// and radome), antenna serial, receiver type, firmware and serial, each cut to 31
+/// characters.
+pub fn descriptor_1033(
+    antenna: &str,
+    antenna_serial: &str,
+    receiver: &str,
+    firmware: &str,
+    receiver_serial: &str,
+) -> Vec<u8> {
+    fn put(p: &mut Vec<u8>, s: &str) {
+        let b = &s.as_bytes()[..s.len().min(31)];
+        p.push(b.len() as u8);
+        p.extend_from_slice(b);
+    }
+    let mut p = vec![(1033u16 >> 4) as u8, ((1033u16 & 0xf) << 4) as u8, 0];
+    put(&mut p, antenna);
+    p.push(0); // antenna setup id
+    for s in [antenna_serial, receiver, firmware, receiver_serial] {
+        put(&mut p, s);
+    }
+    frame(&p)
+}
+
 /// A station position frame with antenna height (1006): the ARP, ECEF metres, and its height
 /// above the marker, metres.
 pub fn station_1006(arp: [f64; 3], height: f64) -> Vec<u8> {

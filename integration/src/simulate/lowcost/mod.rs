@@ -18,6 +18,7 @@
 //! [`receiver`] (the tracking model), [`walk`] (the path), the constellation and the raw-log
 //! writers of `gnss`.
 
+pub mod drone;
 pub mod receiver;
 pub mod walk;
 
@@ -49,11 +50,21 @@ pub struct LowCostReport {
     pub walk_base: TrackStats,
     /// The walk's base position (ARP), ECEF.
     pub walk_base_position: Ecef,
+    /// The drone's folder.
+    pub drone: PathBuf,
+    /// What the drone's simulation holds.
+    pub drone_report: drone::DroneReport,
 }
 
 impl std::fmt::Display for LowCostReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}", walk_summary(self))
+        write!(f, "{}", walk_summary(self))?;
+        write!(
+            f,
+            "drone → {}\n{}",
+            self.drone.display(),
+            drone_text(&self.drone_report)
+        )
     }
 }
 
@@ -137,15 +148,20 @@ pub fn run(dir: &Path, seed: u64) -> Result<LowCostReport, SimError> {
     let walk_dir = dir.join("walk");
     let (walk_rover, walk_base, walk_base_position) =
         walk(&walk_dir, &rng.fork(1), &WalkHalfCycles::default())?;
+    let drone_dir = dir.join("drone");
+    let drone_report = drone::drone(&drone_dir, &rng.fork(2))?;
+    write(&drone_dir, "README.txt", &drone_text(&drone_report))?;
     Ok(LowCostReport {
         walk: walk_dir,
         walk_rover,
         walk_base,
         walk_base_position,
+        drone: drone_dir,
+        drone_report,
     })
 }
 
-fn gpst(s: &str) -> Result<Epoch, SimError> {
+pub(super) fn gpst(s: &str) -> Result<Epoch, SimError> {
     Epoch::from_gregorian_str(&format!("{s} GPST")).map_err(|e| SimError::Key {
         key: "start",
         what: e.to_string(),
@@ -153,7 +169,7 @@ fn gpst(s: &str) -> Result<Epoch, SimError> {
 }
 
 /// The constellation over `[start, end]` written to `dir/nav.rnx` and read back.
-fn constellation(
+pub(super) fn constellation(
     dir: &Path,
     start: Epoch,
     end: Epoch,
@@ -342,7 +358,7 @@ fn gga(t: Epoch, g: &Geodetic) -> Vec<u8> {
 /// The antenna at the true reception time of every epoch of a receiver tagged every `dt`
 /// seconds from `start` for `span` seconds with clock `(offset, drift)`: week, tow, ECEF
 /// position and velocity, zero attitude.
-fn truth_csv(
+pub(super) fn truth_csv(
     start: Epoch,
     span: f64,
     dt: f64,
@@ -397,6 +413,33 @@ fn walk_text(r: &TrackStats, b: &TrackStats, base: Ecef) -> String {
         b.epochs, base.0.x, base.0.y, base.0.z
     );
     s
+}
+
+/// What the drone's receivers and log hold.
+fn drone_text(d: &drone::DroneReport) -> String {
+    let r = &d.rover;
+    format!(
+        "Simulated DJI Phantom 4 RTK-like flight (ppkat simulate --builtin lowcost): {:.0} s, RTCM 3\n\
+         MSM7 at 5 Hz (GPS, GLONASS, Galileo L1/L2) in PPKRAW.bin beside Timestamp.MRK, against a\n\
+         CORS RINEX (base.obs, 1 Hz) 1.7 km away. The log opens with {} stale GPS ephemerides of\n\
+         weeks 2018, 2019 and 2022 before the current ones (week 2024): ppkat dates it by the\n\
+         consensus of the current ones, with no hint.\n\
+         Process: ppkat ppk --config ppk.toml; ppkat exposures --mrk Timestamp.MRK --trajectory ppk.pos;\n\
+         check: posstat.py ppk.pos --truth-sim truth_trajectory.csv\n\n\
+         rover: {} epochs, C/N0 p10/p50/p90 {:.0}/{:.0}/{:.0} dB-Hz, unresolved half cycles on {:.1} % of GPS phases\n\
+         {} exposures; CORS at {:.4} {:.4} {:.4} (ECEF)\n",
+        d.duration,
+        d.stale,
+        r.epochs,
+        r.cn0_percentile(10.0),
+        r.cn0_percentile(50.0),
+        r.cn0_percentile(90.0),
+        100.0 * r.half_share(Constellation::Gps),
+        d.exposures,
+        d.base_position.0.x,
+        d.base_position.0.y,
+        d.base_position.0.z
+    )
 }
 
 /// One line of the walk's figures for the command's summary.
