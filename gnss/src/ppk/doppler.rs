@@ -9,6 +9,8 @@
 //! epoch is removed, from clean signals (C/N0 within 3 dB of the receiver's normal) that did
 //! not slip; the median absolute misfit ignores the few that a manoeuvre or a slip spoils.
 
+#[cfg(test)]
+use super::obs::NO_DROP;
 use super::obs::{SatMeas, NF};
 use hifitime::Epoch;
 
@@ -49,7 +51,7 @@ fn epoch_misfits(prev: &[SatMeas], cur: &[SatMeas], dt: f64) -> Vec<(f64, bool)>
             }
             let predicted = -0.5 * (m.d[f] + h.d[f]) * dt;
             let misfit = (m.l[f] - h.l[f] - predicted) * m.wavelength(f);
-            let clean = m.snr_drop[f] <= CLEAN_DROP && h.snr_drop[f] <= CLEAN_DROP;
+            let clean = m.cn0_drop(f) <= CLEAN_DROP && h.cn0_drop(f) <= CLEAN_DROP;
             v.push((misfit, clean));
         }
     }
@@ -139,8 +141,8 @@ mod tests {
                             p: [range, f64::NAN, f64::NAN],
                             d: [-rate / lam + 0.1 * normal(), f64::NAN, f64::NAN],
                             lli: [0; NF],
-                            snr: [45.0, f64::NAN, f64::NAN],
-                            snr_drop: [0.0, f64::NAN, f64::NAN],
+                            snr: [180, 0, 0],
+                            snr_drop: [0, NO_DROP, NO_DROP],
                         }
                     })
                     .collect()

@@ -149,12 +149,12 @@ fn sd_variance(p: &Pair, f: usize, phase: bool, o: &PpkOptions) -> f64 {
     let v = if phase {
         // The excess of a weakened signal is multipath and diffraction (what lowers C/N0):
         // as correlated in time as they are.
-        let snr = var_snr(p.r.snr_drop[f], o.snr_sigma.0) + var_snr(p.b.snr_drop[f], o.snr_sigma.0);
+        let snr = var_snr(p.r.cn0_drop(f), o.snr_sigma.0) + var_snr(p.b.cn0_drop(f), o.snr_sigma.0);
         el + snr * correlation(o.phase_correlation_s, o)
     } else {
         let white = o.code_phase_ratio.powi(2) * el
-            + var_snr(p.r.snr_drop[f], o.snr_sigma.1)
-            + var_snr(p.b.snr_drop[f], o.snr_sigma.1);
+            + var_snr(p.r.cn0_drop(f), o.snr_sigma.1)
+            + var_snr(p.b.cn0_drop(f), o.snr_sigma.1);
         white * correlation(o.code_correlation_s, o)
     };
     v + p.age_var

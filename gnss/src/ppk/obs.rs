@@ -101,17 +101,56 @@ pub struct SatMeas {
     /// Loss-of-lock indicator of the phase per slot (bit 0: a slip since the last epoch; bit
     /// 1: the half-cycle ambiguity not resolved, so the phase may be half a cycle off).
     pub lli: [u8; NF],
-    /// Carrier-to-noise density per slot, dB-Hz (NaN when the file has none).
-    pub snr: [f64; NF],
-    /// How far (dB) that lies below the receiver's normal C/N0 for the satellite's elevation
-    /// (see `ppk::snr`; NaN unknown, 0 until measured).
-    pub snr_drop: [f64; NF],
+    /// Carrier-to-noise density per slot in quarters of a dB-Hz (0: the file has none; read
+    /// it with [`SatMeas::cn0`]). Kept in a byte: a 10 Hz hour holds millions of these.
+    pub snr: [u8; NF],
+    /// How far that lies below the receiver's normal C/N0 for the satellite's elevation, in
+    /// quarters of a dB ([`NO_DROP`]: unknown; read it with [`SatMeas::cn0_drop`], set by
+    /// `ppk::snr`).
+    pub snr_drop: [u8; NF],
 }
+
+/// [`SatMeas::snr_drop`] unknown.
+pub const NO_DROP: u8 = u8::MAX;
 
 /// Loss-of-lock bit of an unresolved half-cycle ambiguity (RINEX LLI bit 1).
 pub const LLI_HALF_CYCLE: u8 = 2;
 
 impl SatMeas {
+    /// C/N0 of slot `f`, dB-Hz (NaN when the file has none).
+    pub fn cn0(&self, f: usize) -> f64 {
+        match self.snr[f] {
+            0 => f64::NAN,
+            q => f64::from(q) * 0.25,
+        }
+    }
+
+    /// Store a C/N0 (dB-Hz; not positive or not finite: none) for slot `f`, to a quarter dB.
+    pub fn set_cn0(&mut self, f: usize, v: f64) {
+        self.snr[f] = if v > 0.0 {
+            (v * 4.0).round().clamp(1.0, 254.0) as u8
+        } else {
+            0
+        };
+    }
+
+    /// How far (dB) the C/N0 of slot `f` lies below its receiver's normal (NaN unknown).
+    pub fn cn0_drop(&self, f: usize) -> f64 {
+        match self.snr_drop[f] {
+            NO_DROP => f64::NAN,
+            q => f64::from(q) * 0.25,
+        }
+    }
+
+    /// Store a drop (dB; NaN: unknown) for slot `f`, to a quarter dB (at most 63.5 dB).
+    pub fn set_cn0_drop(&mut self, f: usize, v: f64) {
+        self.snr_drop[f] = if v.is_nan() {
+            NO_DROP
+        } else {
+            (v.max(0.0) * 4.0).round().min(254.0) as u8
+        };
+    }
+
     /// Whether the phase of slot `f` may be half a cycle off (its half-cycle ambiguity not
     /// yet resolved by the receiver).
     pub fn half_cycle(&self, f: usize) -> bool {
@@ -151,8 +190,8 @@ pub fn extract(
             p: [f64::NAN; NF],
             d: [f64::NAN; NF],
             lli: [0; NF],
-            snr: [f64::NAN; NF],
-            snr_drop: [f64::NAN; NF],
+            snr: [0; NF],
+            snr_drop: [NO_DROP; NF],
         };
         let mut any = false;
         for (k, c) in row.iter().enumerate().take(nf) {
@@ -178,7 +217,7 @@ pub fn extract(
             }
             if let Some(si) = c.snr {
                 let v = s.get(si).value;
-                m.snr[k] = if v > 0.0 { v } else { f64::NAN };
+                m.set_cn0(k, v);
             }
         }
         if any {

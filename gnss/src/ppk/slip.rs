@@ -158,8 +158,8 @@ impl SlipDetector {
         let Some(n) = self.noise else {
             return fixed;
         };
-        let drop = if m.snr_drop[f].is_finite() {
-            m.snr_drop[f]
+        let drop = if m.cn0_drop(f).is_finite() {
+            m.cn0_drop(f)
         } else {
             0.0
         };
@@ -476,8 +476,8 @@ mod tests {
             p: [range + clock_m, f64::NAN, f64::NAN],
             d: [-rate / lam, f64::NAN, f64::NAN],
             lli: [0; NF],
-            snr: [f64::NAN; NF],
-            snr_drop: [f64::NAN; NF],
+            snr: [0; NF],
+            snr_drop: [super::obs::NO_DROP; NF],
         }
     }
 

@@ -111,10 +111,11 @@ pub(super) fn mark_drops(
                 continue;
             }
             for (f, slot) in by_slot.iter_mut().enumerate() {
-                if s.snr[f].is_finite() {
+                let cn0 = s.cn0(f);
+                if cn0.is_finite() {
                     let b = bin_of(el);
-                    by_signal.entry((s.sv.sys, f)).or_default()[b].push(s.snr[f]);
-                    slot[b].push(s.snr[f]);
+                    by_signal.entry((s.sv.sys, f)).or_default()[b].push(cn0);
+                    slot[b].push(cn0);
                 }
             }
         }
@@ -134,10 +135,8 @@ pub(super) fn mark_drops(
         for (s, &el) in m.iter_mut().zip(e) {
             for f in 0..NF {
                 let normal = curves.get(&(s.sv.sys, f)).map_or(f64::NAN, |c| at(c, el));
-                s.snr_drop[f] = (normal - s.snr[f] - DEAD_BAND).max(0.0);
-                if !(normal.is_finite() && s.snr[f].is_finite()) {
-                    s.snr_drop[f] = f64::NAN;
-                }
+                // NaN (unknown) when either is.
+                s.set_cn0_drop(f, normal - s.cn0(f) - DEAD_BAND);
             }
         }
     }
