@@ -477,7 +477,7 @@ mod tests {
             d: [-rate / lam, f64::NAN, f64::NAN],
             lli: [0; NF],
             snr: [0; NF],
-            snr_drop: [super::obs::NO_DROP; NF],
+            snr_drop: [crate::ppk::obs::NO_DROP; NF],
         }
     }
 
