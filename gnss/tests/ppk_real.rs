@@ -251,6 +251,18 @@ fn cssrlib_car() {
         r.forward
     );
     assert!(s.fixed_pct >= 90.0, "fix rate {}", s.fixed_pct);
+    // Rover L5Q against base L5X and E1 L1C against L1X: both headers declare their phases
+    // aligned (SYS / PHASE SHIFT), so no slot is kept float for its signals.
+    for f in ["SEPT265G.21O", "3034265G.21O"] {
+        let h = gnss::rinex::ObsFile::read(&dir.join(f)).unwrap().header;
+        assert!(h.phase_aligned.contains(&gnss::sv::Constellation::Gps), "{f}");
+        assert!(h.phase_aligned.contains(&gnss::sv::Constellation::Galileo), "{f}");
+    }
+    assert!(
+        !r.warnings.iter().any(|w| w.contains("may differ by a quarter")),
+        "{:?}",
+        r.warnings
+    );
     assert!(s.h_rms <= 0.08, "H RMS over the static start {}", s.h_rms);
 }
 

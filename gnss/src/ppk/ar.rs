@@ -178,6 +178,9 @@ fn candidates(st: &State, o: &PpkOptions, pairs: &[Pair]) -> Vec<Candidate> {
         if o.half_cycle_float && half_cycle(p, amb.slot) {
             continue;
         }
+        if o.float_slots.contains(&(amb.sv.sys, amb.slot)) {
+            continue;
+        }
         if p.el >= o.ar_elev_mask {
             cands.push(Candidate {
                 state,

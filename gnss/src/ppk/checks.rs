@@ -168,10 +168,73 @@ pub fn lonely_warnings(stretches: &[(Epoch, Epoch, usize)]) -> Vec<String> {
         .collect()
 }
 
+/// The frequency slots whose phases rover and base take from different signals of a band
+/// (L2W against L2X, E1C against E1X) that may differ by a fraction of a cycle, because not
+/// both headers declare their phases aligned (`SYS / PHASE SHIFT`, RINEX 3.01 and later), with
+/// a warning for each: their ambiguities stay float.
+pub(super) fn misaligned_slots(
+    rover: &crate::rinex::ObsHeader,
+    base: &crate::rinex::ObsHeader,
+    systems: &[crate::sv::Constellation],
+    nf: usize,
+    warnings: &mut Vec<String>,
+) -> Vec<(crate::sv::Constellation, usize)> {
+    use super::obs::SignalPlan;
+    let (r, b) = (SignalPlan::new(rover), SignalPlan::new(base));
+    let mut out = Vec::new();
+    for (sys, rc) in &r.cols {
+        let Some(bc) = b.cols.get(sys) else { continue };
+        if !systems.contains(sys) || *sys == crate::sv::Constellation::Glonass {
+            continue;
+        }
+        let aligned = rover.phase_aligned.contains(sys) && base.phase_aligned.contains(sys);
+        for slot in 0..nf.min(rc.len()) {
+            let (Some(x), Some(y)) = (rc[slot], bc[slot]) else {
+                continue;
+            };
+            if x.phase_code != y.phase_code && !aligned {
+                out.push((*sys, slot));
+                warnings.push(format!(
+                    "{sys:?} phases: the rover's {} and the base's {} may differ by a quarter or half cycle (not both files declare them aligned, SYS / PHASE SHIFT): their ambiguities are kept float",
+                    x.phase_code, y.phase_code
+                ));
+            }
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use hifitime::Duration;
+
+    /// Rover L2X against base L2W: slot 1 of GPS stays float, with a warning, unless both
+    /// headers declare their phases aligned; the same signal at both ends is never a concern.
+    #[test]
+    fn different_signals_of_a_band_stay_float_unless_declared_aligned() {
+        use crate::rinex::{ObsCode, ObsHeader};
+        use crate::sv::Constellation::Gps;
+        let header = |l2: &[u8; 3]| {
+            let mut h = ObsHeader::new(3.04);
+            let types = [b"C1C", b"L1C", b"C2X", l2].map(|c| ObsCode(*c));
+            h.obs_types.insert(Gps, types.to_vec());
+            h
+        };
+        let (rover, base) = (header(b"L2X"), header(b"L2W"));
+        let mut w = Vec::new();
+        assert_eq!(
+            misaligned_slots(&rover, &base, &[Gps], 2, &mut w),
+            vec![(Gps, 1)]
+        );
+        assert!(w[0].contains("L2X") && w[0].contains("L2W"), "{w:?}");
+        let (mut r, mut b) = (rover.clone(), base.clone());
+        r.phase_aligned.insert(Gps);
+        b.phase_aligned.insert(Gps);
+        assert!(misaligned_slots(&r, &b, &[Gps], 2, &mut w).is_empty());
+        assert!(misaligned_slots(&rover, &rover, &[Gps], 2, &mut w).is_empty());
+        assert_eq!(w.len(), 1);
+    }
 
     fn at(s: f64) -> Epoch {
         crate::time::gpst(2024, 1, 1, 0, 0, 0, 0) + Duration::from_seconds(s)

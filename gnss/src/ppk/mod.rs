@@ -490,6 +490,14 @@ fn prepare_run(
     if opts.interval_s <= 0.0 {
         opts.interval_s = interval;
     }
+    let misaligned = checks::misaligned_slots(
+        &rover.header,
+        &base.header,
+        &opts.systems,
+        opts.nf,
+        &mut warnings,
+    );
+    opts.float_slots.extend(misaligned);
     let inputs = inputs::prepare(
         (rover, records.0),
         (base, records.1),

@@ -121,6 +121,11 @@ pub struct PpkOptions {
     pub code_correlation_s: f64,
     /// The rover's nominal interval, seconds (0: taken from the data by the run).
     pub interval_s: f64,
+    /// Frequency slots of a system whose ambiguities stay float: the run adds those where rover
+    /// and base track different signals of a band (L2W against L2X) whose phases may differ by
+    /// a quarter or half cycle (RINEX 3.04 Table A23) because not both files declare them
+    /// aligned (`SYS / PHASE SHIFT`).
+    pub float_slots: Vec<(Constellation, usize)>,
     /// Prior sigma of the GLONASS inter-channel code bias between the two receivers, metres
     /// per frequency channel number (estimated, one state, when GLONASS is processed: code
     /// biases of different receivers differ by up to metres across the channels).
@@ -215,6 +220,7 @@ impl Default for PpkOptions {
             code_correlation_s: 10.0,
             interval_s: 0.0,
             glonass_code_bias_sigma: 0.3,
+            float_slots: Vec::new(),
             age_error_rate: 0.001,
             amb_process_noise: 1e-4,
             amb_init_sigma: 30.0,

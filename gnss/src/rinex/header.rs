@@ -47,6 +47,10 @@ pub struct ObsHeader {
     pub obs_types: BTreeMap<Constellation, Vec<ObsCode>>,
     /// GLONASS frequency channel numbers by slot.
     pub glonass_channels: BTreeMap<u8, i8>,
+    /// Systems with `SYS / PHASE SHIFT` records: their phases are aligned to each band's
+    /// reference signal (RINEX 3.01 and later), so two receivers' different signals of one
+    /// band differ by whole cycles only.
+    pub phase_aligned: std::collections::BTreeSet<Constellation>,
     /// Time scale of the epochs (GPST unless the header says otherwise).
     pub time_scale: TimeScale,
     /// Leap seconds, when given.
@@ -74,6 +78,7 @@ impl ObsHeader {
             interval: None,
             obs_types: BTreeMap::new(),
             glonass_channels: BTreeMap::new(),
+            phase_aligned: Default::default(),
             time_scale: TimeScale::GPST,
             leap_seconds: None,
             notes: Vec::new(),
@@ -285,6 +290,13 @@ fn read_header_line(
                     if let Ok(Some(ch)) = parse_int(cols(line, a + 4, a + 6)) {
                         h.glonass_channels.insert(sv.prn, ch as i8);
                     }
+                }
+            }
+        }
+        b"SYS / PHASE SHIFT" => {
+            if let Some(sys) = line.first().copied().and_then(Constellation::from_letter) {
+                if line[0] != b' ' {
+                    h.phase_aligned.insert(sys);
                 }
             }
         }
