@@ -255,11 +255,19 @@ fn cssrlib_car() {
     // aligned (SYS / PHASE SHIFT), so no slot is kept float for its signals.
     for f in ["SEPT265G.21O", "3034265G.21O"] {
         let h = gnss::rinex::ObsFile::read(&dir.join(f)).unwrap().header;
-        assert!(h.phase_aligned.contains(&gnss::sv::Constellation::Gps), "{f}");
-        assert!(h.phase_aligned.contains(&gnss::sv::Constellation::Galileo), "{f}");
+        assert!(
+            h.phase_aligned.contains(&gnss::sv::Constellation::Gps),
+            "{f}"
+        );
+        assert!(
+            h.phase_aligned.contains(&gnss::sv::Constellation::Galileo),
+            "{f}"
+        );
     }
     assert!(
-        !r.warnings.iter().any(|w| w.contains("may differ by a quarter")),
+        !r.warnings
+            .iter()
+            .any(|w| w.contains("may differ by a quarter")),
         "{:?}",
         r.warnings
     );

@@ -17,6 +17,7 @@ mod import;
 mod info;
 mod inputs;
 mod kill;
+mod lowcost;
 mod outputs;
 mod precise;
 mod raw;
