@@ -92,6 +92,22 @@ pub struct Filter<'a> {
     recorded: Option<Prior>,
     /// The position state holds an estimate (static runs keep it from epoch to epoch).
     position_started: bool,
+    /// The state vector and covariance before the last measurement update (to redo it).
+    before_update: Option<(nalgebra::DVector<f64>, nalgebra::DMatrix<f64>)>,
+    /// The base's view of the satellites of its last epoch used, with the day of year.
+    base_terms: Option<(Epoch, f64, Vec<Option<BaseTerms>>)>,
+}
+
+/// The base's view of one satellite at one base epoch.
+#[derive(Clone, Copy, Debug)]
+struct BaseTerms {
+    /// Azimuth and elevation at the base, radians.
+    az: f64,
+    el: f64,
+    /// Geometric range base → satellite, metres.
+    rho: f64,
+    /// Base troposphere, metres.
+    tropo: f64,
 }
 
 /// Ionospheric constraint of the epoch (ionosphere-weighted model), from the baseline length.
@@ -137,6 +153,8 @@ impl<'a> Filter<'a> {
             record: false,
             recorded: None,
             position_started: false,
+            before_update: None,
+            base_terms: None,
         }
     }
 
@@ -197,33 +215,35 @@ impl<'a> Filter<'a> {
         let (t, tb) = (rover.time, base.time);
         let mut pairs: Vec<Pair> = Vec::new();
         let start_geo = start.to_geodetic();
-        let doy = day_of_year(t);
         let age_sigma = self.opts.age_error_rate
             * (t - tb).to_seconds().abs()
             * (1.0 + (start.0 - self.base.0).norm() / 10_000.0);
+        self.refresh_base_terms(&base);
+        let Some((_, doy, terms)) = self.base_terms.take() else {
+            return pairs;
+        };
         for (r, vr) in rover.meas.iter().zip(rover.views) {
             let Some(k) = base.meas.iter().position(|b| b.sv == r.sv) else {
                 continue;
             };
             let b = &base.meas[k];
-            let (Some(vr), Some(vb)) = (*vr, base.views[k]) else {
+            let (Some(vr), Some(vb), Some(bt)) = (*vr, base.views[k], terms[k]) else {
                 self.stats.no_orbit += 1;
                 continue;
             };
             let (az, el) = vr.az_el(start, &start_geo);
-            let (az_b, el_b) = vb.az_el(&self.base, &self.base_geo);
+            let (az_b, el_b) = (bt.az, bt.el);
             if el < self.opts.elev_mask {
                 self.stats.below_mask += 1;
                 continue;
             }
-            let (rho_b, _) = vb.range(&self.base.0);
             pairs.push(Pair {
                 r: r.clone(),
                 b: b.clone(),
                 vr,
                 vb,
-                rho_b,
-                tropo_b: tropo(&self.base_geo, el_b, doy),
+                rho_b: bt.rho,
+                tropo_b: bt.tropo,
                 el,
                 map_wet: wet_mapping(&start_geo, el, doy),
                 doy,
@@ -238,7 +258,34 @@ impl<'a> Filter<'a> {
                 }),
             });
         }
+        self.base_terms = Some((tb, doy, terms));
         pairs
+    }
+
+    /// The base's view of each satellite of base epoch `base` (azimuth, elevation, range,
+    /// troposphere), computed once per base epoch: a 1 Hz base serves ten 10 Hz rover
+    /// epochs. The day of year (for the mapping functions) is the base epoch's.
+    fn refresh_base_terms(&mut self, base: &ReceiverEpoch) {
+        if self.base_terms.as_ref().is_some_and(|c| c.0 == base.time) {
+            return;
+        }
+        let doy = day_of_year(base.time);
+        let terms = base
+            .views
+            .iter()
+            .map(|v| {
+                v.map(|vb| {
+                    let (az, el) = vb.az_el(&self.base, &self.base_geo);
+                    BaseTerms {
+                        az,
+                        el,
+                        rho: vb.range(&self.base.0).0,
+                        tropo: tropo(&self.base_geo, el, doy),
+                    }
+                })
+            })
+            .collect();
+        self.base_terms = Some((base.time, doy, terms));
     }
 
     /// Prediction: kinematic, the position from the start value with a wide variance (no
@@ -375,20 +422,31 @@ impl<'a> Filter<'a> {
         for iter in 0..2 {
             let at = self.state.position();
             let all = measure::residuals(pairs, &self.state, o);
-            let (kept, rejected) = measure::gate(all.clone(), o.max_innovation);
+            // Rows are copied for the gate only when it removes some (rarely).
+            let gated = all
+                .rows
+                .iter()
+                .any(|r| r.innovation.abs() > o.max_innovation)
+                .then(|| measure::gate(all.clone(), o.max_innovation));
+            let kept = match &gated {
+                Some((kept, rejected)) => {
+                    for (reason, n) in rejected {
+                        *self.stats.rejected.entry(*reason).or_default() += n;
+                    }
+                    kept
+                }
+                None => &all,
+            };
+            let lin = kept.linearise(self.state.x.len())?;
+            let ids = kept.row_ids();
             last = Some(Linearisation {
                 rows: all,
                 at: self.state.x.clone(),
             });
-            for (reason, n) in rejected {
-                *self.stats.rejected.entry(reason).or_default() += n;
-            }
-            let lin = kept.linearise(self.state.x.len())?;
             used_sats = lin.used_sats;
             // IEKF: innovation about the prior.
             let dxi = &x0 - &self.state.x;
             let innov = &lin.v - &lin.h * &dxi;
-            let ids = kept.row_ids();
             if let Some((_, gain)) = first.as_ref().filter(|(first_ids, _)| *first_ids == ids) {
                 // The same rows, linearised [`GAIN_REUSE`] or less away: their design rows
                 // differ by the turn of the lines of sight (under 5·10⁻⁷), so the first gain
@@ -409,6 +467,7 @@ impl<'a> Filter<'a> {
         }
         let p = &self.state.p;
         self.state.p = (p + p.transpose()) * 0.5;
+        self.before_update = Some((x0, p0));
         Some((used_sats, last?))
     }
 
@@ -417,14 +476,16 @@ impl<'a> Filter<'a> {
     /// now, so the epoch's solution does not carry it) up to [`EXCLUSIONS`] times. A residual
     /// that most rows of a group share is the pivot's.
     fn update_excluding_slips(&mut self, pairs: &[Pair]) -> Option<(usize, Linearisation)> {
-        let mut before = self.state.clone();
         let mut out = self.measurement_update(pairs)?;
         for _ in 0..EXCLUSIONS {
             let Some(bad) = self.worst_phase_outlier(&out.1) else {
                 break;
             };
-            before.remove(&[StateKey::Ambiguity(bad)]);
-            self.state = before.clone();
+            // Back to the state before the update (its layout is unchanged), without `bad`.
+            let (x0, p0) = self.before_update.take()?;
+            self.state.x = x0;
+            self.state.p = p0;
+            self.state.remove(&[StateKey::Ambiguity(bad)]);
             self.stats.outlier_resets += 1;
             out = self.measurement_update(pairs)?;
         }

@@ -143,19 +143,20 @@ fn var_snr(drop: f64, sigma: f64) -> f64 {
 
 /// The single-difference variance (m²) of slot `f` of pair `p`, phase or code: elevation
 /// terms of both receivers (the code's scaled by the code/phase ratio), each receiver's C/N0
-/// term, the code's multiplied by its correlation over the rover interval, and the base age.
-fn sd_variance(p: &Pair, f: usize, phase: bool, o: &PpkOptions) -> f64 {
+/// term, the excess phase and the code multiplied by their [`correlation`]s `corr` (phase,
+/// code), and the base age.
+fn sd_variance(p: &Pair, f: usize, phase: bool, o: &PpkOptions, corr: (f64, f64)) -> f64 {
     let el = 2.0 * var_phase(p.el, o);
     let v = if phase {
         // The excess of a weakened signal is multipath and diffraction (what lowers C/N0):
         // as correlated in time as they are.
         let snr = var_snr(p.r.cn0_drop(f), o.snr_sigma.0) + var_snr(p.b.cn0_drop(f), o.snr_sigma.0);
-        el + snr * correlation(o.phase_correlation_s, o)
+        el + snr * corr.0
     } else {
         let white = o.code_phase_ratio.powi(2) * el
             + var_snr(p.r.cn0_drop(f), o.snr_sigma.1)
             + var_snr(p.b.cn0_drop(f), o.snr_sigma.1);
-        white * correlation(o.code_correlation_s, o)
+        white * corr.1
     };
     v + p.age_var
 }
@@ -251,6 +252,10 @@ pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residu
     let offsets = StateOffsets::of(pairs, state, o.nf);
     let ztd = state.offset(StateKey::Tropo);
     let glo_bias = state.offset(StateKey::GlonassCodeBias);
+    let corr = (
+        correlation(o.phase_correlation_s, o),
+        correlation(o.code_correlation_s, o),
+    );
     let mut out = Residuals::default();
     for sys in Constellation::ALL {
         if !pairs.iter().any(|p| p.r.sv.sys == sys) {
@@ -283,7 +288,7 @@ pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residu
                         p.r.p[f] - p.b.p[f]
                     }
                 };
-                let sd_var = |i: usize| sd_variance(&pairs[i], f, phase, o);
+                let sd_var = |i: usize| sd_variance(&pairs[i], f, phase, o, corr);
                 // GLONASS code: the inter-channel bias of the channel.
                 let chan = |i: usize| {
                     glo_bias
