@@ -425,7 +425,7 @@ pub fn ppk(job: &PpkJob, progress: &dyn gnss::progress::Progress) -> Result<PpkR
         gnss::ppk::Reference::Arp => "rover antenna reference point (ARP)",
         gnss::ppk::Reference::Marker => "rover marker (ARP minus the antenna delta)",
     };
-    let header = vec![
+    let mut header = vec![
         format!(
             "program   : ppkat {} (carrier-phase {motion})",
             env!("CARGO_PKG_VERSION")
@@ -461,6 +461,12 @@ pub fn ppk(job: &PpkJob, progress: &dyn gnss::progress::Progress) -> Result<PpkR
             result.fixed()
         ),
     ];
+    if result.models.glonass_float {
+        header.push(
+            "glonass   : ambiguities kept float (the receivers' inter-channel phase biases are not calibrated); inter-channel code bias estimated"
+                .into(),
+        );
+    }
     let records = result.trajectory.records();
     crate::vector::write(&job.out, &header, &records, job.format, &job.heights)?;
     let mut summary = None;
