@@ -32,11 +32,7 @@ fn raw_note(path: &Path, format: &str, s: &RawStats) -> String {
     let dropped: u64 = s.dropped.values().sum();
     // A log mixing protocols is named by what it holds (UBX + RTCM 3 + NMEA).
     let format = if s.protocols.len() > 1 {
-        let names: Vec<&str> = ["UBX", "RTCM 3", "NMEA"]
-            .into_iter()
-            .filter(|p| s.protocols.contains_key(*p))
-            .collect();
-        names.join(" + ")
+        s.log_kind(gnss::raw::RawFormat::Ubx)
     } else {
         format.to_string()
     };

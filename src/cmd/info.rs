@@ -32,10 +32,10 @@ pub struct Args {
 /// Read the file and print its summary.
 pub fn run(args: Args) -> Result<()> {
     let input = read_obs(&args.file, args.obs_format.into(), args.time.hint())?;
-    if let ObsFormat::Raw(f) = input.format {
+    if let (ObsFormat::Raw(f), Some(st)) = (input.format, &input.raw) {
         println!(
             "{} log, described as its RINEX 3.04 conversion (ppkat convert):",
-            f.name()
+            st.log_kind(f)
         );
     }
     print!("{}", ObsSummary::of(&input.obs));

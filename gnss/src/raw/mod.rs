@@ -260,6 +260,20 @@ pub struct NavStats {
 }
 
 impl RawStats {
+    /// What a log read as `format` holds, for a user: `u-blox UBX`, or `UBX + RTCM 3 + NMEA`
+    /// (the protocols found) when it mixes them.
+    pub fn log_kind(&self, format: RawFormat) -> String {
+        if self.protocols.len() > 1 {
+            let names: Vec<&str> = ["UBX", "RTCM 3", "NMEA"]
+                .into_iter()
+                .filter(|p| self.protocols.contains_key(*p))
+                .collect();
+            names.join(" + ")
+        } else {
+            format.name().to_string()
+        }
+    }
+
     /// Count one dropped measurement for `reason`.
     pub fn drop(&mut self, reason: &str) {
         *self.dropped.entry(reason.to_string()).or_default() += 1;
