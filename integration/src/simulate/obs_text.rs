@@ -29,23 +29,9 @@ pub(super) fn write_event(body: &mut String, t: Epoch) {
 }
 
 /// An observation epoch: the epoch line, then one line per satellite (SSI from the SNR on
-/// code and phase, LLI on the phases).
+/// code and phase, LLI on the phases), both bands.
 pub(super) fn write_epoch(body: &mut String, tag: Epoch, recs: &[SatObs]) {
-    let _ = writeln!(body, "> {}  0{:3}", epoch_fields(tag), recs.len());
-    for r in recs {
-        let _ = write!(body, "{}", r.sv);
-        let ssi = char::from(b'0' + ((r.v[3].min(54.0) / 6.0) as u8).clamp(1, 9));
-        for (j, val) in r.v.iter().enumerate() {
-            let lli = match j {
-                1 if r.lli[0] > 0 => char::from(b'0' + r.lli[0]),
-                5 if r.lli[1] > 0 => char::from(b'0' + r.lli[1]),
-                _ => ' ',
-            };
-            let ssi = if j % 4 < 2 { ssi } else { ' ' };
-            let _ = write!(body, "{val:14.3}{lli}{ssi}");
-        }
-        body.push('\n');
-    }
+    write_epoch_bands(body, tag, recs, 2);
 }
 
 /// An observation epoch of a receiver of `bands` bands (1: the first four values of each
@@ -67,9 +53,6 @@ pub(super) fn write_epoch_bands(body: &mut String, tag: Epoch, recs: &[SatObs], 
             };
             let ssi = if j % 4 < 2 { ssi } else { ' ' };
             let _ = write!(body, "{val:14.3}{lli}{ssi}");
-        }
-        while body.ends_with(' ') {
-            body.pop();
         }
         body.push('\n');
     }
