@@ -21,6 +21,20 @@ fn weighted(a: &EpochSol, b: &EpochSol) -> Option<(nalgebra::Vector3<f64>, Matri
     Some((p * (ia * a.pos.0 + ib * b.pos.0), p))
 }
 
+/// The covariance-weighted mean of the two passes; when they disagree beyond their σ (the
+/// 99.9 % ellipsoid), one of them carries an error its σ does not know of (an undetected slip,
+/// a wrong hold), and the mean's covariance is widened by the gap between them, so that it
+/// covers whichever pass is right.
+fn mean_of(a: &EpochSol, b: &EpochSol) -> (nalgebra::Vector3<f64>, Matrix3<f64>) {
+    let (x, p) = weighted(a, b).unwrap_or((a.pos.0, a.cov));
+    let d = a.pos.0 - b.pos.0;
+    if mahalanobis2(&d, &(a.cov + b.cov)) > CHI2_3 {
+        (x, p + d * d.transpose())
+    } else {
+        (x, p)
+    }
+}
+
 fn mahalanobis2(d: &nalgebra::Vector3<f64>, cov: &Matrix3<f64>) -> f64 {
     cov.try_inverse()
         .map(|i| (d.transpose() * i * d)[0])
@@ -92,8 +106,12 @@ pub fn combine(
     out.ratio = f.ratio.max(b.ratio);
     match (fixed(f), fixed(b)) {
         (true, true) => {
-            let (x, p) = weighted(f, b).unwrap_or((f.pos.0, f.cov));
             let agree = d.norm() < 0.05 && mahalanobis2(&d, &(f.cov + b.cov)) < 16.0 * 3.0;
+            let (x, p) = if agree {
+                weighted(f, b).unwrap_or((f.pos.0, f.cov))
+            } else {
+                mean_of(f, b)
+            };
             out.pos = Ecef(x);
             out.cov = p;
             out.quality = if agree {
@@ -113,14 +131,14 @@ pub fn combine(
                 out = fx.clone();
                 out.nsat = f.nsat.max(b.nsat);
             } else {
-                let (x, p) = weighted(f, b).unwrap_or((f.pos.0, f.cov));
+                let (x, p) = mean_of(f, b);
                 out.pos = Ecef(x);
                 out.cov = p;
                 out.quality = Quality::Float;
             }
         }
         (false, false) => {
-            let (x, p) = weighted(f, b).unwrap_or((f.pos.0, f.cov));
+            let (x, p) = mean_of(f, b);
             out.pos = Ecef(x);
             out.cov = p;
             out.quality = f.quality.min(b.quality);
