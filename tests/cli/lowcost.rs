@@ -18,6 +18,10 @@ fn the_low_cost_folders_run_end_to_end() {
     assert!(t.contains("RTCM 1005"), "{t}");
     assert!(t.contains("read as a UBX + RTCM 3 + NMEA log"), "{t}");
     assert!(t.contains("GLONASS ambiguities kept float"), "{t}");
+    assert!(
+        t.contains("rover epochs fall in gaps of the base's log"),
+        "{t}"
+    );
     let fixed = pos_rows(&walk.join("ppk.pos"))
         .iter()
         .filter(|r| r.get(5).map(String::as_str) == Some("1"))

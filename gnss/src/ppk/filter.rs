@@ -72,6 +72,13 @@ const POSITION_SIGMA: f64 = 30.0;
 /// solution (the rest are reset at the next epoch).
 const EXCLUSIONS: usize = 3;
 
+/// Post-fit phase residual, in its own post-fit sigmas, beyond which a phase is taken for an
+/// undetected slip (also below it when the epoch's phase residuals fail their χ² test).
+const STUDENTIZED: f64 = 4.0;
+
+/// Smallest post-fit phase residual (m) taken for an undetected slip.
+const SLIP_FLOOR: f64 = 0.03;
+
 /// The filter of one pass.
 pub struct Filter<'a> {
     opts: &'a PpkOptions,
@@ -172,7 +179,12 @@ impl<'a> Filter<'a> {
         slips: &StepSlips,
         prior: Option<&Prior>,
     ) -> Option<EpochSol> {
-        let (t, tb) = (rover.time, base.time);
+        let t = rover.time;
+        // The base's age: rover − base time, or an interpolated base epoch's effective age.
+        let age = match (t - base.time).to_seconds() {
+            a if base.age > a.abs() => base.age.copysign(a),
+            a => a,
+        };
         let dt = self.elapsed(t);
         let pairs = self.form_pairs(rover, base, &start);
         self.predict(&start);
@@ -186,7 +198,7 @@ impl<'a> Filter<'a> {
         self.post_fit_check(last);
         self.count_locks(t, &pairs);
         let smoothed = prior.and_then(|p| smooth::fuse(&self.state, p)).zip(prior);
-        Some(self.solve(t, tb, used_sats, &pairs, smoothed))
+        Some(self.solve(t, age, used_sats, &pairs, smoothed))
     }
 
     /// Keep the state before each epoch's measurements (see [`Self::take_prior`]).
@@ -215,9 +227,9 @@ impl<'a> Filter<'a> {
         let (t, tb) = (rover.time, base.time);
         let mut pairs: Vec<Pair> = Vec::new();
         let start_geo = start.to_geodetic();
-        let age_sigma = self.opts.age_error_rate
-            * (t - tb).to_seconds().abs()
-            * (1.0 + (start.0 - self.base.0).norm() / 10_000.0);
+        let age = (t - tb).to_seconds().abs().max(base.age);
+        let age_sigma =
+            self.opts.age_error_rate * age * (1.0 + (start.0 - self.base.0).norm() / 10_000.0);
         self.refresh_base_terms(&base);
         let Some((_, doy, terms)) = self.base_terms.take() else {
             return pairs;
@@ -472,9 +484,9 @@ impl<'a> Filter<'a> {
     }
 
     /// The measurement update, redone without the ambiguity of the worst post-fit phase
-    /// residual beyond `max_phase_residual` (a slip no detector saw: its ambiguity is reset
-    /// now, so the epoch's solution does not carry it) up to [`EXCLUSIONS`] times. A residual
-    /// that most rows of a group share is the pivot's.
+    /// residual (see [`Self::worst_phase_outlier`]: a slip no detector saw, its ambiguity is
+    /// reset now, so the epoch's solution does not carry it) up to [`EXCLUSIONS`] times. A
+    /// residual that most rows of a group share is the pivot's.
     fn update_excluding_slips(&mut self, pairs: &[Pair]) -> Option<(usize, Linearisation)> {
         let mut out = self.measurement_update(pairs)?;
         for _ in 0..EXCLUSIONS {
@@ -492,8 +504,8 @@ impl<'a> Filter<'a> {
         Some(out)
     }
 
-    /// The ambiguity of the worst post-fit phase residual beyond `max_phase_residual` (the
-    /// pivot's when most rows of its group exceed it), None when there is none.
+    /// The ambiguity of the worst post-fit phase residual (the pivot's when most rows of its
+    /// group share it), None when the residuals hold none beyond chance.
     fn worst_phase_outlier(&self, last: &Linearisation) -> Option<AmbKey> {
         let o = self.opts;
         let dx = &self.state.x - &last.at;
@@ -502,25 +514,51 @@ impl<'a> Filter<'a> {
         };
         let phase =
             |r: &&measure::Row| r.kind == ObsKind::Phase && r.innovation.abs() <= o.max_innovation;
-        let worst = last
+        // A slip no detector saw (detection, identification, adaptation): a post-fit
+        // residual beyond `max_phase_residual`; or, when the phase residuals together fail
+        // the χ² test (99.9 %) or one stands out by STUDENTIZED, the one of them largest
+        // against its own post-fit sigma, if beyond SLIP_FLOOR. The post-fit sigma is the
+        // row's variance less what the solution absorbed of it (h P hᵀ): with a few rows an
+        // undetected half or whole cycle is largely taken up by the position, and its
+        // residual alone (centimetres) does not stand out of a weak signal's noise.
+        let pivot_var = &last.rows.pivot_var;
+        let p = &self.state.p;
+        let studentized = |r: &measure::Row| {
+            let v = post(r).abs();
+            if v > o.max_phase_residual {
+                return f64::INFINITY;
+            }
+            let e = r.h.entries();
+            let hph: f64 = e
+                .iter()
+                .map(|&(j, a)| a * e.iter().map(|&(k, b)| p[(j, k)] * b).sum::<f64>())
+                .sum();
+            let var = r.var + pivot_var[r.group];
+            v / (var - hph).max(0.01 * var).sqrt()
+        };
+        let rows: Vec<(&measure::Row, f64)> = last
             .rows
             .rows
             .iter()
             .filter(phase)
-            .map(|r| (r, post(r).abs()))
-            .filter(|(_, v)| *v > o.max_phase_residual)
-            .max_by(|a, b| a.1.total_cmp(&b.1))?
-            .0;
-        let group: Vec<&measure::Row> = last
-            .rows
-            .rows
+            .map(|r| (r, studentized(r)))
+            .collect();
+        let global = rows.iter().map(|(_, w)| w * w).sum::<f64>();
+        let (worst, w) = rows
             .iter()
-            .filter(phase)
-            .filter(|r| r.group == worst.group)
+            .filter(|(r, _)| post(r).abs() > SLIP_FLOOR)
+            .max_by(|a, b| a.1.total_cmp(&b.1))?;
+        if !(*w > STUDENTIZED || global > crate::spp::chi2_999(rows.len())) {
+            return None;
+        }
+        // The pivot's slip shows in most rows of its group.
+        let group: Vec<&(&measure::Row, f64)> = rows
+            .iter()
+            .filter(|(r, _)| r.group == worst.group)
             .collect();
         let over = group
             .iter()
-            .filter(|r| post(r).abs() > o.max_phase_residual)
+            .filter(|(r, w)| post(r).abs() > SLIP_FLOOR && *w > STUDENTIZED / 2.0)
             .count();
         let sv = if group.len() >= 2 && 2 * over > group.len() {
             worst.pivot
@@ -605,7 +643,7 @@ impl<'a> Filter<'a> {
     fn solve(
         &mut self,
         t: Epoch,
-        tb: Epoch,
+        age: f64,
         used_sats: usize,
         pairs: &[Pair],
         smoothed: Option<(super::state::State, &Prior)>,
@@ -619,7 +657,7 @@ impl<'a> Filter<'a> {
             quality: Quality::Float,
             nsat: used_sats,
             ratio: 0.0,
-            age: (t - tb).to_seconds(),
+            age,
             nfix: 0,
             segment: 0,
             float: None,

@@ -19,6 +19,9 @@ pub struct ReceiverEpoch<'a> {
     pub meas: &'a [SatMeas],
     /// The satellites at their transmission times, aligned with `meas`.
     pub views: &'a [Option<SatView>],
+    /// For a base epoch interpolated to this time (`ppk::interp`), the seconds to the nearer
+    /// real one (0 otherwise).
+    pub age: f64,
 }
 
 /// A satellite as seen by one receiver at its epoch.

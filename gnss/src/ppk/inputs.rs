@@ -40,6 +40,9 @@ pub(super) struct PassInputs {
     pub(super) rover_views: Vec<Vec<Option<SatView>>>,
     /// Each base satellite's view, aligned with `base_meas`.
     pub(super) base_views: Vec<Vec<Option<SatView>>>,
+    /// For each base epoch (the real ones, then those interpolated into the log's gaps), the
+    /// real epoch whose slips it carries, and its effective age (see `ppk::interp`).
+    pub(super) base_interp: super::interp::Interpolated,
 }
 
 impl PassInputs {
@@ -49,6 +52,7 @@ impl PassInputs {
             time: self.rover_times[i],
             meas: &self.rover_meas[i],
             views: &self.rover_views[i],
+            age: 0.0,
         }
     }
 
@@ -69,7 +73,13 @@ impl PassInputs {
             time: self.base_times[j],
             meas: &self.base_meas[j],
             views: &self.base_views[j],
+            age: self.base_interp.age[j],
         }
+    }
+
+    /// The real base epoch whose slips base epoch `j` carries.
+    pub(super) fn base_slip_index(&self, j: usize) -> usize {
+        self.base_interp.slip_index[j]
     }
 }
 
@@ -254,18 +264,50 @@ pub(super) fn prepare(
     let lonely = checks::without_common(&rover_meas, &base_meas, &pairing.matched);
     let stretches = checks::lonely_stretches(&rover_times, &lonely);
     warnings.extend(checks::lonely_warnings(&stretches));
+    let mut matched = pairing.matched;
+    let (mut base_times, mut base_views) = (base_times, base_drawn.views);
+    let base_interval = crate::time::median_spacing(base_times.iter().copied());
+    let base_interp = super::interp::interpolate_gaps(
+        &rover_times,
+        &mut matched,
+        super::interp::BaseEpochs {
+            times: &mut base_times,
+            meas: &mut base_meas,
+            views: &mut base_views,
+        },
+        &usable,
+        &base_breaks,
+        base_at,
+        orbits,
+        (
+            1.5 * base_interval,
+            if opts.interpolate_base {
+                2.0 * opts.max_age
+            } else {
+                0.0
+            },
+        ),
+    );
+    if base_interp.count > 0 {
+        warnings.push(format!(
+            "{} rover epochs fall in gaps of the base's log: their base epochs are interpolated between the base epochs around them (up to {:.0} s apart)",
+            base_interp.count,
+            2.0 * opts.max_age
+        ));
+    }
     Ok(PassInputs {
         rover_header: rover.header.clone(),
         rover_times,
         base_times,
         rover_meas,
         base_meas,
-        matched: pairing.matched,
+        matched,
         starts: rover_drawn.starts,
         rover_breaks,
         base_breaks,
         rover_views: rover_drawn.views,
-        base_views: base_drawn.views,
+        base_views,
+        base_interp,
     })
 }
 

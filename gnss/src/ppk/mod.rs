@@ -24,6 +24,7 @@ pub mod doppler;
 mod filter;
 pub(crate) mod geometry;
 mod inputs;
+mod interp;
 pub mod lambda;
 mod measure;
 pub mod obs;
@@ -253,11 +254,13 @@ fn run_pass(
         let (Some(j), Ok((start, _))) = (inputs.matched[i], &inputs.starts[i]) else {
             continue;
         };
+        // An interpolated base epoch carries the slips of the real one before its gap.
+        let js = inputs.base_slip_index(j);
         let slips = filter::StepSlips {
             rover: crossed(&inputs.rover_breaks, prev_i, i),
-            base: crossed(&inputs.base_breaks, prev_j, j),
+            base: crossed(&inputs.base_breaks, prev_j, js),
         };
-        (prev_i, prev_j) = (Some(i), Some(j));
+        (prev_i, prev_j) = (Some(i), Some(js));
         let resets_before = f.stats.resets();
         out.sols[i] = f.step(
             inputs.rover_epoch(i),

@@ -163,6 +163,10 @@ pub struct PpkOptions {
     /// integers and fixing them gives wrong integers. On by default; off only to show what it
     /// prevents.
     pub half_cycle_float: bool,
+    /// Interpolate base epochs into the gaps of the base's log (up to twice `max_age` across)
+    /// for the rover epochs that fall in them, instead of pairing those with an aged base
+    /// epoch (see `ppk::interp`). On by default; off only to show what it gains.
+    pub interpolate_base: bool,
     /// Variance of the fix-and-hold constraint, cycles².
     pub hold_variance: f64,
     /// Estimate a single-difference slant ionospheric delay per satellite (the
@@ -233,6 +237,7 @@ impl Default for PpkOptions {
             max_fixed_sigma: 0.08,
             min_fix_ambiguities: 4,
             half_cycle_float: true,
+            interpolate_base: true,
             hold_variance: 0.001,
             iono: Estimate::Auto,
             iono_sigma_per_km: 0.004,
