@@ -137,6 +137,13 @@ pub struct Args {
     /// with, seconds (RTKLIB's pos2-maxage).
     #[arg(long, value_name = "S", default_value_t = 30.0, value_parser = positive)]
     max_age: f64,
+    /// Difference a rover epoch that falls in a gap of the base's log with the nearer base
+    /// epoch, aged, instead of base observations interpolated across the gap (the default:
+    /// the base's residual against the modelled range is interpolated between the epochs on
+    /// either side, within 2 × --max-age, phase dropped across a base slip; its error grows
+    /// with d₀·d₁/span instead of the age).
+    #[arg(long)]
+    no_base_interpolation: bool,
     /// Undifferenced carrier-phase sigma √(a² + (b/sin el)²): a,b in metres (RTKLIB's
     /// stats-errphase and stats-errphaseel).
     #[arg(long, value_name = "A,B", default_value = "0.003,0.003")]
@@ -286,6 +293,7 @@ pub fn job(args: Args) -> Result<pipeline::PpkJob> {
         ratio_threshold: args.ratio,
         min_lock: args.min_lock,
         max_age: args.max_age,
+        interpolate_base: !args.no_base_interpolation,
         phase_sigma,
         code_phase_ratio: args.code_phase_ratio,
         systems,

@@ -28,6 +28,24 @@ fn the_low_cost_folders_run_end_to_end() {
         .count();
     assert!(fixed > 1000, "{fixed} fixed epochs of 1201");
 
+    // Interpolation across the base's gaps can be turned off: the same epochs, aged instead.
+    let aged = walk.join("aged.pos");
+    let t = succeeds(&ppkat(&[
+        "ppk",
+        "--config",
+        p(&walk.join("ppk.toml")),
+        "--no-base-interpolation",
+        "-o",
+        p(&aged),
+    ]));
+    assert!(!t.contains("fall in gaps of the base's log"), "{t}");
+    let (a, b) = (pos_rows(&aged), pos_rows(&walk.join("ppk.pos")));
+    assert_eq!(a.len(), b.len());
+    assert!(
+        a.iter().zip(&b).any(|(x, y)| x[2] != y[2]),
+        "aged = interpolated"
+    );
+
     // The base log's own GGA fixes as a .pos, and no checksum failure.
     let (obs, nmea) = (dir.join("base.obs"), dir.join("base_nmea.pos"));
     let t = succeeds(&ppkat(&[
