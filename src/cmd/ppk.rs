@@ -133,6 +133,11 @@ pub struct Args {
     /// Epochs an ambiguity must be locked before it may be fixed (RTKLIB's pos2-arlockcnt).
     #[arg(long, value_name = "N", default_value_t = 1)]
     min_lock: usize,
+    /// Largest 3D position sigma of an epoch reported fixed, metres: a fix whose position is
+    /// less certain (few satellites, a long baseline) is not used and the epoch stays float:
+    /// the integers may be right and the position still decimetres off.
+    #[arg(long, value_name = "M", default_value_t = 0.08, value_parser = positive)]
+    max_fixed_sigma: f64,
     /// Largest time difference between a rover epoch and the base epoch it is differenced
     /// with, seconds (RTKLIB's pos2-maxage).
     #[arg(long, value_name = "S", default_value_t = 30.0, value_parser = positive)]
@@ -292,6 +297,7 @@ pub fn job(args: Args) -> Result<pipeline::PpkJob> {
         ar_elev_mask,
         ratio_threshold: args.ratio,
         min_lock: args.min_lock,
+        max_fixed_sigma: args.max_fixed_sigma,
         max_age: args.max_age,
         interpolate_base: !args.no_base_interpolation,
         phase_sigma,

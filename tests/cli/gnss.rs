@@ -71,6 +71,24 @@ fn ppk_geonet_writes_fixed_solutions_with_quality_columns() {
             && t15.contains("5 epochs unsolved: no single-point solution: poor geometry"),
         "unsolved epochs say why: {t15}"
     );
+    // Its last solved epoch has five satellites: the fix's 3D sigma (about 11 cm, and 7.5 cm
+    // off the truth: no better than the float's 6.7 cm) is over --max-fixed-sigma's 8 cm, so
+    // it stays float unless the user allows more.
+    assert!(t15.contains("114 fixed"), "{t15}");
+    let wide = tmp("geonet-ppk-15-wide.pos");
+    let args = [
+        GEONET_BASE_POS,
+        "--elev-mask",
+        "15",
+        "--max-fixed-sigma",
+        "0.12",
+    ];
+    let t = succeeds(&ppk(&rover, &base, &[&nav], &wide, &args));
+    assert!(t.contains("115 fixed (100.0 % of solved)"), "{t}");
+    let last = pos_rows(&wide).pop().unwrap();
+    let sd: Vec<f64> = (7..10).map(|i| last[i].parse().unwrap()).collect();
+    let sigma3 = sd.iter().map(|s| s * s).sum::<f64>().sqrt();
+    assert!((0.08..0.12).contains(&sigma3), "fixed 3D sigma {sigma3}");
     assert_base_read_back(&out);
     let rows = pos_rows(&out);
     assert_eq!(rows.len(), 120);
