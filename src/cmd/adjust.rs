@@ -15,6 +15,11 @@ use std::path::PathBuf;
 /// parameters.csv, report.json and a self-contained report.html. Prints a summary:
 /// redundancy, σ0, per-group variance factors, lever arm, drift, latency, observations
 /// removed and the check-point table.
+///
+/// Images and points the observations do not determine (a single ray, one point and a GNSS
+/// centre, points in line) are left out, each named with the reason, and the rest is
+/// adjusted: the exit code is then 3. Only a defect of the whole block (no datum, a drift
+/// that control cannot separate) fails the run (exit 1).
 #[derive(clap::Args)]
 pub struct Args {
     /// The project file (TOML; see the README: cameras, images, measurements, ground points,
@@ -40,5 +45,5 @@ pub fn run(args: Args, threads: Option<usize>) -> Result<()> {
     let r = r?;
     print!("{}", r.summary());
     println!("outputs in {}", args.out.display());
-    Ok(())
+    super::complete(r.left_out)
 }

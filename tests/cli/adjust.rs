@@ -224,3 +224,41 @@ fn simulate_rejects_a_bad_scenario_naming_the_key() {
     ]);
     fails_with(&o, &["nosuch", "demo", "classic-block"]);
 }
+
+/// A block whose observations do not determine every image (`sparse-control`, and two of its
+/// images that share one unknown point besides one control point each: each has 7
+/// equations, together they are singular): the run finishes, names what it left out and
+/// exits with 3; it used to abort "singular at the orientation of image 102".
+#[test]
+fn adjust_leaves_out_what_it_cannot_determine_and_exits_3() {
+    let dir = tmp("adjust-sparse");
+    let t = simulate_project("sparse-control", &dir);
+    assert!(t.contains("290 images"), "{t}");
+    let obs = dir.join("image_observations.csv");
+    let mut text = std::fs::read_to_string(&obs).unwrap();
+    text.push_str("101,T1,2700.0,4000.0,1\n102,T1,2600.0,3900.0,1\n");
+    std::fs::write(&obs, text).unwrap();
+    let project = dir.join("project.toml");
+    let o = ppkat(&[
+        "adjust",
+        "--project",
+        p(&project),
+        "-o",
+        p(&dir.join("out")),
+    ]);
+    let t = skips(
+        &o,
+        &[
+            "209 input(s) skipped",
+            "image 103: its observations give 5 equations",
+        ],
+    );
+    for needle in [
+        "image 102 is left out of the adjustment: its observations do not fix its unknowns together with the rest",
+        "image 101 is left out of the adjustment: its observations give 5 equations",
+        "point T1 is left out",
+    ] {
+        assert!(t.contains(needle), "{needle}: {t}");
+    }
+    assert!(t.contains("82 images"), "{t}");
+}

@@ -1,7 +1,9 @@
 //! Images and points their own observations do not determine are left out of the adjustment
 //! (their block fixed, their factors removed), each named with the reason, and the rest is
 //! adjusted. Leaving one out can leave another undetermined (a point seen by a removed image),
-//! so the test repeats until every remaining block is determined.
+//! so the test repeats until every remaining block is determined. An image or point the
+//! solver later finds singular (its observations determine it only together with others, or
+//! not after snooping) is left out the same way, and the solve starts again.
 //!
 //! What enters: the project, the point names and the assembled problem. What leaves: the
 //! problem with the undetermined blocks out, and the list of what was left out and why; an
@@ -33,10 +35,10 @@ pub(super) fn undetermined(
         let mut touching = factors_of(pr, &keys);
         for (key, touching) in keys.into_iter().zip(touching.iter_mut()) {
             // A factor may touch two of them: left out with the first.
-            touching.retain(|&f| !pr.is_removed(f));
-            let rays = touching.len();
-            left_out.push(describe(p, point_names, key, rays));
-            for &f in touching.iter() {
+            touching.retain(|&(f, _)| !pr.is_removed(f));
+            let equations = touching.iter().map(|&(_, dim)| dim).sum();
+            left_out.push(describe(p, point_names, key, (touching.len(), equations)));
+            for &(f, _) in touching.iter() {
                 pr.remove(f);
             }
             pr.set_fixed(key, true).map_err(|e| err(e.to_string()))?;
@@ -58,24 +60,52 @@ pub(super) fn undetermined(
     Ok(())
 }
 
-/// The active factors that touch each of `keys`, in factor order: one pass over the
+/// Leave out the image or point `key` the solver found singular (its factors removed, its
+/// block fixed), named in `left_out` with `why`, then whatever that leaves undetermined.
+/// Refused (`false`) for any other kind of block: a defect of the whole block (drift,
+/// latency, lever arm, camera) is the user's to mend.
+pub(super) fn singular(
+    p: &Project,
+    point_names: &[String],
+    pr: &mut Problem,
+    key: Key,
+    why: &str,
+    left_out: &mut Vec<(String, String)>,
+) -> Result<bool, AdjustError> {
+    if !matches!(key, Key::Pose(_) | Key::Point(_)) || pr.is_fixed(key) {
+        return Ok(false);
+    }
+    let touching = factors_of(pr, &[key]).pop().unwrap_or_default();
+    let (what, _) = describe(p, point_names, key, (touching.len(), 0));
+    left_out.push((what, why.to_string()));
+    for (f, _) in touching {
+        pr.remove(f);
+    }
+    pr.set_fixed(key, true).map_err(|e| err(e.to_string()))?;
+    undetermined(p, point_names, pr, left_out)?;
+    Ok(true)
+}
+
+/// The active factors that touch each of `keys` with their residual dimension, in factor order: one pass over the
 /// factors (a pass per key was quadratic on large blocks with many single-ray points).
-fn factors_of(pr: &Problem, keys: &[Key]) -> Vec<Vec<FactorId>> {
+fn factors_of(pr: &Problem, keys: &[Key]) -> Vec<Vec<(FactorId, usize)>> {
     let index: std::collections::HashMap<Key, usize> =
         keys.iter().enumerate().map(|(i, k)| (*k, i)).collect();
     let mut out = vec![Vec::new(); keys.len()];
     for (id, f) in pr.factors().filter(|(id, _)| !pr.is_removed(*id)) {
         for k in f.keys() {
             if let Some(&i) = index.get(k) {
-                out[i].push(id);
+                out[i].push((id, f.dim()));
             }
         }
     }
     out
 }
 
-/// What a left-out block is and why, from the number of observations that touch it.
-fn describe(p: &Project, point_names: &[String], key: Key, n: usize) -> (String, String) {
+/// What a left-out block is and why, from the observations that touch it: `(count,
+/// equations)` (an image point gives 2 equations, a GNSS centre 3).
+fn describe(p: &Project, point_names: &[String], key: Key, n: (usize, usize)) -> (String, String) {
+    let (n, equations) = n;
     match key {
         Key::Pose(i) => (
             format!(
@@ -84,10 +114,10 @@ fn describe(p: &Project, point_names: &[String], key: Key, n: usize) -> (String,
                     .get(i.index())
                     .map_or(i.to_string(), |x| x.id.clone())
             ),
-            if n < 4 {
-                format!("too few observations for its six elements ({n}: points and GNSS); measure at least 3 well-spread points")
+            if equations < 6 {
+                format!("its observations give {equations} equations for its six unknowns (an image point gives 2, a GNSS centre 3; one ray leaves a rotation about it free): measure at least 3 well-spread points, or 2 with a GNSS centre")
             } else {
-                format!("its {n} observations do not fix its six elements (points on a line, or all in one spot); measure points spread over the image")
+                format!("its {equations} equations do not fix its six unknowns (points in line with each other or with the GNSS centre, or all in one spot): measure points spread over the image")
             },
         ),
         Key::Point(k) => (

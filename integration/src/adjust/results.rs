@@ -176,6 +176,9 @@ pub struct Results {
     pub distance_residuals: Vec<DistanceResidual>,
     /// What the user should know (inputs left out, float positions …).
     pub warnings: Vec<String>,
+    /// Images and points left out of the adjustment, each with the reason (also among the
+    /// warnings): the run finished without them.
+    pub left_out: Vec<String>,
     /// Tight coupling: ambiguities fixed before and after, per exposure (None: loose).
     pub tight: Option<super::tight_report::TightSummary>,
     /// The solver's timed stages (solves, cofactor computations), for benchmarks; not
@@ -338,6 +341,11 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         gnss_residuals: res.gnss,
         distance_residuals: res.distance,
         tight: super::tight_report::summary(p, s),
+        left_out: b
+            .left_out
+            .iter()
+            .map(|(what, why)| format!("{what}: {why}"))
+            .collect(),
         warnings: warnings(p, b)
             .into_iter()
             .chain(not_compared)

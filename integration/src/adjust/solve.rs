@@ -64,10 +64,12 @@ pub fn solve_with_progress(
             p.set_len(name, 0);
         }
     };
-    let result = solve_built(project, &mut built, &stage);
+    let mut removed = Vec::new();
+    let result = solve_leaving_out(project, &mut built, &stage, &mut removed);
     if let Some(p) = &progress {
         p.finish();
     }
+    let result = result?;
     built.problem.set_observer(None);
     let name = |e: photo::lsq::SolveError| {
         use photo::lsq::SolveError;
@@ -84,7 +86,7 @@ pub fn solve_with_progress(
     }
     };
     match result {
-        Ok((stats, removed, components, critical)) => Ok(Solved {
+        Ok((stats, components, critical)) => Ok(Solved {
             built,
             stats,
             removed,
@@ -132,26 +134,53 @@ fn block_name(p: &Project, b: &Built, key: photo::lsq::Key) -> String {
     }
 }
 
-/// Snooping, variance components, snooping again, final solve.
-#[allow(clippy::type_complexity)]
+/// Images or points the solver may leave out, one at a time, before the solve gives up.
+const MAX_LEFT_OUT_BY_SOLVER: usize = 1000;
+
+/// What a solve produced: the last summary, the variance components, the critical |w|.
+type SolveOutput = (photo::lsq::Summary, Vec<f64>, f64);
+
+/// [`solve_built`], again after leaving out each image or point the solver finds singular
+/// (named in `built.left_out`); a singular block of any other kind is the error. The outer
+/// error is the project's (nothing left to adjust), the inner one the solver's.
+fn solve_leaving_out(
+    project: &Project,
+    built: &mut Built,
+    stage: &dyn Fn(&str),
+    removed: &mut Vec<(photo::lsq::FactorId, f64)>,
+) -> Result<Result<SolveOutput, photo::lsq::SolveError>, AdjustError> {
+    use photo::lsq::SolveError;
+    for _ in 0..MAX_LEFT_OUT_BY_SOLVER {
+        let key = match solve_built(project, built, stage, removed) {
+            Err(SolveError::Undetermined(k)) => (k, "not determined by the observations left to it (after data snooping or other images left out)"),
+            Err(SolveError::Dependent(k)) => (k, "its observations do not fix its unknowns together with the rest of the block (too few points, in line with the GNSS centre or each other)"),
+            r => return Ok(r),
+        };
+        let Built {
+            problem,
+            point_names,
+            left_out,
+            ..
+        } = built;
+        if !super::leave_out::singular(project, point_names, problem, key.0, key.1, left_out)? {
+            return Ok(Err(SolveError::Dependent(key.0)));
+        }
+    }
+    Ok(solve_built(project, built, stage, removed))
+}
+
+/// Snooping, variance components, snooping again, final solve; what snooping removed is
+/// added to `removed`.
 fn solve_built(
     project: &Project,
     built: &mut Built,
     stage: &dyn Fn(&str),
-) -> Result<
-    (
-        photo::lsq::Summary,
-        Vec<(photo::lsq::FactorId, f64)>,
-        Vec<f64>,
-        f64,
-    ),
-    photo::lsq::SolveError,
-> {
+    removed: &mut Vec<(photo::lsq::FactorId, f64)>,
+) -> Result<SolveOutput, photo::lsq::SolveError> {
     let opts = &project.file.adjustment;
     let (pr, tight) = (&mut built.problem, &mut built.tight);
     let tests: usize = pr.factors().map(|(_, f)| f.dim()).sum();
     let critical = photo::lsq::snooping_critical(opts.alpha, tests);
-    let mut removed = Vec::new();
     let snoop = |pr: &mut photo::lsq::Problem,
                  removed: &mut Vec<(photo::lsq::FactorId, f64)>|
      -> Result<(), photo::lsq::SolveError> {
@@ -163,25 +192,25 @@ fn solve_built(
         }
         Ok(())
     };
-    snoop(pr, &mut removed)?;
+    snoop(pr, removed)?;
     if let Some(t) = tight.as_mut() {
         // Integers with the image geometry in the ambiguities' covariance, then snooping
         // again with them.
         stage("adjustment: ambiguity resolution, iteration");
         t.sigma_float = super::tight::centre_sigmas(pr, t)?;
         super::tight::resolve(pr, t, RATIO_MIN, SUCCESS_MIN)?;
-        snoop(pr, &mut removed)?;
+        snoop(pr, removed)?;
     }
     let mut components = vec![1.0; GROUPS];
     if opts.variance_components {
         stage("adjustment: variance components, iteration");
         components = pr.variance_components(10)?;
         // Snoop again with the estimated weights.
-        snoop(pr, &mut removed)?;
+        snoop(pr, removed)?;
     }
     stage("adjustment: final solve, iteration");
     let stats = pr.solve()?;
-    Ok((stats, removed, components, critical))
+    Ok((stats, components, critical))
 }
 
 /// Tight coupling: the ratio test's threshold.

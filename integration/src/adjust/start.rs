@@ -150,17 +150,16 @@ pub(super) fn orientations(
     if start.iter().zip(skip).any(|(s, &k)| s.is_none() && !k) {
         resect_on_ties(p, &ix, rays, &mut start, skip);
     }
-    let lost: Vec<LeftOut> = p
-        .images
-        .iter()
-        .zip(&start)
-        .zip(skip)
-        .filter(|((_, s), &k)| s.is_none() && !k)
-        .map(|((im, _), _)| {
-            (
-                im.id.clone(),
-                "no start orientation: no GNSS antenna position with attitude or strip, no compass angles, and fewer than 3 control or tie points seen by other images".to_string(),
-            )
+    let lost: Vec<LeftOut> = (0..p.images.len())
+        .filter(|&i| start[i].is_none() && !skip[i])
+        .map(|i| {
+            let n = controls_in(p, &ix, i, |id| ix.control.get(id).map(|_| Vector3::zeros())).len();
+            let why = if n >= 3 {
+                format!("no start orientation: the resection on its {n} control points failed (points nearly in a line, or on a circle through the image's nadir: the critical configuration); measure a point elsewhere in the image")
+            } else {
+                "no start orientation: no GNSS antenna position with attitude or strip, no compass angles, and fewer than 3 control or tie points seen by other images".to_string()
+            };
+            (p.images[i].id.clone(), why)
         })
         .collect();
     if start.iter().all(Option::is_none) {

@@ -140,7 +140,7 @@ fn undetermined_images_are_named_and_left_out() {
         r.warnings
     );
     assert!(
-        said("image 103 is left out of the adjustment: too few observations"),
+        said("image 103 is left out of the adjustment: its observations give 5 equations"),
         "{:?}",
         r.warnings
     );

@@ -10,6 +10,7 @@ mod latency;
 mod models;
 mod nav;
 mod patb;
+mod sparse;
 
 use integration::adjust::{self, results::Results};
 use integration::simulate::block::{self, BlockSpec, BlockTruth};

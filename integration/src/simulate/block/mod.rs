@@ -18,6 +18,7 @@
 
 mod files;
 pub mod nav;
+mod sparse;
 mod spec;
 pub mod textured;
 
@@ -348,7 +349,8 @@ pub fn gnss_section(spec: &BlockSpec, tape_error: [f64; 3], group: &str, model: 
 /// Built-in simulated adjustment projects: `classic-block` (the 2-strip block, 4 corner GCPs,
 /// tape-measured lever arm, linear drift), `close-range` (two stations), `block1000`
 /// (20 strips × 50 photos for benchmarks), `nav-block` (navigation-grade GPS with a
-/// latency, control only in a few images each; see [`nav`]) and `textured-block` (3 × 8
+/// latency, control only in a few images each; see [`nav`]), `sparse-control` (the same GNSS
+/// over 290 images of which most measure one control point) and `textured-block` (3 × 8
 /// rendered photos with exact truth, for feature matchers; see [`textured`]). Returns a
 /// one-line summary.
 pub fn builtin(name: &str, dir: &Path) -> Option<Result<String, SimError>> {
@@ -399,6 +401,21 @@ pub fn builtin(name: &str, dir: &Path) -> Option<Result<String, SimError>> {
                 dir.join("project.toml").display()
             )
         })),
+        "sparse-control" => Some(nav_block(&NavSpec::sparse_control(), dir).map(|t| {
+            let per = |n: usize| t.control_per_image.iter().filter(|&&c| c == n).count();
+            format!(
+                "sparse-control: {} images (control measured: {} in one, {} in two, {} in three, {} in four or more), {} ground points, {} image measurements, GNSS offset 14 m, latency {} s → {} (and project_gcp_only.toml)",
+                t.images.len(),
+                per(1),
+                per(2),
+                per(3),
+                t.control_per_image.iter().filter(|&&c| c >= 4).count(),
+                t.points.len(),
+                t.measurements,
+                nav::LATENCY_S,
+                dir.join("project.toml").display()
+            )
+        })),
         "textured-block" => Some(textured::textured_block(&textured::TexturedSpec::builtin(), dir).map(|r| {
             format!(
                 "textured-block: {} images of {} × {} px rendered in {:.1} s into {}, {} points, {} exact image measurements → {}",
@@ -417,11 +434,12 @@ pub fn builtin(name: &str, dir: &Path) -> Option<Result<String, SimError>> {
 }
 
 /// Names of the built-in adjustment projects.
-pub const BUILTINS: [&str; 5] = [
+pub const BUILTINS: [&str; 6] = [
     "classic-block",
     "close-range",
     "block1000",
     "nav-block",
+    "sparse-control",
     "textured-block",
 ];
 

@@ -74,6 +74,18 @@ pub struct NavSpec {
     pub min_control: usize,
     /// Images (flight order) whose measurements are all dropped.
     pub empty_images: Vec<usize>,
+    /// Name of the projects written.
+    pub name: String,
+    /// Air base over the along-track footprint (0.4: 60 % forward overlap).
+    pub base_fraction: f64,
+    /// Strip spacing over the across-track footprint (0.7: 30 % side overlap).
+    pub spacing_fraction: f64,
+    /// The constant GNSS offset (E, N, U of the site frame), metres.
+    pub offset_enu: [f64; 3],
+    /// Weights of 1, 2, 3, 4 and 5 control points measured per image (each image draws its
+    /// count, then that many of the control points it sees; check points in 2–4 images
+    /// each, see [`super::sparse`]); `None`: each point measured in 1–6 images as drawn.
+    pub control_per_image: Option<[f64; 5]>,
 }
 
 impl NavSpec {
@@ -87,6 +99,32 @@ impl NavSpec {
             checks: 16,
             min_control: 0,
             empty_images: vec![5, 23, 41],
+            name: "nav-block".into(),
+            base_fraction: 0.4,
+            spacing_fraction: 0.7,
+            offset_enu: OFFSET_ENU,
+            control_per_image: None,
+        }
+    }
+
+    /// `simulate --builtin sparse-control`: 10 strips of 29 images at 84 % / 69 % overlap,
+    /// 71 control and 16 check points, the control measured as in a real film block (of 290
+    /// images, 202 measure one control point, 49 two, 25 three, 10 four, 4 five), a 14 m
+    /// GNSS offset and the 0.8 s latency.
+    pub fn sparse_control() -> NavSpec {
+        NavSpec {
+            seed: 48,
+            strips: 10,
+            per_strip: 29,
+            control: 71,
+            checks: 16,
+            min_control: 0,
+            empty_images: Vec::new(),
+            name: "sparse-control".into(),
+            base_fraction: 0.16,
+            spacing_fraction: 0.31,
+            offset_enu: [6.0, -12.0, 4.0],
+            control_per_image: Some([202.0, 49.0, 25.0, 10.0, 4.0]),
         }
     }
 
@@ -131,7 +169,10 @@ pub fn nav_block(spec: &NavSpec, dir: &Path) -> Result<NavTruth, SimError> {
     let origin = Geodetic::from_degrees(46.52, 7.45, 620.0);
     let images = fly(spec, &mut rng);
     let mut points = place(spec, &cam, &images, &mut rng);
-    let mut meas = measure(&cam, &images, &points, &mut rng);
+    let mut meas = match spec.control_per_image {
+        Some(w) => super::sparse::measure(&w, &cam, &images, &points, &mut rng),
+        None => measure(&cam, &images, &points, &mut rng),
+    };
     if spec.min_control > 0 {
         fill_control(spec, &cam, &images, &mut points, &mut meas, &mut rng);
     }
@@ -152,11 +193,11 @@ pub fn nav_block(spec: &NavSpec, dir: &Path) -> Result<NavTruth, SimError> {
     write(
         dir,
         "antennas.csv",
-        &antennas_csv(&images, &origin, &mut rng),
+        &antennas_csv(&images, &origin, spec.offset_enu, &mut rng),
     )?;
-    write(dir, "project.toml", &project(true))?;
-    write(dir, "project_gcp_only.toml", &project(false))?;
-    write(dir, "truth.toml", &truth_toml(&origin))?;
+    write(dir, "project.toml", &project(&spec.name, true))?;
+    write(dir, "project_gcp_only.toml", &project(&spec.name, false))?;
+    write(dir, "truth.toml", &truth_toml(&origin, spec.offset_enu))?;
     write(dir, "truth_exposures.csv", &truth_exposures(&images))?;
     write(dir, "truth_points.csv", &truth_points(&kept))?;
     let mut per_image = vec![0; images.len()];
@@ -176,16 +217,20 @@ pub fn nav_block(spec: &NavSpec, dir: &Path) -> Result<NavTruth, SimError> {
 }
 
 /// Along-track footprint, base and strip spacing (m).
-fn layout() -> (f64, f64, f64) {
+fn layout(spec: &NavSpec) -> (f64, f64, f64) {
     let scale = HEIGHT / FOCAL;
     let along = WIDTH_PX as f64 * PIXEL * scale;
     let across = HEIGHT_PX as f64 * PIXEL * scale;
-    (along, along * 0.4, across * 0.7)
+    (
+        along,
+        along * spec.base_fraction,
+        across * spec.spacing_fraction,
+    )
 }
 
 /// The exposures strip by strip, alternate strips flown west, with crab and tilt.
 fn fly(spec: &NavSpec, rng: &mut Rng) -> Vec<NavImage> {
-    let (_, base, spacing) = layout();
+    let (_, base, spacing) = layout(spec);
     let mut t = T_FIRST;
     let mut images = Vec::new();
     for s in 0..spec.strips {
@@ -220,7 +265,7 @@ fn fly(spec: &NavSpec, rng: &mut Rng) -> Vec<NavImage> {
 }
 
 /// Where `x` lands in the image, when inside the format 100 px from the edges.
-fn seen(cam: &Camera, pose: &Pose, x: &Vector3<f64>) -> Option<Vector2<f64>> {
+pub(super) fn seen(cam: &Camera, pose: &Pose, x: &Vector3<f64>) -> Option<Vector2<f64>> {
     let xy = cam.project(pose, x)?;
     let px = cam.image_to_pixel(xy);
     let inside = |v: f64, n: usize| (100.0..n as f64 - 100.0).contains(&v);
@@ -229,7 +274,7 @@ fn seen(cam: &Camera, pose: &Pose, x: &Vector3<f64>) -> Option<Vector2<f64>> {
 
 /// Control and check points at random over the block, each seen by at least one image.
 fn place(spec: &NavSpec, cam: &Camera, images: &[NavImage], rng: &mut Rng) -> Vec<Point> {
-    let (along, base, spacing) = layout();
+    let (along, base, spacing) = layout(spec);
     let xmax = (spec.per_strip - 1) as f64 * base + 0.3 * along;
     let ymax = (spec.strips - 1) as f64 * spacing + 0.4 * spacing;
     let mut points = Vec::new();
@@ -251,9 +296,9 @@ fn place(spec: &NavSpec, cam: &Camera, images: &[NavImage], rng: &mut Rng) -> Ve
 }
 
 /// An image measurement: image index, point index, image coordinates (m).
-type Meas = (usize, usize, Vector2<f64>);
+pub(super) type Meas = (usize, usize, Vector2<f64>);
 
-fn noisy(xy: Vector2<f64>, rng: &mut Rng) -> Vector2<f64> {
+pub(super) fn noisy(xy: Vector2<f64>, rng: &mut Rng) -> Vector2<f64> {
     xy + Vector2::new(rng.normal(), rng.normal()) * (SIGMA_PX * PIXEL)
 }
 
@@ -365,14 +410,13 @@ fn measurements_csv(cam: &Camera, images: &[NavImage], points: &[Point], meas: &
 
 /// The antenna table: true antenna − v·δ + offset + 2 m noise; velocity + 5 cm/s noise;
 /// both expressed in the ENU at the antenna.
-fn antennas_csv(images: &[NavImage], origin: &Geodetic, rng: &mut Rng) -> String {
+fn antennas_csv(images: &[NavImage], origin: &Geodetic, offset: [f64; 3], rng: &mut Rng) -> String {
     let lever = photo::lever::LeverArm::new(Vector3::from(LEVER_ARM));
     let mut rows = Vec::new();
     for im in images {
         let noise = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * GNSS_SIGMA;
-        let a = lever.antenna(&im.2.centre, &im.2.r) - im.4 * LATENCY_S
-            + Vector3::from(OFFSET_ENU)
-            + noise;
+        let a =
+            lever.antenna(&im.2.centre, &im.2.r) - im.4 * LATENCY_S + Vector3::from(offset) + noise;
         let g = geodetic(origin, &a);
         let m = enu_rotation(&g) * enu_rotation(origin).transpose();
         let v = m * (im.4 + Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.05);
@@ -398,9 +442,9 @@ fn antennas_csv(images: &[NavImage], origin: &Geodetic, rng: &mut Rng) -> String
 }
 
 /// `project.toml` (with the GNSS: block offset, block latency) or `project_gcp_only.toml`.
-fn project(gnss: bool) -> String {
+fn project(name: &str, gnss: bool) -> String {
     let mut s = format!(
-        "name = \"nav-block{}\"\noutput = \"utm\"\n\n[[camera]]\nid = \"cam\"\nfocal_mm = {}\npixel_um = {}\nwidth_px = {WIDTH_PX}\nheight_px = {HEIGHT_PX}\nsigma_px = {SIGMA_PX}\n\n[images]\nlist = \"images.csv\"\nmeasurements = \"image_observations.csv\"\n\n[ground]\nfile = \"ground_points.csv\"\n",
+        "name = \"{name}{}\"\noutput = \"utm\"\n\n[[camera]]\nid = \"cam\"\nfocal_mm = {}\npixel_um = {}\nwidth_px = {WIDTH_PX}\nheight_px = {HEIGHT_PX}\nsigma_px = {SIGMA_PX}\n\n[images]\nlist = \"images.csv\"\nmeasurements = \"image_observations.csv\"\n\n[ground]\nfile = \"ground_points.csv\"\n",
         if gnss { "" } else { " (control only)" },
         FOCAL * 1e3,
         PIXEL * 1e6
@@ -415,12 +459,12 @@ fn project(gnss: bool) -> String {
     s
 }
 
-fn truth_toml(origin: &Geodetic) -> String {
+fn truth_toml(origin: &Geodetic, offset: [f64; 3]) -> String {
     format!(
-        "# nav-block truth. latency: the camera fires latency_s after the time of its GNSS position\n# (antenna at the exposure = GNSS position + v * latency_s). offset: GNSS minus true antenna,\n# E/N/U of the site frame (m). Frame: ENU at origin (lat, lon deg, h m).\nlatency_s = {LATENCY_S}\noffset_enu = [{}, {}, {}]\nlever_arm = [{}, {}, {}]\ngnss_sigma_m = {GNSS_SIGMA}\nvelocity_sigma_ms = 0.05\norigin = [{:.9}, {:.9}, {:.3}]\n",
-        OFFSET_ENU[0],
-        OFFSET_ENU[1],
-        OFFSET_ENU[2],
+        "# nav-block / sparse-control truth. latency: the camera fires latency_s after the time of its GNSS position\n# (antenna at the exposure = GNSS position + v * latency_s). offset: GNSS minus true antenna,\n# E/N/U of the site frame (m). Frame: ENU at origin (lat, lon deg, h m).\nlatency_s = {LATENCY_S}\noffset_enu = [{}, {}, {}]\nlever_arm = [{}, {}, {}]\ngnss_sigma_m = {GNSS_SIGMA}\nvelocity_sigma_ms = 0.05\norigin = [{:.9}, {:.9}, {:.3}]\n",
+        offset[0],
+        offset[1],
+        offset[2],
         LEVER_ARM[0],
         LEVER_ARM[1],
         LEVER_ARM[2],
