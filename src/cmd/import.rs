@@ -18,6 +18,15 @@ pub struct Args {
     what: ImportCmd,
 }
 
+/// What GNSS camera positions are (`--gnss-kind`).
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum GnssKindArg {
+    /// RTK or PPK positions.
+    Survey,
+    /// Navigation-grade positions (code GPS, an autopilot's log).
+    Nav,
+}
+
 #[derive(Subcommand)]
 enum ImportCmd {
     Micmac(MicmacArgs),
@@ -60,9 +69,14 @@ struct MicmacArgs {
     /// Columns of the --gnss file: N image name, X Y Z coordinates, other letters ignored.
     #[arg(long, value_name = "FORMAT", default_value = "#F=N X Y Z")]
     gnss_format: String,
-    /// σ of the GNSS positions, horizontal and vertical, metres.
-    #[arg(long, value_name = "H,V", default_value = "0.05,0.10")]
-    gnss_sigma: String,
+    /// σ of the GNSS positions, horizontal and vertical, metres (default: by --gnss-kind).
+    #[arg(long, value_name = "H,V")]
+    gnss_sigma: Option<String>,
+    /// What the --gnss positions are: survey (RTK/PPK: σ 0.05,0.10 m, no drift) or nav
+    /// (navigation-grade: σ 3,5 m and an offset of the whole block estimated). Without it
+    /// survey-grade is assumed, and the import says so.
+    #[arg(long, value_enum, value_name = "KIND")]
+    gnss_kind: Option<GnssKindArg>,
     /// Folder of MicMac orientation files (Orientation-IMAGE.xml), used as start values.
     #[arg(long, value_name = "DIR")]
     orientations: Option<PathBuf>,
@@ -204,7 +218,14 @@ pub fn run(args: Args) -> Result<()> {
                 check: a.check_ground.zip(a.check_measures),
                 crs: a.crs,
                 gnss: a.gnss.map(|g| (g, a.gnss_format)),
-                gnss_sigma: pair("--gnss-sigma", &a.gnss_sigma)?,
+                gnss_sigma: match &a.gnss_sigma {
+                    Some(s) => Some(pair("--gnss-sigma", s)?),
+                    None => None,
+                },
+                gnss_kind: a.gnss_kind.map(|k| match k {
+                    GnssKindArg::Survey => micmac::GnssKind::Survey,
+                    GnssKindArg::Nav => micmac::GnssKind::Navigation,
+                }),
                 orientations: a.orientations,
                 pixel_um: positive("--pixel-um", a.pixel_um)?,
                 sigma_px: positive("--sigma-px", a.sigma_px)?,

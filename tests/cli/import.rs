@@ -306,3 +306,58 @@ fn patb_import_prints_counts_and_names_bad_lines() {
         &["--camera FILE.toml", "--focal-mm"],
     );
 }
+
+/// GNSS positions imported as navigation-grade: σ in metres and a block offset in the
+/// project, the assumption printed; without a kind, survey-grade is assumed and said.
+#[test]
+fn micmac_gnss_kind_sets_sigma_and_offset_and_says_so() {
+    let Some(dir) = shared(&format!("{MM}/Saisies-MMV1")) else {
+        return;
+    };
+    let ori = dir.join("Ori-Ground_mm3d");
+    let base = tmp("import-gnss-kind");
+    std::fs::create_dir_all(&base).unwrap();
+    let gps = base.join("gps.txt");
+    let mut text = String::from("#F=N X Y Z\n");
+    for n in 4167..=4170 {
+        let c = micmac_centre(&ori.join(format!("Orientation-IMGP{n}.JPG.xml")));
+        text.push_str(&format!("IMGP{n}.JPG {} {} {}\n", c[0] + 14.0, c[1], c[2]));
+    }
+    std::fs::write(&gps, text).unwrap();
+    let (ground, measures) = (dir.join("Ground-Pts3D.xml"), dir.join("GroundMeasure.xml"));
+    let import = |out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "import",
+            "micmac",
+            "--ground",
+            p(&ground),
+            "--measures",
+            p(&measures),
+            "--orientations",
+            p(&ori),
+            "--gnss",
+            p(&gps),
+            "-o",
+            p(out),
+        ];
+        args.extend_from_slice(extra);
+        succeeds(&ppkat(&args))
+    };
+    let nav = base.join("nav");
+    let t = import(&nav, &["--gnss-kind", "nav"]);
+    assert!(
+        t.contains("GNSS positions: σ 3 m horizontal, 5 m vertical (by --gnss-kind)"),
+        "{t}"
+    );
+    let toml = std::fs::read_to_string(nav.join("project.toml")).unwrap();
+    assert!(
+        toml.contains("drift = \"block\"") && toml.contains("drift_model = \"offset\""),
+        "{toml}"
+    );
+    let survey = base.join("survey");
+    let t = import(&survey, &[]);
+    assert!(t.contains("assumed survey-grade"), "{t}");
+    let toml = std::fs::read_to_string(survey.join("project.toml")).unwrap();
+    assert!(toml.contains("drift = \"none\""), "{toml}");
+    let _ = std::fs::remove_dir_all(&base);
+}

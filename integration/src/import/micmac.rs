@@ -30,8 +30,10 @@ pub struct MicMacJob {
     pub crs: Option<String>,
     /// GNSS camera positions (text) and their format (`#F=N X Y Z`).
     pub gnss: Option<(PathBuf, String)>,
-    /// σ of the GNSS positions, horizontal and vertical (m).
-    pub gnss_sigma: [f64; 2],
+    /// σ of the GNSS positions, horizontal and vertical (m); `None`: by `gnss_kind`.
+    pub gnss_sigma: Option<[f64; 2]>,
+    /// What the positions are (`None`: survey-grade assumed, and said).
+    pub gnss_kind: Option<GnssKind>,
     /// A folder of `Orientation-*.xml` start orientations.
     pub orientations: Option<PathBuf>,
     /// Pixel size (µm) written for the camera (MicMac works in pixels).
@@ -443,7 +445,7 @@ pub fn import(job: &MicMacJob) -> Result<(ProjectOut, Summary), ImportError> {
         });
     }
     if let Some((path, format)) = &job.gnss {
-        add_gnss(path, format, job.gnss_sigma, &frame, &mut out, &mut sum)?;
+        add_gnss(path, format, job, &frame, &mut out, &mut sum)?;
     }
     sum.read.push(("images".into(), out.images.len()));
     Ok((out, sum))
@@ -525,15 +527,58 @@ fn read_orientations(
     Ok(res)
 }
 
+/// What GNSS camera positions are, for their σ and drift when the file does not say.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GnssKind {
+    /// RTK or PPK positions: σ 5 cm / 10 cm, no drift.
+    Survey,
+    /// Navigation-grade positions (code GPS, an autopilot's log, EXIF): σ 3 m / 5 m and an
+    /// unknown offset of the whole block estimated (`drift = "block"`, offset).
+    Navigation,
+}
+
+impl GnssKind {
+    /// The σ (horizontal, vertical) assumed for this kind, metres.
+    pub fn sigma(self) -> [f64; 2] {
+        match self {
+            GnssKind::Survey => [0.05, 0.10],
+            GnssKind::Navigation => [3.0, 5.0],
+        }
+    }
+}
+
+/// The σ and kind of the positions, and the note that says what was assumed.
+fn gnss_assumptions(job: &MicMacJob) -> ([f64; 2], GnssKind, String) {
+    let kind = job.gnss_kind.unwrap_or(GnssKind::Survey);
+    let sigma = job.gnss_sigma.unwrap_or(kind.sigma());
+    let given = match (job.gnss_kind, job.gnss_sigma) {
+        (None, None) => "assumed survey-grade (RTK/PPK) as no --gnss-kind or --gnss-sigma was given; for navigation-grade positions give --gnss-kind nav",
+        (Some(_), None) => "by --gnss-kind",
+        (_, Some(_)) => "from --gnss-sigma",
+    };
+    let drift = match kind {
+        GnssKind::Survey => "no drift estimated",
+        GnssKind::Navigation => "an offset of the whole block estimated (drift = \"block\"); no latency, as the file has no times",
+    };
+    let note = format!(
+        "GNSS positions: σ {} m horizontal, {} m vertical ({given}); {drift}",
+        sigma[0], sigma[1]
+    );
+    (sigma, kind, note)
+}
+
 /// GNSS camera positions as antenna positions (lever arm zero, fixed).
 fn add_gnss(
     path: &Path,
     format: &str,
-    sigma: [f64; 2],
+    job: &MicMacJob,
     frame: &GroundFrame,
     out: &mut ProjectOut,
     sum: &mut Summary,
 ) -> Result<(), ImportError> {
+    let (sigma, kind, note) = gnss_assumptions(job);
+    sum.notes.push(note);
+    out.gnss_navigation = kind == GnssKind::Navigation;
     let rows = read_gnss(path, format)?;
     sum.read.push(("GNSS positions".into(), rows.len()));
     let images: HashSet<String> = out.images.iter().map(|(i, _)| i.clone()).collect();

@@ -46,3 +46,37 @@ fn saisies_projection_matches_micmac() {
         "ppkat {rms} px vs MicMac {rms_mm} px"
     );
 }
+
+/// GNSS positions without σ: survey-grade assumed and said; `--gnss-kind nav` gives metres
+/// and a block offset; an explicit σ wins over the kind.
+#[test]
+fn gnss_assumptions_are_stated() {
+    let job = |kind, sigma| MicMacJob {
+        ground: PathBuf::new(),
+        measures: PathBuf::new(),
+        calibration: None,
+        check: None,
+        crs: None,
+        gnss: None,
+        gnss_sigma: sigma,
+        gnss_kind: kind,
+        orientations: None,
+        pixel_um: 1.0,
+        sigma_px: 1.0,
+    };
+    let (s, k, note) = gnss_assumptions(&job(None, None));
+    assert_eq!((s, k), ([0.05, 0.10], GnssKind::Survey));
+    assert!(
+        note.contains("assumed survey-grade") && note.contains("--gnss-kind nav"),
+        "{note}"
+    );
+    let (s, k, note) = gnss_assumptions(&job(Some(GnssKind::Navigation), None));
+    assert_eq!((s, k), ([3.0, 5.0], GnssKind::Navigation));
+    assert!(
+        note.contains("offset of the whole block") && note.contains("by --gnss-kind"),
+        "{note}"
+    );
+    let (s, _, note) = gnss_assumptions(&job(Some(GnssKind::Navigation), Some([1.0, 2.0])));
+    assert_eq!(s, [1.0, 2.0]);
+    assert!(note.contains("from --gnss-sigma"), "{note}");
+}

@@ -78,6 +78,9 @@ pub struct ProjectOut {
     pub ground: Vec<GroundOut>,
     /// GNSS antenna positions with σ east, north, up (m).
     pub gnss: Vec<(String, Ecef, [f64; 3])>,
+    /// The positions are navigation-grade (metres, offset): the project estimates a block
+    /// offset; otherwise survey-grade (no drift).
+    pub gnss_navigation: bool,
     /// Start orientations.
     pub starts: Vec<StartOut>,
 }
@@ -116,7 +119,12 @@ impl ProjectOut {
             let _ = writeln!(s, "\n[ground]\nfile = \"ground_points.csv\"");
         }
         if !self.gnss.is_empty() {
-            let _ = writeln!(s, "\n[gnss]\nantennas = \"antennas.csv\"\nlever_arm = [0.0, 0.0, 0.0]\nestimate_lever_arm = false\ndrift = \"none\"");
+            let drift = if self.gnss_navigation {
+                "drift = \"block\"\ndrift_model = \"offset\""
+            } else {
+                "drift = \"none\""
+            };
+            let _ = writeln!(s, "\n[gnss]\nantennas = \"antennas.csv\"\nlever_arm = [0.0, 0.0, 0.0]\nestimate_lever_arm = false\n{drift}");
         }
         s
     }
