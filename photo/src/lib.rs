@@ -11,6 +11,7 @@
 //!   converted into [`camera::Camera`], with the conversion's error.
 //! - [`lever`]: the GNSS lever arm, X_A = X_S + R·(u, v, w).
 //! - [`resection`], [`intersection`]: closed-form starts and least-squares refinement.
+//! - [`relative`]: the relative orientation of two images (five-point essential matrix, RANSAC).
 //! - [`lsq`]: the least-squares core — typed keys, factors with their own noise model and
 //!   loss, Levenberg–Marquardt with the Schur complement, statistics, data snooping, variance
 //!   components.
@@ -29,5 +30,6 @@ pub mod features;
 pub mod intersection;
 pub mod lever;
 pub mod lsq;
+pub mod relative;
 pub mod resection;
 pub mod rotation;
