@@ -9,6 +9,7 @@
 //!   Jacobians, pixel ↔ image coordinates.
 //! - [`camera_convert`]: MicMac (`ModRad`, `ModPhgrStd`) and OpenCV/COLMAP camera models
 //!   converted into [`camera::Camera`], with the conversion's error.
+//! - [`datum`]: inner constraints over the image centres, the datum of a free network.
 //! - [`lever`]: the GNSS lever arm, X_A = X_S + R·(u, v, w).
 //! - [`resection`], [`intersection`]: closed-form starts and least-squares refinement.
 //! - [`relative`]: the relative orientation of two images (five-point essential matrix, RANSAC).
@@ -25,6 +26,7 @@
 pub mod bal;
 pub mod camera;
 pub mod camera_convert;
+pub mod datum;
 pub mod factors;
 pub mod features;
 pub mod intersection;

@@ -9,7 +9,7 @@
 //! −z; see [`crate::camera`]). What leaves: E with x_bᵀ·E·x_a = 0, the second camera's pose
 //! relative to the first (first at the origin, unrotated; baseline of length 1) and the
 //! inliers. Works on planar scenes, where the eight-point F is degenerate. Deterministic for a
-//! seed.
+//! seed. And the similarity that places such a block onto known points ([`similarity`]).
 
 use crate::camera::Pose;
 use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
@@ -405,6 +405,45 @@ pub fn relative_orientation(
         },
         inliers,
     })
+}
+
+/// Similarity (scale, rotation, translation) mapping `from` onto `to` in least squares
+/// (Umeyama 1991); `None` with fewer than 3 points or when they are collinear.
+pub fn similarity(
+    from: &[Vector3<f64>],
+    to: &[Vector3<f64>],
+) -> Option<(f64, Matrix3<f64>, Vector3<f64>)> {
+    let n = from.len() as f64;
+    if from.len() < 3 {
+        return None;
+    }
+    let (mf, mt) = (
+        from.iter().sum::<Vector3<f64>>() / n,
+        to.iter().sum::<Vector3<f64>>() / n,
+    );
+    let mut cov = Matrix3::zeros();
+    let mut var = 0.0;
+    for (a, b) in from.iter().zip(to) {
+        cov += (b - mt) * (a - mf).transpose();
+        var += (a - mf).norm_squared();
+    }
+    // nalgebra's SVD has no iteration bound: on NaN (huge coordinates overflowed) it never ends.
+    if !cov.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let svd = cov.svd(true, true);
+    let (u, vt) = (svd.u?, svd.v_t?);
+    let mut s = Matrix3::identity();
+    if (u * vt).determinant() < 0.0 {
+        s[(2, 2)] = -1.0;
+    }
+    let sv = svd.singular_values;
+    if sv[1] < 1e-9 * sv[0] || var <= 0.0 {
+        return None;
+    }
+    let r = u * s * vt;
+    let scale = (sv[0] * s[(0, 0)] + sv[1] * s[(1, 1)] + sv[2] * s[(2, 2)]) / var;
+    Some((scale, r, mt - scale * r * mf))
 }
 
 #[cfg(test)]

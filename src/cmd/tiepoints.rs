@@ -47,6 +47,12 @@ pub struct Args {
     /// σ of positions that carry none, horizontal,vertical (m): consumer GPS by default.
     #[arg(long, value_name = "H,V", default_value = "3,5", value_parser = sigma_pair)]
     gnss_sigma: SigmaPair,
+    /// Use no position from the photos' EXIF/XMP (when they are wrong, or to start from the
+    /// photos alone): without positions the block starts from a relative orientation of its
+    /// best pair and the project is a free network (coordinates arbitrary) unless control
+    /// points are added.
+    #[arg(long)]
+    ignore_gps: bool,
     /// Output project folder (written whole, or not at all).
     #[arg(short = 'o', long = "out", value_name = "DIR")]
     out: PathBuf,
@@ -97,6 +103,7 @@ pub fn run(args: Args) -> Result<()> {
         _ => PairMode::Auto,
     };
     job.gnss_sigma = args.gnss_sigma.0;
+    job.ignore_gps = args.ignore_gps;
     let bar = indicatif::ProgressBar::new(0);
     if super::quiet() {
         bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
@@ -112,11 +119,14 @@ pub fn run(args: Args) -> Result<()> {
     });
     bar.finish_and_clear();
     let m = m?;
-    let w = project::build(&job, &m)?;
+    let mut w = project::build(&job, &m)?;
     let staged = gnss::atomic::StagedDir::new(&args.out, &OUTPUTS)?;
     w.project
         .write(staged.path())
         .map_err(|e| anyhow::anyhow!("{e}"))?;
+    if w.project.free_datum {
+        w.with_attitude = project::tie_starts(&mut w.project, staged.path())?;
+    }
     let json = report::json_text(&m, &w);
     std::fs::write(staged.path().join("match.json"), json)
         .with_context(|| format!("cannot write {}", args.out.display()))?;

@@ -54,6 +54,89 @@ fn brighton_beach_photos_match_into_one_block_that_adjusts() {
     );
     assert!(rms <= 1.0, "image-point RMS {rms} px");
     assert!((0.7..1.3).contains(&s0), "σ0 {s0}");
+    free_and_tie_started(&out, &adj);
+}
+
+/// The matched block without its positions (issue 48): as a free network started from its
+/// tie points alone it adjusts within 1 px; with the EXIF positions given back to that
+/// tie-started block (each image its own strip, so no image starts from GNSS and a strip
+/// direction) it reaches the GNSS-started result within its σ.
+fn free_and_tie_started(matched: &Path, gnss_run: &Path) {
+    let toml = std::fs::read_to_string(matched.join("project.toml")).unwrap();
+    let gnss_at = toml.find("\n[gnss]").unwrap();
+    let base = toml[..gnss_at].replace("start = \"start.csv\"\n", "");
+    let copy = |dir: &Path, files: &[&str]| {
+        std::fs::create_dir_all(dir).unwrap();
+        for f in files {
+            std::fs::copy(matched.join(f), dir.join(f)).unwrap();
+        }
+    };
+    // Free network: no positions, no control.
+    let free = matched.join("free");
+    copy(&free, &["images.csv", "image_observations.csv"]);
+    std::fs::write(
+        free.join("project.toml"),
+        format!("{base}\n[datum]\nfree = true\n"),
+    )
+    .unwrap();
+    let t = succeeds(&ppkat(&[
+        "adjust",
+        "--project",
+        p(&free.join("project.toml")),
+        "-o",
+        p(&free.join("out")),
+    ]));
+    assert!(
+        t.contains("18 images") && t.contains("a free network"),
+        "{t}"
+    );
+    let rms: Vec<f64> = column(&free.join("out/orientations.csv"), "rms_px")
+        .iter()
+        .map(|x| x.parse().unwrap())
+        .collect();
+    assert!(rms.len() == 18 && rms.iter().all(|r| *r <= 1.0), "{rms:?}");
+    // Tie-started, the EXIF positions given back.
+    let tied = matched.join("tied");
+    copy(&tied, &["image_observations.csv", "antennas.csv"]);
+    let images: Vec<String> = column(&matched.join("images.csv"), "image");
+    let cams = column(&matched.join("images.csv"), "camera");
+    let mut list = String::from("image,camera,strip\n");
+    for (k, (i, c)) in images.iter().zip(&cams).enumerate() {
+        list.push_str(&format!("{i},{c},{k}\n"));
+    }
+    std::fs::write(tied.join("images.csv"), list).unwrap();
+    std::fs::write(
+        tied.join("project.toml"),
+        format!("{base}{}", &toml[gnss_at..]),
+    )
+    .unwrap();
+    succeeds(&ppkat(&[
+        "adjust",
+        "--project",
+        p(&tied.join("project.toml")),
+        "-o",
+        p(&tied.join("out")),
+    ]));
+    let centres = |dir: &Path| -> Vec<[f64; 6]> {
+        let c = |n: &str| -> Vec<f64> {
+            column(&dir.join("orientations.csv"), n)
+                .iter()
+                .map(|x| x.parse().unwrap())
+                .collect()
+        };
+        let (e, n, h) = (c("e_local"), c("n_local"), c("u_local"));
+        let (se, sn, su) = (c("sigma_e"), c("sigma_n"), c("sigma_u"));
+        (0..e.len())
+            .map(|i| [e[i], n[i], h[i], se[i], sn[i], su[i]])
+            .collect()
+    };
+    let (a, b) = (centres(gnss_run), centres(&tied.join("out")));
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(&b) {
+        for k in 0..3 {
+            assert!((x[k] - y[k]).abs() < x[3 + k], "{x:?} vs {y:?}");
+        }
+    }
 }
 
 #[test]

@@ -37,8 +37,10 @@ pub const GROUP_CODE: Group = Group(7);
 pub const GROUP_IONO: Group = Group(8);
 /// Integer constraints of fixed combinations of ambiguities (tight coupling).
 pub const GROUP_FIX: Group = Group(9);
+/// The inner constraints of a free network.
+pub const GROUP_DATUM: Group = Group(10);
 /// Names of the groups, by index.
-pub const GROUP_NAMES: [&str; 10] = [
+pub const GROUP_NAMES: [&str; 11] = [
     "image points",
     "control points",
     "GNSS centres",
@@ -49,6 +51,7 @@ pub const GROUP_NAMES: [&str; 10] = [
     "GNSS code (DD)",
     "ionosphere prior",
     "ambiguity constraints",
+    "datum (inner constraints)",
 ];
 
 /// A drift group (key `Drift(DriftId(index))`): its name, model and reference time.

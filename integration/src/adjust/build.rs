@@ -19,7 +19,7 @@ use super::project::{PointKind, Project};
 pub use super::start::compass_rotation;
 use super::start::{orientations, Rays};
 use gnss::frame::Ecef;
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use photo::lsq::Problem;
 use std::collections::BTreeMap;
 
@@ -45,6 +45,8 @@ pub struct Built {
     pub without_antenna: Vec<String>,
     /// Tight coupling: the double differences and ambiguities (None: loose).
     pub tight: Option<super::tight::Tight>,
+    /// A free network: the datum is the inner constraints over the image centres.
+    pub free_network: bool,
 }
 
 /// Check the inputs, choose the frame and the start values, assemble the problem.
@@ -94,6 +96,10 @@ pub fn build(p: &Project) -> Result<Built, AdjustError> {
         None => None,
     };
     super::leave_out::undetermined(p, &point_names, &mut pr, &mut left_out)?;
+    let free = free_network(p, &antenna_of);
+    if free {
+        inner_constraints(&mut pr, !p.distances.is_empty())?;
+    }
     Ok(Built {
         frame,
         problem: pr,
@@ -105,6 +111,7 @@ pub fn build(p: &Project) -> Result<Built, AdjustError> {
         unused_antennas,
         without_antenna,
         tight,
+        free_network: free,
     })
 }
 
@@ -192,16 +199,57 @@ fn antennas_by_image(p: &Project) -> Result<(Vec<Option<usize>>, Vec<String>), A
     Ok((antenna_of, unused))
 }
 
-/// Refused without GNSS and with fewer than three control points.
+/// Whether the block is a free network: `[datum] free = true` and no control point and no
+/// GNSS centre to give it a datum.
+pub(super) fn free_network(p: &Project, antenna_of: &[Option<usize>]) -> bool {
+    p.file.datum.free
+        && antenna_of.iter().all(Option::is_none)
+        && !p.ground.iter().any(|g| g.kind == PointKind::Control)
+}
+
+/// σ of the inner constraints: they hold to the solver's precision.
+const INNER_SIGMA: f64 = 1e-6;
+
+/// The datum of a free network: inner constraints over the centres of the images adjusted
+/// (without the scale row when distances give the scale).
+fn inner_constraints(pr: &mut photo::lsq::Problem, scaled: bool) -> Result<(), AdjustError> {
+    use photo::lsq::{ImageId, Key, Loss, Noise};
+    let (ids, centres): (Vec<ImageId>, Vec<Vector3<f64>>) = pr
+        .keys()
+        .iter()
+        .filter(|k| !pr.is_fixed(**k))
+        .filter_map(|k| match (k, pr.value(*k).and_then(|v| v.pose())) {
+            (Key::Pose(i), Some(pose)) => Some((*i, pose.centre)),
+            _ => None,
+        })
+        .unzip();
+    let f = photo::datum::InnerConstraints::new(&ids, &centres, !scaled).ok_or_else(|| {
+        err("a free network needs at least two images at different places".into())
+    })?;
+    let dim = if scaled { 6 } else { 7 };
+    pr.add_factor(
+        f,
+        Noise::sigmas(&vec![INNER_SIGMA; dim]),
+        Loss::Trivial,
+        super::assemble::GROUP_DATUM,
+    )
+    .map_err(|e| err(e.to_string()))?;
+    Ok(())
+}
+
+/// Refused without GNSS and with fewer than three control points, unless a free network.
 fn check_datum(p: &Project, antenna_of: &[Option<usize>]) -> Result<(), AdjustError> {
     let n_control = p
         .ground
         .iter()
         .filter(|g| g.kind == PointKind::Control)
         .count();
+    if free_network(p, antenna_of) {
+        return Ok(());
+    }
     if antenna_of.iter().all(Option::is_none) && n_control < 3 {
         return Err(err(format!(
-            "datum defect: {n_control} control point(s) and no GNSS centres — the block's position, orientation and scale are not determined; give at least 3 control points or GNSS antenna positions"
+            "datum defect: {n_control} control point(s) and no GNSS centres — the block's position, orientation and scale are not determined; give at least 3 control points or GNSS antenna positions, or adjust a free network ([datum] free = true: coordinates arbitrary)"
         )));
     }
     Ok(())
@@ -215,6 +263,10 @@ fn frame_of(p: &Project, gnss: bool) -> LocalFrame {
     } else {
         p.ground.iter().map(|g| g.pos).collect()
     };
+    if centre_pts.is_empty() {
+        // A free network: the frame of the start values, placed at 0°, 0°.
+        return LocalFrame::new(gnss::frame::Geodetic::from_degrees(0.0, 0.0, 0.0));
+    }
     let mean = centre_pts.iter().fold(Vector3::zeros(), |a, x| a + x.0) / centre_pts.len() as f64;
     let mut g0 = Ecef(mean).to_geodetic();
     g0.h = if p.ground.is_empty() {
@@ -223,4 +275,28 @@ fn frame_of(p: &Project, gnss: bool) -> LocalFrame {
         p.ground.iter().map(|g| g.pos.to_geodetic().h).sum::<f64>() / p.ground.len() as f64
     };
     LocalFrame::new(g0)
+}
+
+/// A start orientation for a start table: the projection centre and the rotation camera →
+/// ENU at the centre.
+pub type StartPose = (Ecef, Matrix3<f64>);
+
+/// The start orientation of every image of a loaded project as the adjustment begins from
+/// it (for `match` to write them): the projection centre and the rotation camera → ENU at
+/// the centre; `None` for an image without one.
+pub fn start_poses(p: &Project) -> Result<Vec<Option<StartPose>>, AdjustError> {
+    let (rays, empty) = measured(p)?;
+    let (antenna_of, _) = antennas_by_image(p)?;
+    let frame = frame_of(p, antenna_of.iter().any(Option::is_some));
+    let skip: Vec<bool> = (0..p.images.len()).map(|i| empty.contains(&i)).collect();
+    let (start, _) = orientations(p, &frame, &rays, &antenna_of, &skip)?;
+    Ok(start
+        .iter()
+        .map(|s| {
+            s.map(|pose| {
+                let c = frame.to_ecef(&pose.centre);
+                (c, frame.from_enu_at(&c).transpose() * pose.r)
+            })
+        })
+        .collect())
 }

@@ -36,6 +36,7 @@ pub mod results;
 pub mod solve;
 mod start;
 pub mod start_file;
+mod start_relative;
 mod summary;
 mod tables;
 pub mod tight;

@@ -53,6 +53,22 @@ pub struct ProjectFile {
     /// Solver and statistics options.
     #[serde(default)]
     pub adjustment: AdjustmentSection,
+    /// The datum when neither control nor GNSS gives one.
+    #[serde(default)]
+    pub datum: DatumSection,
+}
+
+/// The `[datum]` section.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DatumSection {
+    /// A free network: with no control and no GNSS the block is adjusted under inner
+    /// constraints over the image centres (no shift, rotation or scale of the centres from
+    /// their start values, in the least-squares sense), so image residuals, relative
+    /// precision and data snooping come out while the coordinates stay arbitrary; measured
+    /// distances give the scale when there are any.
+    #[serde(default)]
+    pub free: bool,
 }
 
 fn default_output() -> String {

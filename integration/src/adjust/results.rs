@@ -558,6 +558,12 @@ fn interiors(p: &Project, ctx: &Context) -> Vec<Estimated> {
 /// undetermined, antennas of unknown images.
 fn warnings(p: &Project, b: &super::build::Built) -> Vec<String> {
     let mut warnings = p.warnings.clone();
+    if b.free_network {
+        warnings.push(format!(
+            "a free network: no control and no GNSS, so the coordinates are arbitrary (the datum is the inner constraints over the image centres; {}); image residuals, σ0, data snooping and the precision relative to the centres' centroid are the block's own",
+            if p.distances.is_empty() { "the scale is that of the start values" } else { "the scale from the measured distances" }
+        ));
+    }
     if !b.single_ray.is_empty() {
         let list: Vec<String> = b
             .single_ray

@@ -3,7 +3,8 @@
 //! range); nadir along the strip direction of the neighbouring antennas; a resection on ≥ 4
 //! control points (RANSAC over their triples, so a wrong point does not spoil it), or on 3 (aerial: of the exact solutions, the camera above the points
 //! looking down); the same on tie points intersected from the images that have a start,
-//! growing the block until no image gains one.
+//! growing the block until no image gains one; and when no image starts from its own data,
+//! a relative orientation from the tie points seeds the block (`start_relative`).
 //! What enters: the project, the frame, the measurements by point and the antenna of each
 //! image. What leaves: a pose per image that can have one and the images left without
 //! (named, with the reason); an error only when no image has a start.
@@ -149,6 +150,20 @@ pub(super) fn orientations(
         .collect();
     if start.iter().zip(skip).any(|(s, &k)| s.is_none() && !k) {
         resect_on_ties(p, &ix, rays, &mut start, skip);
+    }
+    if start.iter().all(Option::is_none) {
+        // Nothing starts from its own data: a relative orientation seeds the block from the
+        // tie points, which then grows and is placed on what control or GNSS it has.
+        if let Some(seed) = super::start_relative::seed_pair(p, rays, skip) {
+            for (i, pose) in seed {
+                start[i] = Some(pose);
+            }
+            resect_on_ties(p, &ix, rays, &mut start, skip);
+            if let Some(sim) = super::start_relative::placement(p, frame, rays, &start, antenna_of)
+            {
+                super::start_relative::place(&mut start, sim);
+            }
+        }
     }
     let lost: Vec<LeftOut> = (0..p.images.len())
         .filter(|&i| start[i].is_none() && !skip[i])

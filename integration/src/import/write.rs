@@ -83,6 +83,8 @@ pub struct ProjectOut {
     pub gnss_navigation: bool,
     /// Start orientations.
     pub starts: Vec<StartOut>,
+    /// No control and no positions: `[datum] free = true`.
+    pub free_datum: bool,
 }
 
 fn px(cam: &Camera, xy: Vector2<f64>) -> [f64; 2] {
@@ -117,6 +119,9 @@ impl ProjectOut {
         }
         if !self.ground.is_empty() {
             let _ = writeln!(s, "\n[ground]\nfile = \"ground_points.csv\"");
+        }
+        if self.free_datum {
+            let _ = writeln!(s, "\n[datum]\nfree = true");
         }
         if !self.gnss.is_empty() {
             let drift = if self.gnss_navigation {

@@ -50,6 +50,8 @@ pub struct MatchJob {
     pub ransac_px: f64,
     /// Fewest verified matches for a pair.
     pub min_matches: usize,
+    /// Use no position from the photos' metadata.
+    pub ignore_gps: bool,
 }
 
 impl MatchJob {
@@ -66,6 +68,7 @@ impl MatchJob {
             ratio: 0.8,
             ransac_px: 1.5,
             min_matches: 20,
+            ignore_gps: false,
         }
     }
 }
@@ -377,7 +380,11 @@ pub fn run(
                 .collect::<String>()
         )));
     }
-    let positions = project::image_positions(table.as_ref(), &images);
+    let positions = if job.ignore_gps && table.is_none() {
+        vec![None; images.len()]
+    } else {
+        project::image_positions(table.as_ref(), &images)
+    };
     let enu = project::local_enu(&positions);
     let radius = project::footprint_radii(&images);
     let (list, pair_note) = pairs::choose(job.pairs, &enu, &radius).map_err(MatchError::Input)?;

@@ -478,9 +478,38 @@ pub fn build(job: &MatchJob, m: &Matched) -> Result<Written, MatchError> {
     p.notes = vec![
         format!("written by ppkat match from {}", job.photos.display()),
         "positions: ".to_string()
-            + if job.exposures.is_some() { "the exposures table" } else { "EXIF GPS (altitudes taken as ellipsoidal heights: consumer GPS heights are often biased, the block shifts with them)" },
+            + if job.exposures.is_some() { "the exposures table" } else if job.ignore_gps { "none (--ignore-gps)" } else { "EXIF GPS (altitudes taken as ellipsoidal heights: consumer GPS heights are often biased, the block shifts with them)" },
         "start attitudes: nadir photos headed as their overlaps with neighbours say, others from DJI gimbal yaw/pitch/roll".into(),
     ];
+    if p.gnss.is_empty() {
+        p.free_datum = true;
+        p.notes.push("no positions: a free network (coordinates arbitrary) until control points or positions are added; adjust starts it from the relative orientation of its best pair".into());
+    }
     w.project = p;
     Ok(w)
+}
+
+/// A project without positions (a free network) given the start orientations `adjust` finds
+/// from its tie points alone (the relative orientation of its best pair, grown by resection),
+/// rewritten into `dir` where it was written; returns the photos with a start.
+pub fn tie_starts(p: &mut ProjectOut, dir: &std::path::Path) -> Result<usize, MatchError> {
+    use crate::adjust::{build::start_poses, project::Project};
+    let loaded =
+        Project::load(&dir.join("project.toml")).map_err(|e| MatchError::Nothing(e.to_string()))?;
+    let poses = start_poses(&loaded).map_err(|e| MatchError::Nothing(e.to_string()))?;
+    p.starts = loaded
+        .images
+        .iter()
+        .zip(&poses)
+        .filter_map(|(im, s)| {
+            s.map(|(pos, r_enu)| StartOut {
+                image: im.id.clone(),
+                pos,
+                r_enu,
+            })
+        })
+        .collect();
+    p.write(dir)
+        .map_err(|e| MatchError::Nothing(e.to_string()))?;
+    Ok(p.starts.len())
 }

@@ -1,0 +1,194 @@
+//! Start values from tie points alone, for blocks where no image can start from its own data
+//! (no GNSS with attitude or strip, no compass, fewer than three control points per image):
+//! the relative orientation of the best pair (most shared points, enough parallax; five-point
+//! essential matrix with RANSAC, [`photo::relative`]) seeds the block, `start` grows it by
+//! resection on intersected tie points, and the grown block is placed by a similarity onto
+//! the control points it intersects or the GNSS centres of its images (a free network stays
+//! in the arbitrary frame of the pair: first camera at the origin, nadir, 100 units above the
+//! median point).
+//!
+//! What enters: the project, the frame, the measurements by point, the images to skip. What
+//! leaves: the two seed poses, and the similarity placing a grown block.
+
+use super::frame::LocalFrame;
+use super::input::ControlAxes;
+use super::project::{PointKind, Project};
+use super::start::{intersect_point, Rays};
+use nalgebra::{Matrix3, Vector2, Vector3};
+use photo::camera::{Camera, Pose};
+use photo::relative::{relative_orientation, similarity};
+use std::collections::BTreeMap;
+
+/// Pairs tried, by the number of points they share.
+const PAIRS_TRIED: usize = 10;
+/// Fewest agreeing points for a seed pair.
+const MIN_INLIERS: usize = 30;
+/// Median intersection angle below which a pair's depths are too uncertain, radians (1°).
+const MIN_PARALLAX: f64 = 0.0175;
+/// Median depth of the seed pair's points, in the free network's units.
+const SEED_DEPTH: f64 = 100.0;
+
+/// The unit ray of image coordinates `xy` in the camera frame (distortion left to the
+/// adjustment).
+fn bearing(cam: &Camera, xy: &Vector2<f64>) -> Vector3<f64> {
+    Vector3::new(xy.x - cam.x0, xy.y - cam.y0, -cam.f).normalize()
+}
+
+/// Image pairs by the number of points measured in both (most first; ties by index).
+fn pairs_by_shared(p: &Project, rays: &Rays, skip: &[bool]) -> Vec<((usize, usize), usize)> {
+    let mut count: BTreeMap<(usize, usize), usize> = BTreeMap::new();
+    for ks in rays.values() {
+        let mut ims: Vec<usize> = ks
+            .iter()
+            .map(|&k| p.measurements[k].image)
+            .filter(|&i| !skip[i])
+            .collect();
+        ims.sort_unstable();
+        ims.dedup();
+        for (x, &i) in ims.iter().enumerate() {
+            for &j in &ims[x + 1..] {
+                *count.entry((i, j)).or_default() += 1;
+            }
+        }
+    }
+    let mut v: Vec<_> = count.into_iter().collect();
+    v.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+    v
+}
+
+/// The rays of the points images `i` and `j` both measure, in each camera's frame.
+fn shared_rays(
+    p: &Project,
+    rays: &Rays,
+    i: usize,
+    j: usize,
+) -> (Vec<Vector3<f64>>, Vec<Vector3<f64>>) {
+    let cam = |im: usize| &p.cameras[p.images[im].camera].camera;
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    for ks in rays.values() {
+        let find = |im: usize| {
+            ks.iter()
+                .map(|&k| &p.measurements[k])
+                .find(|m| m.image == im)
+        };
+        if let (Some(mi), Some(mj)) = (find(i), find(j)) {
+            a.push(bearing(cam(i), &mi.xy));
+            b.push(bearing(cam(j), &mj.xy));
+        }
+    }
+    (a, b)
+}
+
+/// The median of `v` (empty: 0).
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// The two start poses of the best pair: of the most connected pairs, the one with most
+/// points agreeing with its relative orientation, weighted by parallax up to 3°.
+pub(super) fn seed_pair(p: &Project, rays: &Rays, skip: &[bool]) -> Option<[(usize, Pose); 2]> {
+    let mut best: Option<(f64, [(usize, Pose); 2])> = None;
+    for ((i, j), n) in pairs_by_shared(p, rays, skip).into_iter().take(PAIRS_TRIED) {
+        if n < MIN_INLIERS {
+            break;
+        }
+        let (a, b) = shared_rays(p, rays, i, j);
+        let cam = &p.cameras[p.images[i].camera].camera;
+        let sigma = p.cameras[p.images[i].camera].sigma_px.max(0.5) * cam.pixel / cam.f;
+        let seed = (i as u64) << 32 | j as u64;
+        let Some(rel) = relative_orientation(&a, &b, 4.0 * sigma, MIN_INLIERS, seed) else {
+            continue;
+        };
+        let second = &rel.second;
+        let (mut angles, mut depths) = (Vec::new(), Vec::new());
+        for &k in &rel.inliers {
+            let (ra, rb) = (a[k], second.r * b[k]);
+            angles.push(ra.dot(&rb).clamp(-1.0, 1.0).acos());
+            // Depth along ray a of the point nearest both rays (baseline of length 1).
+            let c = second.centre;
+            let (aa, ab, bb) = (1.0, ra.dot(&rb), 1.0);
+            let (d, e) = (ra.dot(&c), rb.dot(&c));
+            let den = aa * bb - ab * ab;
+            if den > 1e-12 {
+                depths.push((d * bb - ab * e) / den);
+            }
+        }
+        let parallax = median(angles);
+        if parallax < MIN_PARALLAX {
+            continue;
+        }
+        let score = rel.inliers.len() as f64 * (parallax / (3.0 * MIN_PARALLAX)).min(1.0);
+        let depth = median(depths);
+        if depth <= 0.0 {
+            continue;
+        }
+        let scale = SEED_DEPTH / depth;
+        let poses = [
+            (
+                i,
+                Pose {
+                    r: Matrix3::identity(),
+                    centre: Vector3::new(0.0, 0.0, SEED_DEPTH),
+                },
+            ),
+            (
+                j,
+                Pose {
+                    r: second.r,
+                    centre: Vector3::new(0.0, 0.0, SEED_DEPTH) + second.centre * scale,
+                },
+            ),
+        ];
+        if best.as_ref().is_none_or(|b| score > b.0) {
+            best = Some((score, poses));
+        }
+    }
+    best.map(|b| b.1)
+}
+
+/// The similarity (scale, rotation, shift) that places a block grown from a seed pair: onto
+/// the control points it intersects (≥ 3), else onto the GNSS antenna positions of its
+/// images (≥ 3, lever arm neglected); `None` for a free network.
+pub(super) fn placement(
+    p: &Project,
+    frame: &LocalFrame,
+    rays: &Rays,
+    start: &[Option<Pose>],
+    antenna_of: &[Option<usize>],
+) -> Option<(f64, Matrix3<f64>, Vector3<f64>)> {
+    let (mut from, mut to) = (Vec::new(), Vec::new());
+    for g in &p.ground {
+        if g.kind != PointKind::Control || g.axes != ControlAxes::All {
+            continue;
+        }
+        let Some(ks) = rays.get(g.id.as_str()) else {
+            continue;
+        };
+        if let Some(x) = intersect_point(p, ks, |i| start[i].as_ref()) {
+            from.push(x);
+            to.push(frame.to_local(&g.pos));
+        }
+    }
+    if from.len() < 3 {
+        (from, to) = (Vec::new(), Vec::new());
+        for (i, s) in start.iter().enumerate() {
+            if let (Some(s), Some(k)) = (s, antenna_of[i]) {
+                from.push(s.centre);
+                to.push(frame.to_local(&p.antennas[k].pos));
+            }
+        }
+    }
+    similarity(&from, &to)
+}
+
+/// `start` moved by the similarity `(s, r, t)`: centres mapped, rotations turned.
+pub(super) fn place(start: &mut [Option<Pose>], (s, r, t): (f64, Matrix3<f64>, Vector3<f64>)) {
+    for pose in start.iter_mut().flatten() {
+        pose.centre = r * pose.centre * s + t;
+        pose.r = r * pose.r;
+    }
+}
