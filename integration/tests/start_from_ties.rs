@@ -83,6 +83,15 @@ fn textured_block_from_tie_points_and_four_corners_checks_like_gnss() {
         ea / eb
     );
     assert_eq!((a.images.len(), b.images.len()), (24, 24));
+    let note = a.start_note.as_deref().unwrap_or("");
+    assert!(
+        note.contains("grown to 24 images") && note.contains("placed on 4 control points"),
+        "{note}"
+    );
+    assert!(
+        b.start_note.is_none(),
+        "the GNSS run starts from its strips"
+    );
     assert_eq!(a.checks.points.len(), 5);
     assert!(ea <= 1.5 * eb, "from ties {ea} m vs GNSS {eb} m");
     let _ = std::fs::remove_dir_all(&dir);

@@ -110,13 +110,17 @@ fn free_and_tie_started(matched: &Path, gnss_run: &Path) {
         format!("{base}{}", &toml[gnss_at..]),
     )
     .unwrap();
-    succeeds(&ppkat(&[
+    let t = succeeds(&ppkat(&[
         "adjust",
         "--project",
         p(&tied.join("project.toml")),
         "-o",
         p(&tied.join("out")),
     ]));
+    assert!(
+        t.contains("grown to 18 images by resection, placed on 18 GNSS centres"),
+        "{t}"
+    );
     let centres = |dir: &Path| -> Vec<[f64; 6]> {
         let c = |n: &str| -> Vec<f64> {
             column(&dir.join("orientations.csv"), n)

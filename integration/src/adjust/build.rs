@@ -47,6 +47,8 @@ pub struct Built {
     pub tight: Option<super::tight::Tight>,
     /// A free network: the datum is the inner constraints over the image centres.
     pub free_network: bool,
+    /// How the block was started when from its tie points alone.
+    pub start_note: Option<String>,
 }
 
 /// Check the inputs, choose the frame and the start values, assemble the problem.
@@ -72,7 +74,7 @@ pub fn build(p: &Project) -> Result<Built, AdjustError> {
             )
         })
         .collect();
-    let (start, lost) = orientations(p, &frame, &rays, &antenna_of, &skip)?;
+    let (start, lost, start_note) = orientations(p, &frame, &rays, &antenna_of, &skip)?;
     left_out.extend(
         lost.into_iter()
             .map(|(id, why)| (format!("image {id}"), why)),
@@ -112,6 +114,7 @@ pub fn build(p: &Project) -> Result<Built, AdjustError> {
         without_antenna,
         tight,
         free_network: free,
+        start_note,
     })
 }
 
@@ -289,7 +292,7 @@ pub fn start_poses(p: &Project) -> Result<Vec<Option<StartPose>>, AdjustError> {
     let (antenna_of, _) = antennas_by_image(p)?;
     let frame = frame_of(p, antenna_of.iter().any(Option::is_some));
     let skip: Vec<bool> = (0..p.images.len()).map(|i| empty.contains(&i)).collect();
-    let (start, _) = orientations(p, &frame, &rays, &antenna_of, &skip)?;
+    let (start, _, _) = orientations(p, &frame, &rays, &antenna_of, &skip)?;
     Ok(start
         .iter()
         .map(|s| {

@@ -179,6 +179,8 @@ pub struct Results {
     /// Images and points left out of the adjustment, each with the reason (also among the
     /// warnings): the run finished without them.
     pub left_out: Vec<String>,
+    /// How the block was started when from its tie points alone.
+    pub start_note: Option<String>,
     /// Tight coupling: ambiguities fixed before and after, per exposure (None: loose).
     pub tight: Option<super::tight_report::TightSummary>,
     /// The solver's timed stages (solves, cofactor computations), for benchmarks; not
@@ -341,6 +343,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         gnss_residuals: res.gnss,
         distance_residuals: res.distance,
         tight: super::tight_report::summary(p, s),
+        start_note: b.start_note.clone(),
         left_out: b
             .left_out
             .iter()

@@ -122,15 +122,16 @@ fn controls_in(
 }
 
 /// The start orientation of every image that can have one (`skip[i]`: image i is already
-/// left out), and the images left without one (id, reason); refused only when no image has a
-/// start.
+/// left out), the images left without one (id, reason), and how the block was started when
+/// from its tie points alone; refused only when no image has a start.
+#[allow(clippy::type_complexity)]
 pub(super) fn orientations(
     p: &Project,
     frame: &LocalFrame,
     rays: &Rays,
     antenna_of: &[Option<usize>],
     skip: &[bool],
-) -> Result<(Vec<Option<Pose>>, Vec<LeftOut>), AdjustError> {
+) -> Result<(Vec<Option<Pose>>, Vec<LeftOut>, Option<String>), AdjustError> {
     let lever0 = p
         .file
         .gnss
@@ -151,18 +152,29 @@ pub(super) fn orientations(
     if start.iter().zip(skip).any(|(s, &k)| s.is_none() && !k) {
         resect_on_ties(p, &ix, rays, &mut start, skip);
     }
+    let mut note = None;
     if start.iter().all(Option::is_none) {
         // Nothing starts from its own data: a relative orientation seeds the block from the
         // tie points, which then grows and is placed on what control or GNSS it has.
-        if let Some(seed) = super::start_relative::seed_pair(p, rays, skip) {
-            for (i, pose) in seed {
-                start[i] = Some(pose);
+        if let Some((seed, agree)) = super::start_relative::seed_pair(p, rays, skip) {
+            for (i, pose) in &seed {
+                start[*i] = Some(*pose);
             }
             resect_on_ties(p, &ix, rays, &mut start, skip);
-            if let Some(sim) = super::start_relative::placement(p, frame, rays, &start, antenna_of)
-            {
-                super::start_relative::place(&mut start, sim);
-            }
+            let placed = super::start_relative::placement(p, frame, rays, &start, antenna_of);
+            let on = match placed {
+                Some((sim, what)) => {
+                    super::start_relative::place(&mut start, sim);
+                    format!("placed on {what} by a similarity")
+                }
+                None => "left in the pair's arbitrary frame".to_string(),
+            };
+            note = Some(format!(
+                "start orientations from the tie points alone: the relative orientation of images {} and {} ({agree} points agree), grown to {} images by resection, {on}",
+                p.images[seed[0].0].id,
+                p.images[seed[1].0].id,
+                start.iter().flatten().count()
+            ));
         }
     }
     let lost: Vec<LeftOut> = (0..p.images.len())
@@ -183,7 +195,7 @@ pub(super) fn orientations(
             lost.first().map_or("none", |l| l.0.as_str())
         )));
     }
-    Ok((start, lost))
+    Ok((start, lost, note))
 }
 
 /// The camera rotation of image `i` from the antenna table's attitude, compass angles, or the

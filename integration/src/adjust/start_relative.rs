@@ -19,6 +19,9 @@ use photo::camera::{Camera, Pose};
 use photo::relative::{relative_orientation, similarity};
 use std::collections::BTreeMap;
 
+/// A similarity: scale, rotation, shift (x ↦ s·R·x + t).
+pub(super) type Similarity = (f64, Matrix3<f64>, Vector3<f64>);
+
 /// Pairs tried, by the number of points they share.
 const PAIRS_TRIED: usize = 10;
 /// Fewest agreeing points for a seed pair.
@@ -88,10 +91,13 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
+/// The seed of a block: the two start poses and the number of points that agree with them.
+pub(super) type Seed = ([(usize, Pose); 2], usize);
+
 /// The two start poses of the best pair: of the most connected pairs, the one with most
 /// points agreeing with its relative orientation, weighted by parallax up to 3°.
-pub(super) fn seed_pair(p: &Project, rays: &Rays, skip: &[bool]) -> Option<[(usize, Pose); 2]> {
-    let mut best: Option<(f64, [(usize, Pose); 2])> = None;
+pub(super) fn seed_pair(p: &Project, rays: &Rays, skip: &[bool]) -> Option<Seed> {
+    let mut best: Option<(f64, Seed)> = None;
     for ((i, j), n) in pairs_by_shared(p, rays, skip).into_iter().take(PAIRS_TRIED) {
         if n < MIN_INLIERS {
             break;
@@ -144,7 +150,7 @@ pub(super) fn seed_pair(p: &Project, rays: &Rays, skip: &[bool]) -> Option<[(usi
             ),
         ];
         if best.as_ref().is_none_or(|b| score > b.0) {
-            best = Some((score, poses));
+            best = Some((score, (poses, rel.inliers.len())));
         }
     }
     best.map(|b| b.1)
@@ -152,14 +158,15 @@ pub(super) fn seed_pair(p: &Project, rays: &Rays, skip: &[bool]) -> Option<[(usi
 
 /// The similarity (scale, rotation, shift) that places a block grown from a seed pair: onto
 /// the control points it intersects (≥ 3), else onto the GNSS antenna positions of its
-/// images (≥ 3, lever arm neglected); `None` for a free network.
+/// images (≥ 3, lever arm neglected), with what it was placed on; `None` for a free
+/// network.
 pub(super) fn placement(
     p: &Project,
     frame: &LocalFrame,
     rays: &Rays,
     start: &[Option<Pose>],
     antenna_of: &[Option<usize>],
-) -> Option<(f64, Matrix3<f64>, Vector3<f64>)> {
+) -> Option<(Similarity, String)> {
     let (mut from, mut to) = (Vec::new(), Vec::new());
     for g in &p.ground {
         if g.kind != PointKind::Control || g.axes != ControlAxes::All {
@@ -173,6 +180,7 @@ pub(super) fn placement(
             to.push(frame.to_local(&g.pos));
         }
     }
+    let mut what = format!("{} control points", from.len());
     if from.len() < 3 {
         (from, to) = (Vec::new(), Vec::new());
         for (i, s) in start.iter().enumerate() {
@@ -181,12 +189,13 @@ pub(super) fn placement(
                 to.push(frame.to_local(&p.antennas[k].pos));
             }
         }
+        what = format!("{} GNSS centres", from.len());
     }
-    similarity(&from, &to)
+    similarity(&from, &to).map(|s| (s, what))
 }
 
 /// `start` moved by the similarity `(s, r, t)`: centres mapped, rotations turned.
-pub(super) fn place(start: &mut [Option<Pose>], (s, r, t): (f64, Matrix3<f64>, Vector3<f64>)) {
+pub(super) fn place(start: &mut [Option<Pose>], (s, r, t): Similarity) {
     for pose in start.iter_mut().flatten() {
         pose.centre = r * pose.centre * s + t;
         pose.r = r * pose.r;

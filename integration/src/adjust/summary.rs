@@ -40,6 +40,9 @@ impl Results {
         if let Some(t) = &self.tight {
             s += &t.lines();
         }
+        if let Some(n) = &self.start_note {
+            s += &format!("{n}\n");
+        }
         s += &format!("removed by data snooping: {}\n", self.removed.len());
         for r in &self.removed {
             s += &format!("  {} (|w| {:.1}) {}\n", r.what, r.w, r.source);
