@@ -73,8 +73,9 @@ struct MicmacArgs {
     #[arg(long, value_name = "H,V")]
     gnss_sigma: Option<String>,
     /// What the --gnss positions are: survey (RTK/PPK: σ 0.05,0.10 m, no drift) or nav
-    /// (navigation-grade: σ 3,5 m and an offset of the whole block estimated). Without it
-    /// survey-grade is assumed, and the import says so.
+    /// (navigation-grade: σ 3,5 m and an offset per strip, strips from the positions' track
+    /// with the images in name order). Without it survey-grade is assumed, and the import
+    /// says so.
     #[arg(long, value_enum, value_name = "KIND")]
     gnss_kind: Option<GnssKindArg>,
     /// Folder of MicMac orientation files (Orientation-IMAGE.xml), used as start values.

@@ -307,8 +307,9 @@ fn patb_import_prints_counts_and_names_bad_lines() {
     );
 }
 
-/// GNSS positions imported as navigation-grade: σ in metres and a block offset in the
-/// project, the assumption printed; without a kind, survey-grade is assumed and said.
+/// GNSS positions imported as navigation-grade: σ in metres and an offset per strip (strips
+/// from the positions' track) in the project, the assumption printed; without a kind,
+/// survey-grade is assumed and said.
 #[test]
 fn micmac_gnss_kind_sets_sigma_and_offset_and_says_so() {
     let Some(dir) = shared(&format!("{MM}/Saisies-MMV1")) else {
@@ -351,9 +352,13 @@ fn micmac_gnss_kind_sets_sigma_and_offset_and_says_so() {
     );
     let toml = std::fs::read_to_string(nav.join("project.toml")).unwrap();
     assert!(
-        toml.contains("drift = \"block\"") && toml.contains("drift_model = \"offset\""),
+        toml.contains("drift = \"strip\"") && toml.contains("drift_model = \"offset\""),
         "{toml}"
     );
+    // Four photos around a small scene: the strips come from their track, and are said.
+    assert!(t.contains("strips from the GNSS track"), "{t}");
+    let list = std::fs::read_to_string(nav.join("images.csv")).unwrap();
+    assert!(list.starts_with("image,camera,strip\n"), "{list}");
     let survey = base.join("survey");
     let t = import(&survey, &[]);
     assert!(t.contains("assumed survey-grade"), "{t}");

@@ -9,6 +9,10 @@
 //! duplicated points or measurements, measurements outside the calibration's image, and
 //! unknown images are errors naming the file, the line and what to do.
 
+use super::micmac_gnss::add_gnss;
+#[cfg(test)]
+use super::micmac_gnss::gnss_assumptions;
+pub use super::micmac_gnss::GnssKind;
 use super::{ferr, CameraOut, GroundFrame, GroundOut, ImportError, ProjectOut, StartOut, Summary};
 use nalgebra::{Matrix3, Vector3};
 use photo::camera_convert::MicMacCalibration;
@@ -276,7 +280,10 @@ fn read_orientation(path: &Path) -> Result<Orientation, ImportError> {
 }
 
 /// GNSS camera positions in `OriConvert` text: `#F=N X Y Z` (other letters ignored).
-fn read_gnss(path: &Path, format: &str) -> Result<Vec<(String, Vector3<f64>, usize)>, ImportError> {
+pub(super) fn read_gnss(
+    path: &Path,
+    format: &str,
+) -> Result<Vec<(String, Vector3<f64>, usize)>, ImportError> {
     let fields: Vec<&str> = format
         .trim()
         .trim_start_matches("#F=")
@@ -525,90 +532,6 @@ fn read_orientations(
         ));
     }
     Ok(res)
-}
-
-/// What GNSS camera positions are, for their σ and drift when the file does not say.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum GnssKind {
-    /// RTK or PPK positions: σ 5 cm / 10 cm, no drift.
-    Survey,
-    /// Navigation-grade positions (code GPS, an autopilot's log, EXIF): σ 3 m / 5 m and an
-    /// unknown offset of the whole block estimated (`drift = "block"`, offset).
-    Navigation,
-}
-
-impl GnssKind {
-    /// The σ (horizontal, vertical) assumed for this kind, metres.
-    pub fn sigma(self) -> [f64; 2] {
-        match self {
-            GnssKind::Survey => [0.05, 0.10],
-            GnssKind::Navigation => [3.0, 5.0],
-        }
-    }
-}
-
-/// The σ and kind of the positions, and the note that says what was assumed.
-fn gnss_assumptions(job: &MicMacJob) -> ([f64; 2], GnssKind, String) {
-    let kind = job.gnss_kind.unwrap_or(GnssKind::Survey);
-    let sigma = job.gnss_sigma.unwrap_or(kind.sigma());
-    let given = match (job.gnss_kind, job.gnss_sigma) {
-        (None, None) => "assumed survey-grade (RTK/PPK) as no --gnss-kind or --gnss-sigma was given; for navigation-grade positions give --gnss-kind nav",
-        (Some(_), None) => "by --gnss-kind",
-        (_, Some(_)) => "from --gnss-sigma",
-    };
-    let drift = match kind {
-        GnssKind::Survey => "no drift estimated",
-        GnssKind::Navigation => "an offset of the whole block estimated (drift = \"block\"); no latency, as the file has no times",
-    };
-    let note = format!(
-        "GNSS positions: σ {} m horizontal, {} m vertical ({given}); {drift}",
-        sigma[0], sigma[1]
-    );
-    (sigma, kind, note)
-}
-
-/// GNSS camera positions as antenna positions (lever arm zero, fixed).
-fn add_gnss(
-    path: &Path,
-    format: &str,
-    job: &MicMacJob,
-    frame: &GroundFrame,
-    out: &mut ProjectOut,
-    sum: &mut Summary,
-) -> Result<(), ImportError> {
-    let (sigma, kind, note) = gnss_assumptions(job);
-    sum.notes.push(note);
-    out.gnss_navigation = kind == GnssKind::Navigation;
-    let rows = read_gnss(path, format)?;
-    sum.read.push(("GNSS positions".into(), rows.len()));
-    let images: HashSet<String> = out.images.iter().map(|(i, _)| i.clone()).collect();
-    for (name, p, line) in rows {
-        if !images.contains(&name) {
-            sum.skipped.push((
-                format!("GNSS position of {name} ({}:{line})", path.display()),
-                "image not measured".into(),
-            ));
-            continue;
-        }
-        out.gnss
-            .push((name, frame.to_ecef(&p), [sigma[0], sigma[0], sigma[1]]));
-    }
-    let located: HashSet<&str> = out.gnss.iter().map(|g| g.0.as_str()).collect();
-    let without: Vec<&str> = out
-        .images
-        .iter()
-        .map(|(i, _)| i.as_str())
-        .filter(|i| !located.contains(i))
-        .collect();
-    if !without.is_empty() {
-        sum.notes.push(format!(
-            "{} measured image(s) have no position in {}: {}",
-            without.len(),
-            path.display(),
-            without.join(", ")
-        ));
-    }
-    Ok(())
 }
 
 #[cfg(test)]

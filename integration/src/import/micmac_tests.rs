@@ -73,7 +73,7 @@ fn gnss_assumptions_are_stated() {
     let (s, k, note) = gnss_assumptions(&job(Some(GnssKind::Navigation), None));
     assert_eq!((s, k), ([3.0, 5.0], GnssKind::Navigation));
     assert!(
-        note.contains("offset of the whole block") && note.contains("by --gnss-kind"),
+        note.contains("one offset per strip") && note.contains("by --gnss-kind"),
         "{note}"
     );
     let (s, _, note) = gnss_assumptions(&job(Some(GnssKind::Navigation), Some([1.0, 2.0])));

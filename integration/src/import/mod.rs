@@ -18,7 +18,9 @@
 
 pub mod colmap;
 pub mod micmac;
+mod micmac_gnss;
 pub mod patb;
+pub mod strips;
 mod write;
 
 pub use write::{CameraOut, GroundOut, ProjectOut, StartOut, FILES};

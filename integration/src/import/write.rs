@@ -85,6 +85,9 @@ pub struct ProjectOut {
     pub starts: Vec<StartOut>,
     /// No control and no positions: `[datum] free = true`.
     pub free_datum: bool,
+    /// The strip of each image (same order as `images`; empty: no strip column). With
+    /// navigation-grade GNSS the drift is then one offset per strip.
+    pub image_strips: Vec<String>,
 }
 
 fn px(cam: &Camera, xy: Vector2<f64>) -> [f64; 2] {
@@ -124,7 +127,9 @@ impl ProjectOut {
             let _ = writeln!(s, "\n[datum]\nfree = true");
         }
         if !self.gnss.is_empty() {
-            let drift = if self.gnss_navigation {
+            let drift = if self.gnss_navigation && !self.image_strips.is_empty() {
+                "drift = \"strip\"\ndrift_model = \"offset\""
+            } else if self.gnss_navigation {
                 "drift = \"block\"\ndrift_model = \"offset\""
             } else {
                 "drift = \"none\""
@@ -155,9 +160,18 @@ impl ProjectOut {
                 .map_err(|e| ferr(&path, None, format!("cannot write: {e}")))
         };
         put("project.toml", self.toml())?;
-        let mut s = String::from("image,camera\n");
-        for (i, c) in &self.images {
-            let _ = writeln!(s, "{i},{c}");
+        let strips = self.image_strips.len() == self.images.len();
+        let mut s = String::from(if strips {
+            "image,camera,strip\n"
+        } else {
+            "image,camera\n"
+        });
+        for (k, (i, c)) in self.images.iter().enumerate() {
+            match strips {
+                true => writeln!(s, "{i},{c},{}", self.image_strips[k]),
+                false => writeln!(s, "{i},{c}"),
+            }
+            .ok();
         }
         put("images.csv", s)?;
         let mut s = String::from("image,point,x_px,y_px\n");

@@ -118,6 +118,33 @@ fn sparse_control_adjusts_what_its_observations_determine() {
         ids.len(), r.left_out.len(), dl, r.checks.points.len(), r.checks.rms, r.checks.theoretical_rms
     );
 
+    // As a time-less import gets it (`import micmac --gnss-kind nav`): no latency, one offset
+    // per strip, which takes up the 14 m and the ±45 m along-track shift of the latency.
+    let toml = std::fs::read_to_string(dir.join("project.toml")).unwrap();
+    let strip = toml
+        .replace("drift = \"block\"", "drift = \"strip\"")
+        .replace("latency = \"block\"\n", "");
+    std::fs::write(dir.join("strip.toml"), strip).unwrap();
+    let s = adjust::run(
+        &dir.join("strip.toml"),
+        &dir.join("out3"),
+        &Default::default(),
+    )
+    .unwrap_or_else(|e| panic!("offsets per strip: {e}"));
+    assert!(
+        s.latencies.is_empty() && s.drifts.len() == 10,
+        "{}",
+        s.drifts.len()
+    );
+    assert_eq!(adjusted(&s).len(), ids.len(), "the same images adjust");
+    for a in 0..3 {
+        let ratio = s.checks.rms[a] / s.checks.theoretical_rms[a];
+        assert!(
+            ratio < 1.3,
+            "offsets per strip: check RMS / theoretical, axis {a}: {ratio:.2}"
+        );
+    }
+
     let c = adjust::run(
         &dir.join("project_gcp_only.toml"),
         &dir.join("out2"),
