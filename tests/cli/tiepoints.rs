@@ -118,7 +118,7 @@ fn free_and_tie_started(matched: &Path, gnss_run: &Path) {
         p(&tied.join("out")),
     ]));
     assert!(
-        t.contains("grown to 18 images by resection, placed on 18 GNSS centres"),
+        t.contains("grown to 18 images by resection with local bundle adjustments, placed on 18 GNSS centres"),
         "{t}"
     );
     let centres = |dir: &Path| -> Vec<[f64; 6]> {

@@ -156,14 +156,27 @@ fn solve_leaving_out(
             Err(SolveError::Dependent(k)) => (k, "its observations do not fix its unknowns together with the rest of the block (too few points, in line with the GNSS centre or each other)"),
             r => return Ok(r),
         };
+        let original = match key.0 {
+            k if key.1.starts_with("not determined") => SolveError::Undetermined(k),
+            k => SolveError::Dependent(k),
+        };
         let Built {
             problem,
             point_names,
             left_out,
             ..
         } = built;
-        if !super::leave_out::singular(project, point_names, problem, key.0, key.1, left_out)? {
-            return Ok(Err(SolveError::Dependent(key.0)));
+        let images =
+            |l: &[(String, String)]| l.iter().filter(|x| x.0.starts_with("image ")).count();
+        let before = images(left_out);
+        let done =
+            super::leave_out::singular(project, point_names, problem, key.0, key.1, left_out);
+        // Leaving it out must not take the block apart: when it drags more than a tenth of
+        // the images with it, the block itself is ill-conditioned and the solver's error is
+        // the honest answer.
+        let cascade = images(left_out) - before;
+        if !matches!(done, Ok(true)) || cascade > (project.images.len() / 10).max(3) {
+            return Ok(Err(original));
         }
     }
     Ok(solve_built(project, built, stage, removed))

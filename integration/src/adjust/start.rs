@@ -160,7 +160,8 @@ pub(super) fn orientations(
             for (i, pose) in &seed {
                 start[*i] = Some(*pose);
             }
-            resect_on_ties(p, &ix, rays, &mut start, skip);
+            grow(p, &ix, rays, &mut start, skip, true);
+            super::start_relative::local_bundle(p, rays, &mut start);
             let placed = super::start_relative::placement(p, frame, rays, &start, antenna_of);
             let on = match placed {
                 Some((sim, what)) => {
@@ -170,7 +171,7 @@ pub(super) fn orientations(
                 None => "left in the pair's arbitrary frame".to_string(),
             };
             note = Some(format!(
-                "start orientations from the tie points alone: the relative orientation of images {} and {} ({agree} points agree), grown to {} images by resection, {on}",
+                "start orientations from the tie points alone: the relative orientation of images {} and {} ({agree} points agree), grown to {} images by resection with local bundle adjustments, {on}",
                 p.images[seed[0].0].id,
                 p.images[seed[1].0].id,
                 start.iter().flatten().count()
@@ -300,7 +301,28 @@ fn looking_down(pts: &[Control]) -> impl Fn(&Pose) -> f64 {
 /// Images still without a start (no GNSS, no control): resect them on tie points intersected
 /// from the images that have one, growing the block until no image gains a start.
 fn resect_on_ties(p: &Project, ix: &Index, rays: &Rays, start: &mut [Option<Pose>], skip: &[bool]) {
+    grow(p, ix, rays, start, skip, false);
+}
+
+/// [`resect_on_ties`]; with `bundle` (a block seeded from its ties, in its own frame), a
+/// local bundle adjustment each time the block has grown by a fifth.
+fn grow(
+    p: &Project,
+    ix: &Index,
+    rays: &Rays,
+    start: &mut [Option<Pose>],
+    skip: &[bool],
+    bundle: bool,
+) {
+    let mut adjusted_at = start.iter().flatten().count();
     loop {
+        if bundle {
+            let n = start.iter().flatten().count();
+            if n as f64 >= super::start_relative::BA_GROWTH * adjusted_at as f64 {
+                super::start_relative::local_bundle(p, rays, start);
+                adjusted_at = n;
+            }
+        }
         let known: BTreeMap<&str, Vector3<f64>> = rays
             .iter()
             .filter_map(|(id, ks)| intersect_point(p, ks, |i| start[i].as_ref()).map(|x| (*id, x)))

@@ -2,7 +2,8 @@
 //! (no GNSS with attitude or strip, no compass, fewer than three control points per image):
 //! the relative orientation of the best pair (most shared points, enough parallax; five-point
 //! essential matrix with RANSAC, [`photo::relative`]) seeds the block, `start` grows it by
-//! resection on intersected tie points, and the grown block is placed by a similarity onto
+//! resection on intersected tie points with a local bundle adjustment each time it has grown
+//! by a fifth ([`local_bundle`]), and the grown block is placed by a similarity onto
 //! the control points it intersects or the GNSS centres of its images (a free network stays
 //! in the arbitrary frame of the pair: first camera at the origin, nadir, 100 units above the
 //! median point).
@@ -199,5 +200,75 @@ pub(super) fn place(start: &mut [Option<Pose>], (s, r, t): Similarity) {
     for pose in start.iter_mut().flatten() {
         pose.centre = r * pose.centre * s + t;
         pose.r = r * pose.r;
+    }
+}
+
+/// The block has grown by this factor since its last local bundle adjustment: adjust again.
+pub(super) const BA_GROWTH: f64 = 1.2;
+
+/// A bundle adjustment of the started images and the tie points they intersect, in the
+/// block's own frame (inner constraints over the centres keep it there; cameras as given;
+/// Huber loss against wrong ties), so that the growth resects on refined points and does not
+/// drift. The start values are kept when it fails.
+pub(super) fn local_bundle(p: &Project, rays: &Rays, start: &mut [Option<Pose>]) {
+    use photo::factors::ImagePoint;
+    use photo::lsq::{Group, ImageId, Key, Loss, Noise, Options, PointId, Problem, Value};
+    let mut pr = Problem::new(Options {
+        max_iterations: 100,
+        function_tolerance: 1e-8,
+        ..Options::default()
+    });
+    let (mut ids, mut centres) = (Vec::new(), Vec::new());
+    for (i, s) in start.iter().enumerate() {
+        if let Some(s) = s {
+            if pr
+                .add_block(Key::Pose(ImageId::from(i)), Value::Pose(*s))
+                .is_err()
+            {
+                return;
+            }
+            ids.push(ImageId::from(i));
+            centres.push(s.centre);
+        }
+    }
+    for (k, ks) in rays.values().enumerate() {
+        let Some(x) = intersect_point(p, ks, |i| start[i].as_ref()) else {
+            continue;
+        };
+        let key = Key::Point(PointId::from(k));
+        if pr.add_block(key, Value::point(&x)).is_err() {
+            return;
+        }
+        for &m in ks {
+            let ms = &p.measurements[m];
+            if start[ms.image].is_none() {
+                continue;
+            }
+            let cam = p.cameras[p.images[ms.image].camera].camera;
+            let f = ImagePoint::new(cam, ImageId::from(ms.image), PointId::from(k), ms.xy);
+            if pr
+                .add_factor(f, Noise::isotropic(2, ms.sigma), Loss::Huber(3.0), Group(0))
+                .is_err()
+            {
+                return;
+            }
+        }
+    }
+    let Some(datum) = photo::datum::InnerConstraints::new(&ids, &centres, true) else {
+        return;
+    };
+    if pr
+        .add_factor(datum, Noise::isotropic(7, 1e-6), Loss::Trivial, Group(1))
+        .is_err()
+    {
+        return;
+    }
+    if pr.solve().is_err() {
+        return;
+    }
+    for id in ids {
+        if let Some(Value::Pose(pose)) = pr.value(Key::Pose(id)) {
+            start[id.index()] = Some(*pose);
+        }
     }
 }
