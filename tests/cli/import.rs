@@ -211,6 +211,10 @@ fn colmap_brighton_beach_imports_and_adjusts() {
     assert_eq!(count(&t, "images"), 18);
     assert_eq!(count(&t, "points"), 7751);
     assert_eq!(count(&t, "EXIF GPS positions"), 18);
+    assert!(
+        t.contains("GNSS positions from EXIF GPS: σ 3 m horizontal, 5 m vertical"),
+        "the assumption said: {t}"
+    );
     // 30,702 observations: 155 second observations of a point in one image and 1,188 of the
     // 594 two-image points skipped, 29,359 kept.
     assert_eq!(count(&t, "observations kept"), 29359);

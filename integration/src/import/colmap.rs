@@ -216,6 +216,10 @@ pub fn import(job: &ColmapJob) -> Result<(ProjectOut, Summary), ImportError> {
         }
     }
     sum.read.push(("EXIF GPS positions".into(), gps.len()));
+    sum.notes.push(format!(
+        "GNSS positions from EXIF GPS: σ {} m horizontal, {} m vertical (--gnss-sigma; consumer GPS by default); no drift: the block takes their datum, a bias of their heights included",
+        job.gnss_sigma[0], job.gnss_sigma[1]
+    ));
     let origin = gps.values().next().copied().ok_or_else(|| {
         ferr(
             photos,
