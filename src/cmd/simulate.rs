@@ -23,6 +23,11 @@ use std::path::{Path, PathBuf};
 /// images.csv, project.toml (coupling = "loose": the PPK antenna positions) and
 /// project_tight.toml (coupling = "tight": the double-difference carrier phase itself).
 ///
+/// long-baseline is a 250 km pair of static geodetic receivers (GPS L1/L2, 30 s, 24 h) with
+/// the ionosphere and troposphere differing between the ends beyond the broadcast models and
+/// code biases of two receiver types: OUT/ppk.toml, rover.obs, base.obs, nav.rnx,
+/// truth_trajectory.csv, truth.toml, README.txt.
+///
 /// lowcost is the test bench of low-cost receivers, with exact truth: OUT/walk/ holds a u-blox
 /// M8P-like rover walking a river trail (20 min, 1 Hz, GPS/GLONASS/QZSS L1, under trees half
 /// the time: C/N0 falling, losses of lock, half cycles that clear after some seconds,
@@ -59,8 +64,9 @@ pub struct Args {
     /// Flight scenario file (TOML; keys as in fixtures/scenario_small.toml).
     #[arg(long, value_name = "FILE.toml", conflicts_with = "builtin")]
     scenario: Option<PathBuf>,
-    /// Built-in scenario: demo, block20 or long (flights), or classic-block, close-range,
-    /// block1000, nav-block, sparse-control or textured-block (adjustment projects).
+    /// Built-in scenario: demo, block20, long or hard-sky (flights), lowcost or long-baseline
+    /// (GNSS benches), or classic-block, close-range, block1000, nav-block, sparse-control or
+    /// textured-block (adjustment projects).
     #[arg(long, value_name = "NAME")]
     builtin: Option<String>,
     /// Output folder (created; files of the same names are replaced).
@@ -105,6 +111,21 @@ pub fn run(args: Args) -> Result<()> {
             bail!("--raw does not apply to lowcost: its folders hold the logs low-cost receivers write (u-blox UBX, a UBX + RTCM 3 + NMEA base log)");
         }
         print!("{}", simulate::lowcost::run(&args.out, 47)?);
+        return Ok(());
+    }
+    if args.builtin.as_deref() == Some("long-baseline") {
+        if args.raw.is_some() {
+            bail!("--raw does not apply to long-baseline: its receivers write RINEX");
+        }
+        let r = simulate::longbase::run(&args.out, 49)?;
+        println!(
+            "long-baseline: {:.1} km, rover {} epochs, base {} epochs → {} (ppkat ppk --config {})",
+            r.baseline_km,
+            r.rover.epochs,
+            r.base.epochs,
+            args.out.display(),
+            args.out.join("ppk.toml").display()
+        );
         return Ok(());
     }
     if args.builtin.as_deref() == Some("hard-sky") && args.raw.is_none() {

@@ -426,3 +426,37 @@ fn quiet_ppk_prints_nothing_and_changes_nothing() {
         );
     }
 }
+
+/// `simulate --builtin long-baseline` (issue 49's bench): a 250 km pair over 24 h at 30 s
+/// with its truth, processed by its own `ppk.toml`; the PPK names the baseline it saw and
+/// solves nearly every epoch against the exact rover position.
+#[test]
+fn the_long_baseline_bench_runs_end_to_end() {
+    let dir = tmp("long-baseline");
+    let _ = std::fs::remove_dir_all(&dir);
+    let t = succeeds(&ppkat(&[
+        "simulate",
+        "--builtin",
+        "long-baseline",
+        "-o",
+        p(&dir),
+    ]));
+    assert!(
+        t.contains("long-baseline: 250.") && t.contains("2881 epochs"),
+        "{t}"
+    );
+    for f in [
+        "rover.obs",
+        "base.obs",
+        "nav.rnx",
+        "truth.toml",
+        "truth_trajectory.csv",
+        "README.txt",
+    ] {
+        assert!(dir.join(f).exists(), "{f}");
+    }
+    let t = succeeds(&ppkat(&["ppk", "--config", p(&dir.join("ppk.toml"))]));
+    assert!(t.contains("longest baseline 250."), "{t}");
+    let rows = pos_rows(&dir.join("ppk.pos"));
+    assert!(rows.len() > 2700, "{} epochs solved of 2881", rows.len());
+}

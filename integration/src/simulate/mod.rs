@@ -31,6 +31,7 @@ mod glonass_nav;
 pub mod gnss_obs;
 mod ground_points;
 mod io;
+pub mod longbase;
 pub mod lowcost;
 mod obs_text;
 pub mod rng;

@@ -160,6 +160,8 @@ pub(super) fn drone(dir: &Path, rng: &Rng) -> Result<DroneReport, SimError> {
         span: (start, start + Duration::from_seconds(duration), 0.2),
         bands: 2,
         mask_deg: 10.0,
+        atmosphere: None,
+        code_bias: [0.0; 2],
         profile: drone_profile(),
     };
     let base = LowCost {
@@ -170,6 +172,8 @@ pub(super) fn drone(dir: &Path, rng: &Rng) -> Result<DroneReport, SimError> {
         span: (base_start, base_end, 1.0),
         bands: 2,
         mask_deg: 5.0,
+        atmosphere: None,
+        code_bias: [0.0; 2],
         profile: cors_profile(),
     };
     let (rtext, rstats) = receiver::simulate(&rover, &eph, &klob, &rng.fork(1), &|_| true);

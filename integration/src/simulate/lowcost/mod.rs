@@ -161,7 +161,7 @@ pub fn run(dir: &Path, seed: u64) -> Result<LowCostReport, SimError> {
     })
 }
 
-pub(super) fn gpst(s: &str) -> Result<Epoch, SimError> {
+pub(crate) fn gpst(s: &str) -> Result<Epoch, SimError> {
     Epoch::from_gregorian_str(&format!("{s} GPST")).map_err(|e| SimError::Key {
         key: "start",
         what: e.to_string(),
@@ -169,7 +169,7 @@ pub(super) fn gpst(s: &str) -> Result<Epoch, SimError> {
 }
 
 /// The constellation over `[start, end]` written to `dir/nav.rnx` and read back.
-pub(super) fn constellation(
+pub(crate) fn constellation(
     dir: &Path,
     start: Epoch,
     end: Epoch,
@@ -229,6 +229,8 @@ fn walk(
         span: (start, start + Duration::from_seconds(WALK_S), 1.0),
         bands: 1,
         mask_deg: 5.0,
+        atmosphere: None,
+        code_bias: [0.0; 2],
         profile: walk_rover_profile(half),
     };
     let open_sky = |_t: f64| 0.0;
@@ -240,6 +242,8 @@ fn walk(
         span: (base_start, base_end, 1.0),
         bands: 1,
         mask_deg: 5.0,
+        atmosphere: None,
+        code_bias: [0.0; 2],
         profile: walk_base_profile(half),
     };
     let (rtext, rstats) = receiver::simulate(&rover, &eph, &klob, &rng.fork(1), &|_| true);
@@ -358,7 +362,7 @@ fn gga(t: Epoch, g: &Geodetic) -> Vec<u8> {
 /// The antenna at the true reception time of every epoch of a receiver tagged every `dt`
 /// seconds from `start` for `span` seconds with clock `(offset, drift)`: week, tow, ECEF
 /// position and velocity, zero attitude.
-pub(super) fn truth_csv(
+pub(crate) fn truth_csv(
     start: Epoch,
     span: f64,
     dt: f64,

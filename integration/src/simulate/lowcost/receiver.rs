@@ -76,6 +76,13 @@ pub struct LowCost<'a> {
     pub mask_deg: f64,
     /// How it tracks.
     pub profile: Profile,
+    /// What the atmosphere holds beyond the broadcast models at this antenna, for a
+    /// satellite at (azimuth, elevation) radians at a true time: the L1 ionosphere as a
+    /// factor on Klobuchar's, and an extra slant troposphere (metres). `None`: the models.
+    pub atmosphere: Option<&'a dyn Fn(Epoch, f64, f64) -> (f64, f64)>,
+    /// The receiver's code biases on each band, metres (they differ between receiver types
+    /// and do not cancel between two of them).
+    pub code_bias: [f64; 2],
 }
 
 /// What a receiver's simulation holds, to compare the bench with the real cases.
@@ -259,8 +266,9 @@ impl Run<'_> {
             let half = s.locked && ts < s.half.0;
             let k = f64::from(chan.unwrap_or(0));
             let icb = (k * p.glonass_icb.0, k * p.glonass_icb.1);
-            let trop = troposphere(&g, el);
-            let i1 = klobuchar_gps(self.klob, &g, az, el, tow);
+            let (iono_factor, trop_extra) = rx.atmosphere.map_or((1.0, 0.0), |f| f(t, az, el));
+            let trop = troposphere(&g, el) + trop_extra;
+            let i1 = klobuchar_gps(self.klob, &g, az, el, tow) * iono_factor;
             let base = rho + C * (dtr - dts);
             let range_rate = rate + C * (rx.clock.1 - dts_rate);
             let mut v = [f64::NAN; 8];
@@ -270,7 +278,13 @@ impl Run<'_> {
                 let iono = i1 * (F1 / f).powi(2);
                 let code_mp = s.code_mp[b].step(dt, &mut self.rng) * sc;
                 let phase_mp = (s.phase_mp[b].step(dt, &mut self.rng) * sc).clamp(-0.03, 0.03);
-                v[4 * b] = base + trop + iono + icb.1 + code_mp + p.code.0 * sc * self.rng.normal();
+                v[4 * b] = base
+                    + trop
+                    + iono
+                    + icb.1
+                    + rx.code_bias[b]
+                    + code_mp
+                    + p.code.0 * sc * self.rng.normal();
                 if s.locked {
                     let phase =
                         base + trop - iono + icb.0 + phase_mp + p.phase.0 * sc * self.rng.normal();
