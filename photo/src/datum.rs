@@ -9,7 +9,11 @@
 //! What enters: the pose blocks and their start centres. What leaves: a [`Factor`] whose
 //! residual is the translation, rotation and scale of the centres away from the start.
 
-use crate::lsq::{Factor, ImageId, Key, Params};
+use crate::lsq::{Factor, ImageId, Key, Noise, Params};
+
+/// σ of the inner constraints: they hold to the solver's precision (metres for the shift,
+/// radians and parts for rotation and scale).
+pub const SIGMA: f64 = 1e-6;
 use nalgebra::{DMatrixViewMut, Vector3};
 
 /// Inner constraints over image centres: r = (mean shift, Σ dᵢ × δᵢ / S, Σ dᵢ · δᵢ / S) with
@@ -40,6 +44,13 @@ impl InnerConstraints {
             spread,
             scale,
         })
+    }
+}
+
+impl InnerConstraints {
+    /// The noise model that makes the constraints hold ([`SIGMA`] on every row).
+    pub fn noise(&self) -> Noise {
+        Noise::isotropic(self.dim(), SIGMA)
     }
 }
 
@@ -118,8 +129,8 @@ mod tests {
         ];
         let ids: Vec<ImageId> = (0..3).map(ImageId).collect();
         let f = InnerConstraints::new(&ids, &start, true).unwrap();
-        let eval = |centres: &[Vector3<f64>]| {
-            let vals: Vec<Value> = centres
+        let poses = |centres: &[Vector3<f64>]| -> Vec<Value> {
+            centres
                 .iter()
                 .map(|c| {
                     Value::Pose(Pose {
@@ -127,7 +138,10 @@ mod tests {
                         centre: *c,
                     })
                 })
-                .collect();
+                .collect()
+        };
+        let eval = |centres: &[Vector3<f64>]| {
+            let vals = poses(centres);
             let mut r = vec![0.0; 7];
             assert!(f.evaluate(&Params::in_order(&vals), &mut r, &mut [None, None, None]));
             r
@@ -150,15 +164,7 @@ mod tests {
             "{r:?}"
         );
         // Finite differences of the centre columns of image 1.
-        let vals: Vec<Value> = start
-            .iter()
-            .map(|c| {
-                Value::Pose(Pose {
-                    r: Matrix3::identity(),
-                    centre: *c,
-                })
-            })
-            .collect();
+        let vals = poses(&start);
         let mut jm = nalgebra::DMatrix::zeros(7, 6);
         let mut r0 = vec![0.0; 7];
         {

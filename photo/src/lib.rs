@@ -35,3 +35,4 @@ pub mod lsq;
 pub mod relative;
 pub mod resection;
 pub mod rotation;
+mod sample;

@@ -347,15 +347,7 @@ pub fn relative_orientation(
     let (mut it, mut needed) = (0usize, 500usize);
     while it < needed.min(500) {
         it += 1;
-        let mut idx = [0usize; 5];
-        let mut k = 0;
-        while k < 5 {
-            let c = rng.below(n);
-            if !idx[..k].contains(&c) {
-                idx[k] = c;
-                k += 1;
-            }
-        }
+        let idx: [usize; 5] = crate::sample::distinct(n, |n| rng.below(n));
         let (sa, sb) = (idx.map(|i| a[i]), idx.map(|i| b[i]));
         for e in five_point(&sa, &sb) {
             let inl: Vec<usize> = (0..n)

@@ -47,7 +47,9 @@ pub enum ResectionError {
     NoConvergence,
 }
 
-fn ray(cam: &Camera, xy: &Vector2<f64>) -> Vector3<f64> {
+/// The unit ray of image coordinates `xy` in the camera frame (x right, y up, looking along
+/// −z), distortion left out: the direction start values are computed from.
+pub fn ray(cam: &Camera, xy: &Vector2<f64>) -> Vector3<f64> {
     Vector3::new(xy.x - cam.x0, xy.y - cam.y0, -cam.f).normalize()
 }
 

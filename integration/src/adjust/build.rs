@@ -210,13 +210,10 @@ pub(super) fn free_network(p: &Project, antenna_of: &[Option<usize>]) -> bool {
         && !p.ground.iter().any(|g| g.kind == PointKind::Control)
 }
 
-/// σ of the inner constraints: they hold to the solver's precision.
-const INNER_SIGMA: f64 = 1e-6;
-
 /// The datum of a free network: inner constraints over the centres of the images adjusted
 /// (without the scale row when distances give the scale).
 fn inner_constraints(pr: &mut photo::lsq::Problem, scaled: bool) -> Result<(), AdjustError> {
-    use photo::lsq::{ImageId, Key, Loss, Noise};
+    use photo::lsq::{ImageId, Key, Loss};
     let (ids, centres): (Vec<ImageId>, Vec<Vector3<f64>>) = pr
         .keys()
         .iter()
@@ -229,14 +226,9 @@ fn inner_constraints(pr: &mut photo::lsq::Problem, scaled: bool) -> Result<(), A
     let f = photo::datum::InnerConstraints::new(&ids, &centres, !scaled).ok_or_else(|| {
         err("a free network needs at least two images at different places".into())
     })?;
-    let dim = if scaled { 6 } else { 7 };
-    pr.add_factor(
-        f,
-        Noise::sigmas(&vec![INNER_SIGMA; dim]),
-        Loss::Trivial,
-        super::assemble::GROUP_DATUM,
-    )
-    .map_err(|e| err(e.to_string()))?;
+    let noise = f.noise();
+    pr.add_factor(f, noise, Loss::Trivial, super::assemble::GROUP_DATUM)
+        .map_err(|e| err(e.to_string()))?;
     Ok(())
 }
 

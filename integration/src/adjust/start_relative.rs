@@ -15,9 +15,10 @@ use super::frame::LocalFrame;
 use super::input::ControlAxes;
 use super::project::{PointKind, Project};
 use super::start::{intersect_point, Rays};
-use nalgebra::{Matrix3, Vector2, Vector3};
-use photo::camera::{Camera, Pose};
+use nalgebra::{Matrix3, Vector3};
+use photo::camera::Pose;
 use photo::relative::{relative_orientation, similarity};
+use photo::resection::ray;
 use std::collections::BTreeMap;
 
 /// A similarity: scale, rotation, shift (x ↦ s·R·x + t).
@@ -31,12 +32,6 @@ const MIN_INLIERS: usize = 30;
 const MIN_PARALLAX: f64 = 0.0175;
 /// Median depth of the seed pair's points, in the free network's units.
 const SEED_DEPTH: f64 = 100.0;
-
-/// The unit ray of image coordinates `xy` in the camera frame (distortion left to the
-/// adjustment).
-fn bearing(cam: &Camera, xy: &Vector2<f64>) -> Vector3<f64> {
-    Vector3::new(xy.x - cam.x0, xy.y - cam.y0, -cam.f).normalize()
-}
 
 /// Image pairs by the number of points measured in both (most first; ties by index).
 fn pairs_by_shared(p: &Project, rays: &Rays, skip: &[bool]) -> Vec<((usize, usize), usize)> {
@@ -76,8 +71,8 @@ fn shared_rays(
                 .find(|m| m.image == im)
         };
         if let (Some(mi), Some(mj)) = (find(i), find(j)) {
-            a.push(bearing(cam(i), &mi.xy));
-            b.push(bearing(cam(j), &mj.xy));
+            a.push(ray(cam(i), &mi.xy));
+            b.push(ray(cam(j), &mj.xy));
         }
     }
     (a, b)
@@ -257,8 +252,9 @@ pub(super) fn local_bundle(p: &Project, rays: &Rays, start: &mut [Option<Pose>])
     let Some(datum) = photo::datum::InnerConstraints::new(&ids, &centres, true) else {
         return;
     };
+    let noise = datum.noise();
     if pr
-        .add_factor(datum, Noise::isotropic(7, 1e-6), Loss::Trivial, Group(1))
+        .add_factor(datum, noise, Loss::Trivial, Group(1))
         .is_err()
     {
         return;

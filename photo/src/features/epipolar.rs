@@ -3,6 +3,7 @@
 //! inliers. No camera knowledge is needed, so it also holds where the focal length in the
 //! metadata is wrong; lens distortion is absorbed by the threshold. Deterministic for a seed.
 
+use crate::sample::Rng;
 use nalgebra::{Matrix3, SMatrix, Vector2, Vector3};
 
 /// How RANSAC runs.
@@ -36,22 +37,6 @@ pub struct Verified {
     pub f: Matrix3<f64>,
     /// Indices into the correspondences.
     pub inliers: Vec<usize>,
-}
-
-/// A small deterministic generator (SplitMix64).
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
 }
 
 /// Hartley normalisation: centroid to the origin, mean distance √2.
@@ -168,15 +153,7 @@ pub fn verify(
     let (mut sa, mut sb) = (Vec::with_capacity(8), Vec::with_capacity(8));
     while it < needed.min(opts.max_iterations) {
         it += 1;
-        let mut idx = [0usize; 8];
-        let mut k = 0;
-        while k < 8 {
-            let c = rng.below(n);
-            if !idx[..k].contains(&c) {
-                idx[k] = c;
-                k += 1;
-            }
-        }
+        let idx: [usize; 8] = rng.distinct(n);
         sa.clear();
         sb.clear();
         sa.extend(idx.iter().map(|&i| a[i]));
