@@ -69,7 +69,6 @@ pub fn solve_with_progress(
     if let Some(p) = &progress {
         p.finish();
     }
-    let result = result?;
     built.problem.set_observer(None);
     let name = |e: photo::lsq::SolveError| {
         use photo::lsq::SolveError;
@@ -141,24 +140,21 @@ const MAX_LEFT_OUT_BY_SOLVER: usize = 1000;
 type SolveOutput = (photo::lsq::Summary, Vec<f64>, f64);
 
 /// [`solve_built`], again after leaving out each image or point the solver finds singular
-/// (named in `built.left_out`); a singular block of any other kind is the error. The outer
-/// error is the project's (nothing left to adjust), the inner one the solver's.
+/// (named in `built.left_out`); a singular block of any other kind, or a leave-out that would
+/// take the block apart, is the solver's error.
 fn solve_leaving_out(
     project: &Project,
     built: &mut Built,
     stage: &dyn Fn(&str),
     removed: &mut Vec<(photo::lsq::FactorId, f64)>,
-) -> Result<Result<SolveOutput, photo::lsq::SolveError>, AdjustError> {
-    use photo::lsq::SolveError;
+) -> Result<SolveOutput, photo::lsq::SolveError> {
+    use photo::lsq::{Key, SolveError};
     for _ in 0..MAX_LEFT_OUT_BY_SOLVER {
-        let key = match solve_built(project, built, stage, removed) {
-            Err(SolveError::Undetermined(k)) => (k, "not determined by the observations left to it (after data snooping or other images left out)"),
-            Err(SolveError::Dependent(k)) => (k, "its observations do not fix its unknowns together with the rest of the block (too few points, in line with the GNSS centre or each other)"),
-            r => return Ok(r),
-        };
-        let original = match key.0 {
-            k if key.1.starts_with("not determined") => SolveError::Undetermined(k),
-            k => SolveError::Dependent(k),
+        let result = solve_built(project, built, stage, removed);
+        let (key, why) = match &result {
+            Err(SolveError::Undetermined(k)) => (*k, "not determined by the observations left to it (after data snooping or other images left out)"),
+            Err(SolveError::Dependent(k)) => (*k, "its observations do not fix its unknowns together with the rest of the block (too few points, in line with the GNSS centre or each other)"),
+            _ => return result,
         };
         let Built {
             problem,
@@ -166,20 +162,23 @@ fn solve_leaving_out(
             left_out,
             ..
         } = built;
-        let images =
-            |l: &[(String, String)]| l.iter().filter(|x| x.0.starts_with("image ")).count();
-        let before = images(left_out);
-        let done =
-            super::leave_out::singular(project, point_names, problem, key.0, key.1, left_out);
+        let images_out = |pr: &photo::lsq::Problem| {
+            pr.keys()
+                .iter()
+                .filter(|k| matches!(k, Key::Pose(_)) && pr.is_fixed(**k))
+                .count()
+        };
+        let before = images_out(problem);
+        let done = super::leave_out::singular(project, point_names, problem, key, why, left_out);
         // Leaving it out must not take the block apart: when it drags more than a tenth of
         // the images with it, the block itself is ill-conditioned and the solver's error is
         // the honest answer.
-        let cascade = images(left_out) - before;
+        let cascade = images_out(problem) - before;
         if !matches!(done, Ok(true)) || cascade > (project.images.len() / 10).max(3) {
-            return Ok(Err(original));
+            return result;
         }
     }
-    Ok(solve_built(project, built, stage, removed))
+    solve_built(project, built, stage, removed)
 }
 
 /// Snooping, variance components, snooping again, final solve; what snooping removed is

@@ -181,7 +181,10 @@ pub(super) fn orientations(
     let lost: Vec<LeftOut> = (0..p.images.len())
         .filter(|&i| start[i].is_none() && !skip[i])
         .map(|i| {
-            let n = controls_in(p, &ix, i, |id| ix.control.get(id).map(|_| Vector3::zeros())).len();
+            let n = ix.by_image[i]
+                .iter()
+                .filter(|&&k| ix.control.contains_key(p.measurements[k].point.as_str()))
+                .count();
             let why = if n >= 3 {
                 format!("no start orientation: the resection on its {n} control points failed (points nearly in a line, or on a circle through the image's nadir: the critical configuration); measure a point elsewhere in the image")
             } else {

@@ -115,8 +115,7 @@ pub fn run(dir: &Path, seed: u64) -> Result<LongBaselineReport, SimError> {
     let rng = Rng::new(seed);
     let start = gpst(START)?;
     let end = start + Duration::from_seconds(SPAN_S);
-    let (_, eph) = constellation(dir, start, end, seed, &[Constellation::Gps])?;
-    let nav = gnss::rinex::nav::NavFile::read(&dir.join("nav.rnx"))?;
+    let (nav, eph) = constellation(dir, start, end, seed, &[Constellation::Gps])?;
     let klob = nav.gps_iono.unwrap_or_default();
     let geo = |(lat, lon, h): (f64, f64, f64)| Geodetic::from_degrees(lat, lon, h);
     let (gb, gr) = (geo(BASE), geo(ROVER));
