@@ -26,7 +26,8 @@ use std::path::{Path, PathBuf};
 /// long-baseline is a 250 km pair of static geodetic receivers (GPS L1/L2, 30 s, 24 h) with
 /// the ionosphere and troposphere differing between the ends beyond the broadcast models and
 /// code biases of two receiver types: OUT/ppk.toml, rover.obs, base.obs, nav.rnx,
-/// truth_trajectory.csv, truth.toml, README.txt.
+/// truth_trajectory.csv, truth.toml, README.txt; the same pair observing Galileo E1/E5a
+/// beside GPS in OUT/gps-galileo/.
 ///
 /// lowcost is the test bench of low-cost receivers, with exact truth: OUT/walk/ holds a u-blox
 /// M8P-like rover walking a river trail (20 min, 1 Hz, GPS/GLONASS/QZSS L1, under trees half

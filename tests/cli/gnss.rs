@@ -429,7 +429,10 @@ fn quiet_ppk_prints_nothing_and_changes_nothing() {
 
 /// `simulate --builtin long-baseline` (issue 49's bench): a 250 km pair over 24 h at 30 s
 /// with its truth, processed by its own `ppk.toml`; the PPK names the baseline it saw and
-/// solves nearly every epoch against the exact rover position.
+/// solves nearly every epoch. Against the exact rover position: GPS alone (8 satellites)
+/// fixes 45.5 % of its epochs, the fixed ones within 13.7 cm; with Galileo E1/E5a beside
+/// GPS (15 satellites) 98.6 % are fixed, 3D RMS 3.8 cm over all epochs, the worst fixed
+/// 14.3 cm off (issue 49 asks for 80 % with GPS alone and none beyond 10 cm: not yet).
 #[test]
 fn the_long_baseline_bench_runs_end_to_end() {
     let dir = tmp("long-baseline");
@@ -445,18 +448,72 @@ fn the_long_baseline_bench_runs_end_to_end() {
         t.contains("long-baseline: 250.") && t.contains("2881 epochs"),
         "{t}"
     );
-    for f in [
-        "rover.obs",
-        "base.obs",
-        "nav.rnx",
-        "truth.toml",
-        "truth_trajectory.csv",
-        "README.txt",
-    ] {
-        assert!(dir.join(f).exists(), "{f}");
+    for d in [dir.clone(), dir.join("gps-galileo")] {
+        for f in [
+            "rover.obs",
+            "base.obs",
+            "nav.rnx",
+            "truth.toml",
+            "truth_trajectory.csv",
+            "README.txt",
+        ] {
+            assert!(d.join(f).exists(), "{}", d.join(f).display());
+        }
     }
     let t = succeeds(&ppkat(&["ppk", "--config", p(&dir.join("ppk.toml"))]));
     assert!(t.contains("longest baseline 250."), "{t}");
+    let gps = against_truth(&dir);
+    assert!(gps.solved > 2800, "{gps:?}");
+    assert!(gps.fixed_share > 0.42 && gps.worst_fixed < 0.16, "{gps:?}");
+    let galileo = dir.join("gps-galileo");
+    let t = succeeds(&ppkat(&["ppk", "--config", p(&galileo.join("ppk.toml"))]));
+    assert!(t.contains("longest baseline 250."), "{t}");
+    let both = against_truth(&galileo);
+    assert!(both.solved == 2881, "{both:?}");
+    assert!(
+        both.fixed_share > 0.95 && both.rms_3d < 0.05 && both.worst_fixed < 0.18,
+        "{both:?}"
+    );
+}
+
+/// A long-baseline folder's `ppk.pos` against the rover of its `truth.toml`.
+#[derive(Debug)]
+struct BenchFigures {
+    solved: usize,
+    fixed_share: f64,
+    rms_3d: f64,
+    worst_fixed: f64,
+}
+
+fn against_truth(dir: &Path) -> BenchFigures {
+    let truth = std::fs::read_to_string(dir.join("truth.toml")).unwrap();
+    let rover: Vec<f64> = truth
+        .lines()
+        .find_map(|l| l.strip_prefix("rover = ["))
+        .expect("a rover line")
+        .trim_end_matches(']')
+        .split(',')
+        .map(|v| v.trim().parse().unwrap())
+        .collect();
     let rows = pos_rows(&dir.join("ppk.pos"));
-    assert!(rows.len() > 2700, "{} epochs solved of 2881", rows.len());
+    let (mut fixed, mut sum2, mut worst) = (0, 0.0, 0.0f64);
+    for r in &rows {
+        let f = |k: usize| r[k].parse::<f64>().unwrap();
+        let e = ::gnss::frame::Geodetic::from_degrees(f(2), f(3), f(4))
+            .to_ecef()
+            .0;
+        let d =
+            ((e.x - rover[0]).powi(2) + (e.y - rover[1]).powi(2) + (e.z - rover[2]).powi(2)).sqrt();
+        sum2 += d * d;
+        if r[5] == "1" {
+            fixed += 1;
+            worst = worst.max(d);
+        }
+    }
+    BenchFigures {
+        solved: rows.len(),
+        fixed_share: fixed as f64 / rows.len() as f64,
+        rms_3d: (sum2 / rows.len() as f64).sqrt(),
+        worst_fixed: worst,
+    }
 }

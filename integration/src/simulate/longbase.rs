@@ -4,11 +4,14 @@
 //! follows its daily cycle, and travelling disturbances of a few percent), a wet troposphere
 //! of its own at each station (a random walk about an offset, and north/east gradients), and
 //! receivers of different types whose code biases do not cancel. The truth is exact; the
-//! folder is processed by `ppkat ppk --config ppk.toml` like the other benches.
+//! folder is processed by `ppkat ppk --config ppk.toml` like the other benches. The same
+//! pair with Galileo E1/E5a beside GPS (same atmosphere, same receivers) is written to
+//! `gps-galileo/`.
 //!
-//! Enters: the output folder and a seed. Leaves: `base.obs`, `rover.obs`, `nav.rnx`,
-//! `ppk.toml`, `truth_trajectory.csv` (the static rover at every epoch), `truth.toml` (both
-//! positions, the baseline and the atmosphere simulated) and `README.txt`.
+//! Enters: the output folder and a seed. Leaves, in the folder and in `gps-galileo/`:
+//! `base.obs`, `rover.obs`, `nav.rnx`, `ppk.toml`, `truth_trajectory.csv` (the static rover
+//! at every epoch), `truth.toml` (both positions, the baseline and the atmosphere simulated)
+//! and `README.txt`.
 
 use super::error::SimError;
 use super::io::write;
@@ -110,12 +113,41 @@ fn atmosphere(
     }
 }
 
-/// Simulate the pair into `dir`.
+/// The systems of a variant, their signals and the `systems` of its `ppk.toml`.
+#[derive(Clone, Copy, Debug)]
+struct Variant {
+    systems: &'static [Constellation],
+    signals: &'static str,
+    option: &'static str,
+}
+
+/// GPS L1/L2, the bench's own.
+const GPS: Variant = Variant {
+    systems: &[Constellation::Gps],
+    signals: "GPS L1/L2",
+    option: "G",
+};
+
+/// GPS L1/L2 with Galileo E1/E5a.
+const GPS_GALILEO: Variant = Variant {
+    systems: &[Constellation::Gps, Constellation::Galileo],
+    signals: "GPS L1/L2 and Galileo E1/E5a",
+    option: "G,E",
+};
+
+/// Simulate the pair into `dir` (GPS) and `dir/gps-galileo` (GPS and Galileo); the report is
+/// the GPS one's.
 pub fn run(dir: &Path, seed: u64) -> Result<LongBaselineReport, SimError> {
+    simulate_variant(&dir.join("gps-galileo"), seed, GPS_GALILEO)?;
+    simulate_variant(dir, seed, GPS)
+}
+
+/// Simulate the pair observing the systems of `v` into `dir`.
+fn simulate_variant(dir: &Path, seed: u64, v: Variant) -> Result<LongBaselineReport, SimError> {
     let rng = Rng::new(seed);
     let start = gpst(START)?;
     let end = start + Duration::from_seconds(SPAN_S);
-    let (nav, eph) = constellation(dir, start, end, seed, &[Constellation::Gps])?;
+    let (nav, eph) = constellation(dir, start, end, seed, v.systems)?;
     let klob = nav.gps_iono.unwrap_or_default();
     let geo = |(lat, lon, h): (f64, f64, f64)| Geodetic::from_degrees(lat, lon, h);
     let (gb, gr) = (geo(BASE), geo(ROVER));
@@ -166,7 +198,7 @@ pub fn run(dir: &Path, seed: u64) -> Result<LongBaselineReport, SimError> {
         &truth_csv(start, SPAN_S, INTERVAL_S, rover.clock, &rover_at),
     )?;
     let baseline_km = (pr.0 - pb.0).norm() / 1000.0;
-    write(dir, "ppk.toml", &ppk_toml(pb))?;
+    write(dir, "ppk.toml", &ppk_toml(pb, v))?;
     write(dir, "truth.toml", &truth_toml(pb, pr, baseline_km))?;
     let report = LongBaselineReport {
         rover: rstats,
@@ -174,14 +206,14 @@ pub fn run(dir: &Path, seed: u64) -> Result<LongBaselineReport, SimError> {
         positions: [pb, pr],
         baseline_km,
     };
-    write(dir, "README.txt", &readme(&report))?;
+    write(dir, "README.txt", &readme(&report, v))?;
     Ok(report)
 }
 
-fn ppk_toml(base: Ecef) -> String {
+fn ppk_toml(base: Ecef, v: Variant) -> String {
     format!(
-        "# ppkat ppk --config ppk.toml: the 250 km pair, GPS L1/L2, 24 h at 30 s\nrover = \"rover.obs\"\nbase = \"base.obs\"\nnav = [\"nav.rnx\"]\nbase-pos = \"{:.4},{:.4},{:.4}\"\nsystems = \"G\"\nout = \"ppk.pos\"\n",
-        base.0.x, base.0.y, base.0.z
+        "# ppkat ppk --config ppk.toml: the 250 km pair, {}, 24 h at 30 s\nrover = \"rover.obs\"\nbase = \"base.obs\"\nnav = [\"nav.rnx\"]\nbase-pos = \"{:.4},{:.4},{:.4}\"\nsystems = \"{}\"\nout = \"ppk.pos\"\n",
+        v.signals, base.0.x, base.0.y, base.0.z, v.option
     )
 }
 
@@ -196,10 +228,15 @@ fn truth_toml(base: Ecef, rover: Ecef, km: f64) -> String {
     )
 }
 
-fn readme(r: &LongBaselineReport) -> String {
+fn readme(r: &LongBaselineReport, v: Variant) -> String {
+    let other = match v.option {
+        "G" => "The same pair with Galileo E1/E5a beside GPS: gps-galileo/.",
+        _ => "The same pair with GPS alone: the folder above.",
+    };
     format!(
-        "long-baseline: two static geodetic receivers {:.1} km apart, GPS L1/L2 every {INTERVAL_S} s for 24 h from {START} GPST.\nWhat the broadcast models leave out: an ionosphere factor growing {IONO_GRADIENT_PER_DEG} per degree of pierce-point latitude north of the base, with travelling disturbances of {} % ({} s, {} km); a zenith wet delay at each station (offsets {} m and {} m, random walks {} and {} m/√h) with north/east gradients; code biases L1/L2 of {:?} m (base) and {:?} m (rover).\nEpochs: rover {}, base {}; satellites per epoch (median) {}.\nProcess: ppkat ppk --config ppk.toml; compare: posstat.py ppk.pos --truth-sim truth_trajectory.csv\n",
+        "long-baseline: two static geodetic receivers {:.1} km apart, {} every {INTERVAL_S} s for 24 h from {START} GPST. {other}\nWhat the broadcast models leave out: an ionosphere factor growing {IONO_GRADIENT_PER_DEG} per degree of pierce-point latitude north of the base, with travelling disturbances of {} % ({} s, {} km); a zenith wet delay at each station (offsets {} m and {} m, random walks {} and {} m/√h) with north/east gradients; code biases on the first/second signal of {:?} m (base) and {:?} m (rover).\nEpochs: rover {}, base {}; satellites per epoch (median) {}.\nProcess: ppkat ppk --config ppk.toml; compare: posstat.py ppk.pos --truth-sim truth_trajectory.csv\n",
         r.baseline_km,
+        v.signals,
         TID.0 * 100.0,
         TID.1,
         TID.2,
