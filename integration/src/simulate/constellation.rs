@@ -73,34 +73,51 @@ fn d19(v: f64) -> String {
     format!("{:>19}", format!("{v:.12E}"))
 }
 
-fn sats(rng: &mut Rng) -> Vec<Sat> {
+/// How many GPS satellites fly, plane by plane.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GpsLayout {
+    /// The 24-slot baseline constellation, four per plane (the flight benches' own).
+    Baseline24,
+    /// 31 satellites as in 2024 (six in the first plane, five in the others): what a
+    /// static receiver at mid-latitudes sees over a day, 8 to 12 above 10°.
+    Operational31,
+}
+
+impl GpsLayout {
+    fn per_plane(self) -> [usize; 6] {
+        match self {
+            GpsLayout::Baseline24 => [4; 6],
+            GpsLayout::Operational31 => [6, 5, 5, 5, 5, 5],
+        }
+    }
+}
+
+fn sats(rng: &mut Rng, gps: GpsLayout) -> Vec<Sat> {
     let mut out = Vec::new();
-    let mut add =
-        |sys: char, planes: usize, per: usize, a: f64, inc: f64, mu: f64, rng: &mut Rng| {
-            let mut prn = 1u8;
-            for p in 0..planes {
-                for k in 0..per {
-                    out.push(Sat {
-                        sys,
-                        prn,
-                        sqrt_a: grid(a.sqrt(), -19),
-                        e: grid(rng.range(0.001, 0.01), -33),
-                        i0: grid_angle(inc.to_radians() + rng.range(-0.01, 0.01), -31),
-                        raan: 2.0 * PI * p as f64 / planes as f64,
-                        omega: grid_angle(wrap(rng.range(0.0, 2.0 * PI)), -31),
-                        m_ref: 2.0
-                            * PI
-                            * (k as f64 / per as f64 + p as f64 / (planes * per) as f64),
-                        mu,
-                        af0: rng.range(-2e-4, 2e-4),
-                        af1: grid(rng.range(-5e-12, 5e-12), clock_exp(sys).1),
-                    });
-                    prn += 1;
-                }
+    let mut add = |sys: char, per_plane: &[usize], a: f64, inc: f64, mu: f64, rng: &mut Rng| {
+        let mut prn = 1u8;
+        let planes = per_plane.len();
+        for (p, &per) in per_plane.iter().enumerate() {
+            for k in 0..per {
+                out.push(Sat {
+                    sys,
+                    prn,
+                    sqrt_a: grid(a.sqrt(), -19),
+                    e: grid(rng.range(0.001, 0.01), -33),
+                    i0: grid_angle(inc.to_radians() + rng.range(-0.01, 0.01), -31),
+                    raan: 2.0 * PI * p as f64 / planes as f64,
+                    omega: grid_angle(wrap(rng.range(0.0, 2.0 * PI)), -31),
+                    m_ref: 2.0 * PI * (k as f64 / per as f64 + p as f64 / (planes * per) as f64),
+                    mu,
+                    af0: rng.range(-2e-4, 2e-4),
+                    af1: grid(rng.range(-5e-12, 5e-12), clock_exp(sys).1),
+                });
+                prn += 1;
             }
-        };
-    add('G', 6, 4, 26_559_700.0, 55.0, 3.986_005e14, rng);
-    add('E', 3, 8, 29_599_800.0, 56.0, 3.986_004_418e14, rng);
+        }
+    };
+    add('G', &gps.per_plane(), 26_559_700.0, 55.0, 3.986_005e14, rng);
+    add('E', &[8; 3], 29_599_800.0, 56.0, 3.986_004_418e14, rng);
     out
 }
 
@@ -168,8 +185,19 @@ pub fn navigation_text_of(
     seed: u64,
     systems: &[Constellation],
 ) -> String {
+    navigation_text_with(start, end, seed, systems, GpsLayout::Baseline24)
+}
+
+/// [`navigation_text_of`] with the GPS satellites of `gps`.
+pub fn navigation_text_with(
+    start: Epoch,
+    end: Epoch,
+    seed: u64,
+    systems: &[Constellation],
+    gps: GpsLayout,
+) -> String {
     let mut rng = Rng::new(seed).fork(0x6e6176);
-    let sats: Vec<Sat> = sats(&mut rng)
+    let sats: Vec<Sat> = sats(&mut rng, gps)
         .into_iter()
         .filter(|s| letter_in(systems, s.sys))
         .collect();

@@ -1,5 +1,5 @@
 //! `long-baseline`: two static geodetic receivers 250 km apart observing GPS L1/L2 every 30 s
-//! for 24 h, with what the broadcast models leave out at that distance: an ionosphere that
+//! for 24 h (31 GPS satellites, as flew in 2024: [`GpsLayout::Operational31`]), with what the broadcast models leave out at that distance: an ionosphere that
 //! differs between the two ends (a north–south gradient on top of Klobuchar's own, which
 //! follows its daily cycle, and travelling disturbances of a few percent), a wet troposphere
 //! of its own at each station (a random walk about an offset, and north/east gradients), and
@@ -13,10 +13,11 @@
 //! at every epoch), `truth.toml` (both positions, the baseline and the atmosphere simulated)
 //! and `README.txt`.
 
+use super::constellation::GpsLayout;
 use super::error::SimError;
 use super::io::write;
 use super::lowcost::receiver::{self, LowCost, Profile, TrackStats};
-use super::lowcost::{constellation, gpst, truth_csv};
+use super::lowcost::{constellation_with, gpst, truth_csv};
 use super::rng::Rng;
 use gnss::frame::{Ecef, Geodetic};
 use gnss::sv::Constellation;
@@ -147,7 +148,8 @@ fn simulate_variant(dir: &Path, seed: u64, v: Variant) -> Result<LongBaselineRep
     let rng = Rng::new(seed);
     let start = gpst(START)?;
     let end = start + Duration::from_seconds(SPAN_S);
-    let (nav, eph) = constellation(dir, start, end, seed, v.systems)?;
+    let (nav, eph) =
+        constellation_with(dir, (start, end), seed, v.systems, GpsLayout::Operational31)?;
     let klob = nav.gps_iono.unwrap_or_default();
     let geo = |(lat, lon, h): (f64, f64, f64)| Geodetic::from_degrees(lat, lon, h);
     let (gb, gr) = (geo(BASE), geo(ROVER));

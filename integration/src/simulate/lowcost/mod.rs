@@ -22,7 +22,7 @@ pub mod drone;
 pub mod receiver;
 pub mod walk;
 
-use super::constellation::navigation_text_of;
+use super::constellation::{navigation_text_with, GpsLayout};
 use super::error::SimError;
 use super::io::{write, write_bytes};
 use super::rng::Rng;
@@ -176,10 +176,21 @@ pub(crate) fn constellation(
     seed: u64,
     systems: &[Constellation],
 ) -> Result<(NavFile, Ephemerides), SimError> {
+    constellation_with(dir, (start, end), seed, systems, GpsLayout::Baseline24)
+}
+
+/// [`constellation`] with the GPS satellites of `gps`.
+pub(crate) fn constellation_with(
+    dir: &Path,
+    (start, end): (Epoch, Epoch),
+    seed: u64,
+    systems: &[Constellation],
+    gps: GpsLayout,
+) -> Result<(NavFile, Ephemerides), SimError> {
     let path = write(
         dir,
         "nav.rnx",
-        &navigation_text_of(start, end, seed, systems),
+        &navigation_text_with(start, end, seed, systems, gps),
     )?;
     let nav = NavFile::read(&path)?;
     let eph = Ephemerides::from_nav(std::slice::from_ref(&nav));
