@@ -204,6 +204,46 @@ pub(super) fn misaligned_slots(
     out
 }
 
+/// The frequency slots whose codes rover and base take from different signals of a band
+/// (C1W against C1C, C2X against C2W): each satellite's code differs between them by the
+/// satellite's own bias (P1−C1: up to a metre), which no double difference removes. With a
+/// warning for each; the filter estimates those biases per satellite.
+pub(super) fn mismatched_codes(
+    rover: &crate::rinex::ObsHeader,
+    base: &crate::rinex::ObsHeader,
+    systems: &[crate::sv::Constellation],
+    nf: usize,
+    warnings: &mut Vec<String>,
+) -> Vec<(crate::sv::Constellation, usize)> {
+    use super::obs::SignalPlan;
+    let (r, b) = (SignalPlan::new(rover), SignalPlan::new(base));
+    let code = |h: &crate::rinex::ObsHeader, sys, col: Option<usize>| {
+        h.obs_types.get(sys).and_then(|t| t.get(col?)).copied()
+    };
+    let mut out = Vec::new();
+    for (sys, rc) in &r.cols {
+        let Some(bc) = b.cols.get(sys) else { continue };
+        if !systems.contains(sys) || *sys == crate::sv::Constellation::Glonass {
+            continue;
+        }
+        for slot in 0..nf.min(rc.len()) {
+            let (Some(x), Some(y)) = (rc[slot], bc[slot]) else {
+                continue;
+            };
+            let (Some(cx), Some(cy)) = (code(rover, sys, x.code), code(base, sys, y.code)) else {
+                continue;
+            };
+            if cx != cy {
+                out.push((*sys, slot));
+                warnings.push(format!(
+                    "{sys:?} codes: the rover's {cx} and the base's {cy} differ by each satellite's own bias (P1−C1 or the like), which double differences keep: estimated per satellite"
+                ));
+            }
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -233,6 +273,30 @@ mod tests {
         b.phase_aligned.insert(Gps);
         assert!(misaligned_slots(&r, &b, &[Gps], 2, &mut w).is_empty());
         assert!(misaligned_slots(&rover, &rover, &[Gps], 2, &mut w).is_empty());
+        assert_eq!(w.len(), 1);
+    }
+
+    /// A P1 rover against a C1 base: GPS slot 0 gets per-satellite code biases, with a
+    /// warning naming both codes; L2 (P2 at both ends) and a file against itself do not.
+    #[test]
+    fn different_codes_of_a_band_are_named() {
+        use crate::rinex::{ObsCode, ObsHeader};
+        use crate::sv::Constellation::Gps;
+        let header = |c1: &[u8; 3]| {
+            let mut h = ObsHeader::new(3.04);
+            let types = [c1, b"L1C", b"C2W", b"L2W"].map(|c| ObsCode(*c));
+            h.obs_types.insert(Gps, types.to_vec());
+            h
+        };
+        let (rover, base) = (header(b"C1W"), header(b"C1C"));
+        let mut w = Vec::new();
+        assert_eq!(
+            mismatched_codes(&rover, &base, &[Gps], 2, &mut w),
+            vec![(Gps, 0)]
+        );
+        assert!(w[0].contains("C1W") && w[0].contains("C1C"), "{w:?}");
+        assert!(mismatched_codes(&rover, &rover, &[Gps], 2, &mut w).is_empty());
+        assert!(mismatched_codes(&rover, &base, &[], 2, &mut w).is_empty());
         assert_eq!(w.len(), 1);
     }
 

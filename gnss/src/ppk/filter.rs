@@ -332,9 +332,19 @@ impl<'a> Filter<'a> {
                 noise.push((s.key, 1e-8 * dt));
                 continue;
             }
+            let gap = (t - s.track.last).to_seconds().abs() > o.max_gap;
+            if let StateKey::CodeBias(_) = s.key {
+                // a satellite's bias between two codes: slips do not touch it; a satellite
+                // gone for longer than a gap starts again from the prior
+                if gap {
+                    reset.push(s.key);
+                } else {
+                    noise.push((s.key, 1e-8 * dt));
+                }
+                continue;
+            }
             let rs = slip_of(&slips.rover, s.key);
             let bs = slip_of(&slips.base, s.key);
-            let gap = (t - s.track.last).to_seconds().abs() > o.max_gap;
             let pending =
                 matches!(s.key, StateKey::Ambiguity(a) if self.pending_reset.contains(&a));
             if o.ar == ArMode::Instantaneous || rs.is_some() || bs.is_some() || gap || pending {
@@ -370,7 +380,7 @@ impl<'a> Filter<'a> {
 
     /// New SD ambiguity states from phase minus code for every slot observed on both
     /// receivers without a state; new SD ionosphere states (zero) in the ionosphere-weighted
-    /// model.
+    /// model; new SD code-bias states (zero) on the slots whose codes differ.
     fn add_new_states(&mut self, t: Epoch, pairs: &[Pair], iono_sigma0: f64) {
         let o = self.opts;
         for pr in pairs {
@@ -400,6 +410,14 @@ impl<'a> Filter<'a> {
             let sigma = o.glonass_code_bias_sigma;
             self.state
                 .add(StateKey::GlonassCodeBias, t, 0.0, sigma * sigma);
+        }
+        for pr in pairs {
+            for &(sys, slot) in &o.code_bias_slots {
+                let key = StateKey::CodeBias(AmbKey { sv: pr.r.sv, slot });
+                if pr.r.sv.sys == sys && observes(pr, key) && !self.state.has(key) {
+                    self.state.add(key, t, 0.0, o.code_bias_sigma.powi(2));
+                }
+            }
         }
         if o.tropo == Estimate::On && !self.state.has(StateKey::Tropo) {
             self.state

@@ -18,7 +18,8 @@
 //!   by its correlation over the rover interval (`code_correlation_s`), plus the base age's
 //!   (see `PpkOptions::age_error_rate`); DDs of one group share their pivot's SD variance.
 //! - GLONASS code rows carry the inter-channel code bias state times the channel number
-//!   difference of the two satellites.
+//!   difference of the two satellites; code rows of a slot whose two receivers track
+//!   different codes carry ±1 on the two satellites' SD code-bias states.
 //! - Row order: system (`Constellation::ALL`), slot, phase before code, then the pairs' order.
 
 use super::dd::DdGroup;
@@ -218,6 +219,8 @@ struct StateOffsets {
     ambiguity: Vec<[Option<usize>; NF]>,
     /// SD ionosphere state per pair.
     iono: Vec<Option<usize>>,
+    /// SD code-bias state per pair and slot.
+    code_bias: Vec<[Option<usize>; NF]>,
 }
 
 impl StateOffsets {
@@ -236,7 +239,19 @@ impl StateOffsets {
             .iter()
             .map(|p| state.offset(StateKey::Iono(p.r.sv)))
             .collect();
-        StateOffsets { ambiguity, iono }
+        let code_bias = pairs
+            .iter()
+            .map(|p| {
+                std::array::from_fn(|slot| {
+                    state.offset(StateKey::CodeBias(AmbKey { sv: p.r.sv, slot }))
+                })
+            })
+            .collect();
+        StateOffsets {
+            ambiguity,
+            iono,
+            code_bias,
+        }
     }
 }
 
@@ -265,6 +280,8 @@ pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residu
             for kind in [ObsKind::Phase, ObsKind::Code] {
                 let amb = |i: usize| offsets.ambiguity[i][f];
                 let iono = |i: usize| offsets.iono[i];
+                let code_bias =
+                    |i: usize| offsets.code_bias[i][f].filter(|_| kind == ObsKind::Code);
                 // Members with the needed data (and an ambiguity state for phase).
                 let members: Vec<usize> = (0..pairs.len())
                     .filter(|&i| {
@@ -315,6 +332,9 @@ pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residu
                     if let Some((k, ch)) = chan(i) {
                         m += ch * x[k];
                     }
+                    if let Some(k) = code_bias(i) {
+                        m += x[k];
+                    }
                     m
                 };
                 let refi = group.pivot;
@@ -336,6 +356,12 @@ pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residu
                     }
                     if let (Some((k, a)), Some((_, b))) = (chan(i), chan(refi)) {
                         hr.set(k, a - b);
+                    }
+                    if let Some(k) = code_bias(i) {
+                        hr.set(k, 1.0);
+                    }
+                    if let Some(k) = code_bias(refi) {
+                        hr.set(k, -1.0);
                     }
                     if phase {
                         if let (Some(ki), Some(kr)) = (amb(i), amb(refi)) {

@@ -187,6 +187,7 @@ fn choose_models(opts: &mut PpkOptions, longest: f64) -> Models {
         iono,
         tropo,
         glonass_float: false,
+        code_biases: opts.code_bias_slots.clone(),
     }
 }
 
@@ -501,6 +502,14 @@ fn prepare_run(
         &mut warnings,
     );
     opts.float_slots.extend(misaligned);
+    let mismatched = checks::mismatched_codes(
+        &rover.header,
+        &base.header,
+        &opts.systems,
+        opts.nf,
+        &mut warnings,
+    );
+    opts.code_bias_slots.extend(mismatched);
     let inputs = inputs::prepare(
         (rover, records.0),
         (base, records.1),

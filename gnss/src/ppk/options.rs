@@ -130,6 +130,13 @@ pub struct PpkOptions {
     /// per frequency channel number (estimated, one state, when GLONASS is processed: code
     /// biases of different receivers differ by up to metres across the channels).
     pub glonass_code_bias_sigma: f64,
+    /// Slots whose code rover and base take from different signals (C1W against C1C): each
+    /// satellite's code carries its own bias between the two (P1−C1), estimated per
+    /// satellite. Filled by the run from the headers.
+    pub code_bias_slots: Vec<(Constellation, usize)>,
+    /// Prior sigma of such a satellite's bias, metres (the published P1−C1 biases of GPS
+    /// satellites spread by about 1 ns, 0.3 m).
+    pub code_bias_sigma: f64,
     /// Growth of the single-difference sigma with the age of the base epoch, m/s per
     /// (1 + baseline/10 km): a rover epoch matched to a base epoch 30 s away on a 115 km
     /// baseline weighs as if its sigma were 0.37 m (the base's atmosphere of another moment);
@@ -224,6 +231,8 @@ impl Default for PpkOptions {
             code_correlation_s: 10.0,
             interval_s: 0.0,
             glonass_code_bias_sigma: 0.3,
+            code_bias_slots: Vec::new(),
+            code_bias_sigma: 0.5,
             float_slots: Vec::new(),
             age_error_rate: 0.001,
             amb_process_noise: 1e-4,

@@ -142,7 +142,7 @@ impl PassStats {
 
 /// The atmospheric delays a run estimated (beyond the a-priori models), settled from the
 /// options and the longest baseline.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Models {
     /// Longest distance of a rover start position (single-point) from the base, metres.
     pub longest_baseline: f64,
@@ -154,6 +154,9 @@ pub struct Models {
     /// two receivers differ unless they are identical; they are not calibrated) and its
     /// inter-channel code bias was estimated.
     pub glonass_float: bool,
+    /// Per-satellite code biases were estimated on these slots (system, slot): rover and
+    /// base track different codes there (P1 against C1).
+    pub code_biases: Vec<(crate::sv::Constellation, usize)>,
 }
 
 /// Output of a carrier-phase run.

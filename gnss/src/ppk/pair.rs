@@ -41,13 +41,19 @@ pub(super) fn has_phase(p: &Pair, slot: usize) -> bool {
     p.r.l[slot].is_finite() && p.b.l[slot].is_finite()
 }
 
+/// Whether a pair observes the code of slot `slot` on both receivers.
+pub(super) fn has_code(p: &Pair, slot: usize) -> bool {
+    p.r.p[slot].is_finite() && p.b.p[slot].is_finite()
+}
+
 /// Whether a pair observes what a per-satellite state describes: the phase of its slot for an
-/// ambiguity, any phase for the ionosphere.
+/// ambiguity, any phase for the ionosphere, the code of its slot for a code bias.
 pub(super) fn observes(p: &Pair, key: StateKey) -> bool {
     match key {
         StateKey::Position | StateKey::Tropo => true,
         StateKey::GlonassCodeBias => p.r.sv.sys == crate::sv::Constellation::Glonass,
         StateKey::Ambiguity(a) => p.r.sv == a.sv && has_phase(p, a.slot),
         StateKey::Iono(sv) => p.r.sv == sv && (0..NF).any(|k| has_phase(p, k)),
+        StateKey::CodeBias(a) => p.r.sv == a.sv && has_code(p, a.slot),
     }
 }

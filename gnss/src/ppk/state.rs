@@ -13,7 +13,11 @@
 //!                                                   (optional model; one state, never reset)
 //!         StateKey::GlonassCodeBias                 GLONASS inter-channel code bias, rover
 //!                                                   − base, metres per channel number
-//!                                                   (with GLONASS; one state, never reset) ]
+//!                                                   (with GLONASS; one state, never reset)
+//!         StateKey::CodeBias(AmbKey { sv, slot })   single-difference code bias of a slot
+//!                                                   whose two receivers track different
+//!                                                   codes (C1W against C1C), metres;
+//!                                                   kept through slips ]
 //! ```
 //! The satellite part is built from the satellites in view: a state is added when its
 //! satellite is first seen (or seen again after a reset) and removed when it is reset, and the
@@ -55,6 +59,10 @@ pub(super) enum StateKey {
     /// GLONASS inter-channel code bias, rover minus base, metres per frequency channel
     /// number (one state, never reset).
     GlonassCodeBias,
+    /// Single-difference code bias of one satellite on one slot, metres: the two receivers
+    /// track different codes of the band (P1 against C1), which differ by the satellite's
+    /// own bias. A property of the satellite, not of the arc: slips do not reset it.
+    CodeBias(AmbKey),
 }
 
 /// Bookkeeping of a per-satellite state.

@@ -517,14 +517,25 @@ impl fmt::Display for PpkReport {
             self.out.display()
         )?;
         let m = &r.models;
-        let estimated: Vec<&str> = [
+        let mut estimated: Vec<String> = [
             (m.iono, "slant ionosphere per satellite"),
             (m.tropo, "rover zenith wet delay"),
         ]
         .iter()
         .filter(|(on, _)| *on)
-        .map(|(_, what)| *what)
+        .map(|(_, what)| what.to_string())
         .collect();
+        if !m.code_biases.is_empty() {
+            let slots: Vec<String> = m
+                .code_biases
+                .iter()
+                .map(|(sys, slot)| format!("{sys:?} signal {}", slot + 1))
+                .collect();
+            estimated.push(format!(
+                "code biases per satellite ({}: rover and base track different codes)",
+                slots.join(", ")
+            ));
+        }
         writeln!(
             f,
             "  longest baseline {:.1} km; estimated: {}{}",

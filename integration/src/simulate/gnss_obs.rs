@@ -283,6 +283,7 @@ pub fn simulate(
         systems: &systems,
         glonass: &glonass,
         bands: 2,
+        gps_l1: b'C',
     });
     let text = header + &body;
     let mut stats = sim.stats;

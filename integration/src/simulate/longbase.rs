@@ -3,7 +3,9 @@
 //! differs between the two ends (a north–south gradient on top of Klobuchar's own, which
 //! follows its daily cycle, and travelling disturbances of a few percent), a wet troposphere
 //! of its own at each station (a random walk about an offset, and north/east gradients), and
-//! receivers of different types whose code biases do not cancel. The truth is exact; the
+//! receivers of different types whose code biases do not cancel (the base tracks GPS C/A,
+//! the rover P(Y): each satellite's C1 − P1 bias stays in the double differences, as when a
+//! C1 file meets a P1 file). The truth is exact; the
 //! folder is processed by `ppkat ppk --config ppk.toml` like the other benches. The same
 //! pair with Galileo E1/E5a beside GPS (same atmosphere, same receivers) is written to
 //! `gps-galileo/`.
@@ -16,11 +18,11 @@
 use super::constellation::GpsLayout;
 use super::error::SimError;
 use super::io::write;
-use super::lowcost::receiver::{self, LowCost, Profile, TrackStats};
+use super::lowcost::receiver::{self, GpsL1, LowCost, Profile, TrackStats};
 use super::lowcost::{constellation_with, gpst, truth_csv};
 use super::rng::Rng;
 use gnss::frame::{Ecef, Geodetic};
-use gnss::sv::Constellation;
+use gnss::sv::{Constellation, Sv};
 use hifitime::{Duration, Epoch};
 use nalgebra::Vector3;
 use std::path::Path;
@@ -181,6 +183,7 @@ fn simulate_variant(dir: &Path, seed: u64, v: Variant) -> Result<LongBaselineRep
         profile: geodetic(),
         atmosphere: Some(&base_atm),
         code_bias: BIAS_BASE,
+        gps_l1: GpsL1::Ca,
     };
     let rover = LowCost {
         name: "ROVR",
@@ -188,6 +191,7 @@ fn simulate_variant(dir: &Path, seed: u64, v: Variant) -> Result<LongBaselineRep
         clock: (2.0e-4, 1.0e-9),
         atmosphere: Some(&rover_atm),
         code_bias: BIAS_ROVER,
+        gps_l1: GpsL1::P,
         ..base
     };
     let (btext, bstats) = receiver::simulate(&base, &eph, &klob, &rng.fork(1), &|_| true);
@@ -220,6 +224,20 @@ fn ppk_toml(base: Ecef, v: Variant) -> String {
 }
 
 fn truth_toml(base: Ecef, rover: Ecef, km: f64) -> String {
+    let c1_p1: Vec<String> = (1..=32u8)
+        .map(|prn| {
+            let sv = Sv::new(Constellation::Gps, prn);
+            format!("G{prn:02} = {:.4}", receiver::c1_p1_bias(sv))
+        })
+        .collect();
+    format!(
+        "{}[c1_minus_p1]\n# each GPS satellite's C/A code minus its P(Y) code, metres: the base tracks C/A (C1C), the rover P(Y) (C1W)\n{}\n",
+        truth_head(base, rover, km),
+        c1_p1.join("\n")
+    )
+}
+
+fn truth_head(base: Ecef, rover: Ecef, km: f64) -> String {
     format!(
         "# long-baseline truth: antenna reference points, ECEF metres\nbase = [{:.4}, {:.4}, {:.4}]\nrover = [{:.4}, {:.4}, {:.4}]\nbaseline_km = {km:.3}\niono_gradient_per_deg = {IONO_GRADIENT_PER_DEG}\ntid = [{}, {}, {}]\ntropo_base = [{}, {}, {}, {}]\ntropo_rover = [{}, {}, {}, {}]\ncode_bias_base = [{}, {}]\ncode_bias_rover = [{}, {}]\n",
         base.0.x, base.0.y, base.0.z, rover.0.x, rover.0.y, rover.0.z,
@@ -236,7 +254,7 @@ fn readme(r: &LongBaselineReport, v: Variant) -> String {
         _ => "The same pair with GPS alone: the folder above.",
     };
     format!(
-        "long-baseline: two static geodetic receivers {:.1} km apart, {} every {INTERVAL_S} s for 24 h from {START} GPST. {other}\nWhat the broadcast models leave out: an ionosphere factor growing {IONO_GRADIENT_PER_DEG} per degree of pierce-point latitude north of the base, with travelling disturbances of {} % ({} s, {} km); a zenith wet delay at each station (offsets {} m and {} m, random walks {} and {} m/√h) with north/east gradients; code biases on the first/second signal of {:?} m (base) and {:?} m (rover).\nEpochs: rover {}, base {}; satellites per epoch (median) {}.\nProcess: ppkat ppk --config ppk.toml; compare: posstat.py ppk.pos --truth-sim truth_trajectory.csv\n",
+        "long-baseline: two static geodetic receivers {:.1} km apart, {} every {INTERVAL_S} s for 24 h from {START} GPST. {other}\nWhat the broadcast models leave out: an ionosphere factor growing {IONO_GRADIENT_PER_DEG} per degree of pierce-point latitude north of the base, with travelling disturbances of {} % ({} s, {} km); a zenith wet delay at each station (offsets {} m and {} m, random walks {} and {} m/√h) with north/east gradients; code biases on the first/second signal of {:?} m (base) and {:?} m (rover); the base tracks GPS C/A (C1C), the rover P(Y) (C1W), so each GPS satellite's C1 − P1 bias (σ 0.3 m, listed in truth.toml) stays in the double differences.\nEpochs: rover {}, base {}; satellites per epoch (median) {}.\nProcess: ppkat ppk --config ppk.toml; compare: posstat.py ppk.pos --truth-sim truth_trajectory.csv\n",
         r.baseline_km,
         v.signals,
         TID.0 * 100.0,

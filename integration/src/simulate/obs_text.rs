@@ -76,6 +76,9 @@ pub(super) struct HeaderInfo<'a> {
     pub glonass: &'a [(u8, i8)],
     /// Bands observed: 1 (the first signal's four types) or 2.
     pub bands: usize,
+    /// The RINEX attribute of the GPS L1 code (`C`: C/A, `W`: P(Y)); the phase is `L1C`
+    /// either way, as RINEX 2 files write `L1` beside `C1` or `P1`.
+    pub gps_l1: u8,
 }
 
 /// The observation types of a system's records: the first and second signal's code, phase,
@@ -144,7 +147,15 @@ pub(super) fn header(h: &HeaderInfo) -> String {
         format!("{:14.4}{:14.4}{:14.4}", 0.0, 0.0, 0.0),
         "ANTENNA: DELTA H/E/N",
     );
-    for types in h.systems.iter().filter_map(|&sys| obs_types(sys)) {
+    for (sys, types) in h
+        .systems
+        .iter()
+        .filter_map(|&sys| Some((sys, obs_types(sys)?)))
+    {
+        let types = match sys {
+            Constellation::Gps => types.replacen("C1C", &format!("C1{}", h.gps_l1 as char), 1),
+            _ => types.to_string(),
+        };
         if h.bands == 1 {
             // "G    8 C1C L1C D1C S1C …" → "G    4 C1C L1C D1C S1C"
             line(
@@ -152,7 +163,7 @@ pub(super) fn header(h: &HeaderInfo) -> String {
                 "SYS / # / OBS TYPES",
             );
         } else {
-            line(types.into(), "SYS / # / OBS TYPES");
+            line(types, "SYS / # / OBS TYPES");
         }
     }
     line(format!("{:10.3}", h.interval), "INTERVAL");

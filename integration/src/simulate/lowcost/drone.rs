@@ -15,7 +15,7 @@ use super::super::error::SimError;
 use super::super::flight::{Flight, FlightPlan};
 use super::super::io::{write, write_bytes};
 use super::super::rng::Rng;
-use super::receiver::{self, LowCost, Profile, TrackStats};
+use super::receiver::{self, GpsL1, LowCost, Profile, TrackStats};
 use super::{constellation, gpst, truth_csv};
 use gnss::frame::{enu_rotation, Ecef, Enu, Geodetic};
 use gnss::raw::rtcm::message_number;
@@ -162,6 +162,7 @@ pub(super) fn drone(dir: &Path, rng: &Rng) -> Result<DroneReport, SimError> {
         mask_deg: 10.0,
         atmosphere: None,
         code_bias: [0.0; 2],
+        gps_l1: GpsL1::CaAsP,
         profile: drone_profile(),
     };
     let base = LowCost {
@@ -174,6 +175,7 @@ pub(super) fn drone(dir: &Path, rng: &Rng) -> Result<DroneReport, SimError> {
         mask_deg: 5.0,
         atmosphere: None,
         code_bias: [0.0; 2],
+        gps_l1: GpsL1::CaAsP,
         profile: cors_profile(),
     };
     let (rtext, rstats) = receiver::simulate(&rover, &eph, &klob, &rng.fork(1), &|_| true);

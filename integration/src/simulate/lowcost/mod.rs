@@ -35,7 +35,7 @@ use gnss::rinex::ObsFile;
 use gnss::sv::Constellation;
 use hifitime::{Duration, Epoch};
 use nalgebra::Vector3;
-use receiver::{LowCost, Profile, TrackStats};
+use receiver::{GpsL1, LowCost, Profile, TrackStats};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -242,6 +242,7 @@ fn walk(
         mask_deg: 5.0,
         atmosphere: None,
         code_bias: [0.0; 2],
+        gps_l1: GpsL1::CaAsP,
         profile: walk_rover_profile(half),
     };
     let open_sky = |_t: f64| 0.0;
@@ -255,6 +256,7 @@ fn walk(
         mask_deg: 5.0,
         atmosphere: None,
         code_bias: [0.0; 2],
+        gps_l1: GpsL1::CaAsP,
         profile: walk_base_profile(half),
     };
     let (rtext, rstats) = receiver::simulate(&rover, &eph, &klob, &rng.fork(1), &|_| true);

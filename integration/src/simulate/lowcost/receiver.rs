@@ -83,6 +83,40 @@ pub struct LowCost<'a> {
     /// The receiver's code biases on each band, metres (they differ between receiver types
     /// and do not cancel between two of them).
     pub code_bias: [f64; 2],
+    /// Which GPS L1 code it tracks.
+    pub gps_l1: GpsL1,
+}
+
+/// The GPS L1 code a receiver tracks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GpsL1 {
+    /// C/A (`C1C`) as referred to P(Y): the flight and low-cost benches, whose two
+    /// receivers are alike (each satellite's P1−C1 bias would cancel between them).
+    CaAsP,
+    /// C/A (`C1C`) with each satellite's own C1 − P1 bias ([`c1_p1_bias`]): what a C/A
+    /// receiver measures against a P(Y) receiver.
+    Ca,
+    /// P(Y) code (`C1W`; the phase written as `L1C`, as RINEX 2 files write `L1` beside
+    /// `P1`): a geodetic receiver's P1.
+    P,
+}
+
+impl GpsL1 {
+    /// The RINEX attribute of its code.
+    pub fn attribute(self) -> u8 {
+        match self {
+            GpsL1::CaAsP | GpsL1::Ca => b'C',
+            GpsL1::P => b'W',
+        }
+    }
+}
+
+/// A GPS satellite's C1 − P1 code bias, metres: what its C/A code reads longer than its
+/// P(Y) code (the published P1−C1 bias with the opposite sign). Drawn once per PRN (normal,
+/// σ 0.3 m, i.e. 1 ns, the spread of the published monthly values), the same for every
+/// receiver and run.
+pub fn c1_p1_bias(sv: Sv) -> f64 {
+    0.3 * Rng::new(0x5031_4331 + u64::from(sv.prn)).normal()
 }
 
 /// What a receiver's simulation holds, to compare the bench with the real cases.
@@ -268,6 +302,10 @@ impl Run<'_> {
             let icb = (k * p.glonass_icb.0, k * p.glonass_icb.1);
             let (iono_factor, trop_extra) = rx.atmosphere.map_or((1.0, 0.0), |f| f(t, az, el));
             let trop = troposphere(&g, el) + trop_extra;
+            let l1_bias = match (sv.sys, rx.gps_l1) {
+                (Constellation::Gps, GpsL1::Ca) => c1_p1_bias(sv),
+                _ => 0.0,
+            };
             let i1 = klobuchar_gps(self.klob, &g, az, el, tow) * iono_factor;
             let base = rho + C * (dtr - dts);
             let range_rate = rate + C * (rx.clock.1 - dts_rate);
@@ -283,6 +321,7 @@ impl Run<'_> {
                     + iono
                     + icb.1
                     + rx.code_bias[b]
+                    + l1_bias * f64::from(u8::from(b == 0))
                     + code_mp
                     + p.code.0 * sc * self.rng.normal();
                 if s.locked {
@@ -369,6 +408,7 @@ pub fn simulate(
         systems: &systems,
         glonass: &glonass,
         bands: rx.bands,
+        gps_l1: rx.gps_l1.attribute(),
     });
     (head + &body, run.stats)
 }
