@@ -462,7 +462,19 @@ fn the_long_baseline_bench_runs_end_to_end() {
     }
     let t = succeeds(&ppkat(&["ppk", "--config", p(&dir.join("ppk.toml"))]));
     assert!(t.contains("longest baseline 250."), "{t}");
+    // The C/A base against the P(Y) rover: the satellites' code biases are estimated.
+    assert!(t.contains("code biases per satellite (Gps signal 1"), "{t}");
     let gps = against_truth(&dir);
+    // What ran, said: the narrow-lane rate is the fix rate; the wide lanes come first.
+    let rate = |name: &str| -> f64 {
+        let tail = &t[t.find(name).unwrap_or_else(|| panic!("{name} in {t}")) + name.len()..];
+        tail.split_whitespace().next().unwrap().parse().unwrap()
+    };
+    let (wide, narrow) = (rate("wide lanes fixed at"), rate("narrow lanes at"));
+    assert!(
+        (narrow - 100.0 * gps.fixed_share).abs() < 0.06 && wide >= narrow,
+        "{wide} {narrow} {gps:?}"
+    );
     assert!(gps.solved == 2881, "{gps:?}");
     assert!(
         gps.fixed_share > 0.80 && gps.rms_3d < 0.06 && gps.worst_fixed < 0.14,

@@ -76,6 +76,9 @@ pub(super) struct Fix {
     /// Each DD ambiguity's integer when the fix determines it (conditioned σ below 0.02
     /// cycle), in DD row order.
     pub(super) dd_integers: Vec<Option<i64>>,
+    /// Satellites whose double-difference wide lane (first minus second slot, one pivot for
+    /// both) the fix determines (conditioned σ below 0.02 cycle).
+    pub(super) widelanes: usize,
     /// The integers determine the position (at least three satellites fixed on every slot,
     /// `min_fix_ambiguities` DD integers in all: a wide-lane-only fix is not) and do so
     /// precisely (3D σ at most `max_fixed_sigma`: a fix in a weak geometry is no better than
@@ -201,6 +204,26 @@ fn position_range(st: &State) -> Range<usize> {
         .expect("the position block exists")
 }
 
+/// Pairs of DD rows (first slot, second slot) of one satellite against one pivot: its
+/// wide lane is their difference.
+fn widelane_rows(groups: &[DdGroup<Candidate>]) -> Vec<(usize, usize)> {
+    let mut rows: BTreeMap<(Sv, usize), (Sv, usize)> = BTreeMap::new();
+    let mut row = 0;
+    for g in groups {
+        for c in &g.others {
+            rows.insert((c.sv(), g.slot), (g.pivot.sv(), row));
+            row += 1;
+        }
+    }
+    rows.iter()
+        .filter(|((_, slot), _)| *slot == 0)
+        .filter_map(|((sv, _), (pivot, i))| {
+            let (p2, j) = rows.get(&(*sv, 1))?;
+            (p2 == pivot).then_some((*i, *j))
+        })
+        .collect()
+}
+
 /// The float DD ambiguities of the groups and their covariance.
 struct FloatDd {
     /// DD operator (DD rows × state), as [`dd_operator`] gives it.
@@ -209,6 +232,8 @@ struct FloatDd {
     a: DVector<f64>,
     /// Their covariance, cycles².
     q: DMatrix<f64>,
+    /// The groups, in DD row order.
+    groups: Vec<DdGroup<Candidate>>,
 }
 
 impl FloatDd {
@@ -226,7 +251,12 @@ impl FloatDd {
             dp[(i, a)] - dp[(i, r)]
         });
         let q = (&q + q.transpose()) * 0.5;
-        FloatDd { d, a, q }
+        FloatDd {
+            d,
+            a,
+            q,
+            groups: groups.to_vec(),
+        }
     }
 
     /// D·M for a matrix M over the state (rows: state).
@@ -247,6 +277,8 @@ struct FixedSolution {
     constraints: DMatrix<f64>,
     /// Each DD ambiguity's integer when the fix determines it.
     dd_integers: Vec<Option<i64>>,
+    /// Satellites whose wide lane the fix determines.
+    widelanes: usize,
 }
 
 /// The fixed solution for the best integers of `cands` (with the runner-up weighted by the
@@ -293,11 +325,23 @@ fn fixed_solution(
             (var.max(0.0).sqrt() < 0.02).then(|| a_fixed[i].round() as i64)
         })
         .collect();
+    // The wide lane of a satellite: its first-slot DD row minus its second-slot one, when
+    // both groups have the same pivot; conditioned variance from the same columns.
+    let widelanes = widelane_rows(&fl.groups)
+        .into_iter()
+        .filter(|&(i, j)| {
+            let var = fl.q[(i, i)] + fl.q[(j, j)]
+                - 2.0 * fl.q[(i, j)]
+                - (y.column(i) - y.column(j)).norm_squared();
+            var.max(0.0).sqrt() < 0.02
+        })
+        .count();
     Some(FixedSolution {
         position: Vector3::new(x[0], x[1], x[2]),
         covariance: Matrix3::from_fn(|i, j| cov[(i, j)]),
         constraints: c,
         dd_integers,
+        widelanes,
     })
 }
 
@@ -329,6 +373,7 @@ pub(super) fn resolve(
                 covariance,
                 constraints,
                 dd_integers,
+                widelanes,
             } = fixed_solution(st, &fl, &dec, k, &c)?;
             let complete = determines_position(&groups, &dd_integers, o.min_fix_ambiguities)
                 && covariance.trace().sqrt() <= o.max_fixed_sigma;
@@ -342,6 +387,7 @@ pub(super) fn resolve(
                 integers: DVector::from_column_slice(&c.fixes[0]),
                 groups,
                 dd_integers,
+                widelanes,
             });
         }
         k -= 1;
@@ -353,4 +399,48 @@ pub(super) fn resolve(
 /// variance `var` (cycles²).
 pub(super) fn hold(st: &mut State, fix: &Fix, var: f64) {
     constrain(&mut st.x, &mut st.p, &fix.constraints, &fix.integers, var);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cand(prn: u8, slot: usize, state: usize) -> Candidate {
+        Candidate {
+            state,
+            amb: AmbKey {
+                sv: Sv::new(Constellation::Gps, prn),
+                slot,
+            },
+            elevation: 0.5,
+            lock: 10,
+            arc: state as u64,
+        }
+    }
+
+    /// A satellite's wide lane pairs its first- and second-slot DD rows when both groups
+    /// share the pivot; a satellite on one slot only, or against another pivot, has none.
+    #[test]
+    fn widelanes_pair_the_rows_of_one_satellite_against_one_pivot() {
+        let l1 = DdGroup {
+            slot: 0,
+            pivot: cand(1, 0, 0),
+            others: vec![cand(2, 0, 1), cand(3, 0, 2), cand(4, 0, 3)],
+        };
+        let l2 = DdGroup {
+            slot: 1,
+            pivot: cand(1, 1, 4),
+            others: vec![cand(3, 1, 5), cand(2, 1, 6)],
+        };
+        // Rows: L1 of G02, G03, G04 (0, 1, 2), then L2 of G03, G02 (3, 4).
+        let mut pairs = widelane_rows(&[l1.clone(), l2]);
+        pairs.sort_unstable();
+        assert_eq!(pairs, vec![(0, 4), (1, 3)]);
+        let other_pivot = DdGroup {
+            slot: 1,
+            pivot: cand(2, 1, 4),
+            others: vec![cand(3, 1, 5), cand(1, 1, 6)],
+        };
+        assert!(widelane_rows(&[l1, other_pivot]).is_empty());
+    }
 }

@@ -677,6 +677,7 @@ impl<'a> Filter<'a> {
             ratio: 0.0,
             age,
             nfix: 0,
+            widelanes: 0,
             segment: 0,
             float: None,
         };
@@ -685,7 +686,9 @@ impl<'a> Filter<'a> {
             return sol;
         }
         let mut best_ratio = None;
-        let mut fix = ar::resolve(st, o, pairs, &mut best_ratio).filter(|f| f.complete);
+        let raw = ar::resolve(st, o, pairs, &mut best_ratio);
+        sol.widelanes = raw.as_ref().map_or(0, |f| f.widelanes);
+        let mut fix = raw.filter(|f| f.complete);
         if let (Some(f), Some((_, prior))) = (&fix, &smoothed) {
             if !self.halves_agree(f, prior, pairs) {
                 self.stats.smoothed_fixes_rejected += 1;
@@ -702,6 +705,11 @@ impl<'a> Filter<'a> {
             sol.nfix = fix.n_fixed;
             if o.ar == ArMode::FixAndHold && smoothed.is_none() {
                 ar::hold(&mut self.state, &fix, o.hold_variance);
+                let held = fix
+                    .groups
+                    .iter()
+                    .flat_map(|g| g.others.iter().chain([&g.pivot]));
+                self.stats.held_arcs.extend(held.map(|c| c.arc));
             }
             fixed = Some(FixedIntegers::of(&fix));
         } else if let Some(r) = best_ratio {

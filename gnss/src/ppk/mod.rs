@@ -41,7 +41,9 @@ mod update;
 
 pub use measure::GateReason;
 pub use options::{ArMode, BasePosition, Estimate, FilterMode, Motion, PpkOptions, Reference};
-pub use output::{EpochSol, Models, PassDiagnostics, PassStats, PpkResult, Spread, StaticSolution};
+pub use output::{
+    AmbiguityRates, EpochSol, Models, PassDiagnostics, PassStats, PpkResult, Spread, StaticSolution,
+};
 
 use crate::error::{Error, Result};
 use crate::frame::{enu_rotation, Ecef};
@@ -281,6 +283,26 @@ fn run_pass(
     }
     out.stats = f.stats;
     out
+}
+
+/// How the output epochs' ambiguities were resolved (see [`AmbiguityRates`]).
+fn ambiguity_rates(
+    merged: &[Option<(EpochSol, u32)>],
+    passes: [&Option<PassStats>; 2],
+    dual_frequency: bool,
+) -> AmbiguityRates {
+    let solved = merged.iter().flatten();
+    AmbiguityRates {
+        solved: solved.clone().count(),
+        widelane: solved.clone().filter(|(s, _)| s.widelanes >= 3).count(),
+        narrowlane: solved.filter(|(s, _)| s.quality == Quality::Fixed).count(),
+        arcs_held: passes
+            .iter()
+            .flat_map(|p| p.iter())
+            .map(|p| p.held_arcs.len())
+            .sum(),
+        dual_frequency,
+    }
 }
 
 /// The output solution of each epoch with its ambiguity segment (see
@@ -623,12 +645,14 @@ fn run_prepared(p: Prepared, progress: &dyn crate::progress::Progress) -> PpkRes
     let merged = merge_passes(fw.as_ref(), bw.as_ref(), smoothed);
     let keep_stats = |p: Option<PassOutput>| p.map(|p| p.stats);
     let (fw, bw) = (keep_stats(fw), keep_stats(bw));
+    let ambiguities = ambiguity_rates(&merged, [&fw, &bw], opts.nf >= 2);
     let (epochs, unsolved) = output_epochs(merged, &inputs, &opts, antenna_sigma, &base_arp);
     let static_solution = match (opts.motion, &fw) {
         (Motion::Static, Some(fw)) => StaticSolution::of(&epochs, fw),
         _ => None,
     };
     PpkResult {
+        ambiguities,
         static_solution,
         trajectory: Trajectory::new(epochs, SegmentSource::Filter),
         forward: fw,

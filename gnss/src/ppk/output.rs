@@ -33,6 +33,9 @@ pub struct EpochSol {
     pub age: f64,
     /// Number of double-difference ambiguities fixed.
     pub nfix: usize,
+    /// Satellites whose wide lane the epoch's integer search determined (also when the
+    /// narrow lanes were not: a float epoch may have its wide lanes fixed).
+    pub widelanes: usize,
     /// Ambiguity segment of this epoch within its pass (see [`crate::trajectory`]).
     pub segment: u32,
     /// The float solution (position, covariance) of a fixed epoch, for a demotion.
@@ -84,6 +87,8 @@ pub struct PassStats {
     pub phase_residuals: Spread,
     /// Post-fit double-difference code residuals of the float solution, metres.
     pub code_residuals: Spread,
+    /// Ambiguity arcs (per pass) whose integer was held in the filter state (fix-and-hold).
+    pub held_arcs: std::collections::BTreeSet<u64>,
 }
 
 /// Size of a set of residuals: count, root mean square and largest magnitude.
@@ -159,9 +164,28 @@ pub struct Models {
     pub code_biases: Vec<(crate::sv::Constellation, usize)>,
 }
 
+/// How far the output epochs' ambiguities were resolved: wide lanes (with two or more
+/// frequencies) and narrow lanes (the fixed solution).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AmbiguityRates {
+    /// Solved epochs.
+    pub solved: usize,
+    /// Epochs whose wide lanes were fixed on at least three satellites besides the pivot
+    /// (enough to carry the position once the narrow lanes follow).
+    pub widelane: usize,
+    /// Epochs with the fixed solution (Q = 1: the narrow lanes, or L1, fixed).
+    pub narrowlane: usize,
+    /// Ambiguity arcs held in the filter state, summed over the passes.
+    pub arcs_held: usize,
+    /// Two or more frequencies were processed (wide lanes exist).
+    pub dual_frequency: bool,
+}
+
 /// Output of a carrier-phase run.
 #[derive(Clone, Debug)]
 pub struct PpkResult {
+    /// How the output epochs' ambiguities were resolved.
+    pub ambiguities: AmbiguityRates,
     /// The rover trajectory (of the chosen filter mode): ARP or marker positions (as the
     /// options refer) at the true reception times, with the filter's ambiguity segments.
     pub trajectory: Trajectory,

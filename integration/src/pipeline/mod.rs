@@ -551,6 +551,24 @@ impl fmt::Display for PpkReport {
                 ""
             }
         )?;
+        let a = &r.ambiguities;
+        if a.solved > 0 {
+            let pct = |k: usize| 100.0 * k as f64 / a.solved as f64;
+            let fixed = if a.dual_frequency {
+                format!(
+                    "wide lanes fixed at {:.1} % of solved epochs (3 satellites or more), narrow lanes at {:.1} % (the fixed solution)",
+                    pct(a.widelane),
+                    pct(a.narrowlane)
+                )
+            } else {
+                format!("fixed at {:.1} % of solved epochs", pct(a.narrowlane))
+            };
+            writeln!(
+                f,
+                "  ambiguities: {fixed}; {} ambiguity arcs held",
+                a.arcs_held
+            )?;
+        }
         let mut reasons: std::collections::BTreeMap<&str, (usize, Epoch)> = Default::default();
         for (t, why) in &r.unsolved {
             reasons.entry(why.as_str()).or_insert((0, *t)).0 += 1;
