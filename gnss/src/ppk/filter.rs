@@ -105,6 +105,15 @@ pub struct Filter<'a> {
     base_terms: Option<(Epoch, f64, Vec<Option<BaseTerms>>)>,
 }
 
+/// What the two halves of the data (before and after an epoch) say of a smoothed fix.
+#[derive(Clone, Copy, Debug)]
+struct HalvesSay {
+    /// Neither fixes an ambiguity to another integer.
+    agree: bool,
+    /// Each alone fixes every integer of it (and they agree).
+    confirm: bool,
+}
+
 /// The base's view of one satellite at one base epoch.
 #[derive(Clone, Copy, Debug)]
 struct BaseTerms {
@@ -638,25 +647,36 @@ impl<'a> Filter<'a> {
         }
     }
 
-    /// Whether the data before and after this epoch, each alone, agree with a smoothed fix:
-    /// neither the forward state nor the backward `prior` resolves any ambiguity to
-    /// another integer than `fix` (they may resolve fewer). Independent halves agreeing is
-    /// what makes a fix of long-baseline data trustworthy: a model error that biases the
-    /// smoothed float rarely biases both halves to the same wrong integer.
-    fn halves_agree(&self, fix: &ar::Fix, prior: &Prior, pairs: &[Pair]) -> bool {
+    /// What the data before and after this epoch, each alone, say of a smoothed fix: they
+    /// agree when neither the forward state nor the backward `prior` resolves any ambiguity
+    /// to another integer than `fix` (they may resolve fewer); they confirm it when each
+    /// alone fixes every integer of `fix`. Independent halves agreeing is what makes a fix of
+    /// long-baseline data trustworthy: a model error that biases the smoothed float rarely
+    /// biases both halves to the same wrong integer.
+    fn halves_agree(&self, fix: &ar::Fix, prior: &Prior, pairs: &[Pair]) -> HalvesSay {
         let mine = FixedIntegers::by_satellite(fix);
         let mut unused = None;
-        [Some(&self.state), None]
+        let halves: Vec<Option<FixedIntegers<crate::sv::Sv>>> = [Some(&self.state), None]
             .into_iter()
             .map(|s| match s {
                 Some(s) => ar::resolve(s, self.opts, pairs, &mut unused),
                 None => ar::resolve(&prior.to_state(), self.opts, pairs, &mut unused),
             })
-            .all(|half| half.is_none_or(|h| !FixedIntegers::by_satellite(&h).conflicts(&mine)))
+            .map(|h| h.map(|h| FixedIntegers::by_satellite(&h)))
+            .collect();
+        let agree = halves
+            .iter()
+            .all(|h| h.as_ref().is_none_or(|h| !h.conflicts(&mine)));
+        let confirm = agree
+            && halves
+                .iter()
+                .all(|h| h.as_ref().is_some_and(|h| mine.covered_by(h)));
+        HalvesSay { agree, confirm }
     }
 
     /// The float solution (the smoothed one when given), replaced by the fixed one when the
-    /// ambiguities resolve (and then held in fix-and-hold mode, never on a smoothed state),
+    /// ambiguities resolve (and then held in fix-and-hold mode; a smoothed fix only when both
+    /// halves confirm it),
     /// with its ambiguity segment.
     fn solve(
         &mut self,
@@ -689,8 +709,11 @@ impl<'a> Filter<'a> {
         let raw = ar::resolve(st, o, pairs, &mut best_ratio);
         sol.widelanes = raw.as_ref().map_or(0, |f| f.widelanes);
         let mut fix = raw.filter(|f| f.complete);
+        let mut confirmed = false;
         if let (Some(f), Some((_, prior))) = (&fix, &smoothed) {
-            if !self.halves_agree(f, prior, pairs) {
+            let halves = self.halves_agree(f, prior, pairs);
+            confirmed = halves.confirm;
+            if !halves.agree {
                 self.stats.smoothed_fixes_rejected += 1;
                 fix = None;
             }
@@ -703,7 +726,11 @@ impl<'a> Filter<'a> {
             sol.quality = Quality::Fixed;
             sol.ratio = fix.ratio;
             sol.nfix = fix.n_fixed;
-            if o.ar == ArMode::FixAndHold && smoothed.is_none() {
+            // A smoothed fix is held (into the forward state, so it carries forward along
+            // its arcs) only when each half alone fixed every integer of it: holding one
+            // that a single half or the smoothed float alone reaches held wrong integers for
+            // hours on BELL-EBRE.
+            if o.ar == ArMode::FixAndHold && (smoothed.is_none() || confirmed) {
                 ar::hold(&mut self.state, &fix, o.hold_variance);
                 let held = fix
                     .groups

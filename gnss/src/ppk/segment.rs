@@ -58,6 +58,19 @@ impl<K: Ord + Copy> FixedIntegers<K> {
         FixedIntegers(out)
     }
 
+    /// Whether every ambiguity fixed here (beyond each group's reference) is fixed in
+    /// `other` too.
+    pub(super) fn covered_by(&self, other: &Self) -> bool {
+        self.0.iter().all(|(key, a)| {
+            a.keys().all(|k| {
+                other
+                    .0
+                    .get(key)
+                    .is_some_and(|b| b.len() >= 2 && b.contains_key(k))
+            })
+        })
+    }
+
     /// Whether an ambiguity fixed in both has a different integer: the difference between two
     /// arcs fixed in both is compared, so a change of pivot alone is no conflict.
     pub(super) fn conflicts(&self, other: &Self) -> bool {
