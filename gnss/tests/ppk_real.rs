@@ -318,10 +318,11 @@ fn bell_ebre_115_km_baseline() {
     assert!(r.models.iono && r.models.tropo, "{:?}", r.models);
     assert!((r.models.longest_baseline - 115_284.0).abs() < 100.0);
     assert_eq!(r.trajectory.epochs.len(), r.rover_epochs);
-    // Issue figures: ≥ 50 % fixed (measured 56.7 %), no fixed epoch off by more than 15 cm
-    // (worst 10.9 cm), 3D RMS after the first hour ≤ 15 cm (5.3 cm); RTKLIB demo5's best
-    // on these files is 18.7 % fixed and 1.47 m.
-    assert!(s.fixed_pct >= 52.0, "fix rate {}", s.fixed_pct);
+    // Issue figures: ≥ 50 % fixed (measured 57.1 %, the smoother holding the fixes both
+    // halves confirm), no fixed epoch off by more than 15 cm (worst 11.2 cm), 3D RMS after
+    // the first hour ≤ 15 cm (5.2 cm); RTKLIB demo5's best on these files is 18.7 % fixed
+    // and 1.47 m. Issue 49 asks for 85 % with none beyond 10 cm: not yet.
+    assert!(s.fixed_pct >= 55.0, "fix rate {}", s.fixed_pct);
     assert!(s.max_fixed_err <= 0.15, "worst fixed {}", s.max_fixed_err);
     assert!(late.d3_rms <= 0.10, "3D RMS after 1 h {}", late.d3_rms);
     assert!(s.d3_rms <= 0.10, "3D RMS {}", s.d3_rms);

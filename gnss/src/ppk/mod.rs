@@ -369,7 +369,8 @@ const SMOOTHER_BUDGET: usize = 1 << 30;
 /// covariance, at the largest state the data allow.
 fn smoother_bytes(inputs: &PassInputs, opts: &PpkOptions) -> usize {
     let sats = inputs.rover_meas.iter().map(Vec::len).max().unwrap_or(0);
-    let per_sat = opts.nf + usize::from(opts.iono == Estimate::On);
+    let per_sat =
+        opts.nf + usize::from(opts.iono == Estimate::On) + opts.code_bias_slots.len().min(opts.nf);
     let n = 1 + sats * per_sat;
     inputs.rover_meas.len() * (n * n + 2 * n) * 8
 }
