@@ -168,17 +168,14 @@ pub fn lonely_warnings(stretches: &[(Epoch, Epoch, usize)]) -> Vec<String> {
         .collect()
 }
 
-/// The frequency slots whose phases rover and base take from different signals of a band
-/// (L2W against L2X, E1C against E1X) that may differ by a fraction of a cycle, because not
-/// both headers declare their phases aligned (`SYS / PHASE SHIFT`, RINEX 3.01 and later), with
-/// a warning for each: their ambiguities stay float.
-pub(super) fn misaligned_slots(
+/// The slots (system, slot) that rover and base both fill for a system processed (GLONASS
+/// aside: its slots differ per satellite), with each file's columns for them.
+fn shared_slots(
     rover: &crate::rinex::ObsHeader,
     base: &crate::rinex::ObsHeader,
     systems: &[crate::sv::Constellation],
     nf: usize,
-    warnings: &mut Vec<String>,
-) -> Vec<(crate::sv::Constellation, usize)> {
+) -> Vec<(crate::sv::Constellation, usize, [super::obs::SlotCols; 2])> {
     use super::obs::SignalPlan;
     let (r, b) = (SignalPlan::new(rover), SignalPlan::new(base));
     let mut out = Vec::new();
@@ -187,54 +184,52 @@ pub(super) fn misaligned_slots(
         if !systems.contains(sys) || *sys == crate::sv::Constellation::Glonass {
             continue;
         }
-        let aligned = rover.phase_aligned.contains(sys) && base.phase_aligned.contains(sys);
         for slot in 0..nf.min(rc.len()) {
-            let (Some(x), Some(y)) = (rc[slot], bc[slot]) else {
-                continue;
-            };
-            if x.phase_code != y.phase_code && !aligned {
-                out.push((*sys, slot));
-                warnings.push(format!(
-                    "{sys:?} phases: the rover's {} and the base's {} may differ by a quarter or half cycle (not both files declare them aligned, SYS / PHASE SHIFT): their ambiguities are kept float",
-                    x.phase_code, y.phase_code
-                ));
+            if let (Some(x), Some(y)) = (rc[slot], bc[slot]) {
+                out.push((*sys, slot, [x, y]));
             }
         }
     }
     out
 }
 
-/// The frequency slots whose codes rover and base take from different signals of a band
-/// (C1W against C1C, C2X against C2W): each satellite's code differs between them by the
-/// satellite's own bias (P1−C1: up to a metre), which no double difference removes. With a
-/// warning for each; the filter estimates those biases per satellite.
-pub(super) fn mismatched_codes(
+/// Slots (system, slot) where rover and base take different signals of a band.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(super) struct MixedSignals {
+    /// Phases of different signals (L2W against L2X, E1C against E1X), which may differ by a
+    /// fraction of a cycle, where not both headers declare their phases aligned
+    /// (`SYS / PHASE SHIFT`, RINEX 3.01 and later): their ambiguities stay float.
+    pub(super) misaligned: Vec<(crate::sv::Constellation, usize)>,
+    /// Codes of different signals (C1W against C1C, C2X against C2W): each satellite's code
+    /// differs between them by the satellite's own bias (P1−C1: up to a metre), which no
+    /// double difference removes; the filter estimates those biases per satellite.
+    pub(super) mismatched_codes: Vec<(crate::sv::Constellation, usize)>,
+}
+
+/// The slots where rover and base take different signals of a band, with a warning for each.
+pub(super) fn mixed_signals(
     rover: &crate::rinex::ObsHeader,
     base: &crate::rinex::ObsHeader,
     systems: &[crate::sv::Constellation],
     nf: usize,
     warnings: &mut Vec<String>,
-) -> Vec<(crate::sv::Constellation, usize)> {
-    use super::obs::SignalPlan;
-    let (r, b) = (SignalPlan::new(rover), SignalPlan::new(base));
-    let code = |h: &crate::rinex::ObsHeader, sys, col: Option<usize>| {
-        h.obs_types.get(sys).and_then(|t| t.get(col?)).copied()
+) -> MixedSignals {
+    let code = |h: &crate::rinex::ObsHeader, sys: crate::sv::Constellation, col: Option<usize>| {
+        h.obs_types.get(&sys).and_then(|t| t.get(col?)).copied()
     };
-    let mut out = Vec::new();
-    for (sys, rc) in &r.cols {
-        let Some(bc) = b.cols.get(sys) else { continue };
-        if !systems.contains(sys) || *sys == crate::sv::Constellation::Glonass {
-            continue;
+    let mut out = MixedSignals::default();
+    for (sys, slot, [x, y]) in shared_slots(rover, base, systems, nf) {
+        let aligned = rover.phase_aligned.contains(&sys) && base.phase_aligned.contains(&sys);
+        if x.phase_code != y.phase_code && !aligned {
+            out.misaligned.push((sys, slot));
+            warnings.push(format!(
+                "{sys:?} phases: the rover's {} and the base's {} may differ by a quarter or half cycle (not both files declare them aligned, SYS / PHASE SHIFT): their ambiguities are kept float",
+                x.phase_code, y.phase_code
+            ));
         }
-        for slot in 0..nf.min(rc.len()) {
-            let (Some(x), Some(y)) = (rc[slot], bc[slot]) else {
-                continue;
-            };
-            let (Some(cx), Some(cy)) = (code(rover, sys, x.code), code(base, sys, y.code)) else {
-                continue;
-            };
+        if let (Some(cx), Some(cy)) = (code(rover, sys, x.code), code(base, sys, y.code)) {
             if cx != cy {
-                out.push((*sys, slot));
+                out.mismatched_codes.push((sys, slot));
                 warnings.push(format!(
                     "{sys:?} codes: the rover's {cx} and the base's {cy} differ by each satellite's own bias (P1−C1 or the like), which double differences keep: estimated per satellite"
                 ));
@@ -249,30 +244,36 @@ mod tests {
     use super::*;
     use hifitime::Duration;
 
+    /// A RINEX 3.04 header with these GPS observation types.
+    fn gps_header(types: [&[u8; 3]; 4]) -> crate::rinex::ObsHeader {
+        let mut h = crate::rinex::ObsHeader::new(3.04);
+        let types = types.map(|c| crate::rinex::ObsCode(*c));
+        h.obs_types
+            .insert(crate::sv::Constellation::Gps, types.to_vec());
+        h
+    }
+
     /// Rover L2X against base L2W: slot 1 of GPS stays float, with a warning, unless both
     /// headers declare their phases aligned; the same signal at both ends is never a concern.
     #[test]
     fn different_signals_of_a_band_stay_float_unless_declared_aligned() {
-        use crate::rinex::{ObsCode, ObsHeader};
         use crate::sv::Constellation::Gps;
-        let header = |l2: &[u8; 3]| {
-            let mut h = ObsHeader::new(3.04);
-            let types = [b"C1C", b"L1C", b"C2X", l2].map(|c| ObsCode(*c));
-            h.obs_types.insert(Gps, types.to_vec());
-            h
-        };
+        let header = |l2: &[u8; 3]| gps_header([b"C1C", b"L1C", b"C2X", l2]);
         let (rover, base) = (header(b"L2X"), header(b"L2W"));
         let mut w = Vec::new();
         assert_eq!(
-            misaligned_slots(&rover, &base, &[Gps], 2, &mut w),
+            mixed_signals(&rover, &base, &[Gps], 2, &mut w).misaligned,
             vec![(Gps, 1)]
         );
         assert!(w[0].contains("L2X") && w[0].contains("L2W"), "{w:?}");
         let (mut r, mut b) = (rover.clone(), base.clone());
         r.phase_aligned.insert(Gps);
         b.phase_aligned.insert(Gps);
-        assert!(misaligned_slots(&r, &b, &[Gps], 2, &mut w).is_empty());
-        assert!(misaligned_slots(&rover, &rover, &[Gps], 2, &mut w).is_empty());
+        assert_eq!(mixed_signals(&r, &b, &[Gps], 2, &mut w), Default::default());
+        assert_eq!(
+            mixed_signals(&rover, &rover, &[Gps], 2, &mut w),
+            Default::default()
+        );
         assert_eq!(w.len(), 1);
     }
 
@@ -280,23 +281,23 @@ mod tests {
     /// warning naming both codes; L2 (P2 at both ends) and a file against itself do not.
     #[test]
     fn different_codes_of_a_band_are_named() {
-        use crate::rinex::{ObsCode, ObsHeader};
         use crate::sv::Constellation::Gps;
-        let header = |c1: &[u8; 3]| {
-            let mut h = ObsHeader::new(3.04);
-            let types = [c1, b"L1C", b"C2W", b"L2W"].map(|c| ObsCode(*c));
-            h.obs_types.insert(Gps, types.to_vec());
-            h
-        };
+        let header = |c1: &[u8; 3]| gps_header([c1, b"L1C", b"C2W", b"L2W"]);
         let (rover, base) = (header(b"C1W"), header(b"C1C"));
         let mut w = Vec::new();
         assert_eq!(
-            mismatched_codes(&rover, &base, &[Gps], 2, &mut w),
+            mixed_signals(&rover, &base, &[Gps], 2, &mut w).mismatched_codes,
             vec![(Gps, 0)]
         );
         assert!(w[0].contains("C1W") && w[0].contains("C1C"), "{w:?}");
-        assert!(mismatched_codes(&rover, &rover, &[Gps], 2, &mut w).is_empty());
-        assert!(mismatched_codes(&rover, &base, &[], 2, &mut w).is_empty());
+        assert_eq!(
+            mixed_signals(&rover, &rover, &[Gps], 2, &mut w),
+            Default::default()
+        );
+        assert_eq!(
+            mixed_signals(&rover, &base, &[], 2, &mut w),
+            Default::default()
+        );
         assert_eq!(w.len(), 1);
     }
 

@@ -517,22 +517,15 @@ fn prepare_run(
     if opts.interval_s <= 0.0 {
         opts.interval_s = interval;
     }
-    let misaligned = checks::misaligned_slots(
+    let mixed = checks::mixed_signals(
         &rover.header,
         &base.header,
         &opts.systems,
         opts.nf,
         &mut warnings,
     );
-    opts.float_slots.extend(misaligned);
-    let mismatched = checks::mismatched_codes(
-        &rover.header,
-        &base.header,
-        &opts.systems,
-        opts.nf,
-        &mut warnings,
-    );
-    opts.code_bias_slots.extend(mismatched);
+    opts.float_slots.extend(mixed.misaligned);
+    opts.code_bias_slots.extend(mixed.mismatched_codes);
     let inputs = inputs::prepare(
         (rover, records.0),
         (base, records.1),
