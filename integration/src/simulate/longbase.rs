@@ -282,6 +282,46 @@ fn median(v: &[usize]) -> usize {
 mod tests {
     use super::*;
 
+    /// The satellites' C1 − P1 biases are drawn once per PRN, the same at every call, and
+    /// spread as the published ones (σ about 0.3 m); the base writes its GPS L1 code as C/A
+    /// (C1C), the rover as P(Y) (C1W), each with the phase as L1C, and truth.toml lists
+    /// every bias to 0.1 mm.
+    #[test]
+    fn the_base_tracks_ca_and_the_rover_p_code() {
+        let biases: Vec<f64> = (1..=32u8)
+            .map(|prn| receiver::c1_p1_bias(Sv::new(Constellation::Gps, prn)))
+            .collect();
+        let again = receiver::c1_p1_bias(Sv::new(Constellation::Gps, 7));
+        assert_eq!(again, biases[6]);
+        let rms = (biases.iter().map(|b| b * b).sum::<f64>() / 32.0).sqrt();
+        assert!((0.2..0.45).contains(&rms), "{rms}");
+        let dir = testkit::scratch_path("long-baseline");
+        run(&dir, 49).unwrap();
+        let types = |f: &str| {
+            std::fs::read_to_string(dir.join(f))
+                .unwrap()
+                .lines()
+                .find(|l| l.starts_with('G') && l.contains("OBS TYPES"))
+                .unwrap()
+                .to_string()
+        };
+        assert!(
+            types("base.obs").contains("C1C L1C"),
+            "{}",
+            types("base.obs")
+        );
+        assert!(
+            types("rover.obs").contains("C1W L1C"),
+            "{}",
+            types("rover.obs")
+        );
+        let truth = std::fs::read_to_string(dir.join("truth.toml")).unwrap();
+        assert!(
+            truth.contains(&format!("G07 = {:.4}", biases[6])),
+            "{truth}"
+        );
+    }
+
     /// What the models leave out differs between the ends as described: the rover's
     /// ionosphere factor is larger by the gradient over the 1.08° between them (6.5 %), the
     /// disturbances move it by at most 3 %, and the wet delays start 5 cm apart at the zenith.
