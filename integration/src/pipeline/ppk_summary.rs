@@ -1,0 +1,145 @@
+//! What `ppkat ppk` prints of a carrier-phase run ([`PpkReport`]'s `Display`, also the head of
+//! the PPK report page): the fix rate, what was estimated, how the ambiguities went, why epochs
+//! stayed unsolved, each pass's resets, the static solution and the warnings.
+
+use super::PpkReport;
+use gnss::ppk::{AmbiguityRates, Models, PassStats};
+use gnss::time::format_ymdhms;
+use hifitime::Epoch;
+use std::fmt;
+
+impl fmt::Display for PpkReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let r = &self.result;
+        let solved = r.trajectory.epochs.len();
+        writeln!(
+            f,
+            "ppk: {} rover epochs, {} solved, {} fixed ({:.1} % of solved) in {:.2} s → {}",
+            r.rover_epochs,
+            solved,
+            r.fixed(),
+            100.0 * r.fixed() as f64 / solved.max(1) as f64,
+            self.seconds,
+            self.out.display()
+        )?;
+        writeln!(f, "  {}", models_line(&r.models))?;
+        if let Some(l) = ambiguities_line(&r.ambiguities) {
+            writeln!(f, "  {l}")?;
+        }
+        let mut reasons: std::collections::BTreeMap<&str, (usize, Epoch)> = Default::default();
+        for (t, why) in &r.unsolved {
+            reasons.entry(why.as_str()).or_insert((0, *t)).0 += 1;
+        }
+        for (why, (n, first)) in reasons {
+            writeln!(
+                f,
+                "  {n} epochs unsolved: {why} (first at {})",
+                format_ymdhms(first)
+            )?;
+        }
+        for (name, s) in [("forward", &r.forward), ("backward", &r.backward)] {
+            if let Some(s) = s {
+                writeln!(f, "  {}", pass_line(name, s))?;
+            }
+        }
+        if let Some(st) = &r.static_solution {
+            for l in crate::survey::lines(st, self.refer) {
+                writeln!(f, "  {l}")?;
+            }
+            if let Some(p) = &self.summary {
+                writeln!(f, "  summary → {}", p.display())?;
+            }
+        }
+        if let Some(p) = &self.report {
+            writeln!(f, "  report → {}", p.display())?;
+        }
+        for w in self.warnings.iter().take(20) {
+            writeln!(f, "  warning: {w}")?;
+        }
+        Ok(())
+    }
+}
+
+/// The longest baseline and what was estimated beside the position and the ambiguities.
+fn models_line(m: &Models) -> String {
+    let mut estimated: Vec<String> = [
+        (m.iono, "slant ionosphere per satellite"),
+        (m.tropo, "rover zenith wet delay"),
+    ]
+    .iter()
+    .filter(|(on, _)| *on)
+    .map(|(_, what)| what.to_string())
+    .collect();
+    if !m.code_biases.is_empty() {
+        let slots: Vec<String> = m
+            .code_biases
+            .iter()
+            .map(|(sys, slot)| format!("{sys:?} signal {}", slot + 1))
+            .collect();
+        estimated.push(format!(
+            "code biases per satellite ({}: rover and base track different codes)",
+            slots.join(", ")
+        ));
+    }
+    format!(
+        "longest baseline {:.1} km; estimated: {}{}",
+        m.longest_baseline / 1000.0,
+        if estimated.is_empty() {
+            "no atmospheric delays (a-priori models only)".to_string()
+        } else {
+            estimated.join(", ")
+        },
+        if m.glonass_float {
+            "; GLONASS ambiguities kept float (the receivers' inter-channel phase biases are not calibrated), its inter-channel code bias estimated"
+        } else {
+            ""
+        }
+    )
+}
+
+/// How the ambiguities went: wide and narrow lanes (or, with one frequency, the fixed
+/// solution) and the arcs held; None when nothing was solved.
+fn ambiguities_line(a: &AmbiguityRates) -> Option<String> {
+    if a.solved == 0 {
+        return None;
+    }
+    let pct = |k: usize| 100.0 * k as f64 / a.solved as f64;
+    let fixed = if a.dual_frequency {
+        format!(
+            "wide lanes fixed at {:.1} % of solved epochs (3 satellites or more), narrow lanes at {:.1} % (the fixed solution)",
+            pct(a.widelane),
+            pct(a.narrowlane)
+        )
+    } else {
+        format!("fixed at {:.1} % of solved epochs", pct(a.narrowlane))
+    };
+    Some(format!(
+        "ambiguities: {fixed}; {} ambiguity arcs held",
+        a.arcs_held
+    ))
+}
+
+/// One pass's counters: resets by cause, outliers, the innovation gate, the mask and orbits.
+fn pass_line(name: &str, s: &PassStats) -> String {
+    let slips: Vec<String> = s.slips.iter().map(|(c, n)| format!("{c:?} {n}")).collect();
+    let gated: Vec<String> = s
+        .rejected
+        .iter()
+        .map(|(c, n)| format!("{c:?} {n}"))
+        .collect();
+    format!(
+        "{name}: ambiguity resets {} [{}], post-fit outliers {}, innovations rejected {} [{}], satellite-epochs below mask {}, without orbit {}{}",
+        s.slips.values().sum::<usize>(),
+        slips.join(", "),
+        s.outlier_resets,
+        s.rejected_innovations(),
+        gated.join(", "),
+        s.below_mask,
+        s.no_orbit,
+        if s.half_cycle_float > 0 {
+            format!(", ambiguity-epochs kept float for an unresolved half cycle {}", s.half_cycle_float)
+        } else {
+            String::new()
+        }
+    )
+}
