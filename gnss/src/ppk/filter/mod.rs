@@ -23,21 +23,25 @@
 //!    next epoch; lock counts of the states observed move on;
 //! 8. resolution: the float solution, replaced by the fixed one when the integers pass;
 //!    the epoch's ambiguity segment ([`super::segment`]).
+//!
+//! Steps 6–7's post-fit checks live in `outliers`, step 8 in `resolution`.
+
+mod outliers;
+mod resolution;
 
 use super::ar;
 use super::geometry::{day_of_year, tropo, wet_mapping, ReceiverEpoch};
-use super::measure::{self, ObsKind};
+use super::measure;
 use super::options::{ArMode, Estimate, Motion, PpkOptions};
 use super::output::{EpochSol, PassStats};
 use super::pair::{observes, Pair};
-use super::segment::{FixedIntegers, SegmentTracker};
+use super::segment::SegmentTracker;
 use super::slip::{SlipCause, Slips};
 use super::smooth::{self, Prior};
 use super::state::{AmbKey, State, StateKey};
 use super::update::Gain;
 use crate::frame::{Ecef, Geodetic};
 use crate::model::antex::AntennaPcv;
-use crate::solution::Quality;
 use hifitime::Epoch;
 
 /// Position change (m) of a measurement update beyond which the rows are linearised again.
@@ -531,104 +535,6 @@ impl<'a> Filter<'a> {
         Some(out)
     }
 
-    /// The ambiguity of the worst post-fit phase residual (the pivot's when most rows of its
-    /// group share it), None when the residuals hold none beyond chance.
-    fn worst_phase_outlier(&self, last: &Linearisation) -> Option<AmbKey> {
-        let o = self.opts;
-        let dx = &self.state.x - &last.at;
-        let post = |r: &measure::Row| {
-            r.innovation - r.h.entries().iter().map(|&(j, v)| v * dx[j]).sum::<f64>()
-        };
-        let phase =
-            |r: &&measure::Row| r.kind == ObsKind::Phase && r.innovation.abs() <= o.max_innovation;
-        // A slip no detector saw (detection, identification, adaptation): a post-fit
-        // residual beyond `max_phase_residual`; or, when the phase residuals together fail
-        // the χ² test (99.9 %) or one stands out by STUDENTIZED, the one of them largest
-        // against its own post-fit sigma, if beyond SLIP_FLOOR. The post-fit sigma is the
-        // row's variance less what the solution absorbed of it (h P hᵀ): with a few rows an
-        // undetected half or whole cycle is largely taken up by the position, and its
-        // residual alone (centimetres) does not stand out of a weak signal's noise.
-        let pivot_var = &last.rows.pivot_var;
-        let p = &self.state.p;
-        let studentized = |r: &measure::Row| {
-            let v = post(r).abs();
-            if v > o.max_phase_residual {
-                return f64::INFINITY;
-            }
-            let e = r.h.entries();
-            let hph: f64 = e
-                .iter()
-                .map(|&(j, a)| a * e.iter().map(|&(k, b)| p[(j, k)] * b).sum::<f64>())
-                .sum();
-            let var = r.var + pivot_var[r.group];
-            v / (var - hph).max(0.01 * var).sqrt()
-        };
-        let rows: Vec<(&measure::Row, f64)> = last
-            .rows
-            .rows
-            .iter()
-            .filter(phase)
-            .map(|r| (r, studentized(r)))
-            .collect();
-        let global = rows.iter().map(|(_, w)| w * w).sum::<f64>();
-        let (worst, w) = rows
-            .iter()
-            .filter(|(r, _)| post(r).abs() > SLIP_FLOOR)
-            .max_by(|a, b| a.1.total_cmp(&b.1))?;
-        if !(*w > STUDENTIZED || global > crate::spp::chi2_999(rows.len())) {
-            return None;
-        }
-        // The pivot's slip shows in most rows of its group.
-        let group: Vec<&(&measure::Row, f64)> = rows
-            .iter()
-            .filter(|(r, _)| r.group == worst.group)
-            .collect();
-        let over = group
-            .iter()
-            .filter(|(r, w)| post(r).abs() > SLIP_FLOOR && *w > STUDENTIZED / 2.0)
-            .count();
-        let sv = if group.len() >= 2 && 2 * over > group.len() {
-            worst.pivot
-        } else {
-            worst.sv
-        };
-        Some(AmbKey {
-            sv,
-            slot: worst.slot,
-        })
-    }
-
-    /// Post-fit phase residuals: one larger than `max_phase_residual` betrays an undetected
-    /// slip; its ambiguity is reset at the next epoch. The residuals are those of the last
-    /// linearisation carried to the updated state, v − h·(x − x_lin). The state is close to
-    /// where they were formed: under [`RELINEARISE`] from it when the first linearisation
-    /// was the last, the model's change (millimetres) after a second. The model's curvature
-    /// over that is below 0.1 mm, so forming the rows a third time would tell nothing more.
-    fn post_fit_check(&mut self, last: Linearisation) {
-        let o = self.opts;
-        let dx = &self.state.x - &last.at;
-        let mut res = last.rows;
-        for row in &mut res.rows {
-            row.innovation -= row.h.entries().iter().map(|&(j, v)| v * dx[j]).sum::<f64>();
-        }
-        for row in &res.rows {
-            // Rows beyond the innovation gate did not enter the solution.
-            if row.innovation.abs() <= o.max_innovation {
-                match row.kind {
-                    ObsKind::Phase => self.stats.phase_residuals.add(row.innovation),
-                    ObsKind::Code => self.stats.code_residuals.add(row.innovation),
-                }
-            }
-            if row.kind == ObsKind::Phase && row.innovation.abs() > o.max_phase_residual {
-                self.pending_reset.push(AmbKey {
-                    sv: row.sv,
-                    slot: row.slot,
-                });
-                self.stats.outlier_resets += 1;
-            }
-        }
-    }
-
     /// Lock counts and last-seen epochs of the states observed this epoch; ambiguities kept
     /// float for a half cycle counted.
     fn count_locks(&mut self, t: Epoch, pairs: &[Pair]) {
@@ -645,104 +551,5 @@ impl<'a> Filter<'a> {
         if self.opts.half_cycle_float {
             self.stats.half_cycle_float += half;
         }
-    }
-
-    /// What the data before and after this epoch, each alone, say of a smoothed fix: they
-    /// agree when neither the forward state nor the backward `prior` resolves any ambiguity
-    /// to another integer than `fix` (they may resolve fewer); they confirm it when each
-    /// alone fixes every integer of `fix`. Independent halves agreeing is what makes a fix of
-    /// long-baseline data trustworthy: a model error that biases the smoothed float rarely
-    /// biases both halves to the same wrong integer.
-    fn halves_agree(&self, fix: &ar::Fix, prior: &Prior, pairs: &[Pair]) -> HalvesSay {
-        let mine = FixedIntegers::by_satellite(fix);
-        let mut unused = None;
-        let halves: Vec<Option<FixedIntegers<crate::sv::Sv>>> = [Some(&self.state), None]
-            .into_iter()
-            .map(|s| match s {
-                Some(s) => ar::resolve(s, self.opts, pairs, &mut unused),
-                None => ar::resolve(&prior.to_state(), self.opts, pairs, &mut unused),
-            })
-            .map(|h| h.map(|h| FixedIntegers::by_satellite(&h)))
-            .collect();
-        let agree = halves
-            .iter()
-            .all(|h| h.as_ref().is_none_or(|h| !h.conflicts(&mine)));
-        let confirm = agree
-            && halves
-                .iter()
-                .all(|h| h.as_ref().is_some_and(|h| mine.covered_by(h)));
-        HalvesSay { agree, confirm }
-    }
-
-    /// The float solution (the smoothed one when given), replaced by the fixed one when the
-    /// ambiguities resolve (and then held in fix-and-hold mode; a smoothed fix only when both
-    /// halves confirm it),
-    /// with its ambiguity segment.
-    fn solve(
-        &mut self,
-        t: Epoch,
-        age: f64,
-        used_sats: usize,
-        pairs: &[Pair],
-        smoothed: Option<(super::state::State, &Prior)>,
-    ) -> EpochSol {
-        let o = self.opts;
-        let st = smoothed.as_ref().map_or(&self.state, |s| &s.0);
-        let mut sol = EpochSol {
-            time: t,
-            pos: Ecef(st.position()),
-            cov: st.position_cov(),
-            quality: Quality::Float,
-            nsat: used_sats,
-            ratio: 0.0,
-            age,
-            nfix: 0,
-            widelanes: 0,
-            segment: 0,
-            float: None,
-        };
-        if o.ar == ArMode::Off {
-            sol.segment = self.segments.next(t, None);
-            return sol;
-        }
-        let mut best_ratio = None;
-        let raw = ar::resolve(st, o, pairs, &mut best_ratio);
-        sol.widelanes = raw.as_ref().map_or(0, |f| f.widelanes);
-        let mut fix = raw.filter(|f| f.complete);
-        let mut confirmed = false;
-        if let (Some(f), Some((_, prior))) = (&fix, &smoothed) {
-            let halves = self.halves_agree(f, prior, pairs);
-            confirmed = halves.confirm;
-            if !halves.agree {
-                self.stats.smoothed_fixes_rejected += 1;
-                fix = None;
-            }
-        }
-        let mut fixed = None;
-        if let Some(fix) = fix {
-            sol.float = Some((sol.pos, sol.cov));
-            sol.pos = Ecef(fix.position);
-            sol.cov = fix.covariance;
-            sol.quality = Quality::Fixed;
-            sol.ratio = fix.ratio;
-            sol.nfix = fix.n_fixed;
-            // A smoothed fix is held (into the forward state, so it carries forward along
-            // its arcs) only when each half alone fixed every integer of it: holding one
-            // that a single half or the smoothed float alone reaches held wrong integers for
-            // hours on BELL-EBRE.
-            if o.ar == ArMode::FixAndHold && (smoothed.is_none() || confirmed) {
-                ar::hold(&mut self.state, &fix, o.hold_variance);
-                let held = fix
-                    .groups
-                    .iter()
-                    .flat_map(|g| g.others.iter().chain([&g.pivot]));
-                self.stats.held_arcs.extend(held.map(|c| c.arc));
-            }
-            fixed = Some(FixedIntegers::of(&fix));
-        } else if let Some(r) = best_ratio {
-            sol.ratio = r;
-        }
-        sol.segment = self.segments.next(t, fixed);
-        sol
     }
 }
