@@ -232,8 +232,6 @@ struct FloatDd {
     a: DVector<f64>,
     /// Their covariance, cycles².
     q: DMatrix<f64>,
-    /// The groups, in DD row order.
-    groups: Vec<DdGroup<Candidate>>,
 }
 
 impl FloatDd {
@@ -251,12 +249,7 @@ impl FloatDd {
             dp[(i, a)] - dp[(i, r)]
         });
         let q = (&q + q.transpose()) * 0.5;
-        FloatDd {
-            d,
-            a,
-            q,
-            groups: groups.to_vec(),
-        }
+        FloatDd { d, a, q }
     }
 
     /// D·M for a matrix M over the state (rows: state).
@@ -282,11 +275,11 @@ struct FixedSolution {
 }
 
 /// The fixed solution for the best integers of `cands` (with the runner-up weighted by the
-/// chance of a wrong fix) of the last `k` decorrelated ambiguities; None when the
-/// constrained system is singular.
+/// chance of a wrong fix) of the last `k` decorrelated ambiguities of the float DD
+/// ambiguities of `groups`; None when the constrained system is singular.
 fn fixed_solution(
     st: &State,
-    fl: &FloatDd,
+    (fl, groups): (&FloatDd, &[DdGroup<Candidate>]),
     dec: &Decorrelated,
     k: usize,
     cands: &IntegerCandidates,
@@ -327,7 +320,7 @@ fn fixed_solution(
         .collect();
     // The wide lane of a satellite: its first-slot DD row minus its second-slot one, when
     // both groups have the same pivot; conditioned variance from the same columns.
-    let widelanes = widelane_rows(&fl.groups)
+    let widelanes = widelane_rows(groups)
         .into_iter()
         .filter(|&(i, j)| {
             let var = fl.q[(i, i)] + fl.q[(j, j)]
@@ -374,7 +367,7 @@ pub(super) fn resolve(
                 constraints,
                 dd_integers,
                 widelanes,
-            } = fixed_solution(st, &fl, &dec, k, &c)?;
+            } = fixed_solution(st, (&fl, &groups), &dec, k, &c)?;
             let complete = determines_position(&groups, &dd_integers, o.min_fix_ambiguities)
                 && covariance.trace().sqrt() <= o.max_fixed_sigma;
             return Some(Fix {

@@ -26,7 +26,7 @@ use super::dd::DdGroup;
 use super::geometry::tropo;
 use super::obs::NF;
 use super::options::PpkOptions;
-use super::pair::{has_phase, Pair};
+use super::pair::{has_code, has_phase, Pair};
 use super::state::{AmbKey, State, StateKey};
 use crate::frame::Ecef;
 use crate::orbit::C;
@@ -243,7 +243,9 @@ impl StateOffsets {
             .iter()
             .map(|p| {
                 std::array::from_fn(|slot| {
-                    state.offset(StateKey::CodeBias(AmbKey { sv: p.r.sv, slot }))
+                    (slot < nf)
+                        .then(|| state.offset(StateKey::CodeBias(AmbKey { sv: p.r.sv, slot })))
+                        .flatten()
                 })
             })
             .collect();
@@ -289,7 +291,7 @@ pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residu
                         p.r.sv.sys == sys
                             && match kind {
                                 ObsKind::Phase => has_phase(p, f) && amb(i).is_some(),
-                                ObsKind::Code => p.r.p[f].is_finite() && p.b.p[f].is_finite(),
+                                ObsKind::Code => has_code(p, f),
                             }
                     })
                     .collect();

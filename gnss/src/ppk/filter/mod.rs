@@ -34,7 +34,7 @@ use super::geometry::{day_of_year, tropo, wet_mapping, ReceiverEpoch};
 use super::measure;
 use super::options::{ArMode, Estimate, Motion, PpkOptions};
 use super::output::{EpochSol, PassStats};
-use super::pair::{observes, Pair};
+use super::pair::{has_code, observes, Pair};
 use super::segment::SegmentTracker;
 use super::slip::{SlipCause, Slips};
 use super::smooth::{self, Prior};
@@ -107,15 +107,6 @@ pub struct Filter<'a> {
     before_update: Option<(nalgebra::DVector<f64>, nalgebra::DMatrix<f64>)>,
     /// The base's view of the satellites of its last epoch used, with the day of year.
     base_terms: Option<(Epoch, f64, Vec<Option<BaseTerms>>)>,
-}
-
-/// What the two halves of the data (before and after an epoch) say of a smoothed fix.
-#[derive(Clone, Copy, Debug)]
-struct HalvesSay {
-    /// Neither fixes an ambiguity to another integer.
-    agree: bool,
-    /// Each alone fixes every integer of it (and they agree).
-    confirm: bool,
 }
 
 /// The base's view of one satellite at one base epoch.
@@ -416,8 +407,7 @@ impl<'a> Filter<'a> {
             }
         }
         let glonass_code = pairs.iter().any(|p| {
-            p.r.sv.sys == crate::sv::Constellation::Glonass
-                && (0..o.nf).any(|f| p.r.p[f].is_finite() && p.b.p[f].is_finite())
+            p.r.sv.sys == crate::sv::Constellation::Glonass && (0..o.nf).any(|f| has_code(p, f))
         });
         if glonass_code && !self.state.has(StateKey::GlonassCodeBias) {
             let sigma = o.glonass_code_bias_sigma;

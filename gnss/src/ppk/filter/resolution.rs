@@ -2,7 +2,7 @@
 //! when the integers pass, checked against the two halves of the data on long baselines,
 //! held when fix-and-hold allows, with the epoch's ambiguity segment.
 
-use super::{Filter, HalvesSay};
+use super::Filter;
 use crate::frame::Ecef;
 use crate::ppk::ar;
 use crate::ppk::options::ArMode;
@@ -12,6 +12,15 @@ use crate::ppk::segment::FixedIntegers;
 use crate::ppk::smooth::Prior;
 use crate::solution::Quality;
 use hifitime::Epoch;
+
+/// What the two halves of the data (before and after an epoch) say of a smoothed fix.
+#[derive(Clone, Copy, Debug)]
+struct HalvesSay {
+    /// Neither fixes an ambiguity to another integer.
+    agree: bool,
+    /// Each alone fixes every integer of it (and they agree).
+    confirm: bool,
+}
 
 impl Filter<'_> {
     /// What the data before and after this epoch, each alone, say of a smoothed fix: they
@@ -43,8 +52,7 @@ impl Filter<'_> {
 
     /// The float solution (the smoothed one when given), replaced by the fixed one when the
     /// ambiguities resolve (and then held in fix-and-hold mode; a smoothed fix only when both
-    /// halves confirm it),
-    /// with its ambiguity segment.
+    /// halves confirm it), with its ambiguity segment.
     pub(super) fn solve(
         &mut self,
         t: Epoch,
