@@ -150,7 +150,7 @@ pub(super) fn orientations(
         })
         .collect();
     if start.iter().zip(skip).any(|(s, &k)| s.is_none() && !k) {
-        resect_on_ties(p, &ix, rays, &mut start, skip);
+        grow(p, &ix, rays, &mut start, skip, false);
     }
     let mut note = None;
     if start.iter().all(Option::is_none) {
@@ -302,13 +302,9 @@ fn looking_down(pts: &[Control]) -> impl Fn(&Pose) -> f64 {
 }
 
 /// Images still without a start (no GNSS, no control): resect them on tie points intersected
-/// from the images that have one, growing the block until no image gains a start.
-fn resect_on_ties(p: &Project, ix: &Index, rays: &Rays, start: &mut [Option<Pose>], skip: &[bool]) {
-    grow(p, ix, rays, start, skip, false);
-}
-
-/// [`resect_on_ties`]; with `bundle` (a block seeded from its ties, in its own frame), a
-/// local bundle adjustment each time the block has grown by a fifth.
+/// from the images that have one, growing the block until no image gains a start; with
+/// `bundle` (a block seeded from its ties, in its own frame), a local bundle adjustment each
+/// time the block has grown by a fifth.
 fn grow(
     p: &Project,
     ix: &Index,

@@ -19,7 +19,7 @@ use super::constellation::GpsLayout;
 use super::error::SimError;
 use super::io::write;
 use super::lowcost::receiver::{self, GpsL1, LowCost, Profile, TrackStats};
-use super::lowcost::{constellation_with, gpst, truth_csv};
+use super::lowcost::{constellation, gpst, truth_csv};
 use super::rng::Rng;
 use gnss::frame::{Ecef, Geodetic};
 use gnss::sv::{Constellation, Sv};
@@ -150,8 +150,7 @@ fn simulate_variant(dir: &Path, seed: u64, v: Variant) -> Result<LongBaselineRep
     let rng = Rng::new(seed);
     let start = gpst(START)?;
     let end = start + Duration::from_seconds(SPAN_S);
-    let (nav, eph) =
-        constellation_with(dir, (start, end), seed, v.systems, GpsLayout::Operational31)?;
+    let (nav, eph) = constellation(dir, (start, end), seed, v.systems, GpsLayout::Operational31)?;
     let klob = nav.gps_iono.unwrap_or_default();
     let geo = |(lat, lon, h): (f64, f64, f64)| Geodetic::from_degrees(lat, lon, h);
     let (gb, gr) = (geo(BASE), geo(ROVER));
@@ -205,7 +204,12 @@ fn simulate_variant(dir: &Path, seed: u64, v: Variant) -> Result<LongBaselineRep
     )?;
     let baseline_km = (pr.0 - pb.0).norm() / 1000.0;
     write(dir, "ppk.toml", &ppk_toml(pb, v))?;
-    write(dir, "truth.toml", &truth_toml(pb, pr, baseline_km))?;
+    let gps: Vec<Sv> = eph
+        .satellites()
+        .copied()
+        .filter(|sv| sv.sys == Constellation::Gps)
+        .collect();
+    write(dir, "truth.toml", &truth_toml(pb, pr, baseline_km, &gps))?;
     let report = LongBaselineReport {
         rover: rstats,
         base: bstats,
@@ -223,12 +227,10 @@ fn ppk_toml(base: Ecef, v: Variant) -> String {
     )
 }
 
-fn truth_toml(base: Ecef, rover: Ecef, km: f64) -> String {
-    let c1_p1: Vec<String> = (1..=32u8)
-        .map(|prn| {
-            let sv = Sv::new(Constellation::Gps, prn);
-            format!("G{prn:02} = {:.4}", receiver::c1_p1_bias(sv))
-        })
+fn truth_toml(base: Ecef, rover: Ecef, km: f64, gps: &[Sv]) -> String {
+    let c1_p1: Vec<String> = gps
+        .iter()
+        .map(|&sv| format!("G{:02} = {:.4}", sv.prn, receiver::c1_p1_bias(sv)))
         .collect();
     format!(
         "{}[c1_minus_p1]\n# each GPS satellite's C/A code minus its P(Y) code, metres: the base tracks C/A (C1C), the rover P(Y) (C1W)\n{}\n",
@@ -268,14 +270,8 @@ fn readme(r: &LongBaselineReport, v: Variant) -> String {
         BIAS_ROVER,
         r.rover.epochs,
         r.base.epochs,
-        median(&r.rover.sats_per_epoch),
+        r.rover.median_sats(),
     )
-}
-
-fn median(v: &[usize]) -> usize {
-    let mut v = v.to_vec();
-    v.sort_unstable();
-    v.get(v.len() / 2).copied().unwrap_or(0)
 }
 
 #[cfg(test)]

@@ -11,6 +11,7 @@
 //! rover's RINEX (`rover_rinex.obs`) and `README.txt`; what was simulated.
 
 use super::super::constellation::navigation_text_of;
+use super::super::constellation::GpsLayout;
 use super::super::error::SimError;
 use super::super::flight::{Flight, FlightPlan};
 use super::super::io::{write, write_bytes};
@@ -143,7 +144,13 @@ pub(super) fn drone(dir: &Path, rng: &Rng) -> Result<DroneReport, SimError> {
         start - Duration::from_seconds(120.0),
         start + Duration::from_seconds(duration + 120.0),
     );
-    let (nav, eph) = constellation(dir, base_start, base_end, 2024, &systems)?;
+    let (nav, eph) = constellation(
+        dir,
+        (base_start, base_end),
+        2024,
+        &systems,
+        GpsLayout::Baseline24,
+    )?;
     let klob = nav.gps_iono.unwrap_or_default();
     let rover_at = |t: Epoch| {
         let s = flight.at((t - start).to_seconds());

@@ -168,19 +168,9 @@ pub(crate) fn gpst(s: &str) -> Result<Epoch, SimError> {
     })
 }
 
-/// The constellation over `[start, end]` written to `dir/nav.rnx` and read back.
+/// The constellation over `[start, end]`, with the GPS satellites of `gps`, written to
+/// `dir/nav.rnx` and read back.
 pub(crate) fn constellation(
-    dir: &Path,
-    start: Epoch,
-    end: Epoch,
-    seed: u64,
-    systems: &[Constellation],
-) -> Result<(NavFile, Ephemerides), SimError> {
-    constellation_with(dir, (start, end), seed, systems, GpsLayout::Baseline24)
-}
-
-/// [`constellation`] with the GPS satellites of `gps`.
-pub(crate) fn constellation_with(
     dir: &Path,
     (start, end): (Epoch, Epoch),
     seed: u64,
@@ -222,7 +212,13 @@ fn walk(
     ];
     let base_start = start - Duration::from_seconds(1500.0);
     let base_end = base_start + Duration::from_seconds(3683.0);
-    let (nav, eph) = constellation(dir, base_start, base_end, 47, &systems)?;
+    let (nav, eph) = constellation(
+        dir,
+        (base_start, base_end),
+        47,
+        &systems,
+        GpsLayout::Baseline24,
+    )?;
     let klob = nav.gps_iono.unwrap_or_default();
     let enu = |v: Vector3<f64>| Enu(v).to_ecef(&site);
     let rover_at = |t: Epoch| {
@@ -401,16 +397,11 @@ pub(crate) fn truth_csv(
 /// What the walk's receivers hold, against the real case's figures.
 fn walk_text(r: &TrackStats, b: &TrackStats, base: Ecef) -> String {
     let mut s = String::from("Simulated low-cost walk (ppkat simulate --builtin lowcost): a u-blox M8P-like rover\nwalking a river trail 20 min at 1 Hz, GPS/GLONASS/QZSS L1, against a base of the same kind.\nProcess: ppkat ppk --config ppk.toml; check: posstat.py ppk.pos --truth-sim truth_trajectory.csv\n\n");
-    let med = |v: &[usize]| {
-        let mut v = v.to_vec();
-        v.sort_unstable();
-        v.get(v.len() / 2).copied().unwrap_or(0)
-    };
     let _ = writeln!(
         s,
         "rover: {} epochs, {} satellites a median epoch, C/N0 p10/p50/p90 {:.0}/{:.0}/{:.0} dB-Hz (real: 19, 30/43/51)",
         r.epochs,
-        med(&r.sats_per_epoch),
+        r.median_sats(),
         r.cn0_percentile(10.0),
         r.cn0_percentile(50.0),
         r.cn0_percentile(90.0)

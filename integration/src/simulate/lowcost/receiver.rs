@@ -146,6 +146,13 @@ impl TrackStats {
             .unwrap_or(f64::NAN)
     }
 
+    /// Satellites tracked in a median epoch (0 without epochs).
+    pub fn median_sats(&self) -> usize {
+        let mut v = self.sats_per_epoch.clone();
+        v.sort_unstable();
+        v.get(v.len() / 2).copied().unwrap_or(0)
+    }
+
     /// Share (0–1) of a system's phases with an unresolved half cycle.
     pub fn half_share(&self, sys: Constellation) -> f64 {
         self.phases
