@@ -32,8 +32,10 @@ pub struct Args {
     /// from each photo's metadata.
     #[arg(long, value_name = "FILE.toml")]
     camera: Option<PathBuf>,
-    /// Most features kept per photo (spread over the image by a grid).
-    #[arg(long, value_name = "N", default_value_t = 8000)]
+    /// Most features kept per photo (spread over the image by a grid). The strongest 6,000 of
+    /// them (spread the same way) are matched all against all; the rest are found by guided
+    /// matching along the epipolar lines once a pair's geometry is known.
+    #[arg(long, value_name = "N", default_value_t = 16000)]
     max_features: usize,
     /// Longer side of the reduced image features are extracted from, pixels (photos are
     /// reduced by 2, 4 or 8 to fit; positions are written in the photo's own pixels).
@@ -80,7 +82,7 @@ fn sigma_pair(s: &str) -> std::result::Result<SigmaPair, String> {
 }
 
 /// The files a match run writes (an earlier run's folder may be replaced).
-const OUTPUTS: [&str; 7] = [
+const OUTPUTS: [&str; 8] = [
     "project.toml",
     "images.csv",
     "image_observations.csv",
@@ -88,6 +90,7 @@ const OUTPUTS: [&str; 7] = [
     "start.csv",
     "match.json",
     "match_report.html",
+    "features",
 ];
 
 /// Run `ppkat match`.
@@ -104,6 +107,10 @@ pub fn run(args: Args) -> Result<()> {
     };
     job.gnss_sigma = args.gnss_sigma.0;
     job.ignore_gps = args.ignore_gps;
+    // Staged first: the features of this run are cached in the new folder as they are made,
+    // those of an earlier run read from the old one.
+    let staged = gnss::atomic::StagedDir::new(&args.out, &OUTPUTS)?;
+    job.cache = Some((args.out.join("features"), staged.path().join("features")));
     let bar = indicatif::ProgressBar::new(0);
     if super::quiet() {
         bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
@@ -120,7 +127,6 @@ pub fn run(args: Args) -> Result<()> {
     bar.finish_and_clear();
     let m = m?;
     let mut w = project::build(&job, &m)?;
-    let staged = gnss::atomic::StagedDir::new(&args.out, &OUTPUTS)?;
     w.project
         .write(staged.path())
         .map_err(|e| anyhow::anyhow!("{e}"))?;
@@ -190,6 +196,20 @@ fn print_summary(m: &tiepoints::Matched, w: &project::Written) {
     for (n, d) in &w.heading_disagrees {
         println!("note: {n}: the gimbal yaw differs by {d:.0}° from the heading its overlaps give; the overlaps' is used");
     }
+    let read = m.images.len() + m.skipped.len();
+    println!(
+        "features: {} of {read} photos from the cache, {} extracted{}",
+        m.from_cache,
+        read - m.from_cache,
+        if m.not_cached > 0 {
+            format!(
+                " ({} could not be cached: the next run extracts them again)",
+                m.not_cached
+            )
+        } else {
+            String::new()
+        }
+    );
     for (s, t) in &m.timing {
         println!("time {s}: {t:.1} s");
     }

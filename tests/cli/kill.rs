@@ -29,13 +29,20 @@ fn names(dir: &Path) -> Vec<String> {
     v
 }
 
-/// The files of a folder with their contents.
+/// The files of a folder (and of its folders, as `sub/name`) with their contents.
 fn contents(dir: &Path) -> Vec<(String, Vec<u8>)> {
     names(dir)
         .into_iter()
-        .map(|n| {
-            let b = std::fs::read(dir.join(&n)).unwrap();
-            (n, b)
+        .flat_map(|n| {
+            let p = dir.join(&n);
+            if p.is_dir() {
+                contents(&p)
+                    .into_iter()
+                    .map(|(m, b)| (format!("{n}/{m}"), b))
+                    .collect()
+            } else {
+                vec![(n, std::fs::read(p).unwrap())]
+            }
         })
         .collect()
 }
@@ -144,7 +151,8 @@ fn killed_runs_leave_the_folder_whole(args: &[&str], work: &Path, out: &Path, mi
     succeeds_or_skips(&ppkat(args));
     let new = contents(out);
     assert!(new.len() >= min_files, "{:?}", names(out));
-    for n in names(out) {
+    // Files only: a folder inside (match's feature cache) holds what both runs share.
+    for n in names(out).into_iter().filter(|n| out.join(n).is_file()) {
         mark_old(&out.join(n));
     }
     let old = contents(out);
@@ -175,7 +183,9 @@ fn killed_runs_leave_the_folder_whole(args: &[&str], work: &Path, out: &Path, mi
         std::fs::remove_dir_all(out).unwrap();
         std::fs::create_dir_all(out).unwrap();
         for (n, b) in &old {
-            std::fs::write(out.join(n), b).unwrap();
+            let f = out.join(n);
+            std::fs::create_dir_all(f.parent().unwrap()).unwrap();
+            std::fs::write(f, b).unwrap();
         }
     }
     succeeds_or_skips(&ppkat(args));

@@ -10,6 +10,7 @@
 //! Every photo left out is named with its reason; images not connected to the main block are
 //! named too. Deterministic: parallel stages collect in input order.
 
+pub mod cache;
 pub mod camera;
 pub mod decode;
 pub mod meta;
@@ -19,6 +20,7 @@ pub mod project;
 pub mod report;
 
 use photo::features::epipolar::{coherent, verify, RansacOptions};
+use photo::features::guided::{guided, GuidedOptions};
 use photo::features::matching::{match_descriptors, Match};
 use photo::features::{extract, tracks, FeatureOptions, Features};
 use rayon::prelude::*;
@@ -37,6 +39,9 @@ pub struct MatchJob {
     pub camera: Option<PathBuf>,
     /// Features per photo.
     pub max_features: usize,
+    /// Features per photo matched all against all (the strongest, spread over the photo);
+    /// the rest by guided matching.
+    pub seed_features: usize,
     /// Longer side of the images features are extracted from, pixels.
     pub max_image_size: u32,
     /// How pairs are chosen.
@@ -50,8 +55,14 @@ pub struct MatchJob {
     pub ransac_px: f64,
     /// Fewest verified matches for a pair.
     pub min_matches: usize,
+    /// Ratio test of guided matching, among the candidates near a keypoint's predicted
+    /// position on its epipolar line (0: no guided matching).
+    pub guided_ratio: f64,
     /// Use no position from the photos' metadata.
     pub ignore_gps: bool,
+    /// Feature cache: the folder read from (a previous run's) and the folder written to
+    /// (this run's; every photo's features end up there). None: no cache.
+    pub cache: Option<(PathBuf, PathBuf)>,
 }
 
 impl MatchJob {
@@ -61,17 +72,26 @@ impl MatchJob {
             photos,
             exposures: None,
             camera: None,
-            max_features: 8000,
+            max_features: 16000,
+            seed_features: 6000,
             max_image_size: 2000,
             pairs: PairMode::Auto,
             gnss_sigma: [3.0, 5.0],
             ratio: 0.8,
             ransac_px: 1.5,
             min_matches: 20,
+            guided_ratio: 0.8,
             ignore_gps: false,
+            cache: None,
         }
     }
 }
+
+/// Radius of guided matching around a keypoint's predicted position, in RANSAC thresholds
+/// (12 px at 1.5 px: relief moves a point from where its neighbours go by a few pixels; a
+/// wider search found a few more tracks on Brighton Beach and more wrong ones on the
+/// textured block).
+pub const GUIDED_RADIUS: f64 = 8.0;
 
 /// Neighbours a match's displacement is compared with (motion coherence).
 pub const COHERENCE_NEIGHBOURS: usize = 8;
@@ -87,6 +107,9 @@ pub struct Image {
     pub scale: f64,
     /// Keypoints (photograph pixels) and descriptors.
     pub features: Features,
+    /// The keypoints matched all against all (indices into `features`), and their features:
+    /// the others are found by guided matching once a pair's geometry is known.
+    pub seeds: (Vec<u32>, Features),
 }
 
 /// A matched pair: image indices, putative matches, verified matches.
@@ -130,6 +153,10 @@ pub struct Matched {
     pub other_files: usize,
     /// Seconds per stage: (stage, seconds).
     pub timing: Vec<(String, f64)>,
+    /// Photos whose features were read from the cache.
+    pub from_cache: usize,
+    /// Photos whose features were extracted but could not be cached.
+    pub not_cached: usize,
 }
 
 /// Why a match run failed as a whole.
@@ -169,23 +196,74 @@ fn list(dir: &Path) -> Result<(Vec<PathBuf>, usize), MatchError> {
     Ok((photos, other))
 }
 
-/// Metadata and features of one photo, or why it is left out.
-fn read_one(path: &Path, job: &MatchJob, opts: &FeatureOptions) -> Result<Image, String> {
-    let meta = meta::read(path)?;
+/// Where a photo's features came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Source {
+    /// Extracted (and cached, when a cache is kept and could be written).
+    Extracted { cached: bool },
+    /// Read from the cache.
+    Cache,
+}
+
+/// The features of one photo: from the cache when it holds them under the photo's key, else
+/// extracted (and stored in the cache).
+fn features_of(
+    path: &Path,
+    job: &MatchJob,
+    opts: &FeatureOptions,
+) -> Result<(cache::Cached, Source), String> {
+    let slot = job.cache.as_ref().and_then(|(old, new)| {
+        let key = cache::key(path, job.max_image_size, opts).ok()?;
+        Some((cache::path(old, path), cache::path(new, path), key))
+    });
+    if let Some((old, new, key)) = &slot {
+        if let Some(c) = cache::load(old, *key) {
+            if old != new {
+                // The old run's folder is replaced when this run commits: keep the file.
+                let _ = std::fs::remove_file(new);
+                if std::fs::hard_link(old, new).is_err() {
+                    let _ = cache::store(new, *key, &c);
+                }
+            }
+            return Ok((c, Source::Cache));
+        }
+    }
     let d = decode::decode(path, job.max_image_size)?;
-    let features = extract(&d.gray, d.scale, opts);
-    Ok(Image {
-        meta,
+    let c = cache::Cached {
         size: d.full,
         scale: d.scale,
-        features,
-    })
+        features: extract(&d.gray, d.scale, opts),
+    };
+    let cached = slot.is_some_and(|(_, new, key)| cache::store(&new, key, &c).is_ok());
+    Ok((c, Source::Extracted { cached }))
+}
+
+/// Metadata and features of one photo, or why it is left out.
+fn read_one(path: &Path, job: &MatchJob, opts: &FeatureOptions) -> Result<(Image, Source), String> {
+    let meta = meta::read(path)?;
+    let (c, source) = features_of(path, job, opts)?;
+    let (w, h) = (c.size.0 as f64, c.size.1 as f64);
+    let seeds = photo::features::strongest(&c.features, job.seed_features, w, h, opts);
+    Ok((
+        Image {
+            meta,
+            size: c.size,
+            scale: c.scale,
+            features: c.features,
+            seeds,
+        },
+        source,
+    ))
 }
 
 /// Match one pair: ratio/mutual test, then RANSAC (seeded by the pair).
 fn match_pair(images: &[Image], a: usize, b: usize, job: &MatchJob) -> PairResult {
     let (fa, fb) = (&images[a].features, &images[b].features);
-    let m = match_descriptors(fa, fb, job.ratio);
+    let (sa, sb) = (&images[a].seeds, &images[b].seeds);
+    let m: Vec<Match> = match_descriptors(&sa.1, &sb.1, job.ratio)
+        .into_iter()
+        .map(|(i, j)| (sa.0[i as usize], sb.0[j as usize]))
+        .collect();
     let pa: Vec<_> = m
         .iter()
         .map(|&(i, _)| {
@@ -221,7 +299,16 @@ fn match_pair(images: &[Image], a: usize, b: usize, job: &MatchJob) -> PairResul
                 .filter(|(_, ok)| *ok)
                 .map(|(&k, _)| m[k])
                 .collect();
-            if kept.len() >= job.min_matches {
+            if kept.len() >= job.min_matches && job.guided_ratio > 0.0 {
+                let o = GuidedOptions {
+                    radius_px: GUIDED_RADIUS * opts.threshold_px,
+                    epipolar_px: opts.threshold_px,
+                    ratio: job.guided_ratio,
+                    neighbours: COHERENCE_NEIGHBOURS,
+                    duplicate_px: opts.threshold_px,
+                };
+                guided(fa, fb, &v.f, &kept, &o)
+            } else if kept.len() >= job.min_matches {
                 kept
             } else {
                 Vec::new()
@@ -339,7 +426,7 @@ pub fn run(
     };
     let t = std::time::Instant::now();
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let read: Vec<Result<Image, String>> = files
+    let read: Vec<Result<(Image, Source), String>> = files
         .par_iter()
         .map(|p| {
             let r = read_one(p, job, &opts);
@@ -351,7 +438,16 @@ pub fn run(
     let mut timing = vec![("features".to_string(), t.elapsed().as_secs_f64())];
     let mut images = Vec::new();
     let mut skipped = Vec::new();
+    let (mut from_cache, mut not_cached) = (0, 0);
     for (p, r) in files.iter().zip(read) {
+        let r = r.map(|(im, source)| {
+            match source {
+                Source::Cache => from_cache += 1,
+                Source::Extracted { cached: false } if job.cache.is_some() => not_cached += 1,
+                Source::Extracted { .. } => {}
+            }
+            im
+        });
         let name = p
             .file_name()
             .unwrap_or_default()
@@ -436,5 +532,7 @@ pub fn run(
         skipped,
         other_files,
         timing,
+        from_cache,
+        not_cached,
     })
 }

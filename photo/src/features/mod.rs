@@ -1,7 +1,8 @@
 //! Automatic tie points between photographs: scale- and rotation-invariant features
 //! ([`extract`]), descriptor matching with the ratio test and a mutual check
 //! ([`matching`]), geometric verification by RANSAC on the fundamental matrix
-//! ([`epipolar`]) and tracks across images ([`tracks`]).
+//! ([`epipolar`]), guided matching once a pair's geometry is known ([`guided`]) and tracks
+//! across images ([`tracks`]).
 //!
 //! Enters: grey images (8-bit, any size, perhaps reduced from the photograph) and the factor
 //! back to the photograph's pixels. Leaves: keypoints in the photograph's pixels (column
@@ -15,6 +16,7 @@
 //! the cap goes to the strongest remaining keypoints anywhere.
 
 pub mod epipolar;
+pub mod guided;
 pub mod matching;
 mod sampling;
 pub mod tracks;
@@ -117,6 +119,29 @@ pub fn extract(img: &GrayImage, scale: f64, opts: &FeatureOptions) -> Features {
         out.descriptors.push(d);
     }
     out
+}
+
+/// The `n` keypoints of `f` that seed matching (spread by the grid of `opts` as
+/// extraction spreads them, strongest first within a cell), as their indices in `f` in
+/// increasing order, with their features. All of them when `f` has no more than `n`.
+/// `width` and `height` are the photograph's, pixels.
+pub fn strongest(
+    f: &Features,
+    n: usize,
+    width: f64,
+    height: f64,
+    opts: &FeatureOptions,
+) -> (Vec<u32>, Features) {
+    let o = FeatureOptions {
+        max_features: n,
+        ..*opts
+    };
+    let keep = spread(&f.keypoints, width, height, &o);
+    let sub = Features {
+        keypoints: keep.iter().map(|&i| f.keypoints[i]).collect(),
+        descriptors: keep.iter().map(|&i| f.descriptors[i]).collect(),
+    };
+    (keep.into_iter().map(|i| i as u32).collect(), sub)
 }
 
 /// For every keypoint, the first keypoint at exactly the same position (SIFT gives a point one

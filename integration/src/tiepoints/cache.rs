@@ -1,0 +1,198 @@
+//! Features kept on disk beside the project (`OUT/features/<photo file>.feat`), so a rerun on
+//! the same folder, or on a folder with photos added, extracts only what it has not seen.
+//!
+//! A file holds one photo's keypoints and descriptors with the key they were made under: a
+//! hash of the photo's bytes, the settings that shape extraction (largest image side, features
+//! per photo, grid) and the format's version. A file whose key differs (the photo or the
+//! settings changed) or that does not read back whole is extracted again and replaced. Values
+//! are stored as their exact bits, so a run from the cache writes the same bytes as one
+//! without. Files are written whole (temporary file, then renamed); a cache that cannot be
+//! written costs the next run time, never this run's result.
+
+use photo::features::{Descriptor, FeatureOptions, Features, Keypoint, DESCRIPTOR_LEN};
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+/// First bytes of a feature file.
+const MAGIC: &[u8; 8] = b"PPKFEAT1";
+
+/// Bumped whenever extraction changes what it returns for the same photo.
+const EXTRACTION_VERSION: u64 = 1;
+
+/// Most keypoints a feature file may declare (a guard against a damaged file).
+const MAX_KEYPOINTS: u64 = 1_000_000;
+
+/// The features of one photo as the cache holds them.
+#[derive(Clone, Debug)]
+pub struct Cached {
+    /// Photograph width and height, pixels.
+    pub size: (u32, u32),
+    /// Photograph pixels per pixel of the image features were extracted from.
+    pub scale: f64,
+    /// Keypoints and descriptors.
+    pub features: Features,
+}
+
+/// FNV-1a, 64 bits, continued from `h`.
+fn fnv(mut h: u64, bytes: &[u8]) -> u64 {
+    for &b in bytes {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+/// The key of a photo's features: its bytes and the settings of extraction.
+pub fn key(photo: &Path, max_image_size: u32, opts: &FeatureOptions) -> std::io::Result<u64> {
+    let mut f = std::fs::File::open(photo)?;
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    let mut buf = vec![0u8; 1 << 16];
+    loop {
+        let n = f.read(&mut buf)?;
+        if n == 0 {
+            break;
+        }
+        h = fnv(h, &buf[..n]);
+    }
+    for v in [
+        EXTRACTION_VERSION,
+        max_image_size as u64,
+        opts.max_features as u64,
+        opts.grid as u64,
+    ] {
+        h = fnv(h, &v.to_le_bytes());
+    }
+    Ok(h)
+}
+
+/// The cache file of a photo.
+pub fn path(dir: &Path, photo: &Path) -> PathBuf {
+    let name = photo.file_name().unwrap_or_default().to_string_lossy();
+    dir.join(format!("{name}.feat"))
+}
+
+/// The features cached under `key` in `file`; None when absent, made under another key, or
+/// not whole.
+pub fn load(file: &Path, key: u64) -> Option<Cached> {
+    let bytes = std::fs::read(file).ok()?;
+    let mut r = Reader { b: &bytes, at: 0 };
+    if r.take(8)? != MAGIC || r.u64()? != key {
+        return None;
+    }
+    let size = (r.u64()? as u32, r.u64()? as u32);
+    let scale = f64::from_bits(r.u64()?);
+    let n = r.u64()?;
+    if n > MAX_KEYPOINTS || r.b.len() - r.at != n as usize * (5 * 8 + DESCRIPTOR_LEN) {
+        return None;
+    }
+    let mut features = Features::default();
+    for _ in 0..n {
+        let mut v = [0.0; 5];
+        for x in &mut v {
+            *x = f64::from_bits(r.u64()?);
+        }
+        features.keypoints.push(Keypoint {
+            x: v[0],
+            y: v[1],
+            size: v[2],
+            angle: v[3],
+            response: v[4],
+        });
+    }
+    for _ in 0..n {
+        let d: Descriptor = r.take(DESCRIPTOR_LEN)?.try_into().ok()?;
+        features.descriptors.push(d);
+    }
+    Some(Cached {
+        size,
+        scale,
+        features,
+    })
+}
+
+/// Write `c` under `key` to `file`, whole or not at all.
+pub fn store(file: &Path, key: u64, c: &Cached) -> std::io::Result<()> {
+    let f = &c.features;
+    let mut out = Vec::with_capacity(48 + f.keypoints.len() * (40 + DESCRIPTOR_LEN));
+    out.extend_from_slice(MAGIC);
+    for v in [
+        key,
+        c.size.0 as u64,
+        c.size.1 as u64,
+        c.scale.to_bits(),
+        f.keypoints.len() as u64,
+    ] {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    for k in &f.keypoints {
+        for v in [k.x, k.y, k.size, k.angle, k.response] {
+            out.extend_from_slice(&v.to_bits().to_le_bytes());
+        }
+    }
+    for d in &f.descriptors {
+        out.extend_from_slice(d);
+    }
+    if let Some(dir) = file.parent() {
+        std::fs::create_dir_all(dir)?;
+    }
+    let tmp = file.with_extension(format!("feat.tmp{}", std::process::id()));
+    std::fs::write(&tmp, &out)?;
+    std::fs::rename(&tmp, file).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}
+
+struct Reader<'a> {
+    b: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Reader<'a> {
+    fn take(&mut self, n: usize) -> Option<&'a [u8]> {
+        let s = self.b.get(self.at..self.at.checked_add(n)?)?;
+        self.at += n;
+        Some(s)
+    }
+
+    fn u64(&mut self) -> Option<u64> {
+        Some(u64::from_le_bytes(self.take(8)?.try_into().ok()?))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn features_come_back_bit_for_bit_and_a_changed_key_or_damage_is_refused() {
+        let dir = testkit::scratch_path("feature-cache");
+        let file = dir.join("a.jpg.feat");
+        let mut features = Features::default();
+        for i in 0..3 {
+            features.keypoints.push(Keypoint {
+                x: 0.1 + i as f64,
+                y: std::f64::consts::PI * i as f64,
+                size: 3.5,
+                angle: -12.25,
+                response: 1e-3 / 3.0,
+            });
+            features.descriptors.push([i as u8 * 7; DESCRIPTOR_LEN]);
+        }
+        let c = Cached {
+            size: (4000, 2250),
+            scale: 2.0,
+            features,
+        };
+        store(&file, 42, &c).unwrap();
+        let back = load(&file, 42).unwrap();
+        assert_eq!(back.size, c.size);
+        assert_eq!(back.scale.to_bits(), c.scale.to_bits());
+        assert_eq!(back.features.keypoints, c.features.keypoints);
+        assert_eq!(back.features.descriptors, c.features.descriptors);
+        assert!(load(&file, 43).is_none(), "another key");
+        let bytes = std::fs::read(&file).unwrap();
+        std::fs::write(&file, &bytes[..bytes.len() - 1]).unwrap();
+        assert!(load(&file, 42).is_none(), "a file cut short");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
