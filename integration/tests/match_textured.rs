@@ -20,9 +20,21 @@ fn check(spec: &TexturedSpec, name: &str) -> (usize, usize, f64, usize) {
     job.exposures = Some(dir.join("antennas.csv"));
     job.camera = Some(dir.join("camera.toml"));
     job.pairs = PairMode::Auto;
-    let m = tiepoints::run(&job, &|_, _, _| {}).unwrap();
-    let w = project::build(&job, &m).unwrap();
-    let truth = Truth::load(&dir).unwrap();
+    let r = check_job(spec, &dir, &job).0;
+    let _ = std::fs::remove_dir_all(&dir);
+    r
+}
+
+/// Match `job` on the rendered block in `dir` and check its tracks against the truth; also
+/// the run itself.
+fn check_job(
+    spec: &TexturedSpec,
+    dir: &std::path::Path,
+    job: &MatchJob,
+) -> ((usize, usize, f64, usize), tiepoints::Matched) {
+    let m = tiepoints::run(job, &|_, _, _| {}).unwrap();
+    let w = project::build(job, &m).unwrap();
+    let truth = Truth::load(dir).unwrap();
     let mut by_point: std::collections::BTreeMap<&str, Vec<(&str, Vector2<f64>)>> =
         Default::default();
     for (img, pt, x, y) in &w.project.measurements {
@@ -66,11 +78,10 @@ fn check(spec: &TexturedSpec, name: &str) -> (usize, usize, f64, usize) {
         }
     }
     let rms = (sum / n.max(1) as f64).sqrt();
-    if spec.width_px >= 1000 {
-        adjust_with_matched_points(&dir, &w.project.measurements);
+    if spec.width_px >= 1000 && job.exposures.is_some() {
+        adjust_with_matched_points(dir, &w.project.measurements);
     }
-    let _ = std::fs::remove_dir_all(&dir);
-    (by_point.len(), good, rms, w.project.images.len())
+    ((by_point.len(), good, rms, w.project.images.len()), m)
 }
 
 /// The block adjusted with the simulator's exact tie points and with the matched ones (σ
@@ -145,4 +156,48 @@ fn matched_tracks_on_the_full_textured_block_are_right_to_the_subpixel() {
         return;
     }
     assert_figures(&TexturedSpec::builtin(), "full", 24, 2000);
+}
+
+/// Photos without positions, more than are matched all with all: each is paired with the
+/// photos that look most alike and its neighbours in name order, a fraction of every pair,
+/// and the block still comes out whole and right.
+#[test]
+fn unplaced_photos_pair_by_appearance_into_one_right_block() {
+    let spec = TexturedSpec {
+        strips: 3,
+        per_strip: 15,
+        ..TexturedSpec::reduced()
+    };
+    let dir = tmp("appearance");
+    textured_block(&spec, &dir).unwrap();
+    let mut job = MatchJob::new(dir.join("photos"));
+    job.camera = Some(dir.join("camera.toml"));
+    job.ignore_gps = true;
+    let ((tracks, good, rms, block), m) = check_job(&spec, &dir, &job);
+    let _ = std::fs::remove_dir_all(&dir);
+    let frac = good as f64 / tracks.max(1) as f64;
+    eprintln!(
+        "{}; {block} photos in the block, {tracks} tracks, {:.2} % correct, RMS {rms:.3} px",
+        m.pair_note,
+        100.0 * frac
+    );
+    assert!(m.pair_note.starts_with("by appearance"), "{}", m.pair_note);
+    // The pairs chosen mostly overlap (pairing each photo with its least alike instead
+    // verified 83 of 432).
+    let verified = m.pairs.iter().filter(|p| !p.verified.is_empty()).count();
+    eprintln!("{verified} of {} pairs verified", m.pairs.len());
+    assert!(
+        verified * 2 >= m.pairs.len(),
+        "{verified} of {} verified",
+        m.pairs.len()
+    );
+    let all = 45 * 44 / 2;
+    assert!(
+        m.pairs.len() < all * 3 / 5,
+        "{} of {all} pairs",
+        m.pairs.len()
+    );
+    assert_eq!(block, 45, "every photo in one block");
+    assert!(frac >= 0.99, "{:.2} % of the tracks correct", 100.0 * frac);
+    assert!(rms <= 0.3, "measurement RMS {rms} px against truth");
 }

@@ -41,10 +41,12 @@ pub struct Args {
     /// reduced by 2, 4 or 8 to fit; positions are written in the photo's own pixels).
     #[arg(long, value_name = "PX", default_value_t = 2000)]
     max_image_size: u32,
-    /// Pairs to match: auto (every pair up to 40 photos or without positions, else by
-    /// overlapping footprints), exhaustive, or gnss (by footprints; positions required).
+    /// Pairs to match: auto (every pair up to 40 photos; above, by overlapping footprints when
+    /// every photo has a position, else by appearance), exhaustive, gnss (by footprints;
+    /// positions required), or appearance (each photo with the 12 that look most alike by a
+    /// global descriptor built from the block, and 2 neighbours on each side in name order).
     #[arg(long, value_name = "MODE", default_value = "auto",
-          value_parser = ["auto", "exhaustive", "gnss"])]
+          value_parser = ["auto", "exhaustive", "gnss", "appearance"])]
     pairs: String,
     /// σ of positions that carry none, horizontal,vertical (m): consumer GPS by default.
     #[arg(long, value_name = "H,V", default_value = "3,5", value_parser = sigma_pair)]
@@ -103,6 +105,7 @@ pub fn run(args: Args) -> Result<()> {
     job.pairs = match args.pairs.as_str() {
         "exhaustive" => PairMode::Exhaustive,
         "gnss" => PairMode::Gnss,
+        "appearance" => PairMode::Appearance,
         _ => PairMode::Auto,
     };
     job.gnss_sigma = args.gnss_sigma.0;

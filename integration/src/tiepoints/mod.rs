@@ -256,6 +256,21 @@ fn read_one(path: &Path, job: &MatchJob, opts: &FeatureOptions) -> Result<(Image
     ))
 }
 
+/// Each photo's most alike others by VLAD over its seed descriptors (vocabulary from the
+/// block); every photo alike none when the block has too few descriptors for a vocabulary.
+fn alike(images: &[Image]) -> Vec<Vec<usize>> {
+    use photo::features::vlad::{most_alike, VladOptions, Vocabulary};
+    let descs: Vec<&[photo::features::Descriptor]> = images
+        .iter()
+        .map(|i| i.seeds.1.descriptors.as_slice())
+        .collect();
+    let Some(voc) = Vocabulary::build(&descs, &VladOptions::default()) else {
+        return vec![Vec::new(); images.len()];
+    };
+    let vlads: Vec<Vec<f32>> = descs.par_iter().map(|d| voc.vlad(d)).collect();
+    most_alike(&vlads, pairs::MOST_ALIKE)
+}
+
 /// Match one pair: ratio/mutual test, then RANSAC (seeded by the pair).
 fn match_pair(images: &[Image], a: usize, b: usize, job: &MatchJob) -> PairResult {
     let (fa, fb) = (&images[a].features, &images[b].features);
@@ -483,7 +498,14 @@ pub fn run(
     };
     let enu = project::local_enu(&positions);
     let radius = project::footprint_radii(&images);
-    let (list, pair_note) = pairs::choose(job.pairs, &enu, &radius).map_err(MatchError::Input)?;
+    let alike = pairs::wants_appearance(job.pairs, &enu).then(|| {
+        let t = std::time::Instant::now();
+        let a = alike(&images);
+        timing.push(("global descriptors".into(), t.elapsed().as_secs_f64()));
+        a
+    });
+    let (list, pair_note) =
+        pairs::choose(job.pairs, &enu, &radius, alike.as_deref()).map_err(MatchError::Input)?;
     let t = std::time::Instant::now();
     let done = std::sync::atomic::AtomicUsize::new(0);
     let results: Vec<PairResult> = list

@@ -2,7 +2,8 @@
 //! ([`extract`]), descriptor matching with the ratio test and a mutual check
 //! ([`matching`]), geometric verification by RANSAC on the fundamental matrix
 //! ([`epipolar`]), guided matching once a pair's geometry is known ([`guided`]) and tracks
-//! across images ([`tracks`]).
+//! across images ([`tracks`]); a global descriptor per image for pairing photos without
+//! positions ([`vlad`]).
 //!
 //! Enters: grey images (8-bit, any size, perhaps reduced from the photograph) and the factor
 //! back to the photograph's pixels. Leaves: keypoints in the photograph's pixels (column
@@ -20,6 +21,7 @@ pub mod guided;
 pub mod matching;
 mod sampling;
 pub mod tracks;
+pub mod vlad;
 
 /// An 8-bit grey image, row-major.
 #[derive(Clone, Debug)]
