@@ -34,6 +34,7 @@
 pub mod adjust;
 pub mod batch;
 pub mod bench;
+pub mod bench_match;
 pub mod crs;
 pub mod demo;
 pub mod exposure;

@@ -4,10 +4,9 @@
 //! measurements. The full builtin block (24 photos of 1600 × 1200 px) runs when
 //! `PPKAT_FULL_TEXTURED=1` (about a minute); the reduced block always.
 
-use gnss::frame::Enu;
+use integration::bench_match::check_tracks;
 use integration::simulate::textured::{textured_block, TexturedSpec, Truth};
 use integration::tiepoints::{self, project, MatchJob, PairMode};
-use nalgebra::Vector2;
 
 use testkit::scratch_path as tmp;
 
@@ -35,53 +34,11 @@ fn check_job(
     let m = tiepoints::run(job, &|_, _, _| {}).unwrap();
     let w = project::build(job, &m).unwrap();
     let truth = Truth::load(dir).unwrap();
-    let mut by_point: std::collections::BTreeMap<&str, Vec<(&str, Vector2<f64>)>> =
-        Default::default();
-    for (img, pt, x, y) in &w.project.measurements {
-        by_point
-            .entry(pt.as_str())
-            .or_default()
-            .push((img.as_str(), Vector2::new(*x, *y)));
-    }
-    let (mut good, mut sum, mut n) = (0, 0.0, 0usize);
-    for obs in by_point.values() {
-        // The track's ground point: the mean of its measurements' ground points (rays ∩
-        // terrain), then every measurement against its projection.
-        let gs: Vec<_> = obs
-            .iter()
-            .filter_map(|(i, xy)| truth.ground_of(i, *xy))
-            .collect();
-        if gs.len() != obs.len() {
-            continue;
-        }
-        let g = Enu(gs.iter().map(|g| g.0).sum::<nalgebra::Vector3<f64>>() / gs.len() as f64);
-        let mut ok = true;
-        for (img, xy) in obs {
-            let Some(p) = truth.project(img, &g) else {
-                ok = false;
-                continue;
-            };
-            let e = (p - xy).norm();
-            ok &= e <= 2.0;
-            if e <= 2.0 {
-                sum += e * e;
-                n += 1;
-            }
-        }
-        good += ok as usize;
-        if !ok && std::env::var("PPKAT_DEBUG").is_ok() {
-            let errs: Vec<f64> = obs
-                .iter()
-                .map(|(img, xy)| truth.project(img, &g).map_or(-1.0, |p| (p - xy).norm()))
-                .collect();
-            eprintln!("bad track len {}: {errs:.1?}", obs.len());
-        }
-    }
-    let rms = (sum / n.max(1) as f64).sqrt();
+    let c = check_tracks(&truth, &w.project.measurements);
     if spec.width_px >= 1000 && job.exposures.is_some() {
         adjust_with_matched_points(dir, &w.project.measurements);
     }
-    ((by_point.len(), good, rms, w.project.images.len()), m)
+    ((c.tracks, c.correct, c.rms_px, w.project.images.len()), m)
 }
 
 /// The block adjusted with the simulator's exact tie points and with the matched ones (σ

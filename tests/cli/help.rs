@@ -3,7 +3,7 @@
 use super::*;
 
 /// Every subcommand, as its words on the command line.
-const SUBCOMMANDS: [&[&str]; 19] = [
+const SUBCOMMANDS: [&[&str]; 20] = [
     &["info"],
     &["convert"],
     &["spp"],
@@ -23,6 +23,7 @@ const SUBCOMMANDS: [&[&str]; 19] = [
     &["bench", "ingest"],
     &["bench", "ppk"],
     &["bench", "adjust"],
+    &["bench", "match"],
 ];
 
 /// In the long help, each option or positional line (`  -o, --out <OUT>`, `  <FILE>`) is
@@ -75,6 +76,7 @@ fn every_argument_of_every_subcommand_is_described() {
         &["simulate"],
         &["adjust"],
         &["bench", "adjust"],
+        &["bench", "match"],
     ] {
         let mut args = cmd.to_vec();
         args.push("--help");

@@ -56,7 +56,9 @@ pub struct MatchJob {
     /// Fewest verified matches for a pair.
     pub min_matches: usize,
     /// Ratio test of guided matching, among the candidates near a keypoint's predicted
-    /// position on its epipolar line (0: no guided matching).
+    /// position on its epipolar line (0: no guided matching). 0.7, stricter than the 0.8 of
+    /// the matching all with all: at 0.8 the textured block's tracks were 99.04 % right and
+    /// Brighton Beach's image RMS 0.60 px; at 0.7 99.29 % and 0.53 px, for 4 % fewer tracks.
     pub guided_ratio: f64,
     /// Use no position from the photos' metadata.
     pub ignore_gps: bool,
@@ -80,7 +82,7 @@ impl MatchJob {
             ratio: 0.8,
             ransac_px: 1.5,
             min_matches: 20,
-            guided_ratio: 0.8,
+            guided_ratio: 0.7,
             ignore_gps: false,
             cache: None,
         }
