@@ -56,9 +56,12 @@ pub struct MatchJob {
     /// Fewest verified matches for a pair.
     pub min_matches: usize,
     /// Ratio test of guided matching, among the candidates near a keypoint's predicted
-    /// position on its epipolar line (0: no guided matching). 0.7, stricter than the 0.8 of
+    /// position on its epipolar line (0: no guided matching). 0.6, stricter than the 0.8 of
     /// the matching all with all: at 0.8 the textured block's tracks were 99.04 % right and
-    /// Brighton Beach's image RMS 0.60 px; at 0.7 99.29 % and 0.53 px, for 4 % fewer tracks.
+    /// Brighton Beach's image RMS 0.60 px; at 0.7 99.29 % and 0.53 px, for 4 % fewer tracks;
+    /// at 0.6 Brighton's RMS is 0.50 px for 5 % fewer again. At 0.7 the 28-photo free
+    /// network of `start_from_ties` ended singular (its start is sensitive to a few more
+    /// tracks: not understood yet).
     pub guided_ratio: f64,
     /// Use no position from the photos' metadata.
     pub ignore_gps: bool,
@@ -82,7 +85,7 @@ impl MatchJob {
             ratio: 0.8,
             ransac_px: 1.5,
             min_matches: 20,
-            guided_ratio: 0.7,
+            guided_ratio: 0.6,
             ignore_gps: false,
             cache: None,
         }
