@@ -9,9 +9,12 @@ use std::path::PathBuf;
 ///
 /// Reads every JPEG or PNG of the folder: EXIF (GPS, focal length, 35 mm equivalent, size,
 /// model) and DJI XMP (altitudes, gimbal angles, calibrated focal length, RTK σ). Extracts
-/// SIFT features from each photo reduced to --max-image-size, matches the pairs (nearest
-/// neighbours with the ratio test and a mutual check), verifies each pair by RANSAC on the
-/// fundamental matrix, joins matches into tracks across photos, and writes the main connected
+/// SIFT features from each photo reduced to --max-image-size (or reads them from the cache of
+/// an earlier run in the output folder, features/), matches the pairs (the strongest 6,000
+/// features all against all: nearest neighbours with the ratio test and a mutual check),
+/// verifies each pair by RANSAC on the fundamental matrix, finds the other features by guided
+/// matching along the pair's epipolar lines, joins matches into tracks across photos, and
+/// writes the main connected
 /// block: project.toml (cameras from the metadata, self-calibrated with 5 or more photos),
 /// images.csv, image_observations.csv (pixels, column right, row down, origin at the top-left
 /// corner), antennas.csv (camera positions with σ), start.csv (start attitudes from DJI gimbal
@@ -57,7 +60,9 @@ pub struct Args {
     /// points are added.
     #[arg(long)]
     ignore_gps: bool,
-    /// Output project folder (written whole, or not at all).
+    /// Output project folder (written whole, or not at all). Its features/ subfolder caches
+    /// every photo's features: a rerun into the same folder extracts only photos that are new
+    /// or changed (the summary says how many came from the cache).
     #[arg(short = 'o', long = "out", value_name = "DIR")]
     out: PathBuf,
 }
