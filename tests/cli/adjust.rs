@@ -25,24 +25,8 @@ fn demo_runs_the_chain_and_reports_accuracy() {
         .lines()
         .find(|l| l.starts_with("carrier phase:"))
         .expect("a carrier-phase line");
-    let pct: f64 = line
-        .split('(')
-        .nth(1)
-        .unwrap()
-        .split(' ')
-        .next()
-        .unwrap()
-        .parse()
-        .unwrap();
-    let rms: f64 = line
-        .split("3D RMS ")
-        .nth(1)
-        .unwrap()
-        .split(' ')
-        .next()
-        .unwrap()
-        .parse()
-        .unwrap();
+    let pct = number_after(line, "(");
+    let rms = number_after(line, "3D RMS ");
     assert!(pct >= 99.0 && rms <= 20.0, "{line}");
     for f in [
         "rover.obs",

@@ -183,6 +183,17 @@ fn column(path: &Path, name: &str) -> Vec<String> {
 }
 
 /// A path as a command-line argument.
+/// The number that follows `marker` in `line` (up to the next space).
+fn number_after(line: &str, marker: &str) -> f64 {
+    let rest = line
+        .split(marker)
+        .nth(1)
+        .unwrap_or_else(|| panic!("no '{marker}' in {line}"));
+    let word = rest.split(' ').next().unwrap_or_default();
+    word.parse()
+        .unwrap_or_else(|_| panic!("'{word}' after '{marker}' is not a number in {line}"))
+}
+
 fn p(x: &Path) -> &str {
     x.to_str().unwrap()
 }

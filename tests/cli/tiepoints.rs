@@ -218,15 +218,7 @@ fn bench_match_times_the_stages_and_checks_the_tracks() {
     }
     assert!(t.contains("photos in the block: 8 of 8"), "{t}");
     let line = t.lines().find(|l| l.starts_with("tracks: ")).unwrap();
-    let pct: f64 = line
-        .split("), ")
-        .nth(1)
-        .unwrap()
-        .split(' ')
-        .next()
-        .unwrap()
-        .parse()
-        .unwrap();
+    let pct = number_after(line, "), ");
     assert!(pct >= 99.0, "{line}");
     let again = succeeds(&ppkat(&["bench", "match", "--photos", "8", "-o", p(&out)]));
     assert!(again.contains("rendered earlier (reused)"), "{again}");

@@ -6,7 +6,7 @@
 //! per photo, grid) and the format's version. A file whose key differs (the photo or the
 //! settings changed) or that does not read back whole is extracted again and replaced. Values
 //! are stored as their exact bits, so a run from the cache writes the same bytes as one
-//! without. Files are written whole (temporary file, then renamed); a cache that cannot be
+//! without. Files are written whole (`gnss::atomic::write_atomic`); a cache that cannot be
 //! written costs the next run time, never this run's result.
 
 use photo::features::{Descriptor, FeatureOptions, Features, Keypoint, DESCRIPTOR_LEN};
@@ -110,35 +110,35 @@ pub fn load(file: &Path, key: u64) -> Option<Cached> {
     })
 }
 
-/// Write `c` under `key` to `file`, whole or not at all.
-pub fn store(file: &Path, key: u64, c: &Cached) -> std::io::Result<()> {
-    let f = &c.features;
-    let mut out = Vec::with_capacity(48 + f.keypoints.len() * (40 + DESCRIPTOR_LEN));
-    out.extend_from_slice(MAGIC);
-    for v in [
-        key,
-        c.size.0 as u64,
-        c.size.1 as u64,
-        c.scale.to_bits(),
-        f.keypoints.len() as u64,
-    ] {
-        out.extend_from_slice(&v.to_le_bytes());
-    }
-    for k in &f.keypoints {
-        for v in [k.x, k.y, k.size, k.angle, k.response] {
-            out.extend_from_slice(&v.to_bits().to_le_bytes());
-        }
-    }
-    for d in &f.descriptors {
-        out.extend_from_slice(d);
-    }
+/// Write `c` under `key` to `file`, whole or not at all (`gnss::atomic::write_atomic`).
+pub fn store(file: &Path, key: u64, c: &Cached) -> Result<(), gnss::error::Error> {
     if let Some(dir) = file.parent() {
-        std::fs::create_dir_all(dir)?;
+        std::fs::create_dir_all(dir).map_err(|cause| gnss::error::Error::Write {
+            path: dir.to_path_buf(),
+            cause,
+        })?;
     }
-    let tmp = file.with_extension(format!("feat.tmp{}", std::process::id()));
-    std::fs::write(&tmp, &out)?;
-    std::fs::rename(&tmp, file).inspect_err(|_| {
-        let _ = std::fs::remove_file(&tmp);
+    let f = &c.features;
+    gnss::atomic::write_atomic(file, |w| {
+        w.write_all(MAGIC)?;
+        for v in [
+            key,
+            c.size.0 as u64,
+            c.size.1 as u64,
+            c.scale.to_bits(),
+            f.keypoints.len() as u64,
+        ] {
+            w.write_all(&v.to_le_bytes())?;
+        }
+        for k in &f.keypoints {
+            for v in [k.x, k.y, k.size, k.angle, k.response] {
+                w.write_all(&v.to_bits().to_le_bytes())?;
+            }
+        }
+        for d in &f.descriptors {
+            w.write_all(d)?;
+        }
+        Ok(())
     })
 }
 

@@ -319,20 +319,20 @@ fn match_pair(images: &[Image], a: usize, b: usize, job: &MatchJob) -> PairResul
                 .filter(|(_, ok)| *ok)
                 .map(|(&k, _)| m[k])
                 .collect();
-            if kept.len() >= job.min_matches && job.guided_ratio > 0.0 {
-                let o = GuidedOptions {
-                    radius_px: GUIDED_RADIUS * opts.threshold_px,
-                    epipolar_px: opts.threshold_px,
-                    ratio: job.guided_ratio,
-                    neighbours: COHERENCE_NEIGHBOURS,
-                    duplicate_px: opts.threshold_px,
-                };
-                guided(fa, fb, &v.f, &kept, &o)
-            } else if kept.len() >= job.min_matches {
-                kept
-            } else {
-                Vec::new()
+            if kept.len() < job.min_matches {
+                return Vec::new();
             }
+            if job.guided_ratio <= 0.0 {
+                return kept;
+            }
+            let o = GuidedOptions {
+                radius_px: GUIDED_RADIUS * opts.threshold_px,
+                epipolar_px: opts.threshold_px,
+                ratio: job.guided_ratio,
+                neighbours: COHERENCE_NEIGHBOURS,
+                duplicate_px: opts.threshold_px,
+            };
+            guided(fa, fb, &v.f, &kept, &o)
         })
         .unwrap_or_default();
     let f = f.filter(|_| !verified.is_empty());

@@ -196,6 +196,21 @@ pub fn verify(
     (best.len() >= opts.min_inliers).then_some(Verified { f, inliers: best })
 }
 
+/// The componentwise median of displacements (the mean of the two middle values for an even
+/// count); zero for none.
+pub(crate) fn median_shift<'a>(disp: impl Iterator<Item = &'a Vector2<f64>>) -> Vector2<f64> {
+    let (mut x, mut y): (Vec<f64>, Vec<f64>) = disp.map(|v| (v.x, v.y)).unzip();
+    if x.is_empty() {
+        return Vector2::zeros();
+    }
+    let med = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        let n = v.len();
+        (v[(n - 1) / 2] + v[n / 2]) / 2.0
+    };
+    Vector2::new(med(&mut x), med(&mut y))
+}
+
 /// Motion coherence: which correspondences move like their `k` nearest neighbours (in the
 /// first image) do — their displacement within `tol_px` of the neighbours' median
 /// displacement. A wrong match that happens to lie near its epipolar line still lands far
@@ -213,13 +228,7 @@ pub fn coherent(a: &[Vector2<f64>], b: &[Vector2<f64>], k: usize, tol_px: f64) -
                 .map(|j| ((a[j] - a[i]).norm_squared(), j))
                 .collect();
             d.select_nth_unstable_by(k - 1, |x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
-            let near = &d[..k];
-            let med = |f: &dyn Fn(&Vector2<f64>) -> f64| {
-                let mut v: Vec<f64> = near.iter().map(|&(_, j)| f(&disp[j])).collect();
-                v.sort_by(f64::total_cmp);
-                (v[(k - 1) / 2] + v[k / 2]) / 2.0
-            };
-            let m = Vector2::new(med(&|v| v.x), med(&|v| v.y));
+            let m = median_shift(d[..k].iter().map(|&(_, j)| &disp[j]));
             (disp[i] - m).norm() <= tol_px
         })
         .collect()

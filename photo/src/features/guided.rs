@@ -6,7 +6,7 @@
 //! dashed line) is matched once its place is known. This is what turns many two-photo tracks
 //! into tracks across the block.
 
-use super::epipolar::sampson;
+use super::epipolar::{median_shift, sampson};
 use super::matching::Match;
 use super::{Descriptor, Features, Keypoint};
 use nalgebra::{Matrix3, Vector2};
@@ -126,13 +126,24 @@ fn predicted_shift(
         .collect();
     near.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
     near.truncate(k);
-    let med = |f: &dyn Fn(&Vector2<f64>) -> f64| {
-        let mut v: Vec<f64> = near.iter().map(|&(_, i)| f(&disp[i as usize])).collect();
-        v.sort_by(f64::total_cmp);
-        let n = v.len();
-        (v[(n - 1) / 2] + v[n / 2]) / 2.0
-    };
-    Some(Vector2::new(med(&|v| v.x), med(&|v| v.y)))
+    Some(median_shift(near.iter().map(|&(_, i)| &disp[i as usize])))
+}
+
+/// The nearest and second-nearest descriptor distances² among `candidates` (keypoint,
+/// distance²), and the nearest's keypoint (the lower of equals); `i64::MAX` and `u32::MAX`
+/// where there are none.
+fn nearest_two(candidates: impl Iterator<Item = (u32, i64)>) -> (i64, i64, u32) {
+    let (mut d1, mut d2, mut k1) = (i64::MAX, i64::MAX, u32::MAX);
+    for (k, d) in candidates {
+        if d < d1 || (d == d1 && k < k1) {
+            d2 = d1;
+            d1 = d;
+            k1 = k;
+        } else if d < d2 {
+            d2 = d;
+        }
+    }
+    (d1, d2, k1)
 }
 
 /// The verified matches `seeds` of images `a` and `b` with fundamental matrix `f`
@@ -191,20 +202,13 @@ pub fn guided(
             continue;
         };
         b_grid.within(&pb, &(p + shift), o.radius_px, &mut cand);
-        let (mut d1, mut d2, mut j1) = (i64::MAX, i64::MAX, u32::MAX);
-        for &j in &cand {
-            if used_b[j as usize] || sampson(f, p, &pb[j as usize]) > o.epipolar_px {
-                continue;
-            }
-            let d = dist2(&a.descriptors[i], &b.descriptors[j as usize]);
-            if d < d1 || (d == d1 && j < j1) {
-                d2 = d1;
-                d1 = d;
-                j1 = j;
-            } else if d < d2 {
-                d2 = d;
-            }
-        }
+        let (d1, d2, j1) = nearest_two(
+            cand.iter()
+                .filter(|&&j| {
+                    !used_b[j as usize] && sampson(f, p, &pb[j as usize]) <= o.epipolar_px
+                })
+                .map(|&j| (j, dist2(&a.descriptors[i], &b.descriptors[j as usize]))),
+        );
         // A lone candidate has nothing to be told apart from: not taken (taking those whose
         // descriptor is as close as the seeds' lowered the correct share on the textured
         // block).
@@ -221,20 +225,18 @@ pub fn guided(
     let back = |i: u32, j: u32, shift: Vector2<f64>, cand: &mut Vec<u32>| {
         let q = pb[j as usize];
         a_grid.within(&pa, &(q - shift), o.radius_px, cand);
-        let (mut d1, mut d2, mut k1) = (i64::MAX, i64::MAX, u32::MAX);
-        for &k in cand.iter() {
-            if used_a[k as usize] || sampson(f, &pa[k as usize], &q) > o.epipolar_px {
-                continue;
-            }
-            let d = dist2(&a.descriptors[k as usize], &b.descriptors[j as usize]);
-            if d < d1 || (d == d1 && k < k1) {
-                d2 = d1;
-                d1 = d;
-                k1 = k;
-            } else if d < d2 {
-                d2 = d;
-            }
-        }
+        let (d1, d2, k1) = nearest_two(
+            cand.iter()
+                .filter(|&&k| {
+                    !used_a[k as usize] && sampson(f, &pa[k as usize], &q) <= o.epipolar_px
+                })
+                .map(|&k| {
+                    (
+                        k,
+                        dist2(&a.descriptors[k as usize], &b.descriptors[j as usize]),
+                    )
+                }),
+        );
         k1 == i && (d2 == i64::MAX || (d1 as f64) < r2 * d2 as f64)
     };
     let mut out = seeds.to_vec();
