@@ -188,8 +188,8 @@ fn print_summary(m: &tiepoints::Matched, w: &project::Written) {
         m.pairs.len()
     );
     println!(
-        "tracks: {} ({} in 3 or more photos), {} measurements; cut: {} conflicting keypoints, {} measurements off the epipolar lines of their track",
-        w.tracks, w.tracks_3plus, w.observations, m.tracks.conflicts, m.inconsistent
+        "tracks: {} ({} in 3 or more photos), {} measurements ({} found by completing tracks in further photos); cut: {} conflicting keypoints, {} measurements off the epipolar lines of their track",
+        w.tracks, w.tracks_3plus, w.observations, m.completed, m.tracks.conflicts, m.inconsistent
     );
     if w.implausible_depth > 0 {
         println!(

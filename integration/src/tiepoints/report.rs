@@ -42,6 +42,8 @@ pub fn json(m: &Matched, w: &Written) -> serde_json::Value {
         "pair_selection": m.pair_note,
         "tracks": w.tracks, "tracks_3plus": w.tracks_3plus, "observations": w.observations,
         "track_conflicts_cut": m.tracks.conflicts,
+        "measurements_off_epipolar_cut": m.inconsistent,
+        "measurements_by_completion": m.completed,
         "not_connected": w.not_connected,
         "skipped": m.skipped.iter().chain(&w.no_camera).map(|(n, r)| json!({"file": n, "reason": r})).collect::<Vec<_>>(),
         "cameras": w.cameras.iter().map(|(c, s, n)| json!({"id": c, "focal_from": s, "photos": n})).collect::<Vec<_>>(),

@@ -6,9 +6,10 @@
 //! dashed line) is matched once its place is known. This is what turns many two-photo tracks
 //! into tracks across the block.
 
-use super::epipolar::{median_shift, sampson};
+use super::epipolar::sampson;
 use super::matching::Match;
-use super::{Descriptor, Features, Keypoint};
+use super::near::{dist2, nearest_two, xy, Grid, Mover};
+use super::Features;
 use nalgebra::{Matrix3, Vector2};
 
 /// How guided matching searches.
@@ -26,124 +27,6 @@ pub struct GuidedOptions {
     /// the same feature) are left alone, pixels: matching them again would only put two
     /// keypoints of one image in one track.
     pub duplicate_px: f64,
-}
-
-/// A uniform grid of points for radius queries.
-struct Grid {
-    cell: f64,
-    cols: usize,
-    rows: usize,
-    buckets: Vec<Vec<u32>>,
-}
-
-impl Grid {
-    fn new(points: &[Vector2<f64>], cell: f64) -> Grid {
-        let (mx, my) = points
-            .iter()
-            .fold((0.0f64, 0.0f64), |(x, y), p| (x.max(p.x), y.max(p.y)));
-        let cols = (mx / cell) as usize + 1;
-        let rows = (my / cell) as usize + 1;
-        let mut buckets = vec![Vec::new(); cols * rows];
-        for (i, p) in points.iter().enumerate() {
-            let (c, r) = (
-                (p.x.max(0.0) / cell) as usize,
-                (p.y.max(0.0) / cell) as usize,
-            );
-            buckets[r.min(rows - 1) * cols + c.min(cols - 1)].push(i as u32);
-        }
-        Grid {
-            cell,
-            cols,
-            rows,
-            buckets,
-        }
-    }
-
-    /// Indices of the points within `r` of `p` (in bucket order: deterministic).
-    fn within(&self, points: &[Vector2<f64>], p: &Vector2<f64>, r: f64, out: &mut Vec<u32>) {
-        out.clear();
-        let span = |v: f64, n: usize| {
-            let lo = ((v - r) / self.cell).floor().max(0.0) as usize;
-            let hi = (((v + r) / self.cell).floor().max(0.0) as usize).min(n - 1);
-            (lo, hi)
-        };
-        let (c0, c1) = span(p.x, self.cols);
-        let (r0, r1) = span(p.y, self.rows);
-        if c0 > c1 || r0 > r1 {
-            return;
-        }
-        for row in r0..=r1 {
-            for col in c0..=c1 {
-                for &i in &self.buckets[row * self.cols + col] {
-                    if (points[i as usize] - p).norm_squared() <= r * r {
-                        out.push(i);
-                    }
-                }
-            }
-        }
-    }
-}
-
-fn xy(k: &Keypoint) -> Vector2<f64> {
-    Vector2::new(k.x, k.y)
-}
-
-fn dist2(a: &Descriptor, b: &Descriptor) -> i64 {
-    a.iter()
-        .zip(b)
-        .map(|(&x, &y)| {
-            let d = x as i64 - y as i64;
-            d * d
-        })
-        .sum()
-}
-
-/// The median displacement of the `k` seeds nearest to `p` (seed positions `sa` in the first
-/// image, displacements `disp`), searching ever wider; None without seeds.
-fn predicted_shift(
-    grid: &Grid,
-    sa: &[Vector2<f64>],
-    disp: &[Vector2<f64>],
-    p: &Vector2<f64>,
-    k: usize,
-    buf: &mut Vec<u32>,
-) -> Option<Vector2<f64>> {
-    let mut r = grid.cell;
-    let widest = grid.cell * (grid.cols.max(grid.rows) as f64 + 1.0) * 1.5;
-    loop {
-        grid.within(sa, p, r, buf);
-        if buf.len() >= k || r > widest {
-            break;
-        }
-        r *= 2.0;
-    }
-    if buf.is_empty() {
-        return None;
-    }
-    let mut near: Vec<(f64, u32)> = buf
-        .iter()
-        .map(|&i| ((sa[i as usize] - p).norm_squared(), i))
-        .collect();
-    near.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
-    near.truncate(k);
-    Some(median_shift(near.iter().map(|&(_, i)| &disp[i as usize])))
-}
-
-/// The nearest and second-nearest descriptor distances² among `candidates` (keypoint,
-/// distance²), and the nearest's keypoint (the lower of equals); `i64::MAX` and `u32::MAX`
-/// where there are none.
-fn nearest_two(candidates: impl Iterator<Item = (u32, i64)>) -> (i64, i64, u32) {
-    let (mut d1, mut d2, mut k1) = (i64::MAX, i64::MAX, u32::MAX);
-    for (k, d) in candidates {
-        if d < d1 || (d == d1 && k < k1) {
-            d2 = d1;
-            d1 = d;
-            k1 = k;
-        } else if d < d2 {
-            d2 = d;
-        }
-    }
-    (d1, d2, k1)
 }
 
 /// The verified matches `seeds` of images `a` and `b` with fundamental matrix `f`
@@ -167,18 +50,13 @@ pub fn guided(
     let pa: Vec<Vector2<f64>> = a.keypoints.iter().map(xy).collect();
     let pb: Vec<Vector2<f64>> = b.keypoints.iter().map(xy).collect();
     let sa: Vec<Vector2<f64>> = seeds.iter().map(|&(i, _)| pa[i as usize]).collect();
-    let disp: Vec<Vector2<f64>> = seeds
-        .iter()
-        .map(|&(i, j)| pb[j as usize] - pa[i as usize])
-        .collect();
+    let sb: Vec<Vector2<f64>> = seeds.iter().map(|&(_, j)| pb[j as usize]).collect();
     let cell = o.radius_px.max(1.0);
     let mut buf = Vec::new();
-    // Seed cells hold about half the neighbours sought, so the search widens a step or two.
     let (w, h) = pa
         .iter()
         .fold((1.0f64, 1.0f64), |(w, h), p| (w.max(p.x), h.max(p.y)));
-    let seed_cell = (w * h * o.neighbours as f64 / (2.0 * sa.len() as f64)).sqrt();
-    let seed_grid = Grid::new(&sa, seed_cell.max(cell));
+    let mover = Mover::new(sa, &sb, o.neighbours, (w, h), cell);
     let b_grid = Grid::new(&pb, cell);
     let mut used_a = vec![false; pa.len()];
     let mut used_b = vec![false; pb.len()];
@@ -198,7 +76,7 @@ pub fn guided(
         if used_a[i] {
             continue;
         }
-        let Some(shift) = predicted_shift(&seed_grid, &sa, &disp, p, o.neighbours, &mut buf) else {
+        let Some(shift) = mover.shift(p, &mut buf) else {
             continue;
         };
         b_grid.within(&pb, &(p + shift), o.radius_px, &mut cand);
@@ -252,6 +130,7 @@ pub fn guided(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::features::{Descriptor, Keypoint};
 
     fn kp(x: f64, y: f64) -> Keypoint {
         Keypoint {

@@ -1,8 +1,9 @@
 //! Automatic tie points between photographs: scale- and rotation-invariant features
 //! ([`extract`]), descriptor matching with the ratio test and a mutual check
 //! ([`matching`]), geometric verification by RANSAC on the fundamental matrix
-//! ([`epipolar`]), guided matching once a pair's geometry is known ([`guided`]) and tracks
-//! across images ([`tracks`]); a global descriptor per image for pairing photos without
+//! ([`epipolar`]), guided matching once a pair's geometry is known ([`guided`]), tracks
+//! across images ([`tracks`]) and their completion in the other photos that see them
+//! ([`complete`]); a global descriptor per image for pairing photos without
 //! positions ([`vlad`]).
 //!
 //! Enters: grey images (8-bit, any size, perhaps reduced from the photograph) and the factor
@@ -16,9 +17,11 @@
 //! a grid: each cell keeps its strongest responses up to its share of the cap, and the rest of
 //! the cap goes to the strongest remaining keypoints anywhere.
 
+pub mod complete;
 pub mod epipolar;
 pub mod guided;
 pub mod matching;
+mod near;
 mod sampling;
 pub mod tracks;
 pub mod vlad;
