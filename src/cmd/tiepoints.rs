@@ -13,8 +13,9 @@ use std::path::PathBuf;
 /// an earlier run in the output folder, features/), matches the pairs (the strongest 6,000
 /// features all against all: nearest neighbours with the ratio test and a mutual check),
 /// verifies each pair by RANSAC on the fundamental matrix, finds the other features by guided
-/// matching along the pair's epipolar lines, joins matches into tracks across photos, and
-/// writes the main connected
+/// matching along the pair's epipolar lines (or reads the pair from the cache), joins matches
+/// into tracks across photos, looks for each track in the further photos where two or more
+/// of its epipolar lines cross, and writes the main connected
 /// block: project.toml (cameras from the metadata, self-calibrated with 5 or more photos),
 /// images.csv, image_observations.csv (pixels, column right, row down, origin at the top-left
 /// corner), antennas.csv (camera positions with σ), start.csv (start attitudes from DJI gimbal
@@ -61,8 +62,9 @@ pub struct Args {
     #[arg(long)]
     ignore_gps: bool,
     /// Output project folder (written whole, or not at all). Its features/ subfolder caches
-    /// every photo's features: a rerun into the same folder extracts only photos that are new
-    /// or changed (the summary says how many came from the cache).
+    /// every photo's features and every pair's matches: a rerun into the same folder extracts
+    /// and matches only photos that are new or changed (the summary says how many came from
+    /// the cache), and writes the same bytes.
     #[arg(short = 'o', long = "out", value_name = "DIR")]
     out: PathBuf,
 }
@@ -216,6 +218,17 @@ fn print_summary(m: &tiepoints::Matched, w: &project::Written) {
             )
         } else {
             String::new()
+        }
+    );
+    println!(
+        "pair matches: {} of {} pairs from the cache, {} matched{}",
+        m.pairs_from_cache,
+        m.pairs.len(),
+        m.pairs.len() - m.pairs_from_cache,
+        if m.pairs_not_cached {
+            " (could not be cached: the next run matches them again)"
+        } else {
+            ""
         }
     );
     for (s, t) in &m.timing {

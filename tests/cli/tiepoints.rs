@@ -33,8 +33,8 @@ fn brighton_beach_photos_match_into_one_block_that_adjusts() {
     assert!(completed >= 800, "{completed} measurements by completion");
     // Six photos of the strip flown back carry a gimbal yaw turned by 180°: the overlaps win.
     assert_eq!(t.matches("the gimbal yaw differs").count(), 6, "{t}");
-    // A rerun on the same folder reads every photo's features from the cache beside the
-    // project and writes the same bytes.
+    // A rerun on the same folder reads every photo's features and every pair's matches from
+    // the cache beside the project and writes the same bytes.
     let before: Vec<Vec<u8>> = ["image_observations.csv", "match.json", "project.toml"]
         .iter()
         .map(|f| std::fs::read(out.join(f)).unwrap())
@@ -42,6 +42,10 @@ fn brighton_beach_photos_match_into_one_block_that_adjusts() {
     let again = succeeds(&ppkat(&["match", "--photos", p(&dir), "-o", p(&out)]));
     assert!(
         again.contains("features: 18 of 18 photos from the cache, 0 extracted"),
+        "{again}"
+    );
+    assert!(
+        again.contains("pair matches: 153 of 153 pairs from the cache, 0 matched"),
         "{again}"
     );
     for (f, b) in ["image_observations.csv", "match.json", "project.toml"]

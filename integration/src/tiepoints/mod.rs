@@ -10,10 +10,12 @@
 //! Every photo left out is named with its reason; images not connected to the main block are
 //! named too. Deterministic: parallel stages collect in input order.
 
+mod block;
 pub mod cache;
 pub mod camera;
 pub mod decode;
 pub mod meta;
+pub mod pair_cache;
 pub mod pairs;
 pub mod positions;
 pub mod project;
@@ -126,6 +128,8 @@ pub struct Image {
     /// The keypoints matched all against all (indices into `features`), and their features:
     /// the others are found by guided matching once a pair's geometry is known.
     pub seeds: (Vec<u32>, Features),
+    /// The key its features are cached under (None without a cache).
+    pub key: Option<u64>,
 }
 
 /// A matched pair: image indices, putative matches, verified matches.
@@ -175,6 +179,10 @@ pub struct Matched {
     pub from_cache: usize,
     /// Photos whose features were extracted but could not be cached.
     pub not_cached: usize,
+    /// Pairs whose matches were read from the cache.
+    pub pairs_from_cache: usize,
+    /// Whether the pairs could not be written to the cache (a cache was asked for).
+    pub pairs_not_cached: bool,
 }
 
 /// Why a match run failed as a whole.
@@ -229,7 +237,7 @@ fn features_of(
     path: &Path,
     job: &MatchJob,
     opts: &FeatureOptions,
-) -> Result<(cache::Cached, Source), String> {
+) -> Result<(cache::Cached, Source, Option<u64>), String> {
     let slot = job.cache.as_ref().and_then(|(old, new)| {
         let key = cache::key(path, job.max_image_size, opts).ok()?;
         Some((cache::path(old, path), cache::path(new, path), key))
@@ -243,7 +251,7 @@ fn features_of(
                     let _ = cache::store(new, *key, &c);
                 }
             }
-            return Ok((c, Source::Cache));
+            return Ok((c, Source::Cache, Some(*key)));
         }
     }
     let d = decode::decode(path, job.max_image_size)?;
@@ -252,14 +260,15 @@ fn features_of(
         scale: d.scale,
         features: extract(&d.gray, d.scale, opts),
     };
+    let key = slot.as_ref().map(|s| s.2);
     let cached = slot.is_some_and(|(_, new, key)| cache::store(&new, key, &c).is_ok());
-    Ok((c, Source::Extracted { cached }))
+    Ok((c, Source::Extracted { cached }, key))
 }
 
 /// Metadata and features of one photo, or why it is left out.
 fn read_one(path: &Path, job: &MatchJob, opts: &FeatureOptions) -> Result<(Image, Source), String> {
     let meta = meta::read(path)?;
-    let (c, source) = features_of(path, job, opts)?;
+    let (c, source, key) = features_of(path, job, opts)?;
     let (w, h) = (c.size.0 as f64, c.size.1 as f64);
     let seeds = photo::features::strongest(&c.features, job.seed_features, w, h, opts);
     Ok((
@@ -269,6 +278,7 @@ fn read_one(path: &Path, job: &MatchJob, opts: &FeatureOptions) -> Result<(Image
             scale: c.scale,
             features: c.features,
             seeds,
+            key,
         },
         source,
     ))
@@ -316,7 +326,8 @@ fn match_pair(images: &[Image], a: usize, b: usize, job: &MatchJob) -> PairResul
         min_inliers: job.min_matches,
         ..RansacOptions::default()
     };
-    let model = verify(&pa, &pb, &opts, (a as u64) << 32 | b as u64);
+    let seed = pair_cache::seed(a, b);
+    let model = verify(&pa, &pb, &opts, seed);
     let f = model.as_ref().map(|v| v.f);
     let verified = model
         .map(|v| {
@@ -358,125 +369,40 @@ fn match_pair(images: &[Image], a: usize, b: usize, job: &MatchJob) -> PairResul
     }
 }
 
-/// Look for every track in the other photos that have verified pairs with two or more of its
-/// photos ([`photo::features::complete`]); returns the measurements added.
-fn complete_tracks(
-    tracks: &mut tracks::Tracks,
+/// Match every pair of `list` in parallel, or read it from the cache of a previous run;
+/// returns the results in list order and how many came from the cache.
+fn match_pairs(
     images: &[Image],
-    canon: &[Vec<u32>],
-    results: &[PairResult],
-    verified: &[(usize, usize, Vec<Match>)],
+    list: &[(usize, usize)],
     job: &MatchJob,
-) -> usize {
-    use photo::features::complete::{complete, CompleteOptions, PairGeometry};
-    if job.complete_ratio <= 0.0 {
-        return 0;
-    }
-    let fs: std::collections::HashMap<(usize, usize), nalgebra::Matrix3<f64>> = results
-        .iter()
-        .filter_map(|p| p.f.map(|f| ((p.a, p.b), f)))
-        .collect();
-    let pairs: Vec<PairGeometry> = verified
-        .iter()
-        .filter_map(|(a, b, m)| {
-            Some(PairGeometry {
-                a: *a,
-                b: *b,
-                f: *fs.get(&(*a, *b))?,
-                matches: m,
-                epipolar_px: job.ransac_px * images[*a].scale.max(images[*b].scale),
-            })
+    progress: &(dyn Fn(&str, usize, usize) + Sync),
+) -> (Vec<PairResult>, usize) {
+    let old = job
+        .cache
+        .as_ref()
+        .map(|(old, _)| pair_cache::load(&pair_cache::path(old)))
+        .unwrap_or_default();
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let hits = std::sync::atomic::AtomicUsize::new(0);
+    let results = list
+        .par_iter()
+        .map(|&(a, b)| {
+            let stored = images[a].key.zip(images[b].key).and_then(|(ka, kb)| {
+                old.get(&(ka, kb, pair_cache::settings(job, pair_cache::seed(a, b))))
+            });
+            let r = match stored {
+                Some(s) => {
+                    hits.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    s.result(a, b)
+                }
+                None => match_pair(images, a, b, job),
+            };
+            let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress("pairs", k, list.len());
+            r
         })
         .collect();
-    let features: Vec<&photo::features::Features> = images.iter().map(|i| &i.features).collect();
-    let o = CompleteOptions {
-        radius: GUIDED_RADIUS,
-        ratio: job.complete_ratio,
-        neighbours: COHERENCE_NEIGHBOURS,
-        min_views: 2,
-        duplicate_px: job.ransac_px,
-        min_crossing: 20.0,
-        lone_factor: LONE_FACTOR,
-    };
-    complete(&features, canon, &pairs, tracks, &o)
-}
-
-/// Cut from every track of three or more photos the measurements that disagree with the
-/// epipolar geometry of its other photos (each verified pair of the track's photos checks its
-/// two measurements, not only the pairs that made the track): the measurement with the most
-/// disagreements goes first, until none disagree. Returns the measurements cut.
-fn consistent_tracks(
-    tracks: &mut tracks::Tracks,
-    images: &[Image],
-    pairs: &[PairResult],
-    job: &MatchJob,
-) -> usize {
-    use photo::features::epipolar::sampson;
-    let fs: std::collections::HashMap<(usize, usize), nalgebra::Matrix3<f64>> = pairs
-        .iter()
-        .filter_map(|p| p.f.map(|f| ((p.a, p.b), f)))
-        .collect();
-    let px = |(i, k): (usize, u32)| {
-        let q = images[i].features.keypoints[k as usize];
-        nalgebra::Vector2::new(q.x, q.y)
-    };
-    let mut cut = 0;
-    for t in tracks.tracks.iter_mut().filter(|t| t.len() >= 3) {
-        loop {
-            let mut bad = vec![0usize; t.len()];
-            for x in 0..t.len() {
-                for y in x + 1..t.len() {
-                    let (a, b) = (t[x], t[y]);
-                    let Some(f) = fs.get(&(a.0, b.0)) else {
-                        continue;
-                    };
-                    let tol = job.ransac_px * images[a.0].scale.max(images[b.0].scale);
-                    if sampson(f, &px(a), &px(b)) > tol {
-                        bad[x] += 1;
-                        bad[y] += 1;
-                    }
-                }
-            }
-            let (worst, &n) = bad
-                .iter()
-                .enumerate()
-                .max_by(|p, q| p.1.cmp(q.1).then(q.0.cmp(&p.0)))
-                .unwrap_or((0, &0));
-            if n == 0 {
-                break;
-            }
-            t.remove(worst);
-            cut += 1;
-        }
-    }
-    tracks.tracks.retain(|t| t.len() >= 2);
-    cut
-}
-
-/// Connected components of the images by verified pairs, numbered by size (0 largest).
-fn components(n: usize, pairs: &[PairResult]) -> Vec<usize> {
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn root(p: &mut [usize], mut x: usize) -> usize {
-        while p[x] != x {
-            p[x] = p[p[x]];
-            x = p[x];
-        }
-        x
-    }
-    for p in pairs.iter().filter(|p| !p.verified.is_empty()) {
-        let (x, y) = (root(&mut parent, p.a), root(&mut parent, p.b));
-        parent[x.max(y)] = x.min(y);
-    }
-    let roots: Vec<usize> = (0..n).map(|i| root(&mut parent, i)).collect();
-    let mut size = vec![0usize; n];
-    roots.iter().for_each(|&r| size[r] += 1);
-    let mut order: Vec<usize> = (0..n).filter(|&r| size[r] > 0).collect();
-    order.sort_by(|&a, &b| size[b].cmp(&size[a]).then(a.cmp(&b)));
-    let mut number = vec![0usize; n];
-    for (k, &r) in order.iter().enumerate() {
-        number[r] = k;
-    }
-    roots.iter().map(|&r| number[r]).collect()
+    (results, hits.into_inner())
 }
 
 /// Run the matching stages; `progress(stage, done, total)` is called as work completes.
@@ -568,16 +494,21 @@ pub fn run(
     let (list, pair_note) =
         pairs::choose(job.pairs, &enu, &radius, alike.as_deref()).map_err(MatchError::Input)?;
     let t = std::time::Instant::now();
-    let done = std::sync::atomic::AtomicUsize::new(0);
-    let results: Vec<PairResult> = list
-        .par_iter()
-        .map(|&(a, b)| {
-            let r = match_pair(&images, a, b, job);
-            let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            progress("pairs", k, list.len());
-            r
-        })
-        .collect();
+    let (results, pairs_from_cache) = match_pairs(&images, &list, job, progress);
+    let pairs_not_cached = job.cache.as_ref().is_some_and(|(_, new)| {
+        let keyed = results.iter().filter_map(|p| {
+            let (ka, kb) = images[p.a].key.zip(images[p.b].key)?;
+            Some((
+                (
+                    ka,
+                    kb,
+                    pair_cache::settings(job, pair_cache::seed(p.a, p.b)),
+                ),
+                p,
+            ))
+        });
+        pair_cache::store(&pair_cache::path(new), keyed).is_err()
+    });
     timing.push(("matching".into(), t.elapsed().as_secs_f64()));
     let counts: Vec<usize> = images.iter().map(|i| i.features.keypoints.len()).collect();
     // One measurement per image position: keypoints of other orientations at the same place
@@ -602,10 +533,10 @@ pub fn run(
         .collect();
     let mut tracks = tracks::build(&counts, &verified);
     let t = std::time::Instant::now();
-    let completed = complete_tracks(&mut tracks, &images, &canon, &results, &verified, job);
+    let completed = block::complete_tracks(&mut tracks, &images, &canon, &results, &verified, job);
     timing.push(("track completion".into(), t.elapsed().as_secs_f64()));
-    let inconsistent = consistent_tracks(&mut tracks, &images, &results, job);
-    let component = components(images.len(), &results);
+    let inconsistent = block::consistent_tracks(&mut tracks, &images, &results, job);
+    let component = block::components(images.len(), &results);
     Ok(Matched {
         images,
         positions,
@@ -621,5 +552,7 @@ pub fn run(
         timing,
         from_cache,
         not_cached,
+        pairs_from_cache,
+        pairs_not_cached,
     })
 }
