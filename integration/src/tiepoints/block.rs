@@ -6,8 +6,7 @@ use photo::features::matching::Match;
 use photo::features::tracks;
 
 /// Look for every track in the other photos that have verified pairs with two or more of its
-/// photos ([`photo::features::complete`]); returns the measurements added and where a track's
-/// lines cross with no keypoint there.
+/// photos ([`photo::features::complete`]); returns the measurements added.
 pub(super) fn complete_tracks(
     tracks: &mut tracks::Tracks,
     images: &[Image],
@@ -15,10 +14,10 @@ pub(super) fn complete_tracks(
     results: &[PairResult],
     verified: &[(usize, usize, Vec<Match>)],
     job: &MatchJob,
-) -> (usize, Vec<photo::features::complete::Miss>) {
+) -> usize {
     use photo::features::complete::{complete, CompleteOptions, PairGeometry};
     if job.complete_ratio <= 0.0 {
-        return (0, Vec::new());
+        return 0;
     }
     let fs: std::collections::HashMap<(usize, usize), nalgebra::Matrix3<f64>> = results
         .iter()
