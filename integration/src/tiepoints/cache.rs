@@ -112,14 +112,8 @@ pub fn load(file: &Path, key: u64) -> Option<Cached> {
 
 /// Write `c` under `key` to `file`, whole or not at all (`gnss::atomic::write_atomic`).
 pub fn store(file: &Path, key: u64, c: &Cached) -> Result<(), gnss::error::Error> {
-    if let Some(dir) = file.parent() {
-        std::fs::create_dir_all(dir).map_err(|cause| gnss::error::Error::Write {
-            path: dir.to_path_buf(),
-            cause,
-        })?;
-    }
     let f = &c.features;
-    gnss::atomic::write_atomic(file, |w| {
+    write_whole(file, |w| {
         w.write_all(MAGIC)?;
         for v in [
             key,
@@ -142,20 +136,39 @@ pub fn store(file: &Path, key: u64, c: &Cached) -> Result<(), gnss::error::Error
     })
 }
 
-struct Reader<'a> {
-    b: &'a [u8],
-    at: usize,
+/// Write `file` whole or not at all (`gnss::atomic::write_atomic`), its folder made first.
+pub(crate) fn write_whole(
+    file: &Path,
+    body: impl FnOnce(&mut dyn std::io::Write) -> std::io::Result<()>,
+) -> Result<(), gnss::error::Error> {
+    if let Some(dir) = file.parent() {
+        std::fs::create_dir_all(dir).map_err(|cause| gnss::error::Error::Write {
+            path: dir.to_path_buf(),
+            cause,
+        })?;
+    }
+    gnss::atomic::write_atomic(file, body)
+}
+
+/// Little-endian values read from the front of a byte slice; None past its end.
+pub(crate) struct Reader<'a> {
+    pub(crate) b: &'a [u8],
+    pub(crate) at: usize,
 }
 
 impl<'a> Reader<'a> {
-    fn take(&mut self, n: usize) -> Option<&'a [u8]> {
+    pub(crate) fn take(&mut self, n: usize) -> Option<&'a [u8]> {
         let s = self.b.get(self.at..self.at.checked_add(n)?)?;
         self.at += n;
         Some(s)
     }
 
-    fn u64(&mut self) -> Option<u64> {
+    pub(crate) fn u64(&mut self) -> Option<u64> {
         Some(u64::from_le_bytes(self.take(8)?.try_into().ok()?))
+    }
+
+    pub(crate) fn u32(&mut self) -> Option<u32> {
+        Some(u32::from_le_bytes(self.take(4)?.try_into().ok()?))
     }
 }
 

@@ -10,7 +10,7 @@
 //! its start is sensitive to which matches RANSAC keeps, not yet understood.) Values are stored as their exact bits; the file is written
 //! whole (`gnss::atomic::write_atomic`) and one that does not read back whole is ignored.
 
-use super::cache::fnv;
+use super::cache::{fnv, write_whole, Reader};
 use super::{MatchJob, PairResult, COHERENCE_NEIGHBOURS, GUIDED_RADIUS};
 use photo::features::matching::Match;
 use std::collections::HashMap;
@@ -130,14 +130,8 @@ pub fn store<'a>(
     file: &Path,
     results: impl Iterator<Item = (PairKey, &'a PairResult)>,
 ) -> Result<(), gnss::error::Error> {
-    if let Some(dir) = file.parent() {
-        std::fs::create_dir_all(dir).map_err(|cause| gnss::error::Error::Write {
-            path: dir.to_path_buf(),
-            cause,
-        })?;
-    }
     let results: Vec<(PairKey, &PairResult)> = results.collect();
-    gnss::atomic::write_atomic(file, |w| {
+    write_whole(file, |w| {
         w.write_all(MAGIC)?;
         w.write_all(&(results.len() as u64).to_le_bytes())?;
         for ((ka, kb, ks), p) in &results {
@@ -159,27 +153,6 @@ pub fn store<'a>(
         }
         Ok(())
     })
-}
-
-struct Reader<'a> {
-    b: &'a [u8],
-    at: usize,
-}
-
-impl<'a> Reader<'a> {
-    fn take(&mut self, n: usize) -> Option<&'a [u8]> {
-        let s = self.b.get(self.at..self.at.checked_add(n)?)?;
-        self.at += n;
-        Some(s)
-    }
-
-    fn u64(&mut self) -> Option<u64> {
-        Some(u64::from_le_bytes(self.take(8)?.try_into().ok()?))
-    }
-
-    fn u32(&mut self) -> Option<u32> {
-        Some(u32::from_le_bytes(self.take(4)?.try_into().ok()?))
-    }
 }
 
 #[cfg(test)]
