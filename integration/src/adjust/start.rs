@@ -301,6 +301,19 @@ fn looking_down(pts: &[Control]) -> impl Fn(&Pose) -> f64 {
     move |pose: &Pose| (pose.centre.z - mean_z).signum() + pose.r[(2, 2)]
 }
 
+/// Fewest intersected tie points an image of a block grown from its ties is resected on.
+const GROWN_FEWEST: usize = 6;
+
+/// Whether the points a resection was made on lie in front of the camera (all but a tenth:
+/// a mirror solution, or one from wrongly intersected points, puts many behind it).
+fn in_front(pose: &Pose, pts: &[Control]) -> bool {
+    let behind = pts
+        .iter()
+        .filter(|c| (pose.r.transpose() * (c.object - pose.centre)).z >= 0.0)
+        .count();
+    10 * behind <= pts.len()
+}
+
 /// Images still without a start (no GNSS, no control): resect them on tie points intersected
 /// from the images that have one, growing the block until no image gains a start; with
 /// `bundle` (a block seeded from its ties, in its own frame), a local bundle adjustment each
@@ -326,21 +339,36 @@ fn grow(
             .iter()
             .filter_map(|(id, ks)| intersect_point(p, ks, |i| start[i].as_ref()).map(|x| (*id, x)))
             .collect();
+        let candidates: Vec<(usize, Vec<Control>)> = (0..start.len())
+            .filter(|&i| start[i].is_none() && !skip[i])
+            .map(|i| (i, controls_in(p, ix, i, |id| known.get(id).copied())))
+            .collect();
+        // Grown from its own ties, a block is only as good as its worst resection: an image
+        // waits until it sees enough points and at least half as many as the best-seen one
+        // of this round (the best placed first, as incremental reconstruction does).
+        let best = candidates.iter().map(|(_, c)| c.len()).max().unwrap_or(0);
+        let fewest = if bundle {
+            GROWN_FEWEST.max(best.div_ceil(2))
+        } else {
+            3
+        };
         let mut gained = false;
-        for (i, st) in start.iter_mut().enumerate() {
-            if st.is_some() || skip[i] {
+        for (i, pts) in candidates {
+            if pts.len() < fewest {
                 continue;
             }
-            let pts = controls_in(p, ix, i, |id| known.get(id).copied());
             let cam = &p.cameras[p.images[i].camera].camera;
-            if pts.len() >= 4 {
-                *st = robust_start(cam, &pts);
+            let pose = if pts.len() >= 4 {
+                robust_start(cam, &pts)
             } else if pts.len() == 3 && p.file.mode != Mode::CloseRange {
-                *st = resect_three(cam, &pts, looking_down(&pts))
+                resect_three(cam, &pts, looking_down(&pts))
                     .ok()
-                    .map(|x| x.pose);
-            }
-            gained |= st.is_some();
+                    .map(|x| x.pose)
+            } else {
+                None
+            };
+            start[i] = pose.filter(|pose| in_front(pose, &pts));
+            gained |= start[i].is_some();
         }
         if !gained {
             return;
