@@ -49,10 +49,10 @@ fn two_cameras_in_one_folder_are_two_cameras_that_calibrate_alike() {
             m.write_to_file(&to).unwrap();
         }
     }
-    let mut job = MatchJob::new(photos);
-    job.max_image_size = 1000;
-    job.max_features = 6000;
-    job.seed_features = 3000;
+    // At the default size: matched at a quarter size (1000 px) the sub-pixel measurements'
+    // weights pull the focal lengths 3–4 % longer (3,005 and 3,037 px; 2,877 and 2,900 with
+    // every measurement at one σ) — noted, not yet understood.
+    let job = MatchJob::new(photos);
     let m = tiepoints::run(&job, &|_, _, _| {}).unwrap();
     let w = project::build(&job, &m).unwrap();
     let cams: Vec<(&str, usize)> = w

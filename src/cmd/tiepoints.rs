@@ -15,7 +15,9 @@ use std::path::PathBuf;
 /// verifies each pair by RANSAC on the fundamental matrix, finds the other features by guided
 /// matching along the pair's epipolar lines (or reads the pair from the cache), joins matches
 /// into tracks across photos, looks for each track in the further photos where two or more
-/// of its epipolar lines cross, and writes the main connected
+/// of its epipolar lines cross, refines every measurement to a tenth of a pixel by
+/// least-squares matching of its track's first patch (each with its own σ in
+/// image_observations.csv), and writes the main connected
 /// block: project.toml (cameras from the metadata, self-calibrated with 5 or more photos),
 /// images.csv, image_observations.csv (pixels, column right, row down, origin at the top-left
 /// corner), antennas.csv (camera positions with σ), start.csv (start attitudes from DJI gimbal
@@ -192,6 +194,10 @@ fn print_summary(m: &tiepoints::Matched, w: &project::Written) {
     println!(
         "tracks: {} ({} in 3 or more photos), {} measurements ({} found by completing tracks in further photos); cut: {} conflicting keypoints, {} measurements off the epipolar lines of their track",
         w.tracks, w.tracks_3plus, w.observations, m.completed, m.tracks.conflicts, m.inconsistent
+    );
+    println!(
+        "sub-pixel: {} measurements refined by least-squares matching against their track's first, {} kept at their keypoints (flat or weakly alike patches)",
+        m.refinement.refined, m.refinement.kept
     );
     if w.implausible_depth > 0 {
         println!(

@@ -88,6 +88,9 @@ pub struct ProjectOut {
     /// The strip of each image (same order as `images`; empty: no strip column). With
     /// navigation-grade GNSS the drift is then one offset per strip.
     pub image_strips: Vec<String>,
+    /// The σ of each measurement, pixels (same order as `measurements`; empty: no σ column,
+    /// every measurement has its camera's).
+    pub measurement_sigmas: Vec<f64>,
 }
 
 fn px(cam: &Camera, xy: Vector2<f64>) -> [f64; 2] {
@@ -174,9 +177,17 @@ impl ProjectOut {
             .ok();
         }
         put("images.csv", s)?;
-        let mut s = String::from("image,point,x_px,y_px\n");
-        for (i, p, x, y) in &self.measurements {
-            let _ = writeln!(s, "{i},{p},{x:.4},{y:.4}");
+        let sigmas = self.measurement_sigmas.len() == self.measurements.len()
+            && !self.measurements.is_empty();
+        let mut s = String::from(match sigmas {
+            true => "image,point,x_px,y_px,sigma_px\n",
+            false => "image,point,x_px,y_px\n",
+        });
+        for (k, (i, p, x, y)) in self.measurements.iter().enumerate() {
+            let _ = match sigmas {
+                true => writeln!(s, "{i},{p},{x:.4},{y:.4},{:.4}", self.measurement_sigmas[k]),
+                false => writeln!(s, "{i},{p},{x:.4},{y:.4}"),
+            };
         }
         put("image_observations.csv", s)?;
         if !self.ground.is_empty() {

@@ -5,7 +5,9 @@
 //! positions (an exposures table from [`positions`] before EXIF GPS), features of every photo
 //! decoded at a reduced size ([`decode`], `photo::features`; one photo per thread at a time,
 //! only keypoints and descriptors kept), pairs ([`pairs`]), matching and RANSAC per pair,
-//! tracks, the connected block, and the project ([`project`]) with a report ([`report`]).
+//! tracks, their completion and consistency ([`block`]), sub-pixel measurements
+//! ([`refine`]), the connected block, and the project ([`project`]) with a report
+//! ([`report`]).
 //!
 //! Every photo left out is named with its reason; images not connected to the main block are
 //! named too. Deterministic: parallel stages collect in input order.
@@ -19,6 +21,7 @@ pub mod pair_cache;
 pub mod pairs;
 pub mod positions;
 pub mod project;
+pub mod refine;
 pub mod report;
 
 use photo::features::epipolar::{coherent, verify, RansacOptions};
@@ -69,6 +72,9 @@ pub struct MatchJob {
     /// epipolar lines cross in a photo it is not in (0: no completion). On Brighton Beach
     /// completion turns 10 % more tracks into tracks of three or more photos.
     pub complete_ratio: f64,
+    /// Refine every track's measurements by least-squares matching of its first one's patch
+    /// ([`refine`]), each then with its own σ.
+    pub refine: bool,
     /// Use no position from the photos' metadata.
     pub ignore_gps: bool,
     /// Feature cache: the folder read from (a previous run's) and the folder written to
@@ -93,6 +99,7 @@ impl MatchJob {
             min_matches: 20,
             guided_ratio: 0.6,
             complete_ratio: 0.8,
+            refine: true,
             ignore_gps: false,
             cache: None,
         }
@@ -164,6 +171,8 @@ pub struct Matched {
     pub tracks: tracks::Tracks,
     /// Measurements track completion added (found in photos the track's pairs did not match).
     pub completed: usize,
+    /// Sub-pixel positions of the tracks' measurements.
+    pub refinement: refine::Refinement,
     /// Measurements cut from tracks for disagreeing with the epipolar geometry of the track's
     /// other photos.
     pub inconsistent: usize,
@@ -537,6 +546,13 @@ pub fn run(
     timing.push(("track completion".into(), t.elapsed().as_secs_f64()));
     let inconsistent = block::consistent_tracks(&mut tracks, &images, &results, job);
     let component = block::components(images.len(), &results);
+    let t = std::time::Instant::now();
+    let refinement = if job.refine {
+        refine::refine(&images, &tracks, job, &|k, n| progress("sub-pixel", k, n))
+    } else {
+        refine::Refinement::default()
+    };
+    timing.push(("sub-pixel".into(), t.elapsed().as_secs_f64()));
     Ok(Matched {
         images,
         positions,
@@ -545,6 +561,7 @@ pub fn run(
         pair_note,
         tracks,
         completed,
+        refinement,
         inconsistent,
         component,
         skipped,

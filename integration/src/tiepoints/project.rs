@@ -438,7 +438,11 @@ pub fn build(job: &MatchJob, m: &Matched) -> Result<Written, MatchError> {
     }
     let depth_ok = depth_check(m, &pose_of, &cams);
     for (k, t) in m.tracks.tracks.iter().enumerate() {
-        let nodes: Vec<_> = t.iter().filter(|(i, _)| in_project[*i]).collect();
+        let nodes: Vec<_> = t
+            .iter()
+            .enumerate()
+            .filter(|(_, (i, _))| in_project[*i])
+            .collect();
         if nodes.len() < 2 {
             continue;
         }
@@ -450,14 +454,21 @@ pub fn build(job: &MatchJob, m: &Matched) -> Result<Written, MatchError> {
         if nodes.len() >= 3 {
             w.tracks_3plus += 1;
         }
-        for &&(i, kp) in &nodes {
+        let measured = m.refinement.measured.get(k);
+        let any = measured.is_some_and(|r| r.iter().any(Option::is_some));
+        for &(n, &(i, kp)) in &nodes {
             let q = m.images[i].features.keypoints[kp as usize];
-            p.measurements.push((
-                m.images[i].meta.id.clone(),
-                format!("T{:06}", k + 1),
-                q.x,
-                q.y,
-            ));
+            let refined = measured.and_then(|r| r[n]);
+            let (x, y) = refined.map_or((q.x, q.y), |r| (r.px.x, r.px.y));
+            p.measurements
+                .push((m.images[i].meta.id.clone(), format!("T{:06}", k + 1), x, y));
+            let s = m.images[i].scale;
+            p.measurement_sigmas.push(match refined {
+                Some(r) => super::refine::sigma(r.sigma, s),
+                // The template's own point: measured by definition, as well as its fits.
+                None if n == 0 && any => super::refine::sigma(0.0, s),
+                None => SIGMA_FEATURE_PX * s,
+            });
         }
     }
     w.observations = p.measurements.len();

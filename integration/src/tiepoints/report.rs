@@ -44,6 +44,8 @@ pub fn json(m: &Matched, w: &Written) -> serde_json::Value {
         "track_conflicts_cut": m.tracks.conflicts,
         "measurements_off_epipolar_cut": m.inconsistent,
         "measurements_by_completion": m.completed,
+        "measurements_refined": m.refinement.refined,
+        "measurements_not_refined": m.refinement.kept,
         "not_connected": w.not_connected,
         "skipped": m.skipped.iter().chain(&w.no_camera).map(|(n, r)| json!({"file": n, "reason": r})).collect::<Vec<_>>(),
         "cameras": w.cameras.iter().map(|(c, s, n)| json!({"id": c, "focal_from": s, "photos": n})).collect::<Vec<_>>(),

@@ -20,6 +20,7 @@
 pub mod complete;
 pub mod epipolar;
 pub mod guided;
+pub mod lsm;
 pub mod matching;
 mod near;
 mod sampling;
