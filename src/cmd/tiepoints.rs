@@ -192,8 +192,8 @@ fn print_summary(m: &tiepoints::Matched, w: &project::Written) {
         m.pairs.len()
     );
     println!(
-        "tracks: {} ({} in 3 or more photos), {} measurements ({} found by completing tracks in further photos); cut: {} conflicting keypoints, {} measurements off the epipolar lines of their track",
-        w.tracks, w.tracks_3plus, w.observations, m.completed, m.tracks.conflicts, m.inconsistent
+        "tracks: {} ({} in 3 or more photos), {} measurements ({} found by completing tracks in further photos: {} at keypoints, {} by their patches where no keypoint was); cut: {} conflicting keypoints, {} measurements off the epipolar lines of their track",
+        w.tracks, w.tracks_3plus, w.observations, m.completed + m.patch_measured, m.completed, m.patch_measured, m.tracks.conflicts, m.inconsistent
     );
     println!(
         "sub-pixel: {} measurements refined by least-squares matching against their track's first, {} kept at their keypoints (flat or weakly alike patches)",

@@ -6,7 +6,8 @@ use photo::features::matching::Match;
 use photo::features::tracks;
 
 /// Look for every track in the other photos that have verified pairs with two or more of its
-/// photos ([`photo::features::complete`]); returns the measurements added.
+/// photos ([`photo::features::complete`]); returns the measurements added and where a track's
+/// lines cross with no keypoint there.
 pub(super) fn complete_tracks(
     tracks: &mut tracks::Tracks,
     images: &[Image],
@@ -14,10 +15,10 @@ pub(super) fn complete_tracks(
     results: &[PairResult],
     verified: &[(usize, usize, Vec<Match>)],
     job: &MatchJob,
-) -> usize {
+) -> (usize, Vec<photo::features::complete::Miss>) {
     use photo::features::complete::{complete, CompleteOptions, PairGeometry};
     if job.complete_ratio <= 0.0 {
-        return 0;
+        return (0, Vec::new());
     }
     let fs: std::collections::HashMap<(usize, usize), nalgebra::Matrix3<f64>> = results
         .iter()

@@ -118,6 +118,10 @@ pub const GUIDED_RADIUS: f64 = 8.0;
 /// correct share stayed at 99.4 %).
 pub const LONE_FACTOR: f64 = 1.5;
 
+/// Bytes of decoded photos kept between patch measurement and refinement (each is decoded
+/// again beyond it).
+pub const DECODED_BUDGET: usize = 512 << 20;
+
 /// Neighbours a match's displacement is compared with (motion coherence).
 pub const COHERENCE_NEIGHBOURS: usize = 8;
 
@@ -137,6 +141,8 @@ pub struct Image {
     pub seeds: (Vec<u32>, Features),
     /// The key its features are cached under (None without a cache).
     pub key: Option<u64>,
+    /// Keypoints added at the end of `features` by measuring tracks' patches (not extracted).
+    pub measured: usize,
 }
 
 /// A matched pair: image indices, putative matches, verified matches.
@@ -171,6 +177,9 @@ pub struct Matched {
     pub tracks: tracks::Tracks,
     /// Measurements track completion added (found in photos the track's pairs did not match).
     pub completed: usize,
+    /// Measurements added by fitting a track's patch where its epipolar lines cross in a photo
+    /// with no keypoint there.
+    pub patch_measured: usize,
     /// Sub-pixel positions of the tracks' measurements.
     pub refinement: refine::Refinement,
     /// Measurements cut from tracks for disagreeing with the epipolar geometry of the track's
@@ -288,6 +297,7 @@ fn read_one(path: &Path, job: &MatchJob, opts: &FeatureOptions) -> Result<(Image
             features: c.features,
             seeds,
             key,
+            measured: 0,
         },
         source,
     ))
@@ -542,13 +552,27 @@ pub fn run(
         .collect();
     let mut tracks = tracks::build(&counts, &verified);
     let t = std::time::Instant::now();
-    let completed = block::complete_tracks(&mut tracks, &images, &canon, &results, &verified, job);
+    let (completed, misses) =
+        block::complete_tracks(&mut tracks, &images, &canon, &results, &verified, job);
     timing.push(("track completion".into(), t.elapsed().as_secs_f64()));
+    let t = std::time::Instant::now();
+    let decodes = refine::Decodes::new(DECODED_BUDGET);
+    let patch_measured = match job.refine {
+        true => {
+            refine::measure_misses(&mut images, &mut tracks, &misses, job, &decodes, &|k, n| {
+                progress("patches", k, n)
+            })
+        }
+        false => 0,
+    };
+    timing.push(("patches".into(), t.elapsed().as_secs_f64()));
     let inconsistent = block::consistent_tracks(&mut tracks, &images, &results, job);
     let component = block::components(images.len(), &results);
     let t = std::time::Instant::now();
     let refinement = if job.refine {
-        refine::refine(&images, &tracks, job, &|k, n| progress("sub-pixel", k, n))
+        refine::refine(&images, &tracks, job, &decodes, &|k, n| {
+            progress("sub-pixel", k, n)
+        })
     } else {
         refine::Refinement::default()
     };
@@ -561,6 +585,7 @@ pub fn run(
         pair_note,
         tracks,
         completed,
+        patch_measured,
         refinement,
         inconsistent,
         component,

@@ -34,7 +34,7 @@ pub fn json(m: &Matched, w: &Written) -> serde_json::Value {
     let per = per_image(m, w);
     json!({
         "images": m.images.iter().zip(&per).enumerate().map(|(i, (im, p))| json!({
-            "id": im.meta.id, "features": im.features.keypoints.len(),
+            "id": im.meta.id, "features": im.features.keypoints.len() - im.measured,
             "matched_pairs": p.0, "observations": p.1, "component": m.component[i],
         })).collect::<Vec<_>>(),
         "pairs_tried": m.pairs.len(),
@@ -44,6 +44,7 @@ pub fn json(m: &Matched, w: &Written) -> serde_json::Value {
         "track_conflicts_cut": m.tracks.conflicts,
         "measurements_off_epipolar_cut": m.inconsistent,
         "measurements_by_completion": m.completed,
+        "measurements_by_patches": m.patch_measured,
         "measurements_refined": m.refinement.refined,
         "measurements_not_refined": m.refinement.kept,
         "not_connected": w.not_connected,

@@ -55,6 +55,8 @@ pub struct Fit {
     pub sigma: f64,
     /// Normalised cross-correlation of the template and the fitted patch.
     pub ncc: f64,
+    /// The fitted affine map (template offsets to image offsets).
+    pub affine: Matrix2<f64>,
 }
 
 /// Bilinear grey value at `p` (corner convention); None outside the pixel centres.
@@ -201,6 +203,7 @@ impl Template {
             position: p,
             sigma: ((cov[(0, 0)] + cov[(1, 1)]) / 2.0).sqrt(),
             ncc,
+            affine: a,
         })
     }
 }
