@@ -34,5 +34,6 @@ pub mod lever;
 pub mod lsq;
 pub mod relative;
 pub mod resection;
+mod resection_triples;
 pub mod rotation;
 mod sample;

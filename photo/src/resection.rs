@@ -269,6 +269,9 @@ pub fn resect(cam: &Camera, pts: &[Control]) -> Result<Resection, ResectionError
     refine(cam, start, pts, true)
 }
 
+/// Triples of points tried by [`resect_robust`].
+const TRIPLES_TRIED: usize = 200;
+
 /// All six elements from ≥ 4 control points of which some may be wrong (a mismeasured point,
 /// a wrong id): every triple (all of them up to 20 points, then a fixed spread of 200) gives
 /// its P3P solutions, each scored by the points it reprojects within `tolerance` (metres in
@@ -283,20 +286,7 @@ pub fn resect_robust(
     if n < 4 {
         return Err(ResectionError::TooFewPoints(n, 4));
     }
-    let mut triples = Vec::new();
-    for i in 0..n {
-        for j in i + 1..n {
-            for k in j + 1..n {
-                triples.push([i, j, k]);
-            }
-        }
-    }
-    if triples.len() > 200 {
-        let step = triples.len() as f64 / 200.0;
-        triples = (0..200)
-            .map(|m| triples[(m as f64 * step) as usize])
-            .collect();
-    }
+    let triples = crate::resection_triples::spread_triples(n, TRIPLES_TRIED);
     let inliers_of = |pose: &Pose| -> Vec<usize> {
         (0..n)
             .filter(|&m| {
