@@ -23,26 +23,56 @@ pub enum Heights {
     Grid(Box<GeoidGrid>),
 }
 
-/// Why `--height egm2008` is not built in, and what to give instead.
-pub const EGM2008_NOT_BUILT_IN: &str = "EGM2008 is not built in: its grids are 75 MB (2.5') to \
-450 MB (1'), and the only crate shipping it (egm2008 0.1) holds a 3-degree grid that is metres \
-off. Give the grid as a file: --height geoid:egm2008-2_5.pgm (GeographicLib's egm2008-1, -2_5 \
-or -5 .pgm) or --height geoid:egm08_25.gtx (PROJ's GTX)";
+/// How `--height egm2008` is given when no grid is found where PROJ and GeographicLib keep
+/// theirs (see [`crate::geoid_grid::find`]).
+pub const EGM2008_AS_FILE: &str = "EGM2008 comes from a grid file: --height egm2008 finds \
+PROJ's us_nga_egm08_25.tif or GeographicLib's egm2008-*.pgm where PROJ and GeographicLib keep \
+them; or give the file: --height geoid:FILE (a GeoTIFF, .pgm, .gtx, NGA's raw grid, or text)";
 
 impl Heights {
-    /// `ellipsoidal`, `egm96` or `geoid:FILE` (the grid is read here); `Err` with the reason:
-    /// a usage error (`egm2008`, an unknown word) as [`HeightsError::Usage`], a grid that
-    /// cannot be read as [`HeightsError::File`].
+    /// `ellipsoidal`, `egm96`, `egm2008` (the grid found where PROJ and GeographicLib keep
+    /// theirs) or `geoid:FILE[@LAT,LON,MINUTES]` (the placement only for a crop of NGA's raw
+    /// grid); the grid is read here. `Err` with the reason: a usage error (an unknown word)
+    /// as [`HeightsError::Usage`], a grid that cannot be found or read as
+    /// [`HeightsError::File`].
     pub fn parse(s: &str) -> std::result::Result<Heights, HeightsError> {
+        Self::parse_with(s, &|k| std::env::var(k).ok())
+    }
+
+    /// [`Heights::parse`] with the environment read through `var`.
+    pub fn parse_with(
+        s: &str,
+        var: &dyn Fn(&str) -> Option<String>,
+    ) -> std::result::Result<Heights, HeightsError> {
+        use crate::geoid_grid::{find, Placement};
         match s {
             "ellipsoidal" => Ok(Heights::Ellipsoidal),
             "egm96" => Ok(Heights::Egm96),
-            "egm2008" => Err(HeightsError::Usage(EGM2008_NOT_BUILT_IN.into())),
-            s if s.starts_with("geoid:") => GeoidGrid::read(Path::new(&s[6..]))
-                .map(|g| Heights::Grid(Box::new(g)))
-                .map_err(HeightsError::File),
+            "egm2008" => {
+                let folders = find::folders(var);
+                let path = find::first(&find::EGM2008_FILES, &folders)
+                    .ok_or_else(|| HeightsError::NotFound(find::not_found(&folders)))?;
+                GeoidGrid::read(&path)
+                    .map(|g| Heights::Grid(Box::new(g.named("EGM2008"))))
+                    .map_err(HeightsError::File)
+            }
+            s if s.starts_with("geoid:") => {
+                let spec = &s[6..];
+                // `FILE@LAT,LON,MINUTES` when the tail is a placement; the whole as a name
+                // otherwise (a name may hold an '@').
+                let (file, place) = match spec.rsplit_once('@') {
+                    Some((f, p)) if !f.is_empty() => match Placement::parse(p) {
+                        Some(p) => (f, Some(p)),
+                        None => (spec, None),
+                    },
+                    _ => (spec, None),
+                };
+                GeoidGrid::read_placed(Path::new(file), place)
+                    .map(|g| Heights::Grid(Box::new(g)))
+                    .map_err(HeightsError::File)
+            }
             s => Err(HeightsError::Usage(format!(
-                "--height {s}: use ellipsoidal, egm96, egm2008 (as geoid:FILE) or geoid:FILE"
+                "--height {s}: use ellipsoidal, egm96, egm2008 or geoid:FILE"
             ))),
         }
     }
@@ -77,7 +107,13 @@ impl Heights {
                 "orthometric heights H = h - N, EGM96 geoid (NGA spherical harmonics, degree 360)"
                     .into()
             }
-            Heights::Grid(g) => format!("orthometric heights H = h - N, geoid grid {}", g.name()),
+            Heights::Grid(g) => match g.model() {
+                Some(m) => format!(
+                    "orthometric heights H = h - N, {m} geoid, grid {}",
+                    g.path().display()
+                ),
+                None => format!("orthometric heights H = h - N, geoid grid {}", g.name()),
+            },
         }
     }
 
@@ -100,6 +136,10 @@ pub enum HeightsError {
     /// The grid file cannot be read (exit code 1).
     #[error(transparent)]
     File(gnss::error::Error),
+    /// No grid of a named geoid was found where grids are kept (exit code 1): where it was
+    /// looked for and where to put one.
+    #[error("{0}")]
+    NotFound(String),
 }
 
 #[cfg(test)]
@@ -146,9 +186,14 @@ mod tests {
             Ok(Heights::Ellipsoidal)
         ));
         assert!(matches!(Heights::parse("egm96"), Ok(Heights::Egm96)));
-        match Heights::parse("egm2008") {
-            Err(HeightsError::Usage(m)) => assert!(m.contains("geoid:"), "{m}"),
-            other => panic!("{other:?}"),
+        let nowhere = |k: &str| (k == "HOME").then(|| "/nonexistent-home".to_string());
+        match Heights::parse_with("egm2008", &nowhere) {
+            Err(HeightsError::NotFound(m)) => assert!(
+                m.contains("geoid:FILE") && m.contains("/nonexistent-home/.local/share/proj"),
+                "{m}"
+            ),
+            Err(e) => panic!("{e}"),
+            Ok(h) => assert!(h.describe().contains("EGM2008"), "a grid on this machine"),
         }
         assert!(matches!(Heights::parse("msl"), Err(HeightsError::Usage(_))));
         assert!(matches!(

@@ -168,25 +168,33 @@ impl From<TrajectoryFormatArg> for TrajectoryFormat {
     }
 }
 
-/// The `--height` value checked for its form (bad usage, exit code 2): `ellipsoidal`, `egm96`
-/// or `geoid:FILE`; `egm2008` says how to give its grid. The grid is read by [`heights`].
+/// The `--height` value checked for its form (bad usage, exit code 2): `ellipsoidal`, `egm96`,
+/// `egm2008` or `geoid:FILE`. The grid is found and read by [`heights`].
 pub fn height_arg(s: &str) -> std::result::Result<String, String> {
     match s {
-        "ellipsoidal" | "egm96" => Ok(s.into()),
-        "egm2008" => Err(integration::height::EGM2008_NOT_BUILT_IN.into()),
+        "ellipsoidal" | "egm96" | "egm2008" => Ok(s.into()),
         g if g.starts_with("geoid:") && g.len() > 6 => Ok(s.into()),
-        _ => Err("use ellipsoidal, egm96 or geoid:FILE (a GeographicLib .pgm such as egm2008-1.pgm, a PROJ .gtx, or a text grid of LAT LON N lines)".into()),
+        _ => Err(format!(
+            "use ellipsoidal, egm96, egm2008 or geoid:FILE. {}",
+            integration::height::EGM2008_AS_FILE
+        )),
     }
 }
 
-/// The heights of a checked `--height` value, its grid read (a grid that cannot be read is a
-/// failure naming the file once, exit code 1: the reader's error already names it).
+/// The heights of a checked `--height` value, its grid found and read (a grid that cannot be
+/// found or read is a failure, exit code 1: the reader's error already names the file).
 pub fn heights(s: &str) -> Result<integration::height::Heights> {
     use integration::height::{Heights, HeightsError};
-    Heights::parse(s).map_err(|e| match e {
+    let h = Heights::parse(s).map_err(|e| match e {
         HeightsError::File(e) => anyhow::anyhow!("--height: {e}"),
-        HeightsError::Usage(m) => anyhow::anyhow!("{m}"),
-    })
+        HeightsError::Usage(m) | HeightsError::NotFound(m) => anyhow::anyhow!("{m}"),
+    })?;
+    if let integration::height::Heights::Grid(g) = &h {
+        if let Some(m) = g.model() {
+            note(&format!("--height {s}: {m} from {}", g.path().display()));
+        }
+    }
+    Ok(h)
 }
 
 /// A flag's number: finite (NaN and infinities are refused as bad usage, exit code 2).

@@ -79,8 +79,13 @@ pub struct Args {
     #[arg(long, value_enum, default_value = "xyz")]
     format: TrajectoryFormatArg,
     /// Heights written: ellipsoidal (WGS84, GNSS's own), egm96 (orthometric above the EGM96
-    /// geoid, built in) or geoid:FILE (orthometric above a grid: GeographicLib .pgm, PROJ
-    /// .gtx, or text lines LAT LON N). The header says which; a static run's OUT.pos.json
+    /// geoid, built in: NGA's spherical harmonics to degree 360), egm2008 (orthometric above
+    /// EGM2008, from the grid found in PROJ's or GeographicLib's data folders: PROJ_DATA,
+    /// PROJ_LIB, ~/.local/share/proj, /usr/share/proj, GeographicLib's geoids; the file used
+    /// is named) or geoid:FILE (orthometric above a grid file, bilinear: PROJ's GeoTIFF such
+    /// as us_nga_egm08_25.tif, a GeographicLib .pgm such as egm2008-1.pgm, NGA's raw EGM2008
+    /// grid, a PROJ .gtx, or text lines LAT LON N; a crop of NGA's raw grid as
+    /// geoid:FILE@LAT,LON,MINUTES with its north-west node and spacing). The header says which; a static run's OUT.pos.json
     /// keeps the ellipsoidal height and adds the orthometric one with the geoid undulation.
     #[arg(long, value_name = "HEIGHT", default_value = "ellipsoidal", value_parser = super::height_arg)]
     height: String,

@@ -233,7 +233,8 @@ fn vector_stations(dir: &Path) {
 
 /// `--height`: ellipsoidal by default, EGM96 built in, a text geoid grid given by the user;
 /// every header says which height it holds, and the heights differ by the undulation N.
-/// `egm2008` is bad usage (exit code 2) that says how to give its grid.
+/// `egm2008` finds its grid in PROJ's data folder and names it (here the real EGM2008 crop,
+/// which does not reach the demo's area: a failure naming the point and the crop's extent).
 #[test]
 fn exposure_heights_ellipsoidal_egm96_and_grid() {
     let dir = demo_dir();
@@ -276,20 +277,32 @@ fn exposure_heights_ellipsoidal_egm96_and_grid() {
     demo_exposures(dir, &["--height", "egm96", "--format", "pos"], &pos);
     let body = std::fs::read_to_string(&pos).unwrap();
     assert!(body.contains("height=WGS84/geodetic(EGM96)"), "{body:.600}");
-    // Bad usage and unreadable grids.
-    let o = ppkat(&[
-        "exposures",
-        "--height",
-        "egm2008",
-        "--trajectory",
-        "x",
-        "--times",
-        "y",
-        "-o",
-        "z",
-    ]);
-    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
-    assert!(text(&o).contains("geoid:egm2008-2_5.pgm"), "{}", text(&o));
+    // EGM2008 found in PROJ's data folder (PROJ_DATA); a crop that does not cover the flight.
+    if let Some(crop) = shared("geoid/egm2008-norcal-crop") {
+        let proj = tmp("proj-data");
+        std::fs::create_dir_all(&proj).unwrap();
+        std::fs::copy(
+            crop.join("egm2008_25_norcal_crop.gtx"),
+            proj.join("egm08_25.gtx"),
+        )
+        .unwrap();
+        let (traj, times) = (dir.join("rover_ppk.pos"), dir.join("rover.obs"));
+        let o = Command::new(env!("CARGO_BIN_EXE_ppkat"))
+            .args(["exposures", "--height", "egm2008", "--trajectory", p(&traj)])
+            .args(["--events", p(&times), "-o", p(&tmp("h-egm2008.csv"))])
+            .env("PROJ_DATA", &proj)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+        for needle in [
+            "EGM2008 from",
+            "egm08_25.gtx",
+            "does not cover latitude 4",
+            "latitudes 37.000000° to 38.000000°",
+        ] {
+            assert!(text(&o).contains(needle), "{needle:?} not in {}", text(&o));
+        }
+    }
     let bad = tmp("bad-geoid.txt");
     std::fs::write(&bad, "48 11 47\n48 12 x\n").unwrap();
     let spec = format!("geoid:{}", p(&bad));
