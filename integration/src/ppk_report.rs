@@ -11,7 +11,7 @@
 //! series (the tables count every epoch).
 
 use crate::pipeline::PpkReport;
-use crate::plot::{axes, html_escape, range, svg_sized};
+use crate::plot::{axes, decimals, html_escape, range, svg_sized, tick, LengthAxis, TimeAxis};
 use gnss::frame::{enu_rotation, Ecef};
 use gnss::solution::Quality;
 use gnss::time::format_ymdhms;
@@ -74,32 +74,6 @@ fn thinned(tr: &Trajectory) -> Vec<&TrajectoryEpoch> {
     tr.epochs.iter().step_by(k).collect()
 }
 
-/// The time axis: minutes (runs under two hours) or hours since the first epoch.
-struct TimeAxis {
-    t0: Epoch,
-    unit: f64,
-    desc: String,
-}
-
-impl TimeAxis {
-    fn new(tr: &Trajectory) -> Option<TimeAxis> {
-        let (t0, t1) = tr.span()?;
-        let (unit, name) = if (t1 - t0).to_seconds() < 7200.0 {
-            (60.0, "minutes")
-        } else {
-            (3600.0, "hours")
-        };
-        Some(TimeAxis {
-            t0,
-            unit,
-            desc: format!("{name} since {} GPST", format_ymdhms(t0)),
-        })
-    }
-    fn x(&self, t: Epoch) -> f64 {
-        (t - self.t0).to_seconds() / self.unit
-    }
-}
-
 /// The report page. `settings` are the `.pos` header lines, `events` the rover's exposure
 /// event times (GPST receiver time tags).
 pub fn html(r: &PpkReport, settings: &[String], events: &[Epoch]) -> String {
@@ -111,7 +85,7 @@ pub fn html(r: &PpkReport, settings: &[String], events: &[Epoch]) -> String {
     );
     let tr = &r.result.trajectory;
     s += &fix_table(r);
-    let Some(axis) = TimeAxis::new(tr) else {
+    let Some(axis) = tr.span().map(|(t0, t1)| TimeAxis::new(t0, t1)) else {
         s += "<p>No epoch was solved: nothing to draw.</p>";
         return s + &settings_table(settings) + "</body></html>\n";
     };
@@ -202,13 +176,18 @@ fn ground_track(tr: &Trajectory, events: &[Epoch]) -> String {
             "○",
         ));
     }
+    let lab = LengthAxis::for_span(2.0 * hx.max(hy));
     let mut s = String::from("<h2>Ground track</h2>\n");
     s += &quality_legend(tr, &extra);
     s += &svg_sized(
-        "East and north from the mean position (m, same scale)",
+        &format!(
+            "East and north from the mean position ({}, same scale)",
+            lab.unit
+        ),
         (w, h),
         |root| {
-            // Whole metres on the axes, and room on the right for the last east label.
+            // Labels in the unit the span suits, and room on the right for the last east
+            // label.
             let mut ch = ChartBuilder::on(root)
                 .margin(10)
                 .margin_right(30)
@@ -216,10 +195,10 @@ fn ground_track(tr: &Trajectory, events: &[Epoch]) -> String {
                 .y_label_area_size(70)
                 .build_cartesian_2d(cx - hx..cx + hx, cy - hy..cy + hy)?;
             ch.configure_mesh()
-                .x_desc("east (m)")
-                .y_desc("north (m)")
-                .x_label_formatter(&|v| format!("{v:.0}"))
-                .y_label_formatter(&|v| format!("{v:.0}"))
+                .x_desc(format!("east ({})", lab.unit))
+                .y_desc(format!("north ({})", lab.unit))
+                .x_label_formatter(&|v| lab.label(*v))
+                .y_label_formatter(&|v| lab.label(*v))
                 .draw()?;
             for (q, ..) in QUALITIES {
                 ch.draw_series(
@@ -321,31 +300,39 @@ fn sigmas(tr: &Trajectory, axis: &TimeAxis) -> String {
         ("σ up", RGBColor(0, 150, 60)),
     ];
     let mut s = legend(&names.map(|(n, c)| (n.to_string(), c, "━")));
-    // log10 of σ on a linear axis, labelled in metres: ticks at every level of the range.
-    let (l0, l1) = (lo.log10(), hi.log10());
-    s += &svg_sized("Standard deviations (m, logarithmic)", (900, 320), |root| {
-        let mut ch = ChartBuilder::on(root)
-            .margin(10)
-            .x_label_area_size(30)
-            .y_label_area_size(60)
-            .build_cartesian_2d(xr.0..xr.1, l0..l1)?;
-        ch.configure_mesh()
-            .x_desc(axis.desc.as_str())
-            .y_desc("m")
-            .y_label_formatter(&|v| {
-                let m = 10f64.powf(*v);
-                format!("{m:.*}", (2.0 - m.log10().floor()).clamp(0.0, 6.0) as usize)
-            })
-            .draw()?;
-        for (k, (_, c)) in names.iter().enumerate() {
-            ch.draw_series(LineSeries::new(
-                sig.iter().map(|p| (p.0, p.1[k].log10())),
-                c,
-            ))?;
-        }
-        Ok(())
-    });
+    // A logarithmic axis: ticks at 1, 2, 5 of each decade, labelled in the unit of the
+    // largest σ.
+    let unit = LengthAxis::for_span(hi);
+    s += &svg_sized(
+        &format!("Standard deviations ({}, logarithmic)", unit.unit),
+        (900, 320),
+        |root| {
+            let mut ch = ChartBuilder::on(root)
+                .margin(10)
+                .x_label_area_size(30)
+                .y_label_area_size(60)
+                .build_cartesian_2d(xr.0..xr.1, (lo..hi).log_scale())?;
+            let dx = decimals(xr.1 - xr.0);
+            ch.configure_mesh()
+                .x_desc(axis.desc.as_str())
+                .x_label_formatter(&|v| tick(*v, dx))
+                .y_desc(unit.unit)
+                .y_label_formatter(&|v| log_label(*v, &unit))
+                .draw()?;
+            for (k, (_, c)) in names.iter().enumerate() {
+                ch.draw_series(LineSeries::new(sig.iter().map(|p| (p.0, p.1[k])), c))?;
+            }
+            Ok(())
+        },
+    );
     s
+}
+
+/// A tick of a logarithmic length axis: as many decimals as its own first digit needs.
+fn log_label(v: f64, unit: &LengthAxis) -> String {
+    let x = v * unit.factor();
+    let decimals = (-x.log10().floor()).clamp(0.0, 6.0) as usize;
+    format!("{x:.decimals$}")
 }
 
 /// Forward minus backward solution, east/north/up in centimetres: where the two passes
@@ -517,4 +504,62 @@ fn settings_table(settings: &[String]) -> String {
         );
     }
     s + "</table>\n"
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gnss::trajectory::SegmentSource;
+
+    /// The tick labels of the ground track's axes (the `<text>` of the SVG that are numbers).
+    fn numbers(svg: &str) -> Vec<String> {
+        svg.split("<text")
+            .skip(1)
+            .filter_map(|t| {
+                let body = t.split('>').nth(1)?.split('<').next()?.trim().to_string();
+                body.parse::<f64>().is_ok().then_some(body)
+            })
+            .collect()
+    }
+
+    /// A static receiver's 30 cm scatter: every tick of both axes reads differently, in
+    /// centimetres (the whole-metre labels read "-0 -0 0 0").
+    #[test]
+    fn ground_track_ticks_of_a_sub_metre_track_are_distinct() {
+        let t0 = Epoch::from_gpst_seconds(1_000_000_000.0);
+        let base = Ecef::new(4_775_849.4, 116_814.3, 4_213_018.9);
+        let epochs = (0..200)
+            .map(|k| {
+                let a = k as f64 * 0.7;
+                let d = nalgebra::Vector3::new(0.15 * a.cos(), 0.12 * a.sin(), 0.05 * a.cos());
+                TrajectoryEpoch::new(
+                    t0 + hifitime::Duration::from_seconds(30.0 * k as f64),
+                    Ecef(base.0 + d),
+                    nalgebra::Matrix3::identity() * 1e-4,
+                    Quality::Fixed,
+                )
+            })
+            .collect();
+        let tr = Trajectory::new(epochs, SegmentSource::Filter);
+        let svg = ground_track(&tr, &[]);
+        assert!(
+            svg.contains("east (cm)") && svg.contains("north (cm)"),
+            "{svg:.400}"
+        );
+        let labels = numbers(&svg);
+        assert!(labels.len() >= 8, "{labels:?}");
+        // Ticks come axis by axis in order: neighbours never read alike, and the values are
+        // many (east and north may share some).
+        assert!(labels.windows(2).all(|w| w[0] != w[1]), "{labels:?}");
+        let mut unique = labels.clone();
+        unique.sort();
+        unique.dedup();
+        assert!(
+            unique.len() >= 6 && 2 * unique.len() >= labels.len(),
+            "{labels:?}"
+        );
+        assert!(!labels
+            .iter()
+            .any(|l| l.starts_with("-0") && l.parse::<f64>() == Ok(0.0)));
+    }
 }

@@ -4,22 +4,19 @@
 //!
 //! Enters: a [`PppReport`] (after the run). Leaves: a self-contained HTML text.
 
-use crate::plot::{axes, html_escape, range, svg};
+use crate::plot::{axes, html_escape, range, svg, TimeAxis};
 use crate::ppp::PppReport;
 use gnss::frame::Ecef;
 use plotters::prelude::*;
 use std::fmt::Write as _;
 
-/// Hours since the first epoch, and the series of one value per solved epoch.
-fn hours(r: &PppReport) -> Vec<f64> {
-    let Some(t0) = r.result.epochs.first().map(|e| e.time) else {
-        return Vec::new();
-    };
-    r.result
-        .epochs
-        .iter()
-        .map(|e| (e.time - t0).to_seconds() / 3600.0)
-        .collect()
+/// The time axis of the run (from a round time), and each solved epoch's value on it.
+fn times(r: &PppReport) -> Option<(TimeAxis, Vec<f64>)> {
+    let first = r.result.epochs.first()?.time;
+    let last = r.result.epochs.last()?.time;
+    let axis = TimeAxis::new(first, last);
+    let t = r.result.epochs.iter().map(|e| axis.x(e.time)).collect();
+    Some((axis, t))
 }
 
 /// East, north, up of every epoch from `origin`, metres.
@@ -43,11 +40,12 @@ pub fn html(r: &PppReport, input: &str) -> String {
         html_escape(input),
         html_escape(&r.to_string())
     );
-    let t = hours(r);
-    let (origin, what) = match (r.last, r.result.epochs.first()) {
-        (Some((p, _)), _) => (p, "running solution minus the final one"),
-        (None, Some(_)) => (mean(r), "position minus the mean position"),
-        (None, None) => return s + "</body></html>\n",
+    let Some((axis, t)) = times(r) else {
+        return s + "</body></html>\n";
+    };
+    let (origin, what) = match r.last {
+        Some((p, _)) => (p, "running solution minus the final one"),
+        None => (mean(r), "position minus the mean position"),
     };
     let enu = enu_from(r, &origin);
     s += &svg(
@@ -57,7 +55,7 @@ pub fn html(r: &PppReport, input: &str) -> String {
                 root,
                 range(t.iter().copied()).0..range(t.iter().copied()).1,
                 -0.5..0.5,
-                ("hours", "m"),
+                (&axis.desc, "m"),
                 50,
             )?;
             for (k, (name, col)) in [("east", RED), ("north", BLUE), ("up", GREEN)]
@@ -81,17 +79,19 @@ pub fn html(r: &PppReport, input: &str) -> String {
     );
     let ztd: Vec<f64> = r.result.epochs.iter().map(|e| e.ztd.0).collect();
     let zr = range(ztd.iter().copied());
-    s += &series("Zenith total delay (m)", &t, &ztd, zr.0..zr.1, "m", BLUE);
+    let x = (&axis.desc[..], &t[..]);
+    s += &series("Zenith total delay (m)", x, &ztd, zr.0..zr.1, "m", BLUE);
     let ns: Vec<f64> = r.result.epochs.iter().map(|e| e.nsat as f64).collect();
     let top = ns.iter().copied().fold(4.0, f64::max) + 1.0;
-    s += &series("Satellites used", &t, &ns, 0.0..top, "satellites", BLACK);
+    s += &series("Satellites used", x, &ns, 0.0..top, "satellites", BLACK);
     s + "</body></html>\n"
 }
 
-/// One value per epoch against hours, as a titled line plot.
+/// One value per epoch against time (the axis description and each epoch's value on it), as
+/// a titled line plot.
 fn series(
     title: &str,
-    t: &[f64],
+    (desc, t): (&str, &[f64]),
     v: &[f64],
     y: std::ops::Range<f64>,
     unit: &str,
@@ -99,7 +99,7 @@ fn series(
 ) -> String {
     let (t0, t1) = range(t.iter().copied());
     svg(title, |root| {
-        let mut ch = axes(root, t0..t1, y, ("hours", unit), 60)?;
+        let mut ch = axes(root, t0..t1, y, (desc, unit), 60)?;
         ch.draw_series(LineSeries::new(
             t.iter().copied().zip(v.iter().copied()),
             colour,

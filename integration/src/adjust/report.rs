@@ -416,19 +416,46 @@ fn plot_checks(r: &Results) -> String {
     })
 }
 
+/// The time axis of the exposures: minutes or hours from a round time, or the exposures'
+/// sequence numbers when the source knew no times (GPS week 0); with each residual's value.
+fn exposure_axis(v: &[super::residuals::GnssResidual]) -> (String, Vec<f64>) {
+    let numbered = v.iter().all(|x| gnss::time::week_tow(x.time).0 == 0);
+    if numbered {
+        let x = v.iter().map(|x| x.tow).collect();
+        return ("exposure number (the source gave no times)".into(), x);
+    }
+    let first = v.iter().map(|x| x.time).min();
+    let last = v.iter().map(|x| x.time).max();
+    match first.zip(last) {
+        Some((a, b)) => {
+            let axis = crate::plot::TimeAxis::new(a, b);
+            let x = v.iter().map(|x| axis.x(x.time)).collect();
+            (axis.desc, x)
+        }
+        None => (String::new(), Vec::new()),
+    }
+}
+
 /// GNSS centre residuals against time, one colour per axis, strips marked by their images.
 fn plot_gnss(r: &Results) -> String {
     let v = &r.gnss_residuals;
-    let (t0, t1) = range(v.iter().map(|x| x.tow));
+    let (desc, xs) = exposure_axis(v);
+    let (t0, t1) = range(xs.iter().copied());
     let (y0, y1) = range(v.iter().flat_map(|x| x.v));
+    // In the unit the residuals' span suits (millimetres for a good flight).
+    let unit = crate::plot::LengthAxis::for_span(y1 - y0);
+    let k = unit.factor();
     svg(
-        "GNSS centre residuals (predicted − observed, m) over time; strips in sequence",
+        &format!(
+            "GNSS centre residuals (predicted − observed, {}) over time; strips in sequence",
+            unit.unit
+        ),
         |root| {
             let mut ch = axes(
                 root,
                 t0..t1,
-                y0..y1,
-                ("GPS time of week (s)", "residual (m)"),
+                k * y0..k * y1,
+                (desc.as_str(), &format!("residual ({})", unit.unit)),
                 60,
             )?;
             let mut strips: Vec<&str> = v.iter().map(|x| x.strip.as_str()).collect();
@@ -436,13 +463,17 @@ fn plot_gnss(r: &Results) -> String {
             for (a, col, name) in [(0, RED, "E"), (1, GREEN, "N"), (2, BLUE, "U")] {
                 for st in &strips {
                     ch.draw_series(LineSeries::new(
-                        v.iter().filter(|x| x.strip == *st).map(|x| (x.tow, x.v[a])),
+                        v.iter()
+                            .zip(&xs)
+                            .filter(|(x, _)| x.strip == *st)
+                            .map(|(x, t)| (*t, k * x.v[a])),
                         col,
                     ))?;
                 }
                 ch.draw_series(
                     v.iter()
-                        .map(|x| Circle::new((x.tow, x.v[a]), 2, col.filled())),
+                        .zip(&xs)
+                        .map(|(x, t)| Circle::new((*t, k * x.v[a]), 2, col.filled())),
                 )?
                 .label(name)
                 .legend(move |(x, y)| Circle::new((x, y), 3, col.filled()));
@@ -457,6 +488,21 @@ fn plot_gnss(r: &Results) -> String {
 fn plot_drift(r: &Results) -> String {
     let v = &r.gnss_residuals;
     let (t0, t1) = range(v.iter().map(|x| x.tow));
+    // The axis as for the residuals: tow maps onto it linearly (one week).
+    let (desc, xs) = exposure_axis(v);
+    let ends = |pick: fn(f64, f64) -> bool| {
+        v.iter()
+            .zip(&xs)
+            .reduce(|m, c| if pick(c.0.tow, m.0.tow) { c } else { m })
+            .map(|(r, x)| (r.tow, *x))
+    };
+    let (x_of, per_s) = match (ends(|a, b| a < b), ends(|a, b| a > b)) {
+        (Some((ta, xa)), Some((tb, xb))) if tb > ta => {
+            let k = (xb - xa) / (tb - ta);
+            (xa - ta * k, k)
+        }
+        _ => (0.0, 1.0),
+    };
     let week_start = |t: f64| t - (t / 604800.0).floor() * 604800.0;
     let mut curves: Vec<(usize, Vec<(f64, f64)>)> = Vec::new();
     for d in &r.drifts {
@@ -470,7 +516,7 @@ fn plot_drift(r: &Results) -> String {
                         _ if d.labels[0].starts_with('b') => d.values[a] * dt,
                         _ => d.values[a],
                     };
-                    (tow, val)
+                    (x_of + per_s * tow, val)
                 })
                 .collect();
             curves.push((a, pts));
@@ -480,13 +526,8 @@ fn plot_drift(r: &Results) -> String {
     svg(
         "Estimated GNSS drift (m) per group: E red, N green, U blue",
         |root| {
-            let mut ch = axes(
-                root,
-                t0..t1,
-                y0..y1,
-                ("GPS time of week (s)", "drift (m)"),
-                60,
-            )?;
+            let (a, b) = (x_of + per_s * t0, x_of + per_s * t1);
+            let mut ch = axes(root, a..b, y0..y1, (desc.as_str(), "drift (m)"), 60)?;
             for (a, pts) in curves {
                 let col = [RED, GREEN, BLUE][a];
                 ch.draw_series(LineSeries::new(pts, col))?;

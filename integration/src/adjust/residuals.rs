@@ -53,6 +53,10 @@ pub struct GnssResidual {
     pub strip: String,
     /// GPS time of week of the exposure, s.
     pub tow: f64,
+    /// The exposure time (GPST; GPS week 0 when the source knew no times and numbered the
+    /// exposures instead).
+    #[serde(skip)]
+    pub time: hifitime::Epoch,
     /// Predicted − observed antenna, local E, N, U (m).
     pub v: [f64; 3],
 }
@@ -171,6 +175,7 @@ pub fn collect(p: &Project, s: &Solved, rel: &[Reliability]) -> Residuals {
                 image: ant.image.clone(),
                 strip: p.images[f.image().index()].strip.clone(),
                 tow: gnss::time::week_tow(ant.time).1,
+                time: ant.time,
                 v: [r[0], r[1], r[2]],
             });
         }
