@@ -65,9 +65,11 @@ fn sample(img: &GrayImage, p: Vector2<f64>) -> Option<f64> {
     if !(u >= 0.0 && v >= 0.0) {
         return None;
     }
-    let (i, j) = (u.floor() as usize, v.floor() as usize);
+    // Non-negative here, so truncation is the floor (and no libm call on baseline x86-64,
+    // where `floor` took 2.5 % of a Brighton match).
+    let (i, j) = (u as usize, v as usize);
     let w = img.width as usize;
-    if i + 1 >= w || j + 1 >= img.height as usize {
+    if i >= w.saturating_sub(1) || j >= (img.height as usize).saturating_sub(1) {
         return None;
     }
     let (fx, fy) = (u - i as f64, v - j as f64);
