@@ -106,6 +106,10 @@ fn onsa_static_ppp_reaches_centimetres_with_honest_sigmas() {
 /// the ETRS89 transform of the former. Interpolated linearly to the data's epoch (2020.48),
 /// the ITRF2014 coordinate is the truth here; the header lies 0.77 m from it horizontally
 /// (ETRS89 moves with Eurasia, about 2.5 cm a year since 1989).
+/// ESBC's up error and σ up bounds, metres (measured 0.022 and 0.051).
+const ESBC_MAX_UP: f64 = 0.035;
+const ESBC_MAX_SIGMA_UP: f64 = 0.08;
+
 #[test]
 fn esbc_static_ppp_within_centimetres_of_itrf() {
     let Some(dir) = common::data("gnss/esbc-2020-177") else {
@@ -148,10 +152,24 @@ fn esbc_static_ppp_within_centimetres_of_itrf() {
             c[(k, k)].sqrt()
         );
     }
-    assert!(
-        c[(2, 2)].sqrt() >= 0.05,
-        "the unmodelled antennas are in the σ"
+    eprintln!(
+        "ESBC: E/N/U error {:.4} {:.4} {:.4} m, σ {:.4} {:.4} {:.4} m",
+        d[0],
+        d[1],
+        d[2],
+        c[(0, 0)].sqrt(),
+        c[(1, 1)].sqrt(),
+        c[(2, 2)].sqrt()
     );
+    // The σ floor for unmodelled antennas (5 cm up) makes the 3σ test above easy on the up
+    // axis; the error itself is held to what it is, and the σ to not more than its floor
+    // needs.
+    let sigma_up = c[(2, 2)].sqrt();
+    assert!(
+        (0.05..=ESBC_MAX_SIGMA_UP).contains(&sigma_up),
+        "σ up {sigma_up:.3} m: the unmodelled antennas are in it, and no more"
+    );
+    assert!(d[2].abs() <= ESBC_MAX_UP, "up error {:.4} m", d[2]);
     let header = obs.header.approx_position.unwrap().enu_from(&last.pos).0;
     assert!(
         (0.7..0.85).contains(&header.xy().norm()) && header.z.abs() < 0.1,

@@ -86,8 +86,9 @@ fn bal_reports_its_lines_and_the_same_numbers_on_any_thread_count() {
     assert_eq!(without_timing(&one), without_timing(&two));
 }
 
-/// The 1800-point Ladybug problem: the final cost stays the one ppkat reached when this test
-/// was written (3.001359e3, within 0.1 %).
+/// The 1800-point Ladybug problem: the final cost is the reference solver's (Ceres 2.1 on
+/// this machine, 3.001362e3 in the shared data's README) to 0.01 %: ppkat reaches 3.001359e3,
+/// 1e-6 below it. A solver that stopped early or in another minimum misses it.
 #[test]
 fn bal_ladybug_1800_points() {
     let Some(file) = shared("photo/bal/bal-ladybug-problem-49-7776-pre-shrink-1800.txt") else {
@@ -99,7 +100,8 @@ fn bal_ladybug_1800_points() {
         "{t}"
     );
     let last: f64 = value(&t, "final cost: ").parse().unwrap();
-    assert!((last / 3.001359e3 - 1.0).abs() < 1e-3, "{t}");
+    const CERES: f64 = 3.001362e3;
+    assert!((last / CERES - 1.0).abs() < 1e-4, "{t}");
 }
 
 #[test]

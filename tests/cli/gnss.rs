@@ -92,14 +92,29 @@ fn ppk_geonet_writes_fixed_solutions_with_quality_columns() {
     assert_base_read_back(&out);
     let rows = pos_rows(&out);
     assert_eq!(rows.len(), 120);
+    // Every fixed epoch against the rover's reference (the shared data's README).
+    let truth = ::gnss::frame::Ecef::new(-3976219.1869, 3382371.6036, 3652511.1410);
+    let mut worst = 0.0f64;
     for r in &rows {
         assert_eq!(r[5], "1", "Q = 1 fixed");
         let sdu: f64 = r[9].parse().unwrap();
         assert!(sdu > 0.001 && sdu < 0.1, "a real vertical sigma: {sdu}");
         let ratio: f64 = r[14].parse().unwrap();
         assert!(ratio >= 3.0);
+        let f = |k: usize| r[k].parse::<f64>().unwrap();
+        let e = ::gnss::frame::Geodetic::from_degrees(f(2), f(3), f(4)).to_ecef();
+        worst = worst.max((e.0 - truth.0).norm());
     }
+    eprintln!("GEONET kinematic: worst fixed epoch {worst:.4} m from the reference");
+    assert!(
+        worst <= GEONET_KINEMATIC_WORST,
+        "worst fixed epoch {worst:.4} m off"
+    );
 }
+
+/// The GEONET rover's kinematic fixed epochs: the farthest from its reference, metres
+/// (measured 3.2 cm; a wrong integer moves an epoch by decimetres).
+const GEONET_KINEMATIC_WORST: f64 = 0.045;
 
 /// RTKLIB's solution reader gets the `--base-pos` we gave back from the `.pos` (llh or xyz).
 fn assert_base_read_back(out: &Path) {

@@ -6,8 +6,10 @@
 use super::*;
 use std::time::Duration;
 
-/// Start `args`, kill it (SIGKILL) after `after`, wait for it.
-fn kill_after(args: &[&str], after: Duration) {
+/// Start `args`, kill it (SIGKILL) after `after`, wait for it; whether the kill interrupted
+/// it (its exit status is the signal) rather than finding it finished.
+fn kill_after(args: &[&str], after: Duration) -> bool {
+    use std::os::unix::process::ExitStatusExt;
     let mut child = Command::new(env!("CARGO_BIN_EXE_ppkat"))
         .args(args)
         .stdout(std::process::Stdio::null())
@@ -16,7 +18,42 @@ fn kill_after(args: &[&str], after: Duration) {
         .expect("start ppkat");
     std::thread::sleep(after);
     let _ = child.kill();
-    let _ = child.wait();
+    let status = child.wait().expect("wait for ppkat");
+    status.signal() == Some(9)
+}
+
+/// Run `args` to the end, asserting its exit code; how long it took.
+fn timed_run(args: &[&str], code: i32) -> Duration {
+    let t = std::time::Instant::now();
+    let o = ppkat(args);
+    assert_eq!(o.status.code(), Some(code), "{args:?}: {}", text(&o));
+    t.elapsed()
+}
+
+/// The moments of the kills: spread over a run that took `run` (a tenth to nine tenths of
+/// it, at least 5 ms), so that they land while it reads, computes and writes, not after it.
+fn moments(run: Duration) -> [Duration; 5] {
+    [0.1, 0.3, 0.5, 0.7, 0.9].map(|f| run.mul_f64(f).max(Duration::from_millis(5)))
+}
+
+/// Exit codes of the killed commands' whole runs: what each must end with, not "0 or 3".
+const ADJUST_CODE: i32 = 0;
+const IMPORT_CODE: i32 = 0;
+const MATCH_CODE: i32 = 0;
+const GEOTAG_CODE: i32 = 0;
+
+/// Kills that must have interrupted a running process, of the five: the later ones may
+/// find a run that went faster than the first finished.
+const MIN_INTERRUPTED: usize = 3;
+
+/// Assert that enough of the kills interrupted the run (`hits` per moment).
+fn assert_interrupted(what: &str, run: Duration, hits: &[(Duration, bool)]) {
+    let n = hits.iter().filter(|h| h.1).count();
+    assert!(
+        n >= MIN_INTERRUPTED && hits[0].1,
+        "{what}: only {n} of {} kills interrupted a run of {run:?} ({hits:?}): the test would check finished runs",
+        hits.len()
+    );
 }
 
 /// The names in a folder.
@@ -53,8 +90,6 @@ fn mark_old(path: &Path) {
     b.extend_from_slice(b"# old run\n");
     std::fs::write(path, b).unwrap();
 }
-
-const MOMENTS_MS: [u64; 5] = [30, 150, 400, 800, 1500];
 
 #[test]
 fn killed_ppk_leaves_the_earlier_pos_whole() {
@@ -113,26 +148,27 @@ fn killed_ppk_of_a_real_ubx_log_leaves_the_earlier_pos_whole() {
 }
 
 /// Run the `ppk` of `args` (writing `out`, alone in `dir`) once, mark its output as old, then
-/// kill reruns at each of [`MOMENTS_MS`]: `out` is the old file or the new one, never a
-/// partial one; a last run writes the first run's file bit for bit and leaves no temporary.
+/// kill reruns at each of its [`moments`] (most must interrupt it): `out` is the old file or
+/// the new one, never a partial one; a last run writes the first run's file bit for bit and
+/// leaves no temporary.
 fn killed_ppk_runs(args: &[&str], dir: &Path, out: &Path) {
-    succeeds(&ppkat(args));
+    timed_run(args, 0);
+    let run = timed_run(args, 0);
     let new = std::fs::read(out).unwrap();
     mark_old(out);
     let old = std::fs::read(out).unwrap();
-    for ms in MOMENTS_MS {
-        kill_after(args, Duration::from_millis(ms));
+    let mut hits = Vec::new();
+    for at in moments(run) {
+        hits.push((at, kill_after(args, at)));
         let now = std::fs::read(out).unwrap();
-        assert!(
-            now == old || now == new,
-            "killed at {ms} ms: a partial .pos"
-        );
+        assert!(now == old || now == new, "killed at {at:?}: a partial .pos");
         // Only the output itself, and perhaps the killed run's hidden temporary.
         for n in names(dir) {
             assert!(n == "out.pos" || n.starts_with(".out.pos."), "{n}");
         }
         std::fs::write(out, &old).unwrap();
     }
+    assert_interrupted("ppk", run, &hits);
     succeeds(&ppkat(args));
     assert_eq!(std::fs::read(out).unwrap(), new, "reruns are bit-identical");
     assert_eq!(
@@ -142,13 +178,21 @@ fn killed_ppk_runs(args: &[&str], dir: &Path, out: &Path) {
     );
 }
 
-/// Run `args` (whose output is the folder `out`, alone in `work`) once, mark its files as
-/// old, then kill reruns at each of [`MOMENTS_MS`]: `out` holds the old files or the new
-/// ones, never a mix; a last run writes the first run's files bit for bit and leaves no
-/// temporary behind.
-fn killed_runs_leave_the_folder_whole(args: &[&str], work: &Path, out: &Path, min_files: usize) {
+/// Run `args` (whose output is the folder `out`, alone in `work`; exit code `code`) twice,
+/// timing the second, mark its files as old, then kill reruns at each of its [`moments`] (most must interrupt
+/// it): `out` holds the old files or the new ones, never a mix; a last run writes the first
+/// run's files bit for bit and leaves no temporary behind. Returns the first run's time.
+fn killed_runs_leave_the_folder_whole(
+    args: &[&str],
+    work: &Path,
+    out: &Path,
+    min_files: usize,
+    code: i32,
+) -> Duration {
     let name = out.file_name().unwrap().to_string_lossy().into_owned();
-    succeeds_or_skips(&ppkat(args));
+    // The first run fills caches (match's features); the kills time the reruns.
+    timed_run(args, code);
+    let run = timed_run(args, code);
     let new = contents(out);
     assert!(new.len() >= min_files, "{:?}", names(out));
     // Files only: a folder inside (match's feature cache) holds what both runs share.
@@ -156,8 +200,10 @@ fn killed_runs_leave_the_folder_whole(args: &[&str], work: &Path, out: &Path, mi
         mark_old(&out.join(n));
     }
     let old = contents(out);
-    for ms in MOMENTS_MS {
-        kill_after(args, Duration::from_millis(ms));
+    let mut hits = Vec::new();
+    for at in moments(run) {
+        hits.push((at, kill_after(args, at)));
+        let ms = at.as_millis();
         if !out.exists() {
             // Killed between the two renames of the swap: the old folder is beside it, whole,
             // and the next run puts it back.
@@ -167,7 +213,7 @@ fn killed_runs_leave_the_folder_whole(args: &[&str], work: &Path, out: &Path, mi
                 .collect();
             assert_eq!(parked.len(), 1, "{:?}", names(work));
             assert_eq!(contents(&work.join(&parked[0])), old, "killed at {ms} ms");
-            succeeds_or_skips(&ppkat(args));
+            timed_run(args, code);
         }
         let now = contents(out);
         assert!(
@@ -188,14 +234,11 @@ fn killed_runs_leave_the_folder_whole(args: &[&str], work: &Path, out: &Path, mi
             std::fs::write(f, b).unwrap();
         }
     }
-    succeeds_or_skips(&ppkat(args));
+    assert_interrupted(args[0], run, &hits);
+    timed_run(args, code);
     assert_eq!(contents(out), new, "reruns are bit-identical");
     assert_eq!(names(work), [name], "the next run removed the temporaries");
-}
-
-/// Assert exit code 0, or 3 (finished, some inputs skipped).
-fn succeeds_or_skips(o: &Output) {
-    assert!(matches!(o.status.code(), Some(0 | 3)), "{}", text(o));
+    run
 }
 
 #[test]
@@ -205,7 +248,7 @@ fn killed_adjust_leaves_the_earlier_folder_whole() {
     let out = work.join("adj");
     let project = demo_dir().join("project.toml");
     let args = ["adjust", "--project", p(&project), "-o", p(&out)];
-    killed_runs_leave_the_folder_whole(&args, &work, &out, 6);
+    killed_runs_leave_the_folder_whole(&args, &work, &out, 6, ADJUST_CODE);
 }
 
 #[test]
@@ -226,7 +269,7 @@ fn killed_import_leaves_the_earlier_folder_whole() {
         "-o",
         p(&out),
     ];
-    killed_runs_leave_the_folder_whole(&args, &work, &out, 5);
+    killed_runs_leave_the_folder_whole(&args, &work, &out, 5, IMPORT_CODE);
 }
 
 #[test]
@@ -250,7 +293,7 @@ fn killed_match_leaves_the_earlier_folder_whole() {
         &["-o", p(&out)],
     ]
     .concat();
-    killed_runs_leave_the_folder_whole(&args, &work, &out, 6);
+    killed_runs_leave_the_folder_whole(&args, &work, &out, 6, MATCH_CODE);
 }
 
 /// A DJI Timestamp.MRK of the 18 Brighton Beach photos (DJI_0018 … DJI_0035), 3 s apart inside
@@ -294,20 +337,21 @@ fn killed_geotag_leaves_the_earlier_folder_whole() {
         "-o",
         p(&csv),
     ];
-    killed_runs_leave_the_folder_whole(&args, &work, &out, 18);
+    let run = killed_runs_leave_the_folder_whole(&args, &work, &out, 18, GEOTAG_CODE);
     // The stations file and the folder: the folder is swapped in only after the file, so a
     // killed run never leaves new tagged photos beside an old stations file.
     let new_csv = std::fs::read(&csv).unwrap();
     let new_dir = contents(&out);
-    for ms in MOMENTS_MS {
+    for at in moments(run) {
+        let ms = at.as_millis();
         mark_old(&csv);
         for n in names(&out) {
             mark_old(&out.join(n));
         }
         let old_dir = contents(&out);
-        kill_after(&args, Duration::from_millis(ms));
+        kill_after(&args, at);
         if !out.exists() {
-            succeeds_or_skips(&ppkat(&args));
+            timed_run(&args, GEOTAG_CODE);
             continue;
         }
         let (csv_now, dir_now) = (std::fs::read(&csv).unwrap(), contents(&out));
@@ -324,7 +368,7 @@ fn killed_geotag_leaves_the_earlier_folder_whole() {
             csv_new || dir_now == old_dir,
             "killed at {ms} ms: new tagged photos beside the old stations file"
         );
-        succeeds_or_skips(&ppkat(&args));
+        timed_run(&args, GEOTAG_CODE);
     }
     // A stations file that cannot be written: the run fails and the folder stays as it was.
     for n in names(&out) {

@@ -198,17 +198,24 @@ fn simulate_writes_the_rover_and_base_also_as_ubx() {
     let (u, r) = (tmp("sim-ubx.pos"), tmp("sim-rnx.pos"));
     run("rover.ubx", "base.ubx", &u);
     run("rover.obs", "base.obs", &r);
-    let (lu, lr) = (pos_lines(&u), pos_lines(&r));
-    assert_eq!(lu.len(), 1175);
-    assert_eq!(lu.len(), lr.len());
-    for (a, b) in lu.iter().zip(&lr) {
+    same_solutions(&pos_lines(&u), &pos_lines(&r), 1175, 1e-3);
+}
+
+/// How close PPK on the RTCM logs comes to PPK on the RINEX files, metres per axis.
+const RTCM_TOL: f64 = 1e-3;
+
+/// Two `.pos` bodies (llh) of the same epochs: equally many (`epochs`), the same times and Q
+/// line by line, positions within `tol` metres on each axis.
+fn same_solutions(a: &[String], b: &[String], epochs: usize, tol: f64) {
+    assert_eq!((a.len(), b.len()), (epochs, epochs), "epochs solved");
+    for (a, b) in a.iter().zip(b) {
         let fa: Vec<&str> = a.split_whitespace().collect();
         let fb: Vec<&str> = b.split_whitespace().collect();
         assert_eq!((fa[0], fa[1], fa[5]), (fb[0], fb[1], fb[5]), "time and Q");
         for k in 2..5 {
             let d = fa[k].parse::<f64>().unwrap() - fb[k].parse::<f64>().unwrap();
             let metres = if k < 4 { d * 111_320.0 } else { d };
-            assert!(metres.abs() <= 1e-3, "{a}\n{b}");
+            assert!(metres.abs() <= tol, "{a}\n{b}");
         }
     }
 }
@@ -221,7 +228,7 @@ fn simulate_writes_the_rover_and_base_also_as_ubx() {
 fn rtcm_logs_carry_their_orbits_and_base_station() {
     let dir = tmp("sim-rtcm");
     let scen = fixture("scenario_small.toml");
-    succeeds(&ppkat(&[
+    let sim = succeeds(&ppkat(&[
         "simulate",
         "--scenario",
         p(&scen),
@@ -240,7 +247,7 @@ fn rtcm_logs_carry_their_orbits_and_base_station() {
         "--in",
         p(&base),
         "-o",
-        p(&dir.join("base.obs")),
+        p(&dir.join("base-rtcm.obs")),
         "--nav",
         p(&nav),
         "--year-hint",
@@ -268,6 +275,23 @@ fn rtcm_logs_carry_their_orbits_and_base_station() {
     );
     let pos = std::fs::read_to_string(&o).unwrap();
     assert!(pos.contains("base from : the station position of"), "{t}");
+    // The same solutions as on the simulator's RINEX files with its navigation file and base
+    // position, to RTCM's resolution.
+    let r = dir.join("rinex.pos");
+    let xyz = simulated_base_xyz(&sim);
+    succeeds(&ppkat(&[
+        "ppk",
+        "--rover",
+        p(&dir.join("rover.obs")),
+        "--base",
+        p(&dir.join("base.obs")),
+        "--nav",
+        p(&dir.join("nav.rnx")),
+        &format!("--base-pos={xyz}"),
+        "-o",
+        p(&r),
+    ]));
+    same_solutions(&pos_lines(&o), &pos_lines(&r), 1175, RTCM_TOL);
     fails_with(
         &ppkat(&["info", p(&base), "--date-hint", "2001-01-01"]),
         &["contradicts the log"],
@@ -369,11 +393,6 @@ fn sbf_logs_carry_their_orbits_and_events() {
         }
         succeeds(&ppkat(&args.iter().map(String::as_str).collect::<Vec<_>>()));
     }
-    let (ls, lr) = (pos_lines(&s), pos_lines(&r));
-    assert_eq!(ls.len(), 1175);
-    for (a, b) in ls.iter().zip(&lr) {
-        let fa: Vec<&str> = a.split_whitespace().collect();
-        let fb: Vec<&str> = b.split_whitespace().collect();
-        assert_eq!((fa[0], fa[1], fa[5]), (fb[0], fb[1], fb[5]), "time and Q");
-    }
+    // The same solutions as on the RINEX files, to 1 mm.
+    same_solutions(&pos_lines(&s), &pos_lines(&r), 1175, 1e-3);
 }

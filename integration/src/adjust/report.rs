@@ -295,6 +295,22 @@ fn html_removed(s: &mut String, r: &Results) {
     if r.removed.is_empty() {
         let _ = writeln!(s, "<p>None.</p>");
     } else {
+        // A long list folds away (the plots below are what a reader looks at first); the
+        // counts by kind stay in view.
+        let long = r.removed.len() > FOLD_ROWS;
+        if long {
+            let mut kinds: std::collections::BTreeMap<&str, usize> = Default::default();
+            for x in &r.removed {
+                *kinds.entry(x.kind.as_str()).or_default() += 1;
+            }
+            let counts: Vec<String> = kinds.iter().map(|(k, n)| format!("{n} {k}")).collect();
+            let _ = writeln!(
+                s,
+                "<details><summary>{} removed: {} (in the order data snooping removed them; show the list)</summary>",
+                r.removed.len(),
+                counts.join(", ")
+            );
+        }
         let _ = writeln!(
             s,
             "<table><tr><th>#</th><th>kind</th><th>what</th><th>|w|</th><th>source</th></tr>"
@@ -311,8 +327,14 @@ fn html_removed(s: &mut String, r: &Results) {
             );
         }
         let _ = writeln!(s, "</table>");
+        if long {
+            let _ = writeln!(s, "</details>");
+        }
     }
 }
+
+/// Removed observations listed in view; a longer list folds away under its counts.
+const FOLD_ROWS: usize = 30;
 
 /// The check-point table.
 fn html_checks(s: &mut String, r: &Results) {
