@@ -75,6 +75,107 @@ fn write_geotiff(path: &Path, v: &[f32], area: bool) {
     img.write_data(v).unwrap();
 }
 
+/// The crop as PROJ's CDN grids are stored: tiled (16 × 16 here, so the 25 × 25 grid spans
+/// four partly filled tiles) with the floating-point predictor (TIFF Technical Note 3: each
+/// row's bytes split into planes, most significant first, then differenced byte by byte),
+/// written by hand because the `tiff` crate cannot encode that predictor.
+fn write_tiled_fp_geotiff(path: &Path, v: &[f32]) {
+    const T: usize = 16;
+    let mut tiles: Vec<Vec<u8>> = Vec::new();
+    for ty in 0..2 {
+        for tx in 0..2 {
+            let mut tile = Vec::with_capacity(T * T * 4);
+            for r in 0..T {
+                let (y, x0) = (ty * T + r, tx * T);
+                let row: Vec<[u8; 4]> = (0..T)
+                    .map(|c| {
+                        let x = x0 + c;
+                        let val = if y < 25 && x < 25 { v[y * 25 + x] } else { 0.0 };
+                        val.to_be_bytes()
+                    })
+                    .collect();
+                let mut bytes: Vec<u8> =
+                    (0..4).flat_map(|k| row.iter().map(move |b| b[k])).collect();
+                for j in (1..bytes.len()).rev() {
+                    bytes[j] = bytes[j].wrapping_sub(bytes[j - 1]);
+                }
+                tile.extend(bytes);
+            }
+            tiles.push(tile);
+        }
+    }
+    let step = 2.5 / 60.0;
+    let doubles = |v: &[f64]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+    let keys: Vec<u8> = [
+        1u16, 1, 0, 3, 1024, 0, 1, 2, 1025, 0, 1, 2, 2048, 0, 1, 4326,
+    ]
+    .iter()
+    .flat_map(|k| k.to_le_bytes())
+    .collect();
+    // Out-of-line values after the directory, then the tiles.
+    const N: usize = 17;
+    let mut extra: Vec<u8> = Vec::new();
+    let base = 8 + 2 + 12 * N + 4;
+    let put = |b: &[u8], extra: &mut Vec<u8>| -> u32 {
+        let at = (base + extra.len()) as u32;
+        extra.extend_from_slice(b);
+        if extra.len() % 2 == 1 {
+            extra.push(0);
+        }
+        at
+    };
+    let scale = put(&doubles(&[step, step, 0.0]), &mut extra);
+    let tie = put(&doubles(&[0.0, 0.0, 0.0, -123.0, 38.0, 0.0]), &mut extra);
+    let geo = put(&keys, &mut extra);
+    let nodata = put(b"-32768\0", &mut extra);
+    let counts_at = put(&[0u8; 16], &mut extra);
+    let offsets_at = put(&[0u8; 16], &mut extra);
+    let mut offsets = Vec::new();
+    for t in &tiles {
+        offsets.push(put(t, &mut extra));
+    }
+    let fill = |extra: &mut Vec<u8>, at: u32, vals: &[u32]| {
+        let o = at as usize - base;
+        for (k, v) in vals.iter().enumerate() {
+            extra[o + 4 * k..o + 4 * k + 4].copy_from_slice(&v.to_le_bytes());
+        }
+    };
+    fill(&mut extra, counts_at, &[(T * T * 4) as u32; 4]);
+    fill(&mut extra, offsets_at, &offsets);
+    // (tag, type, count, value or offset): SHORT 3, LONG 4, DOUBLE 12, ASCII 2.
+    let entries: [(u16, u16, u32, u32); N] = [
+        (256, 3, 1, 25),
+        (257, 3, 1, 25),
+        (258, 3, 1, 32),
+        (259, 3, 1, 1),
+        (262, 3, 1, 1),
+        (277, 3, 1, 1),
+        (284, 3, 1, 1),
+        (317, 3, 1, 3),
+        (322, 3, 1, T as u32),
+        (323, 3, 1, T as u32),
+        (324, 4, 4, offsets_at),
+        (325, 4, 4, counts_at),
+        (339, 3, 1, 3),
+        (33550, 12, 3, scale),
+        (33922, 12, 6, tie),
+        (34735, 3, 16, geo),
+        (42113, 2, 7, nodata),
+    ];
+    let mut b: Vec<u8> = b"II*\0".to_vec();
+    b.extend(8u32.to_le_bytes());
+    b.extend((N as u16).to_le_bytes());
+    for (tag, typ, count, value) in entries {
+        b.extend(tag.to_le_bytes());
+        b.extend(typ.to_le_bytes());
+        b.extend(count.to_le_bytes());
+        b.extend(value.to_le_bytes());
+    }
+    b.extend(0u32.to_le_bytes());
+    b.extend(extra);
+    std::fs::write(path, b).unwrap();
+}
+
 #[test]
 fn the_crop_gives_proj_values_from_raw_gtx_and_geotiff() {
     let Some(dir) = crop() else {
@@ -95,6 +196,12 @@ fn the_crop_gives_proj_values_from_raw_gtx_and_geotiff() {
             &format!("GeoTIFF, pixel-is-area {area}"),
         );
     }
+    let tiled = testkit::scratch_path("egm2008-crop-tiled-fp.tif");
+    write_tiled_fp_geotiff(&tiled, &values(&raw));
+    check(
+        &GeoidGrid::read(&tiled).unwrap(),
+        "tiled GeoTIFF, floating-point predictor",
+    );
     // As a user gives it, through --height.
     let Heights::Grid(g) = Heights::parse(&format!("geoid:{}@38,-123,2.5", raw.display())).unwrap()
     else {
