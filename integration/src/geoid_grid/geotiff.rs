@@ -85,30 +85,23 @@ pub(super) fn read(path: &Path, b: &[u8]) -> Result<GeoidGrid> {
     let half = if point { 0.0 } else { 0.5 };
     let west = tie[3] + (half - tie[0]) * scale[0];
     let north = tie[4] - (half - tie[1]) * scale[1];
-    let mut n = vec![0f32; rows * cols];
-    for (r, row) in values.chunks_exact(cols).enumerate() {
-        // Image row 0 is the north; ours is the south.
-        let dst = &mut n[(rows - 1 - r) * cols..(rows - r) * cols];
-        for (v, &x) in dst.iter_mut().zip(row) {
+    // Image row 0 is the north.
+    let south = north - (rows.max(1) - 1) as f64 * scale[1];
+    Ok(GeoidGrid::from_north_rows(
+        path,
+        (south, west),
+        (scale[1], scale[0]),
+        (rows, cols),
+        |r, c| {
+            let x = values[r * cols + c];
             let missing = !x.is_finite() || nodata.is_some_and(|nd| x == nd);
-            *v = if missing {
+            if missing {
                 f32::NAN
             } else {
                 (offset + factor * x) as f32
-            };
-        }
-    }
-    Ok(GeoidGrid {
-        path: path.to_path_buf(),
-        lat0: north - (rows.max(1) - 1) as f64 * scale[1],
-        lon0: west,
-        dlat: scale[1],
-        dlon: scale[0],
-        rows,
-        cols,
-        n,
-        model: None,
-    })
+            }
+        },
+    ))
 }
 
 /// The value of GeoTIFF key `id` when stored in the directory itself (location 0).

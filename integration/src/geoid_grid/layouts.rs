@@ -63,26 +63,18 @@ pub(super) fn pgm(path: &Path, b: &[u8]) -> Result<GeoidGrid> {
             ),
         ));
     }
-    let mut n = vec![0f32; rows * cols];
-    for r in 0..rows {
-        // File row 0 is the north pole; ours is the south.
-        let dst = &mut n[(rows - 1 - r) * cols..(rows - r) * cols];
-        for (c, v) in dst.iter_mut().enumerate() {
+    // File row 0 is the north pole.
+    let step = (180.0 / (rows - 1) as f64, 360.0 / cols as f64);
+    Ok(GeoidGrid::from_north_rows(
+        path,
+        (-90.0, 0.0),
+        step,
+        (rows, cols),
+        |r, c| {
             let k = at + 2 * (r * cols + c);
-            *v = (offset + scale * u16::from_be_bytes([b[k], b[k + 1]]) as f64) as f32;
-        }
-    }
-    Ok(GeoidGrid {
-        path: path.to_path_buf(),
-        lat0: -90.0,
-        lon0: 0.0,
-        dlat: 180.0 / (rows - 1) as f64,
-        dlon: 360.0 / cols as f64,
-        rows,
-        cols,
-        n,
-        model: None,
-    })
+            (offset + scale * u16::from_be_bytes([b[k], b[k + 1]]) as f64) as f32
+        },
+    ))
 }
 
 /// PROJ's GTX: big-endian header and f32 samples from the south-west corner.

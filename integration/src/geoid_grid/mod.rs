@@ -127,6 +127,37 @@ impl GeoidGrid {
         Ok(g)
     }
 
+    /// A grid whose file stores its rows from the north (PGM, NGA's records, GeoTIFF): node
+    /// (r, c) of the file is `value(r, c)` (NaN where there is none); `south` and `west` place
+    /// the last row's first node; the steps are (latitude, longitude), all in degrees.
+    fn from_north_rows(
+        path: &Path,
+        (south, west): (f64, f64),
+        (dlat, dlon): (f64, f64),
+        (rows, cols): (usize, usize),
+        value: impl Fn(usize, usize) -> f32,
+    ) -> GeoidGrid {
+        let mut n = vec![0f32; rows * cols];
+        for r in 0..rows {
+            // File row r is our row rows − 1 − r (ours run from the south).
+            let dst = &mut n[(rows - 1 - r) * cols..(rows - r) * cols];
+            for (c, v) in dst.iter_mut().enumerate() {
+                *v = value(r, c);
+            }
+        }
+        GeoidGrid {
+            path: path.to_path_buf(),
+            lat0: south,
+            lon0: west,
+            dlat,
+            dlon,
+            rows,
+            cols,
+            n,
+            model: None,
+        }
+    }
+
     /// The grid's extent in words: latitudes and longitudes of its outer nodes, the spacing.
     pub fn extent(&self) -> String {
         let north = self.lat0 + (self.rows - 1) as f64 * self.dlat;

@@ -98,35 +98,26 @@ pub(super) fn read(
         ));
     }
     let record = 4 * cols + 8;
-    let mut n = vec![0f32; rows * cols];
-    for (r, rec) in b.chunks_exact(record).enumerate() {
-        // File row 0 is the north; ours is the south.
-        let dst = &mut n[(rows - 1 - r) * cols..(rows - r) * cols];
-        for (v, c) in dst.iter_mut().zip(rec[4..record - 4].chunks_exact(4)) {
-            let bytes: [u8; 4] = c.try_into().expect("4 bytes");
+    Ok(GeoidGrid::from_north_rows(
+        path,
+        (south, place.west),
+        (step, step),
+        (rows, cols),
+        |r, c| {
+            let at = r * record + 4 + 4 * c;
+            let bytes: [u8; 4] = b[at..at + 4].try_into().expect("4 bytes");
             let x = if little {
                 f32::from_le_bytes(bytes)
             } else {
                 f32::from_be_bytes(bytes)
             };
-            *v = if x.is_finite() && x.abs() < 1000.0 {
+            if x.is_finite() && x.abs() < 1000.0 {
                 x
             } else {
                 f32::NAN
-            };
-        }
-    }
-    Ok(GeoidGrid {
-        path: path.to_path_buf(),
-        lat0: south,
-        lon0: place.west,
-        dlat: step,
-        dlon: step,
-        rows,
-        cols,
-        n,
-        model: None,
-    })
+            }
+        },
+    ))
 }
 
 #[cfg(test)]
