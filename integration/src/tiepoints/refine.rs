@@ -37,13 +37,31 @@ pub struct Refinement {
     pub kept: usize,
 }
 
+/// The rotation by `t` radians.
+fn rotation(t: f64) -> Matrix2<f64> {
+    Matrix2::new(t.cos(), -t.sin(), t.sin(), t.cos())
+}
+
 /// Start maps for the fit: the keypoints' scale ratio and their orientation difference,
 /// turned either way (detectors differ in their angle convention).
 fn starts(a: &photo::features::Keypoint, b: &photo::features::Keypoint) -> [Matrix2<f64>; 2] {
     let s = if a.size > 0.0 { b.size / a.size } else { 1.0 };
     let d = (b.angle - a.angle).to_radians();
-    let rot = |t: f64| Matrix2::new(t.cos(), -t.sin(), t.sin(), t.cos()) * s;
-    [rot(d), rot(-d)]
+    [rotation(d) * s, rotation(-d) * s]
+}
+
+/// Of the start maps `maps`, the one whose template correlates best at `p0` (None without
+/// maps).
+fn best_start(
+    tpl: &Template,
+    gray: &photo::features::GrayImage,
+    p0: Vector2<f64>,
+    maps: impl IntoIterator<Item = Matrix2<f64>>,
+) -> Option<Matrix2<f64>> {
+    maps.into_iter()
+        .map(|a| (tpl.ncc(gray, p0, &a).unwrap_or(-1.0), a))
+        .max_by(|x, y| x.0.total_cmp(&y.0))
+        .map(|x| x.1)
 }
 
 /// Patch size for a photo reduced by `scale`: at most [`PATCH_HALF_PHOTO_PX`] photograph pixels
@@ -148,12 +166,7 @@ pub fn refine(
                         let kr = images[r].features.keypoints[rk as usize];
                         let tpl = templates[t].as_ref().expect("filtered");
                         let p0 = Vector2::new(q.x, q.y) / scale;
-                        let a0 = starts(&kr, &q)
-                            .into_iter()
-                            .map(|a| (tpl.ncc(&gray, p0, &a).unwrap_or(-1.0), a))
-                            .max_by(|x, y| x.0.total_cmp(&y.0))
-                            .map(|x| x.1)
-                            .expect("two starts");
+                        let a0 = best_start(tpl, &gray, p0, starts(&kr, &q)).expect("two starts");
                         let m = tpl.fit(&gray, p0, &a0, &options(scale)).map(|f| Measured {
                             px: f.position * scale,
                             sigma: f.sigma * scale,
@@ -281,14 +294,9 @@ pub fn measure_misses(
                         let (r, rk) = tracks.tracks[m.track][0];
                         let kr = imgs[r].features.keypoints[rk as usize];
                         let p0 = m.at / scale;
-                        let a0 = (0..4)
-                            .map(|q| {
-                                let t = q as f64 * std::f64::consts::FRAC_PI_2;
-                                Matrix2::new(t.cos(), -t.sin(), t.sin(), t.cos())
-                            })
-                            .map(|a| (tpl.ncc(&gray, p0, &a).unwrap_or(-1.0), a))
-                            .max_by(|x, y| x.0.total_cmp(&y.0))?
-                            .1;
+                        let quarter_turns =
+                            (0..4).map(|q| rotation(q as f64 * std::f64::consts::FRAC_PI_2));
+                        let a0 = best_start(tpl, &gray, p0, quarter_turns)?;
                         let f = tpl.fit(&gray, p0, &a0, &options(scale))?;
                         let px = f.position * scale;
                         Some((
@@ -310,6 +318,12 @@ pub fn measure_misses(
             out
         })
         .collect();
+    // The keypoints of each photo already in a track, gathered once (scanning every track
+    // for every photo made this quadratic in the block).
+    let mut in_tracks: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for &(i, k) in tracks.tracks.iter().flatten() {
+        in_tracks[i].push(k);
+    }
     let mut added = 0;
     for (c, new) in found.into_iter().enumerate() {
         // Measurements of tracks already in this photo, on a 2-pixel grid.
@@ -319,11 +333,9 @@ pub fn measure_misses(
             let (i, j) = cell(x, y);
             (-1..=1).any(|di| (-1..=1).any(|dj| taken.contains(&(i + di, j + dj))))
         };
-        for &(i, k) in tracks.tracks.iter().flatten() {
-            if i == c {
-                let q = images[c].features.keypoints[k as usize];
-                taken.insert(cell(q.x, q.y));
-            }
+        for &k in &in_tracks[c] {
+            let q = images[c].features.keypoints[k as usize];
+            taken.insert(cell(q.x, q.y));
         }
         for (t, kp) in new {
             if near(&taken, kp.x, kp.y) {
