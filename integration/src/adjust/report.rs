@@ -439,29 +439,32 @@ fn plot_checks(r: &Results) -> String {
 }
 
 /// The time axis of the exposures: minutes or hours from a round time, or the exposures'
-/// sequence numbers when the source knew no times (GPS week 0); with each residual's value.
-fn exposure_axis(v: &[super::residuals::GnssResidual]) -> (String, Vec<f64>) {
+/// sequence numbers when the source knew no times (GPS week 0, the number as time of week);
+/// its description and the value on it of a time.
+fn exposure_axis(
+    v: &[super::residuals::GnssResidual],
+) -> (String, Box<dyn Fn(hifitime::Epoch) -> f64>) {
+    let tow = |t: hifitime::Epoch| gnss::time::week_tow(t).1;
     let numbered = v.iter().all(|x| gnss::time::week_tow(x.time).0 == 0);
-    if numbered {
-        let x = v.iter().map(|x| x.tow).collect();
-        return ("exposure number (the source gave no times)".into(), x);
-    }
     let first = v.iter().map(|x| x.time).min();
     let last = v.iter().map(|x| x.time).max();
     match first.zip(last) {
-        Some((a, b)) => {
+        Some((a, b)) if !numbered => {
             let axis = crate::plot::TimeAxis::new(a, b);
-            let x = v.iter().map(|x| axis.x(x.time)).collect();
-            (axis.desc, x)
+            (axis.desc.clone(), Box::new(move |t| axis.x(t)))
         }
-        None => (String::new(), Vec::new()),
+        _ => (
+            "exposure number (the source gave no times)".into(),
+            Box::new(tow),
+        ),
     }
 }
 
 /// GNSS centre residuals against time, one colour per axis, strips marked by their images.
 fn plot_gnss(r: &Results) -> String {
     let v = &r.gnss_residuals;
-    let (desc, xs) = exposure_axis(v);
+    let (desc, x_of) = exposure_axis(v);
+    let xs: Vec<f64> = v.iter().map(|r| x_of(r.time)).collect();
     let (t0, t1) = range(xs.iter().copied());
     let (y0, y1) = range(v.iter().flat_map(|x| x.v));
     // In the unit the residuals' span suits (millimetres for a good flight).
@@ -510,21 +513,10 @@ fn plot_gnss(r: &Results) -> String {
 fn plot_drift(r: &Results) -> String {
     let v = &r.gnss_residuals;
     let (t0, t1) = range(v.iter().map(|x| x.tow));
-    // The axis as for the residuals: tow maps onto it linearly (one week).
-    let (desc, xs) = exposure_axis(v);
-    let ends = |pick: fn(f64, f64) -> bool| {
-        v.iter()
-            .zip(&xs)
-            .reduce(|m, c| if pick(c.0.tow, m.0.tow) { c } else { m })
-            .map(|(r, x)| (r.tow, *x))
-    };
-    let (x_of, per_s) = match (ends(|a, b| a < b), ends(|a, b| a > b)) {
-        (Some((ta, xa)), Some((tb, xb))) if tb > ta => {
-            let k = (xb - xa) / (tb - ta);
-            (xa - ta * k, k)
-        }
-        _ => (0.0, 1.0),
-    };
+    // The axis as for the residuals, a time of week placed in the exposures' week.
+    let (desc, x_of) = exposure_axis(v);
+    let week = v.first().map_or(0, |r| gnss::time::week_tow(r.time).0);
+    let at = |tow: f64| x_of(gnss::time::from_week_tow(week, tow));
     let week_start = |t: f64| t - (t / 604800.0).floor() * 604800.0;
     let mut curves: Vec<(usize, Vec<(f64, f64)>)> = Vec::new();
     for d in &r.drifts {
@@ -538,7 +530,7 @@ fn plot_drift(r: &Results) -> String {
                         _ if d.labels[0].starts_with('b') => d.values[a] * dt,
                         _ => d.values[a],
                     };
-                    (x_of + per_s * tow, val)
+                    (at(tow), val)
                 })
                 .collect();
             curves.push((a, pts));
@@ -548,8 +540,13 @@ fn plot_drift(r: &Results) -> String {
     svg(
         "Estimated GNSS drift (m) per group: E red, N green, U blue",
         |root| {
-            let (a, b) = (x_of + per_s * t0, x_of + per_s * t1);
-            let mut ch = axes(root, a..b, y0..y1, (desc.as_str(), "drift (m)"), 60)?;
+            let mut ch = axes(
+                root,
+                at(t0)..at(t1),
+                y0..y1,
+                (desc.as_str(), "drift (m)"),
+                60,
+            )?;
             for (a, pts) in curves {
                 let col = [RED, GREEN, BLUE][a];
                 ch.draw_series(LineSeries::new(pts, col))?;
