@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 /// with --raw rtcm3 rover.rtcm3 and base.rtcm3, RTCM 3 logs (MSM7, station position 1005; no
 /// events: RTCM carries none); with --raw sbf rover.sbf and base.sbf, Septentrio SBF logs
 /// (GPSNav/GALNav ephemerides, GPSIon/GPSUtc, MeasEpoch, ExtEvent at the exposures; no station
-/// position: SBF carries none). The scenario keys are shown in
+/// position: SBF carries none); with --sp3 orbits.sp3, the constellation as precise orbits. The scenario keys are shown in
 /// fixtures/scenario_small.toml; every error source can be switched under `[errors]`.
 ///
 /// hard-sky is a flight where GNSS alone stays float at every strip start (5–6 satellites above
@@ -76,6 +76,11 @@ pub struct Args {
     /// Also write the rover and base as raw receiver logs of this format (flights only).
     #[arg(long, value_enum, value_name = "FORMAT")]
     raw: Option<RawArg>,
+    /// Also write orbits.sp3: the synthetic constellation as precise orbits (SP3-c, positions
+    /// and clocks every 5 minutes from an hour before the flight to an hour after), for
+    /// trying `--sp3` without `--nav` (flights only).
+    #[arg(long)]
+    sp3: bool,
 }
 
 /// A raw log format the simulator writes.
@@ -98,6 +103,14 @@ pub fn run(args: Args) -> Result<()> {
         .is_some_and(|b| block::BUILTINS.contains(&b));
     if project && args.raw.is_some() {
         bail!("--raw applies to flights (a scenario, or --builtin demo, block20 or long), not to adjustment projects");
+    }
+    let plain_flight = !project
+        && !matches!(
+            args.builtin.as_deref(),
+            Some("lowcost" | "long-baseline" | "hard-sky")
+        );
+    if args.sp3 && !plain_flight {
+        bail!("--sp3 applies to flights (a scenario, or --builtin demo, block20 or long)");
     }
     if let Some(r) = args
         .builtin
@@ -136,6 +149,10 @@ pub fn run(args: Args) -> Result<()> {
     let s = scenario(args.scenario.as_deref(), args.builtin.as_deref())?;
     let rep = simulate::run(&s, &args.out)?;
     print!("{rep}");
+    if args.sp3 {
+        let p = simulate::write_sp3(&rep)?;
+        println!("precise orbits: {} (SP3-c, 5 min)", p.display());
+    }
     let raw = match args.raw {
         None => None,
         Some(RawArg::Ubx) => Some((simulate::write_ubx(&rep)?, "u-blox UBX", "UBX", "")),

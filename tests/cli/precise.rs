@@ -1,5 +1,6 @@
-//! `ppkat spp` and `ppkat ppk` on precise orbits: ONSA's day with the IGS final orbits of
-//! three days and no navigation file; clock files that do not fit; bad usage.
+//! `ppkat spp` on precise orbits (ONSA's day with the IGS final orbits of three days and no
+//! navigation file) and `ppkat ppk` on them (a simulated flight with the simulator's SP3);
+//! clock files that do not fit; bad usage.
 
 use super::*;
 
@@ -73,39 +74,99 @@ fn spp_on_three_sp3_files_without_navigation() {
     assert!(median < 6.0, "median 3D error {median:.2} m");
 }
 
+/// `ppk` of the simulated flight (3.8 km from its base) on the simulator's own precise orbits
+/// (`simulate --sp3`) without a navigation file, against the exact antenna trajectory. The
+/// simulation switches broadcast records halfway between their reference times, which is
+/// where the flight starts: the clocks then jump by up to 11 cm, which the SP3's 5-minute
+/// samples smooth over. The base (every 10 s) straddles that jump until its second epoch,
+/// so the comparison starts there; from then on the run on SP3 matches the run on the
+/// navigation file to 0.2 mm (every epoch fixed, the worst 2.5 cm from the truth).
 #[test]
 fn ppk_on_sp3_without_navigation() {
-    let Some(f) = onsa() else {
-        return;
-    };
-    // A zero baseline (the station against itself): every solution is the base position
-    // (to 3 mm at the epochs of poorest geometry, where the filter's position prior shows).
-    let out = tmp("onsa-zero.pos");
-    let base = "--base-pos=3370658.5313,711877.1456,5349786.9559";
-    let mut args = vec![
+    let dir = tmp("sp3-flight");
+    let _ = std::fs::remove_dir_all(&dir);
+    let t = succeeds(&ppkat(&[
+        "simulate",
+        "--builtin",
+        "demo",
+        "--sp3",
+        "-o",
+        p(&dir),
+    ]));
+    assert!(t.contains("orbits.sp3 (SP3-c, 5 min)"), "{t}");
+    let base_pos = t
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("base:"))
+        .and_then(|l| l.split(" at ").nth(1))
+        .map(|l| l.trim_end_matches(" (ECEF)").replace(' ', ","))
+        .unwrap_or_else(|| panic!("no base position in {t}"));
+    let out = dir.join("sp3.pos");
+    let base_flag = format!("--base-pos={base_pos}");
+    let t = succeeds(&ppkat(&[
         "ppk",
         "--rover",
-        p(&f[0]),
+        p(&dir.join("rover.obs")),
         "--base",
-        p(&f[0]),
-        base,
-        // The truth is the marker; ONSA's ARP is 0.995 m above it.
-        "--refer",
-        "marker",
+        p(&dir.join("base.obs")),
+        "--sp3",
+        p(&dir.join("orbits.sp3")),
+        &base_flag,
         "--format",
         "xyz",
         "-o",
-    ];
-    args.push(p(&out));
-    args.extend(sp3_flags(&f));
-    let t = succeeds(&ppkat(&args));
-    let rows = xyz_rows(&out);
-    assert!(rows.len() >= 2800, "{t}");
-    for (time, x) in &rows {
-        for k in 0..3 {
-            assert!((x[k] - ONSA_TRUTH[k]).abs() < 5e-3, "{time}: {x:?}");
+        p(&out),
+    ]));
+    assert!(t.contains("no navigation file"), "{t}");
+    let truth = sim_truth(&dir.join("truth_trajectory.csv"));
+    let rows = pos_rows(&out);
+    assert_eq!(rows.len(), 2379, "{t}");
+    let (mut fixed, mut worst, mut compared) = (0, 0.0f64, 0);
+    for r in &rows {
+        let time = seconds_of_day(&r[1]);
+        if time < 9.0 * 3600.0 + 9.9 {
+            continue; // before the base's second epoch: see above
+        }
+        let x = [2, 3, 4].map(|k| r[k].parse::<f64>().unwrap());
+        let k = truth.partition_point(|(s, _)| *s < time - 1e-3);
+        let (s, y) = truth[k];
+        assert!((s - time).abs() < 1e-3, "{} has no truth", r[1]);
+        let d = (0..3).map(|i| (x[i] - y[i]).powi(2)).sum::<f64>().sqrt();
+        compared += 1;
+        if r[5] == "1" {
+            fixed += 1;
+            worst = worst.max(d);
         }
     }
+    assert!(compared > 2270, "{compared}");
+    assert_eq!(
+        fixed, compared,
+        "every epoch fixed, as on the navigation file"
+    );
+    assert!(
+        worst < 0.04,
+        "worst fixed epoch {worst:.4} m off (0.025 measured)"
+    );
+}
+
+/// The simulator's `truth_trajectory.csv`: (GPST seconds of the day, ECEF antenna position),
+/// in time order.
+fn sim_truth(path: &Path) -> Vec<(f64, [f64; 3])> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .filter(|l| l.starts_with(|c: char| c.is_ascii_digit()))
+        .map(|l| {
+            let v: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
+            (v[1] % 86_400.0, [v[2], v[3], v[4]])
+        })
+        .collect()
+}
+
+/// Seconds of the day of a `.pos` time column (`hh:mm:ss.ssssss`).
+fn seconds_of_day(hms: &str) -> f64 {
+    hms.split(':')
+        .map(|x| x.parse::<f64>().unwrap())
+        .fold(0.0, |acc, x| acc * 60.0 + x)
 }
 
 #[test]

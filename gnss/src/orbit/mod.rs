@@ -9,12 +9,14 @@ pub mod glonass;
 pub mod kepler;
 pub mod precise;
 pub mod sp3;
+pub mod sp3_write;
 
 pub use clk::ClockFile;
 pub use glonass::GlonassEph;
 pub use kepler::{GalMessage, KeplerEph, SatPosClock, C};
 pub use precise::{ClockSource, MergeReport, PreciseOrbits, Unavailable};
 pub use sp3::Sp3;
+pub use sp3_write::sp3_text;
 
 use crate::frame::Ecef;
 use crate::rinex::nav::{Klobuchar, NavFile, NavKind, NavRecord};

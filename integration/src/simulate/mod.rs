@@ -66,6 +66,8 @@ pub struct SimReport {
     pub base: PathBuf,
     /// Navigation file of the synthetic constellation.
     pub nav: PathBuf,
+    /// First epoch of the flight (GPST, true time).
+    pub start: Epoch,
     /// Length of the flight, seconds.
     pub duration_s: f64,
     /// What the rover file holds.
@@ -204,6 +206,7 @@ pub fn run(s: &Scenario, dir: &Path) -> Result<SimReport, SimError> {
         rover: rover_path,
         base: base_path,
         nav: nav_path,
+        start,
         duration_s: duration,
         rover_stats: rstats,
         base_stats: bstats,
@@ -283,6 +286,60 @@ pub fn write_sbf(rep: &SimReport) -> Result<(PathBuf, PathBuf, u64), SimError> {
     write_logs(rep, "sbf", |f| {
         gnss::raw::sbf_write::sbf_from_obs(f, &nav.records, iono)
     })
+}
+
+/// The synthetic constellation of a simulation also as precise orbits (`orbits.sp3`, SP3-c,
+/// frame WGS84, time GPS): every satellite's position and clock every 5 minutes from an hour
+/// before the flight's first epoch to an hour after its last, as the simulation computed them
+/// from its navigation file (the clocks without the relativistic correction, as SP3 has them;
+/// no group delay). Lets `ppk`, `spp` and `ppp` be tried with `--sp3` and without `--nav`.
+/// Its path.
+pub fn write_sp3(rep: &SimReport) -> Result<PathBuf, SimError> {
+    use gnss::orbit::{Eph, Sp3};
+    let eph = Ephemerides::from_nav(&[NavFile::read(&rep.nav)?]);
+    let step = 300.0;
+    let (week, sow) = gnss::time::week_tow(rep.start);
+    let from = (sow / step).floor() * step - 3600.0;
+    let n = ((rep.duration_s + 7200.0) / step).ceil() as usize + 2;
+    let epochs: Vec<Epoch> = (0..n)
+        .map(|k| gnss::time::from_week_tow(week, from + step * k as f64))
+        .collect();
+    let mut sats = std::collections::BTreeMap::new();
+    for &sv in eph.satellites() {
+        let v = epochs
+            .iter()
+            .map(|&t| {
+                // Outside the broadcast validity a Keplerian record extrapolates exactly (the
+                // synthetic orbits have no perturbations); GLONASS records do not.
+                let e = eph.select(sv, t).or_else(|| {
+                    eph.of(sv)
+                        .iter()
+                        .filter(|e| matches!(e, Eph::Kepler(_)))
+                        .min_by(|a, b| {
+                            let d = |e: &&Eph| (t - e.toe()).to_seconds().abs();
+                            d(a).total_cmp(&d(b))
+                        })
+                });
+                match e {
+                    Some(e) => {
+                        let pc = e.compute(t);
+                        let rel = 2.0 * pc.pos.0.dot(&pc.vel) / (gnss::orbit::C * gnss::orbit::C);
+                        (pc.pos.0, pc.clock + rel)
+                    }
+                    None => (nalgebra::Vector3::repeat(f64::NAN), f64::NAN),
+                }
+            })
+            .collect();
+        sats.insert(sv, v);
+    }
+    let sp3 = Sp3 {
+        frame: "WGS84".into(),
+        epochs,
+        interval: step,
+        sats,
+        ..Sp3::default()
+    };
+    write(&rep.dir, "orbits.sp3", &gnss::orbit::sp3_text(&sp3))
 }
 
 /// The navigation file of the scenario's synthetic constellations for `[start, end]` (GPST),
