@@ -182,7 +182,61 @@ fn column(path: &Path, name: &str) -> Vec<String> {
         .collect()
 }
 
-/// A path as a command-line argument.
+/// The base position `simulate` prints ("base: … at X Y Z (ECEF)"), as `X,Y,Z`.
+fn simulated_base_xyz(t: &str) -> String {
+    t.lines()
+        .find_map(|l| l.trim().strip_prefix("base:"))
+        .and_then(|l| l.split(" at ").nth(1))
+        .map(|l| l.split_whitespace().take(3).collect::<Vec<_>>().join(","))
+        .unwrap_or_else(|| panic!("no base position in\n{t}"))
+}
+
+/// The rows of a `--format xyz` `.pos` (as [`pos_rows`] gives them) from GPST second of the
+/// day `from` on, against the simulator's `truth_trajectory.csv` in `dir`: how many were
+/// compared, how many of them are fixed, and the worst fixed one's 3D error (m).
+fn against_sim_truth(dir: &Path, rows: &[Vec<String>], from: f64) -> (usize, usize, f64) {
+    let truth = sim_truth(&dir.join("truth_trajectory.csv"));
+    let (mut compared, mut fixed, mut worst) = (0, 0, 0.0f64);
+    for r in rows {
+        let time = seconds_of_day(&r[1]);
+        if time < from {
+            continue;
+        }
+        let x = [2, 3, 4].map(|k| r[k].parse::<f64>().unwrap());
+        let k = truth.partition_point(|(s, _)| *s < time - 1e-3);
+        let (s, y) = truth[k.min(truth.len() - 1)];
+        assert!((s - time).abs() < 1e-3, "{} has no truth", r[1]);
+        let d = (0..3).map(|i| (x[i] - y[i]).powi(2)).sum::<f64>().sqrt();
+        compared += 1;
+        if r[5] == "1" {
+            fixed += 1;
+            worst = worst.max(d);
+        }
+    }
+    (compared, fixed, worst)
+}
+
+/// The simulator's `truth_trajectory.csv`: (GPST seconds of the day, ECEF antenna position),
+/// in time order.
+fn sim_truth(path: &Path) -> Vec<(f64, [f64; 3])> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .filter(|l| l.starts_with(|c: char| c.is_ascii_digit()))
+        .map(|l| {
+            let v: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
+            (v[1] % 86_400.0, [v[2], v[3], v[4]])
+        })
+        .collect()
+}
+
+/// Seconds of the day of a `.pos` time column (`hh:mm:ss.ssssss`).
+fn seconds_of_day(hms: &str) -> f64 {
+    hms.split(':')
+        .map(|x| x.parse::<f64>().unwrap())
+        .fold(0.0, |acc, x| acc * 60.0 + x)
+}
+
 /// The number that follows `marker` in `line` (up to the next space).
 fn number_after(line: &str, marker: &str) -> f64 {
     let rest = line
@@ -194,6 +248,7 @@ fn number_after(line: &str, marker: &str) -> f64 {
         .unwrap_or_else(|_| panic!("'{word}' after '{marker}' is not a number in {line}"))
 }
 
+/// A path as a command-line argument.
 fn p(x: &Path) -> &str {
     x.to_str().unwrap()
 }

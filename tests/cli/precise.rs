@@ -94,14 +94,8 @@ fn ppk_on_sp3_without_navigation() {
         p(&dir),
     ]));
     assert!(t.contains("orbits.sp3 (SP3-c, 5 min)"), "{t}");
-    let base_pos = t
-        .lines()
-        .find_map(|l| l.trim().strip_prefix("base:"))
-        .and_then(|l| l.split(" at ").nth(1))
-        .map(|l| l.trim_end_matches(" (ECEF)").replace(' ', ","))
-        .unwrap_or_else(|| panic!("no base position in {t}"));
     let out = dir.join("sp3.pos");
-    let base_flag = format!("--base-pos={base_pos}");
+    let base_flag = format!("--base-pos={}", simulated_base_xyz(&t));
     let t = succeeds(&ppkat(&[
         "ppk",
         "--rover",
@@ -117,26 +111,10 @@ fn ppk_on_sp3_without_navigation() {
         p(&out),
     ]));
     assert!(t.contains("no navigation file"), "{t}");
-    let truth = sim_truth(&dir.join("truth_trajectory.csv"));
     let rows = pos_rows(&out);
     assert_eq!(rows.len(), 2379, "{t}");
-    let (mut fixed, mut worst, mut compared) = (0, 0.0f64, 0);
-    for r in &rows {
-        let time = seconds_of_day(&r[1]);
-        if time < 9.0 * 3600.0 + 9.9 {
-            continue; // before the base's second epoch: see above
-        }
-        let x = [2, 3, 4].map(|k| r[k].parse::<f64>().unwrap());
-        let k = truth.partition_point(|(s, _)| *s < time - 1e-3);
-        let (s, y) = truth[k];
-        assert!((s - time).abs() < 1e-3, "{} has no truth", r[1]);
-        let d = (0..3).map(|i| (x[i] - y[i]).powi(2)).sum::<f64>().sqrt();
-        compared += 1;
-        if r[5] == "1" {
-            fixed += 1;
-            worst = worst.max(d);
-        }
-    }
+    // From the base's second epoch on: see above.
+    let (compared, fixed, worst) = against_sim_truth(&dir, &rows, 9.0 * 3600.0 + 9.9);
     assert!(compared > 2270, "{compared}");
     assert_eq!(
         fixed, compared,
@@ -146,27 +124,6 @@ fn ppk_on_sp3_without_navigation() {
         worst < 0.04,
         "worst fixed epoch {worst:.4} m off (0.025 measured)"
     );
-}
-
-/// The simulator's `truth_trajectory.csv`: (GPST seconds of the day, ECEF antenna position),
-/// in time order.
-fn sim_truth(path: &Path) -> Vec<(f64, [f64; 3])> {
-    std::fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .filter(|l| l.starts_with(|c: char| c.is_ascii_digit()))
-        .map(|l| {
-            let v: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
-            (v[1] % 86_400.0, [v[2], v[3], v[4]])
-        })
-        .collect()
-}
-
-/// Seconds of the day of a `.pos` time column (`hh:mm:ss.ssssss`).
-fn seconds_of_day(hms: &str) -> f64 {
-    hms.split(':')
-        .map(|x| x.parse::<f64>().unwrap())
-        .fold(0.0, |acc, x| acc * 60.0 + x)
 }
 
 #[test]

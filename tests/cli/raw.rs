@@ -17,15 +17,6 @@ fn pos_lines(path: &Path) -> Vec<String> {
         .collect()
 }
 
-/// The base position `simulate` prints ("base: … at X Y Z (ECEF)"), as `X,Y,Z`.
-fn simulated_base_xyz(t: &str) -> String {
-    t.lines()
-        .find_map(|l| l.trim().strip_prefix("base:"))
-        .and_then(|l| l.split(" at ").nth(1))
-        .map(|l| l.split_whitespace().take(3).collect::<Vec<_>>().join(","))
-        .unwrap_or_else(|| panic!("no base position in\n{t}"))
-}
-
 #[test]
 fn info_describes_a_ubx_log() {
     let Some(log) = shared(COLD) else {
