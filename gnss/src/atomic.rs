@@ -55,6 +55,14 @@ fn stale(path: &Path, kind: &str) -> Vec<PathBuf> {
         .collect()
 }
 
+/// A file beside an output: `OUT.pos` + `ext` (`.json`, `.html` …), the name every side
+/// output of a run takes.
+pub fn side_path(out: &Path, ext: &str) -> PathBuf {
+    let mut name = out.as_os_str().to_owned();
+    name.push(ext);
+    PathBuf::from(name)
+}
+
 /// Remove what killed runs left of `path`: stale temporary files and staging folders; a
 /// folder renamed away just before its swap is put back when `path` is missing.
 pub fn clean_stale(path: &Path) {

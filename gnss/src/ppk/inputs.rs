@@ -9,7 +9,8 @@
 
 use super::geometry::{ReceiverEpoch, SatView};
 use super::obs::{extract, SatMeas, SignalPlan};
-use super::{checks, slip, PpkOptions};
+use super::options::PpkOptions;
+use super::{checks, slip};
 use crate::error::{Error, Result};
 use crate::frame::Ecef;
 use crate::orbit::Orbits;

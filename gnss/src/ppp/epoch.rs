@@ -6,7 +6,7 @@
 
 use super::corr::{in_shadow, sat_antenna_range, shapiro, windup, Body, SatAntennas};
 use super::filter::{Row, State, ZWD};
-use super::{PppOptions, Reject};
+use super::options::{PppOptions, Reject};
 use crate::frame::{enu_rotation, Ecef};
 use crate::model::antex::AntennaPcv;
 use crate::model::{niell, zenith_delays};

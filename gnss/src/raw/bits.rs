@@ -1,6 +1,6 @@
 //! Bit fields of navigation messages: unsigned and two's-complement fields of up to 32 bits
 //! at any bit offset of a big-endian bit string (bit 0 is the most significant bit of byte 0),
-//! as the interface documents number them.
+//! as the interface documents number them; and [`Writer`], which writes such fields.
 
 /// An unsigned field of `len` (≤ 32) bits starting at bit `pos`; bits past the end read as 0.
 #[inline]
@@ -124,6 +124,36 @@ const CRC24Q_TABLE: [u32; 256] = {
     }
     t
 };
+
+/// A payload written field by field, most significant bit first.
+pub(crate) struct Writer {
+    pub(crate) buf: Vec<u8>,
+    pub(crate) pos: usize,
+}
+
+impl Writer {
+    /// An empty payload.
+    pub(crate) fn new() -> Self {
+        Writer {
+            buf: Vec::new(),
+            pos: 0,
+        }
+    }
+
+    /// Append the low `n` (≤ 64) bits of `v` (two's complement for negative values).
+    pub(crate) fn put(&mut self, n: usize, v: i64) {
+        if self.buf.len() * 8 < self.pos + n {
+            self.buf.resize((self.pos + n).div_ceil(8), 0);
+        }
+        if n > 32 {
+            set_bits(&mut self.buf, self.pos, n - 32, (v >> 32) as u32);
+            set_bits(&mut self.buf, self.pos + n - 32, 32, v as u32);
+        } else {
+            set_bits(&mut self.buf, self.pos, n, v as u32);
+        }
+        self.pos += n;
+    }
+}
 
 #[cfg(test)]
 mod tests {

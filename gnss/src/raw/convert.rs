@@ -9,8 +9,9 @@
 //! threads in batches (the same bytes for any thread count). Memory stays bounded whatever
 //! the log's size.
 
-use super::items::{for_each_item, Edge, LogNav, RawItem};
+use super::items::{Edge, LogNav, RawItem};
 use super::nmea::NmeaFix;
+use super::read_items::for_each_item;
 use super::records::{span, write_raw_epoch, RinexOrder, RinexOut, Scan};
 use super::spill::{self, Spill};
 use super::{RawFormat, RawStats, TimeHint};

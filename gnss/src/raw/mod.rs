@@ -32,6 +32,7 @@ pub mod lnav;
 pub mod log_items;
 pub mod mixed;
 pub mod nmea;
+pub mod read_items;
 pub mod records;
 pub mod rtcm;
 pub mod rtcm_eph;

@@ -7,11 +7,11 @@
 //! each value rounded to the field's resolution (a record already on the broadcast grid goes
 //! through unchanged); `None` for a record no message carries (SBAS, RINEX 4 messages).
 
+use super::bits::Writer;
 use super::inav::sisa_metres;
 use super::lnav::ura_metres;
 use super::rtcm::frame;
 use super::rtcm_msm::leap_seconds;
-use super::rtcm_write::Writer;
 use crate::rinex::nav::{NavKind, NavRecord};
 use crate::sv::Constellation;
 use crate::time::week_tow;

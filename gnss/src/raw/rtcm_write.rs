@@ -8,7 +8,7 @@
 //! message can carry (a phase range more than ±1171 m (MSM7) from the rough range) is sent as
 //! invalid.
 
-use super::bits::set_bits;
+use super::bits::Writer;
 use super::rtcm::frame;
 use super::rtcm_msm::{lock_ms, lock_ms_ext, msm_code, msm_number, RANGE_MS};
 use crate::rinex::nav::NavRecord;
@@ -45,36 +45,6 @@ pub struct MsmSat {
     pub glo_channel: Option<i8>,
     /// Its signals.
     pub sigs: Vec<MsmSignal>,
-}
-
-/// A payload written field by field, most significant bit first.
-pub(crate) struct Writer {
-    pub(crate) buf: Vec<u8>,
-    pub(crate) pos: usize,
-}
-
-impl Writer {
-    /// An empty payload.
-    pub(crate) fn new() -> Self {
-        Writer {
-            buf: Vec::new(),
-            pos: 0,
-        }
-    }
-
-    /// Append the low `n` (≤ 64) bits of `v` (two's complement for negative values).
-    pub(crate) fn put(&mut self, n: usize, v: i64) {
-        if self.buf.len() * 8 < self.pos + n {
-            self.buf.resize((self.pos + n).div_ceil(8), 0);
-        }
-        if n > 32 {
-            set_bits(&mut self.buf, self.pos, n - 32, (v >> 32) as u32);
-            set_bits(&mut self.buf, self.pos + n - 32, 32, v as u32);
-        } else {
-            set_bits(&mut self.buf, self.pos, n, v as u32);
-        }
-        self.pos += n;
-    }
 }
 
 /// The largest indicator whose minimum lock time is at most `ms`.

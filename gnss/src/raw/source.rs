@@ -6,7 +6,8 @@
 //! rounded to the 0.001 RINEX prints), the ephemerides decoded from the log, and its
 //! [`RawStats`]. So an engine gives the same answer on a log as on its conversion.
 
-use super::items::{for_each_item, LogNav, RawItem};
+use super::items::{LogNav, RawItem};
+use super::read_items::for_each_item;
 use super::records::{sat_records, span, RinexOrder, RinexOut, Scan};
 use super::{RawFormat, RawStats, TimeHint};
 use crate::error::Result;

@@ -3,7 +3,7 @@
 
 use super::crx::Crx;
 use super::header::ObsHeader;
-use super::lines::{cols, parse_int, parse_real, Lines};
+use super::lines::{cols, parse_int, parse_real, Lines, MAX_WARNINGS};
 use super::record::{Event, IngestStats, Obs, ObsEpoch, Record, SatObs, Warning};
 use crate::error::Result;
 use crate::sv::{Constellation, Sv};
@@ -34,9 +34,6 @@ fn without_trailing_blanks(mut obs: Vec<Obs>) -> Vec<Obs> {
     obs.shrink_to_fit();
     obs
 }
-
-/// Cap on stored warnings so that a file of garbage cannot exhaust memory; the count goes on.
-pub(super) const MAX_WARNINGS: usize = 1000;
 
 impl Body {
     pub fn new_plain(src: Lines) -> Self {

@@ -468,7 +468,7 @@ fn push_value(l: &mut Vec<u8>, v: Option<i64>, flags: &[u8], k: usize) {
 /// Keep a warning unless `warnings` already holds the body's cap of them (a file of garbage
 /// must not fill memory with messages about itself).
 fn push_capped(warnings: &mut Vec<Warning>, w: Warning) {
-    if warnings.len() < super::body::MAX_WARNINGS {
+    if warnings.len() < super::lines::MAX_WARNINGS {
         warnings.push(w);
     }
 }

@@ -7,6 +7,10 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
+/// Cap on the warnings a reader stores, so that a file of garbage cannot exhaust memory; the
+/// count goes on.
+pub(super) const MAX_WARNINGS: usize = 1000;
+
 /// The longest line read, end-of-line included (1 MiB). A RINEX 3 observation line with 999
 /// types is 16 kB; Hatanaka lines are shorter.
 pub const MAX_LINE: usize = 1 << 20;

@@ -8,12 +8,12 @@
 //! always given [`FAER_DEGREE`]: `Options::threads` (the pool) changes speed, never results.
 
 use super::options::Options;
-use super::reduced::Reduced;
+use super::reduced::{for_each_block, triplets, Reduced};
 use super::selinv::{FactorFailure, Selected, SparseFactor};
 use super::structure::Structure;
 use faer::linalg::solvers::{DenseSolveCore, Solve};
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
-use faer::sparse::{SparseColMat, Triplet};
+use faer::sparse::SparseColMat;
 
 /// The degree of parallelism faer is always given, whatever the thread count: a degree
 /// that followed the threads (sequential on one) gave other bits on 1, 2, 3 and 8 threads
@@ -251,40 +251,5 @@ impl Linear<'_> {
         Ok(Qcc::Sparse(Box::new(
             SparseFactor::new(st, red)?.selected_inverse()?,
         )))
-    }
-}
-
-/// The lower triangle of the reduced matrix as triplets (in a fixed order).
-pub(crate) fn triplets(st: &Structure, red: &Reduced) -> Vec<Triplet<usize, usize, f64>> {
-    let mut t = Vec::with_capacity(red.vals.len());
-    for_each_block(st, red, |r0, c0, dr, dc, b| {
-        for j in 0..dc {
-            for i in 0..dr {
-                if r0 + i >= c0 + j {
-                    t.push(Triplet {
-                        row: r0 + i,
-                        col: c0 + j,
-                        val: b[j * dr + i],
-                    });
-                }
-            }
-        }
-    });
-    t
-}
-
-/// Call `f(row offset, column offset, rows, columns, block)` for every stored block.
-fn for_each_block(
-    st: &Structure,
-    red: &Reduced,
-    mut f: impl FnMut(usize, usize, usize, usize, &[f64]),
-) {
-    for (a, row) in st.rows.iter().enumerate() {
-        let da = st.cdim[a];
-        for &(off, b) in &row.entries {
-            let db = st.cdim[b];
-            let o = row.start + off;
-            f(st.coff[a], st.coff[b], da, db, &red.vals[o..o + da * db]);
-        }
     }
 }

@@ -8,12 +8,15 @@
 //! Tₐ·gₑ. The copies are added in job order — a count fixed by the problem, never by the
 //! threads — and the damping λ·clamp(diag JᵀJ) goes on the diagonal. Then the reduced solve,
 //! back-substitution of the eliminated blocks, and the decrease the linear model promises.
+//! Also the reduced matrix's stored blocks in a fixed order (`for_each_block`, `triplets`),
+//! which the linear solvers and the selected inverse read.
 
 use super::elim::EBlock;
 use super::lin::{add_ab, add_atb, add_atv, add_av, pieces, Linearisation, MIN_LEN};
 use super::model::Model;
 use super::structure::Structure;
 use super::value::Value;
+use faer::sparse::Triplet;
 use nalgebra::{DMatrix, Matrix3, SMatrixView, SMatrixViewMut};
 use rayon::prelude::*;
 
@@ -477,5 +480,40 @@ impl Model {
         let jr: f64 = jd.iter().zip(r).map(|(a, b)| a * b).sum();
         let jj: f64 = jd.iter().map(|a| a * a).sum();
         -lin.weight(st, k) * (jr + 0.5 * jj)
+    }
+}
+
+/// The lower triangle of the reduced matrix as triplets (in a fixed order).
+pub(crate) fn triplets(st: &Structure, red: &Reduced) -> Vec<Triplet<usize, usize, f64>> {
+    let mut t = Vec::with_capacity(red.vals.len());
+    for_each_block(st, red, |r0, c0, dr, dc, b| {
+        for j in 0..dc {
+            for i in 0..dr {
+                if r0 + i >= c0 + j {
+                    t.push(Triplet {
+                        row: r0 + i,
+                        col: c0 + j,
+                        val: b[j * dr + i],
+                    });
+                }
+            }
+        }
+    });
+    t
+}
+
+/// Call `f(row offset, column offset, rows, columns, block)` for every stored block.
+pub(super) fn for_each_block(
+    st: &Structure,
+    red: &Reduced,
+    mut f: impl FnMut(usize, usize, usize, usize, &[f64]),
+) {
+    for (a, row) in st.rows.iter().enumerate() {
+        let da = st.cdim[a];
+        for &(off, b) in &row.entries {
+            let db = st.cdim[b];
+            let o = row.start + off;
+            f(st.coff[a], st.coff[b], da, db, &red.vals[o..o + da * db]);
+        }
     }
 }

@@ -131,7 +131,7 @@ impl SparseFactor {
         let m = SparseColMat::<usize, f64>::try_new_from_triplets(
             nr,
             nr,
-            &super::linear::triplets(st, red),
+            &super::reduced::triplets(st, red),
         )
         .map_err(|e| FactorFailure::Resources(format!("reduced matrix: {e:?}")))?;
         let params = CholeskySymbolicParams {

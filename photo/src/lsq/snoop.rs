@@ -1,10 +1,10 @@
 //! Baarda data snooping with removal, and Förstner variance components per group.
 
+use super::cofactor::Reliability;
 use super::error::SolveError;
 use super::factor::{FactorId, Group};
 use super::lm::Summary;
 use super::problem::Problem;
-use super::Reliability;
 
 /// σ multiplier of a suspect that cannot be removed (it keeps its block determined, with
 /// next to no weight).
