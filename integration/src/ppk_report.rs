@@ -10,7 +10,7 @@
 //! they never cover data; long runs are thinned to at most [`MAX_POINTS`] drawn epochs per
 //! series (the tables count every epoch).
 
-use crate::pipeline::PpkReport;
+use crate::pipeline::ppk_summary::PpkReport;
 use crate::plot::{axes, decimals, html_escape, range, svg_sized, tick, LengthAxis, TimeAxis};
 use gnss::frame::{enu_rotation, Ecef};
 use gnss::solution::Quality;

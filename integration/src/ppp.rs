@@ -6,19 +6,19 @@
 //! command prints.
 
 use crate::orbits::{check_overlap, load_orbits};
-use crate::pipeline::side_path;
+pub use crate::ppp_report::PppReport;
 use crate::survey::{enu_sigmas, refer_name};
+use gnss::atomic::side_path;
 use gnss::error::{Error, Result};
 use gnss::frame::{enu_rotation, Ecef};
 use gnss::model::antex::Antex;
 use gnss::orbit::{ClockSource, Orbits};
 use gnss::ppk::{Motion, Reference};
-use gnss::ppp::{PppOptions, PppResult};
+use gnss::ppp::PppOptions;
 use gnss::rinex::ObsFile;
 use gnss::solution::{write_atomic, PosRecord, Quality};
 use gnss::spp::{solve_epoch, SppOptions};
 use gnss::time::format_ymdhms;
-use nalgebra::Matrix3;
 use serde_json::json;
 use std::fmt;
 use std::path::PathBuf;
@@ -49,33 +49,6 @@ pub struct PppJob {
     /// Heights written (the trajectory file and, with an orthometric model, the static
     /// summary's orthometric height beside the ellipsoidal one).
     pub heights: crate::height::Heights,
-}
-
-/// What a PPP run did.
-#[derive(Clone, Debug)]
-pub struct PppReport {
-    /// The solver's result.
-    pub result: PppResult,
-    /// Static mode: the final position and covariance (ECEF m, m²).
-    pub last: Option<(Ecef, Matrix3<f64>)>,
-    /// The reference point of the positions.
-    pub refer: Reference,
-    /// The motion model.
-    pub motion: Motion,
-    /// The `.pos` written, and the JSON summary (static).
-    pub out: PathBuf,
-    /// The JSON summary, in static mode.
-    pub summary: Option<PathBuf>,
-    /// The HTML report (`OUT.pos.html`).
-    pub html: Option<PathBuf>,
-    /// The zenith total delay series (`OUT.pos.ztd.csv`).
-    pub ztd: Option<PathBuf>,
-    /// Reference frame of the orbits.
-    pub frame: String,
-    /// Seconds spent.
-    pub seconds: f64,
-    /// The header's approximate position (moved to the point asked for), to compare.
-    pub header_position: Option<Ecef>,
 }
 
 /// Run PPP as the job says.

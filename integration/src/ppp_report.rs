@@ -2,13 +2,44 @@
 //! converged (static: each epoch's running solution against the final one; kinematic: the
 //! positions about their mean), of the zenith total delay and of the satellites used.
 //!
-//! Enters: a [`PppReport`] (after the run). Leaves: a self-contained HTML text.
+//! Enters: a [`PppReport`] (what a run did, defined here; `crate::ppp` makes it). Leaves: a
+//! self-contained HTML text.
 
 use crate::plot::{axes, html_escape, range, svg, TimeAxis};
-use crate::ppp::PppReport;
 use gnss::frame::Ecef;
+use gnss::ppk::{Motion, Reference};
+use gnss::ppp::PppResult;
+use nalgebra::Matrix3;
 use plotters::prelude::*;
 use std::fmt::Write as _;
+use std::path::PathBuf;
+
+/// What a PPP run did.
+#[derive(Clone, Debug)]
+pub struct PppReport {
+    /// The solver's result.
+    pub result: PppResult,
+    /// Static mode: the final position and covariance (ECEF m, m²).
+    pub last: Option<(Ecef, Matrix3<f64>)>,
+    /// The reference point of the positions.
+    pub refer: Reference,
+    /// The motion model.
+    pub motion: Motion,
+    /// The `.pos` written, and the JSON summary (static).
+    pub out: PathBuf,
+    /// The JSON summary, in static mode.
+    pub summary: Option<PathBuf>,
+    /// The HTML report (`OUT.pos.html`).
+    pub html: Option<PathBuf>,
+    /// The zenith total delay series (`OUT.pos.ztd.csv`).
+    pub ztd: Option<PathBuf>,
+    /// Reference frame of the orbits.
+    pub frame: String,
+    /// Seconds spent.
+    pub seconds: f64,
+    /// The header's approximate position (moved to the point asked for), to compare.
+    pub header_position: Option<Ecef>,
+}
 
 /// The time axis of the run (from a round time), and each solved epoch's value on it.
 fn times(r: &PppReport) -> Option<(TimeAxis, Vec<f64>)> {

@@ -6,53 +6,15 @@
 use super::error::{problem_err as err, AdjustError};
 use super::factors::{DriftModel, GnssCentre};
 use super::frame::LocalFrame;
+use super::groups::{GROUP_CONTROL, GROUP_DISTANCE, GROUP_GNSS, GROUP_IMAGE, GROUP_PRIOR};
 use super::latency::{self, Latencies};
 use super::project::{DriftGroup, PointKind, Project};
-use super::start::{intersect_point, Rays};
+use super::rays::{intersect_point, Rays};
 use nalgebra::{DMatrix, DVector, Vector3};
 use photo::camera::Pose;
 use photo::factors::{Distance, ImagePoint, Prior};
-use photo::lsq::{
-    CameraId, DriftId, Group, ImageId, Key, Loss, Noise, Options, PointId, Problem, Value,
-};
+use photo::lsq::{CameraId, DriftId, ImageId, Key, Loss, Noise, Options, PointId, Problem, Value};
 use std::collections::BTreeMap;
-
-/// Observation groups (variance components).
-pub const GROUP_IMAGE: Group = Group(0);
-/// Control points.
-pub const GROUP_CONTROL: Group = Group(1);
-/// GNSS antenna positions.
-pub const GROUP_GNSS: Group = Group(2);
-/// Lever-arm priors.
-pub const GROUP_PRIOR: Group = Group(3);
-/// Measured distances.
-pub const GROUP_DISTANCE: Group = Group(4);
-/// Attitude observations.
-pub const GROUP_ATTITUDE: Group = Group(5);
-/// Double-difference carrier phase (tight coupling).
-pub const GROUP_PHASE: Group = Group(6);
-/// Double-difference code (tight coupling).
-pub const GROUP_CODE: Group = Group(7);
-/// Priors of the double-difference ionosphere (tight coupling).
-pub const GROUP_IONO: Group = Group(8);
-/// Integer constraints of fixed combinations of ambiguities (tight coupling).
-pub const GROUP_FIX: Group = Group(9);
-/// The inner constraints of a free network.
-pub const GROUP_DATUM: Group = Group(10);
-/// Names of the groups, by index.
-pub const GROUP_NAMES: [&str; 11] = [
-    "image points",
-    "control points",
-    "GNSS centres",
-    "lever-arm prior",
-    "distances",
-    "attitude",
-    "GNSS phase (DD)",
-    "GNSS code (DD)",
-    "ionosphere prior",
-    "ambiguity constraints",
-    "datum (inner constraints)",
-];
 
 /// A drift group (key `Drift(DriftId(index))`): its name, model and reference time.
 #[derive(Clone, Debug)]

@@ -12,35 +12,15 @@
 //! What enters: the project's `[attitude]` section and antenna table, the frame, the problem.
 //! What leaves: the factors (group "attitude"), the boresight blocks and their results.
 
-use super::build::{GROUP_ATTITUDE, GROUP_PRIOR};
 use super::error::{problem_err as err, AdjustError};
+use super::estimated::Estimated;
 use super::frame::LocalFrame;
+use super::groups::{GROUP_ATTITUDE, GROUP_PRIOR};
 use super::project::Project;
-use super::results::Estimated;
 use nalgebra::{DMatrix, DMatrixViewMut, DVector, Matrix3, Vector3};
 use photo::factors::Prior;
 use photo::lsq::{CameraId, Factor, ImageId, Key, Loss, Noise, Params, Problem, Value};
 use photo::rotation::{exp_so3, log_so3};
-use serde::Deserialize;
-
-/// The `[attitude]` section: attitude observations at the exposures.
-#[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct AttitudeSection {
-    /// σ of the observed attitude about the camera's x, y, z axes (≈ ω, φ, κ), degrees.
-    pub sigma_deg: [f64; 3],
-    /// Estimate a boresight misalignment per camera (default); `false`: the attitude is the
-    /// camera's.
-    #[serde(default = "yes")]
-    pub boresight: bool,
-    /// σ of a prior on the boresight (degrees, about x, y, z); omit: free.
-    #[serde(default)]
-    pub boresight_sigma_deg: Option<[f64; 3]>,
-}
-
-fn yes() -> bool {
-    true
-}
 
 /// An observed camera rotation: r = log(exp(b)ᵀ · R_obsᵀ · R).
 pub struct AttitudeObs {

@@ -9,15 +9,17 @@
 //! `Latency(LatencyId(g))` for `Built::latencies[g]`.
 
 use super::assemble::problem;
-pub use super::assemble::{
-    DriftBlock, GROUP_ATTITUDE, GROUP_CONTROL, GROUP_DISTANCE, GROUP_GNSS, GROUP_IMAGE,
-    GROUP_NAMES, GROUP_PRIOR,
-};
+pub use super::assemble::DriftBlock;
 use super::error::{problem_err as err, AdjustError};
 pub use super::frame::LocalFrame;
+pub use super::groups::{
+    GROUP_ATTITUDE, GROUP_CONTROL, GROUP_DISTANCE, GROUP_GNSS, GROUP_IMAGE, GROUP_NAMES,
+    GROUP_PRIOR,
+};
 use super::project::{PointKind, Project};
+use super::rays::Rays;
 pub use super::start::compass_rotation;
-use super::start::{orientations, Rays};
+use super::start::orientations;
 use gnss::frame::Ecef;
 use nalgebra::{Matrix3, Vector3};
 use photo::lsq::Problem;
@@ -227,7 +229,7 @@ fn inner_constraints(pr: &mut photo::lsq::Problem, scaled: bool) -> Result<(), A
         err("a free network needs at least two images at different places".into())
     })?;
     let noise = f.noise();
-    pr.add_factor(f, noise, Loss::Trivial, super::assemble::GROUP_DATUM)
+    pr.add_factor(f, noise, Loss::Trivial, super::groups::GROUP_DATUM)
         .map_err(|e| err(e.to_string()))?;
     Ok(())
 }

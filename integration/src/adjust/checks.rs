@@ -7,7 +7,8 @@
 //! intersected position (local frame), covariance and number of rays, or why it could not be
 //! compared.
 
-use super::build::{Built, GROUP_IMAGE};
+use super::build::Built;
+use super::groups::GROUP_IMAGE;
 use super::project::{PointKind, Project};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use photo::camera::{Camera, Pose, N_INTERIOR};

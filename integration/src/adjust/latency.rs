@@ -15,29 +15,17 @@
 //! otherwise known: strips flown in both directions separate it from a constant offset, and
 //! a lever arm along the track is as correlated with it as a constant along-track offset.
 
-use super::assemble::GROUP_PRIOR;
 use super::error::{problem_err as err, AdjustError};
 use super::frame::LocalFrame;
+use super::groups::GROUP_PRIOR;
 use super::project::{GnssSection, Project};
+use super::sections::LatencyGroup;
 use nalgebra::{DVector, Vector3};
 use photo::factors::Prior;
 use photo::lsq::{BuildError, Key, LatencyId, Loss, Noise, Problem, Value};
 
 /// Gap between consecutive antenna times (s) that starts a new flight.
 pub const FLIGHT_GAP_S: f64 = 600.0;
-
-/// Which antenna positions share a latency.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum LatencyGroup {
-    /// No latency (δ = 0).
-    #[default]
-    None,
-    /// One latency for the whole block.
-    Block,
-    /// One per flight (antenna times split at gaps longer than [`FLIGHT_GAP_S`]).
-    Flight,
-}
 
 /// A latency group (key `Latency(LatencyId(index))`).
 #[derive(Clone, Debug)]

@@ -2,7 +2,8 @@
 //! latencies, interior orientations — one row per value with its σ and unit, in the order of
 //! `report.json`. What enters: the [`Results`]; what leaves: the CSV text.
 
-use super::results::{Estimated, Results};
+use super::estimated::Estimated;
+use super::results::Results;
 use std::fmt::Write as _;
 
 /// The unit of value `label` of a parameter of `group`.

@@ -13,7 +13,7 @@ use super::input::perr;
 pub use super::input::{
     Antenna, CameraDef, GroundPoint, ImageDef, MeasuredDistance, Measurement, PointKind,
 };
-pub use super::latency::LatencyGroup;
+pub use super::sections::LatencyGroup;
 use super::start_file::{read_starts, StartPose};
 use super::tables::{
     antennas_from_trajectory, read_antennas, read_distances, read_ground, read_images,
@@ -49,7 +49,7 @@ pub struct ProjectFile {
     pub gnss: Option<GnssSection>,
     /// Attitude observations at the exposures and the boresight.
     #[serde(default)]
-    pub attitude: Option<super::attitude::AttitudeSection>,
+    pub attitude: Option<super::sections::AttitudeSection>,
     /// Solver and statistics options.
     #[serde(default)]
     pub adjustment: AdjustmentSection,

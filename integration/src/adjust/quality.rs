@@ -2,8 +2,8 @@
 //! (observations, σ factor, redundancy, uncontrolled components, the largest minimal
 //! detectable blunder) and what data snooping removed, each read from its factor.
 
-use super::build::GROUP_NAMES;
 use super::factors::GnssCentre;
+use super::groups::GROUP_NAMES;
 use super::project::Project;
 use super::residuals::DELTA0;
 use super::solve::Solved;

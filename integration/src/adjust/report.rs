@@ -4,8 +4,9 @@
 //! centre residuals per strip, drift over time.
 
 use super::error::AdjustError;
+use super::estimated::Estimated;
 use super::project::{Mode, Project};
-use super::results::{Estimated, Results};
+use super::results::Results;
 use crate::plot::{axes, range, svg};
 use gnss::solution::write_atomic;
 use plotters::prelude::*;
@@ -181,7 +182,7 @@ pub fn html(p: &Project, r: &Results) -> String {
     html_control(&mut s, r);
     html_distances(&mut s, r);
     html_removed(&mut s, r);
-    super::tight_report::html(&mut s, r);
+    super::tight_report::html(&mut s, r.tight.as_ref());
     html_checks(&mut s, r);
     html_plots(&mut s, p, r);
     html_images(&mut s, r);

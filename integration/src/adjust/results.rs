@@ -4,6 +4,7 @@
 //! the check-point table.
 
 use super::error::AdjustError;
+pub use super::estimated::Estimated;
 use super::factors::DriftModel;
 use super::project::{Mode, PointKind, Project};
 pub use super::quality::{GroupQuality, Removed};
@@ -101,23 +102,6 @@ pub struct CheckTable {
     pub max: [f64; 3],
     /// √(mean σ²) per axis: the RMS the adjustment's own covariance predicts.
     pub theoretical_rms: [f64; 3],
-}
-
-/// An estimated parameter block (lever arm, drift, interior orientation).
-#[derive(Clone, Debug, Serialize)]
-pub struct Estimated {
-    /// Its name.
-    pub name: String,
-    /// The values.
-    pub values: Vec<f64>,
-    /// Their σ (0 when fixed).
-    pub sigmas: Vec<f64>,
-    /// A label per value.
-    pub labels: Vec<String>,
-    /// Reference time t0 of a drift (GPST seconds), 0 otherwise.
-    pub t0: f64,
-    /// Whether the block was held fixed.
-    pub fixed: bool,
 }
 
 /// Everything an adjustment produced, for the reports (`report.json` is this, serialised).

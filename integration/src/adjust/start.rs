@@ -13,18 +13,15 @@ use super::error::{problem_err as err, AdjustError};
 use super::frame::LocalFrame;
 use super::input::ControlAxes;
 use super::project::{Mode, PointKind, Project};
+use super::rays::{intersect_point, Rays};
 use nalgebra::{Matrix3, Vector2, Vector3};
 use photo::camera::Pose;
-use photo::intersection::{intersect, Ray};
 use photo::lever::LeverArm;
 use photo::resection::{resect, resect_angles, resect_robust, resect_three, Control};
 use std::collections::BTreeMap;
 
 /// Something left out of the adjustment (e.g. `image 17`) and why.
 pub(super) type LeftOut = (String, String);
-
-/// Measurements by point id (indices into the project's measurements), in id order.
-pub(super) type Rays<'a> = BTreeMap<&'a str, Vec<usize>>;
 
 /// Camera → ENU of a camera looking at `azimuth` (from north), `elevation`, rolled by `roll`.
 pub fn compass_rotation(az: f64, el: f64, roll: f64) -> Matrix3<f64> {
@@ -36,31 +33,6 @@ pub fn compass_rotation(az: f64, el: f64, roll: f64) -> Matrix3<f64> {
     let x = x0 * c + y0 * s;
     let y = z.cross(&x);
     Matrix3::from_columns(&[x, y, z])
-}
-
-/// A point intersected from its measurements (indices) in the images that have a pose; `None`
-/// with fewer than two such rays or when the rays do not meet.
-pub(super) fn intersect_point<'a>(
-    p: &'a Project,
-    measurements: &[usize],
-    pose_of: impl Fn(usize) -> Option<&'a Pose>,
-) -> Option<Vector3<f64>> {
-    let rays: Vec<Ray> = measurements
-        .iter()
-        .filter_map(|&k| {
-            let m = &p.measurements[k];
-            pose_of(m.image).map(|pose| Ray {
-                camera: &p.cameras[p.images[m.image].camera].camera,
-                pose,
-                xy: m.xy,
-                sigma: m.sigma,
-            })
-        })
-        .collect();
-    if rays.len() < 2 {
-        return None;
-    }
-    intersect(&rays).ok().map(|x| x.point)
 }
 
 /// What the start values look up per image, indexed once (looked up by scanning, they made

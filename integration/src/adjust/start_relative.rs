@@ -14,7 +14,7 @@
 use super::frame::LocalFrame;
 use super::input::ControlAxes;
 use super::project::{PointKind, Project};
-use super::start::{intersect_point, Rays};
+use super::rays::{intersect_point, Rays};
 use nalgebra::{Matrix3, Vector3};
 use photo::camera::Pose;
 use photo::relative::{relative_orientation, similarity};

@@ -13,10 +13,10 @@
 //! solve, and again while that fixes more. Images whose rover epoch has no double
 //! differences keep their loose antenna position.
 
-use super::assemble::{GROUP_CODE, GROUP_FIX, GROUP_IONO, GROUP_PHASE, GROUP_PRIOR};
 use super::dd_factor::{DdFactor, DdKind, FactorRow, IntegerFix};
 use super::error::{problem_err as err, AdjustError};
 use super::frame::LocalFrame;
+use super::groups::{GROUP_CODE, GROUP_FIX, GROUP_IONO, GROUP_PHASE, GROUP_PRIOR};
 use super::project::{Coupling, Project};
 use gnss::ppk::tight::{double_differences, DdAmbiguity, DdEpoch};
 use gnss::ppk::{BasePosition, PpkOptions};

@@ -168,9 +168,9 @@ pub fn true_integers(
 /// The report's section on tight coupling: the counts before (PPK) and after, and the
 /// exposures the PPK left float with the σ of their centres from the float and the final
 /// solution (at most 300 rows; the JSON has them all).
-pub fn html(s: &mut String, r: &super::results::Results) {
+pub fn html(s: &mut String, tight: Option<&TightSummary>) {
     use std::fmt::Write as _;
-    let Some(t) = &r.tight else { return };
+    let Some(t) = tight else { return };
     let _ = writeln!(
         s,
         "<h2>Tight coupling</h2><table><tr><th>exposures</th><th>fixed by PPK</th><th>fixed now</th><th>integer blocks held</th><th>wide lanes</th><th>ionospheres</th><th>rounds</th><th>without double differences</th></tr><tr><td>{}</td><td>{}</td><td>{}</td><td>{} of {}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr></table>",

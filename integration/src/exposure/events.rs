@@ -29,8 +29,8 @@ pub struct MrkInfo {
 /// One exposure time.
 #[derive(Clone, Debug)]
 pub struct ExposureEvent {
-    /// Name: `E0001`-style for RINEX events ([`super::names::generic`]), `DJI_NNNN` from an
-    /// MRK index ([`super::names::dji`]), a CSV's `id` column; replaced by the photo's file
+    /// Name: `E0001`-style for RINEX events ([`generic`]), `DJI_NNNN` from an
+    /// MRK index ([`dji`]), a CSV's `id` column; replaced by the photo's file
     /// name or a names file's line by [`super::names`].
     pub id: String,
     /// GPST.
@@ -94,7 +94,7 @@ pub fn from_rinex(obs: &ObsFile, traj: &Trajectory) -> (Vec<ExposureEvent>, f64)
             let c = offset_at(t);
             max_corr = max_corr.max(c.abs());
             Some(ExposureEvent {
-                id: super::names::generic(k),
+                id: generic(k),
                 time: t - Duration::from_seconds(c),
                 line: e.line,
                 mrk: None,
@@ -169,7 +169,7 @@ pub fn read_mrk(path: &Path) -> Result<Vec<ExposureEvent>> {
         out.push(ExposureEvent {
             id: index
                 .parse::<u32>()
-                .map(super::names::dji)
+                .map(dji)
                 .unwrap_or_else(|_| index.to_string()),
             time,
             line: i + 1,
@@ -240,7 +240,7 @@ pub fn read_times_csv(path: &Path, system: TimeSystem) -> Result<Vec<ExposureEve
         let name = id
             .and_then(|k| f.get(k))
             .map(|s| s.to_string())
-            .unwrap_or_else(|| super::names::generic(out.len()));
+            .unwrap_or_else(|| generic(out.len()));
         out.push(ExposureEvent {
             id: name,
             time: gnss::time::to_gpst(t),
@@ -340,6 +340,17 @@ pub fn sort_and_dedup(events: &mut Vec<ExposureEvent>) -> (bool, Vec<ExposureEve
 /// The position implied by an MRK line for its camera (for checks).
 pub fn mrk_ecef(m: &MrkInfo) -> Ecef {
     m.position.to_ecef()
+}
+
+/// The name of the `k`-th exposure (0-based) when nothing better is known: `E0001`, `E0002` …
+pub fn generic(k: usize) -> String {
+    format!("E{:04}", k + 1)
+}
+
+/// The photograph a DJI drone writes for MRK index `index`: `DJI_0001` (zero-padded to 4 as
+/// DJI does; wider indices keep all their digits).
+pub fn dji(index: u32) -> String {
+    format!("DJI_{index:04}")
 }
 
 #[cfg(test)]

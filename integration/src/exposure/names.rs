@@ -15,16 +15,7 @@ use hifitime::Epoch;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-/// The name of the `k`-th exposure (0-based) when nothing better is known: `E0001`, `E0002` …
-pub fn generic(k: usize) -> String {
-    format!("E{:04}", k + 1)
-}
-
-/// The photograph a DJI drone writes for MRK index `index`: `DJI_0001` (zero-padded to 4 as
-/// DJI does; wider indices keep all their digits).
-pub fn dji(index: u32) -> String {
-    format!("DJI_{index:04}")
-}
+pub use super::events::{dji, generic};
 
 /// The sequence number of a DJI photograph or exposure name: the last `_`-separated group of
 /// 1–6 digits of the name without its extension (`DJI_0042.JPG` → 42,

@@ -7,8 +7,9 @@
 //! why it does not match) and geotagged copies in another folder (WGS84 latitude, longitude,
 //! ellipsoidal height of the projection centre). Uses [`super::exif_io`].
 
+use super::exif_io;
+use super::station::CameraStation;
 use super::xmp::PositionTag;
-use super::{exif_io, CameraStation};
 use crate::height::Heights;
 use gnss::error::{Error, Result};
 use std::path::{Path, PathBuf};

@@ -10,7 +10,8 @@
 //! the whole block shifts with them). Tie points seen in fewer than `min_track` images are
 //! skipped and counted.
 
-use super::{ferr, lines, CameraOut, ImportError, ProjectOut, StartOut, Summary};
+use super::common::{ferr, lines, ImportError, Summary};
+use super::write::{CameraOut, ProjectOut, StartOut};
 use gnss::frame::{enu_rotation, Ecef, Geodetic};
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use photo::camera_convert::ColmapCamera;

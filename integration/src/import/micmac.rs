@@ -9,42 +9,16 @@
 //! duplicated points or measurements, measurements outside the calibration's image, and
 //! unknown images are errors naming the file, the line and what to do.
 
+use super::common::{ferr, GroundFrame, ImportError, Summary};
 use super::micmac_gnss::add_gnss;
 #[cfg(test)]
 use super::micmac_gnss::gnss_assumptions;
-pub use super::micmac_gnss::GnssKind;
-use super::{ferr, CameraOut, GroundFrame, GroundOut, ImportError, ProjectOut, StartOut, Summary};
+pub use super::micmac_job::{GnssKind, MicMacJob};
+use super::write::{CameraOut, GroundOut, ProjectOut, StartOut};
 use nalgebra::{Matrix3, Vector3};
 use photo::camera_convert::MicMacCalibration;
 use std::collections::{BTreeMap, BTreeSet, HashSet};
 use std::path::{Path, PathBuf};
-
-/// What `ppkat import micmac` reads.
-#[derive(Clone, Debug, Default)]
-pub struct MicMacJob {
-    /// Ground control (`DicoAppuisFlottant`).
-    pub ground: PathBuf,
-    /// Image measurements of the control (`SetOfMesureAppuisFlottants`).
-    pub measures: PathBuf,
-    /// Calibration (`CalibrationInternConique`); else the orientations' `FileInterne`.
-    pub calibration: Option<PathBuf>,
-    /// Check points and their measurements.
-    pub check: Option<(PathBuf, PathBuf)>,
-    /// `EPSG:326ZZ`, `utm:ZZN`…; none: a local frame.
-    pub crs: Option<String>,
-    /// GNSS camera positions (text) and their format (`#F=N X Y Z`).
-    pub gnss: Option<(PathBuf, String)>,
-    /// σ of the GNSS positions, horizontal and vertical (m); `None`: by `gnss_kind`.
-    pub gnss_sigma: Option<[f64; 2]>,
-    /// What the positions are (`None`: survey-grade assumed, and said).
-    pub gnss_kind: Option<GnssKind>,
-    /// A folder of `Orientation-*.xml` start orientations.
-    pub orientations: Option<PathBuf>,
-    /// Pixel size (µm) written for the camera (MicMac works in pixels).
-    pub pixel_um: f64,
-    /// Image measurement σ, pixels.
-    pub sigma_px: f64,
-}
 
 /// A ground point: name, position (ground frame), σ.
 type DicoPoint = (String, Vector3<f64>, [f64; 3]);
@@ -277,55 +251,6 @@ fn read_orientation(path: &Path) -> Result<Orientation, ImportError> {
     let r = Matrix3::from_row_slice(&rows.concat());
     let file = text_of(o, "FileInterne");
     Ok((file, centre, r))
-}
-
-/// GNSS camera positions in `OriConvert` text: `#F=N X Y Z` (other letters ignored).
-pub(super) fn read_gnss(
-    path: &Path,
-    format: &str,
-) -> Result<Vec<(String, Vector3<f64>, usize)>, ImportError> {
-    let fields: Vec<&str> = format
-        .trim()
-        .trim_start_matches("#F=")
-        .split_whitespace()
-        .collect();
-    let col = |c: &str| fields.iter().position(|f| *f == c);
-    let (Some(n), Some(xc), Some(yc), Some(zc)) = (col("N"), col("X"), col("Y"), col("Z")) else {
-        return Err(ImportError::Usage(format!(
-            "--gnss-format '{format}': name the columns with N X Y Z, e.g. '#F=N X Y Z'"
-        )));
-    };
-    let text =
-        std::fs::read_to_string(path).map_err(|e| ferr(path, None, format!("cannot read: {e}")))?;
-    let mut out: Vec<(String, Vector3<f64>, usize)> = Vec::new();
-    let mut names = HashSet::new();
-    for (i, l) in text.lines().enumerate() {
-        let f: Vec<&str> = l.split_whitespace().collect();
-        if f.is_empty() || f[0].starts_with('#') {
-            continue;
-        }
-        let num = |c: usize| {
-            f.get(c)
-                .and_then(|s| s.parse::<f64>().ok())
-                .filter(|v| v.is_finite())
-        };
-        let (Some(name), Some(a), Some(b), Some(c)) = (f.get(n), num(xc), num(yc), num(zc)) else {
-            return Err(ferr(
-                path,
-                Some(i + 1),
-                format!("expected the columns '{format}'"),
-            ));
-        };
-        if !names.insert(name.to_string()) {
-            return Err(ferr(
-                path,
-                Some(i + 1),
-                format!("image {name} has two positions: keep one"),
-            ));
-        }
-        out.push((name.to_string(), Vector3::new(a, b, c), i + 1));
-    }
-    Ok(out)
 }
 
 /// Ground points and their measurements of one pair of files, as `kind`, into `out`.

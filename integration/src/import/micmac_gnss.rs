@@ -5,30 +5,12 @@
 //! What enters: the OriConvert-style file, the job, the ground frame. What leaves: the
 //! positions in the project, the strips, the notes.
 
-use super::micmac::{read_gnss, MicMacJob};
-use super::{GroundFrame, ImportError, ProjectOut, Summary};
+use super::common::{ferr, GroundFrame, ImportError, Summary};
+use super::micmac_job::{GnssKind, MicMacJob};
+use super::write::ProjectOut;
+use nalgebra::Vector3;
 use std::collections::HashSet;
 use std::path::Path;
-
-/// What GNSS camera positions are, for their σ and drift when the file does not say.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum GnssKind {
-    /// RTK or PPK positions: σ 5 cm / 10 cm, no drift.
-    Survey,
-    /// Navigation-grade positions (code GPS, an autopilot's log, EXIF): σ 3 m / 5 m and an
-    /// unknown offset of the whole block estimated (`drift = "block"`, offset).
-    Navigation,
-}
-
-impl GnssKind {
-    /// The σ (horizontal, vertical) assumed for this kind, metres.
-    pub fn sigma(self) -> [f64; 2] {
-        match self {
-            GnssKind::Survey => [0.05, 0.10],
-            GnssKind::Navigation => [3.0, 5.0],
-        }
-    }
-}
 
 /// The σ and kind of the positions, and the note that says what was assumed.
 pub(super) fn gnss_assumptions(job: &MicMacJob) -> ([f64; 2], GnssKind, String) {
@@ -118,4 +100,50 @@ pub(super) fn add_gnss(
         ));
     }
     Ok(())
+}
+
+/// GNSS camera positions in `OriConvert` text: `#F=N X Y Z` (other letters ignored).
+fn read_gnss(path: &Path, format: &str) -> Result<Vec<(String, Vector3<f64>, usize)>, ImportError> {
+    let fields: Vec<&str> = format
+        .trim()
+        .trim_start_matches("#F=")
+        .split_whitespace()
+        .collect();
+    let col = |c: &str| fields.iter().position(|f| *f == c);
+    let (Some(n), Some(xc), Some(yc), Some(zc)) = (col("N"), col("X"), col("Y"), col("Z")) else {
+        return Err(ImportError::Usage(format!(
+            "--gnss-format '{format}': name the columns with N X Y Z, e.g. '#F=N X Y Z'"
+        )));
+    };
+    let text =
+        std::fs::read_to_string(path).map_err(|e| ferr(path, None, format!("cannot read: {e}")))?;
+    let mut out: Vec<(String, Vector3<f64>, usize)> = Vec::new();
+    let mut names = HashSet::new();
+    for (i, l) in text.lines().enumerate() {
+        let f: Vec<&str> = l.split_whitespace().collect();
+        if f.is_empty() || f[0].starts_with('#') {
+            continue;
+        }
+        let num = |c: usize| {
+            f.get(c)
+                .and_then(|s| s.parse::<f64>().ok())
+                .filter(|v| v.is_finite())
+        };
+        let (Some(name), Some(a), Some(b), Some(c)) = (f.get(n), num(xc), num(yc), num(zc)) else {
+            return Err(ferr(
+                path,
+                Some(i + 1),
+                format!("expected the columns '{format}'"),
+            ));
+        };
+        if !names.insert(name.to_string()) {
+            return Err(ferr(
+                path,
+                Some(i + 1),
+                format!("image {name} has two positions: keep one"),
+            ));
+        }
+        out.push((name.to_string(), Vector3::new(a, b, c), i + 1));
+    }
+    Ok(out)
 }

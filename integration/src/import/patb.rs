@@ -25,7 +25,8 @@
 //! the control file are tie points. Skipped with a reason: photos without measurements,
 //! control points never measured, cameras no photo uses. Errors name the file and line.
 
-use super::{ferr, CameraOut, GroundFrame, GroundOut, ImportError, ProjectOut, Summary};
+use super::common::{ferr, GroundFrame, ImportError, Summary};
+use super::write::{CameraOut, GroundOut, ProjectOut};
 use crate::adjust::camera_section::{camera_def, CameraSection, INTERIOR_NAMES};
 use nalgebra::{Vector2, Vector3};
 use photo::camera::Camera;
@@ -109,7 +110,7 @@ type Control = (
 
 /// Non-comment, non-blank lines split into fields, with their line numbers.
 fn fields(path: &Path) -> Result<Vec<(usize, Vec<String>)>, ImportError> {
-    Ok(super::lines(path)?
+    Ok(super::common::lines(path)?
         .into_iter()
         .map(|(i, l)| (i, l.split_whitespace().map(String::from).collect()))
         .filter(|(_, f): &(usize, Vec<String>)| !f.is_empty())

@@ -3,7 +3,7 @@
 //! (GNSS) and `start.csv` (start orientations) — each file atomically, and with
 //! [`ProjectOut::write_folder`] the folder as a whole.
 
-use super::{ferr, ImportError};
+use super::common::{ferr, ImportError};
 use gnss::frame::Ecef;
 use gnss::solution::write_atomic;
 use nalgebra::{Matrix3, Vector2};

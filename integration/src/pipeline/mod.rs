@@ -22,9 +22,11 @@ use std::fmt;
 use std::path::PathBuf;
 
 mod exposures;
-mod ppk_summary;
+pub(crate) mod ppk_summary;
 mod swap;
 pub use exposures::{exposures, EventSource, ExposureJob, ExposureReport};
+use gnss::atomic::side_path;
+pub use ppk_summary::PpkReport;
 
 /// Inputs of a single-point run.
 #[derive(Clone, Debug)]
@@ -300,39 +302,6 @@ pub struct PpkJob {
     pub out: PathBuf,
     /// The quality report to write (HTML), if any.
     pub report: Option<PathBuf>,
-}
-
-/// What a carrier-phase run did.
-#[derive(Clone, Debug)]
-pub struct PpkReport {
-    /// The carrier-phase result (trajectory, pass counters, unsolved epochs).
-    pub result: gnss::ppk::PpkResult,
-    /// The `.pos` written.
-    pub out: PathBuf,
-    /// The static summary written beside it (`OUT.pos.json`; static runs only).
-    pub summary: Option<PathBuf>,
-    /// The quality report written (HTML), when asked for.
-    pub report: Option<PathBuf>,
-    /// The point of the rover the positions describe.
-    pub refer: gnss::ppk::Reference,
-    /// Problems with the inputs and the run.
-    pub warnings: Vec<String>,
-    /// What the run took from raw logs themselves (ephemerides, GPS week, base position),
-    /// for standard error.
-    pub notes: Vec<String>,
-    /// Wall time, seconds.
-    pub seconds: f64,
-    /// Of it, reading and checking the inputs, seconds.
-    pub read_seconds: f64,
-    /// Of it, the carrier-phase engine, seconds.
-    pub process_seconds: f64,
-}
-
-/// A file beside an output: `OUT.pos` + `ext` (`.json`, `.html` …).
-pub(crate) fn side_path(out: &std::path::Path, ext: &str) -> PathBuf {
-    let mut name = out.as_os_str().to_owned();
-    name.push(ext);
-    PathBuf::from(name)
 }
 
 /// Run PPK and write the `.pos` output; `progress` counts the epochs of each pass.

@@ -1,12 +1,38 @@
-//! What `ppkat ppk` prints of a carrier-phase run ([`PpkReport`]'s `Display`, also the head of
+//! What a carrier-phase run did ([`PpkReport`]) and what `ppkat ppk` prints of it (its `Display`, also the head of
 //! the PPK report page): the fix rate, what was estimated, how the ambiguities went, why epochs
 //! stayed unsolved, each pass's resets, the static solution and the warnings.
 
-use super::PpkReport;
 use gnss::ppk::{AmbiguityRates, Models, PassStats};
 use gnss::time::format_ymdhms;
 use hifitime::Epoch;
 use std::fmt;
+use std::path::PathBuf;
+
+/// What a carrier-phase run did.
+#[derive(Clone, Debug)]
+pub struct PpkReport {
+    /// The carrier-phase result (trajectory, pass counters, unsolved epochs).
+    pub result: gnss::ppk::PpkResult,
+    /// The `.pos` written.
+    pub out: PathBuf,
+    /// The static summary written beside it (`OUT.pos.json`; static runs only).
+    pub summary: Option<PathBuf>,
+    /// The quality report written (HTML), when asked for.
+    pub report: Option<PathBuf>,
+    /// The point of the rover the positions describe.
+    pub refer: gnss::ppk::Reference,
+    /// Problems with the inputs and the run.
+    pub warnings: Vec<String>,
+    /// What the run took from raw logs themselves (ephemerides, GPS week, base position),
+    /// for standard error.
+    pub notes: Vec<String>,
+    /// Wall time, seconds.
+    pub seconds: f64,
+    /// Of it, reading and checking the inputs, seconds.
+    pub read_seconds: f64,
+    /// Of it, the carrier-phase engine, seconds.
+    pub process_seconds: f64,
+}
 
 impl fmt::Display for PpkReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {

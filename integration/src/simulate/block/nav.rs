@@ -26,6 +26,7 @@
 //! attitudes, velocities) and `truth_points.csv`, beside the [`NavTruth`] returned. Frame:
 //! ENU at the site origin (metres), GPST seconds.
 
+use super::nav_images::{noisy, seen, Meas, NavImage, HEIGHT_PX, PIXEL, SIGMA_PX, WIDTH_PX};
 use super::spec::T_FIRST;
 use crate::exposure::export::{antenna_table, AntennaRow};
 use crate::simulate::error::SimError;
@@ -49,12 +50,7 @@ pub const LEVER_ARM: [f64; 3] = [0.0, 0.0, 0.5];
 pub const GNSS_SIGMA: f64 = 2.0;
 
 const FOCAL: f64 = 0.035;
-const PIXEL: f64 = 4.5e-6;
-/// Along-track (x) and across-track (y) image size, pixels.
-const WIDTH_PX: usize = 5400;
-const HEIGHT_PX: usize = 8000;
 const HEIGHT: f64 = 1000.0;
-const SIGMA_PX: f64 = 1.0;
 const GCP_SIGMA: (f64, f64) = (0.03, 0.05);
 
 /// What to simulate.
@@ -137,9 +133,6 @@ impl NavSpec {
         }
     }
 }
-
-/// An exposure: id, strip (from 0), true pose (site ENU), GPST seconds, true velocity (ENU).
-pub type NavImage = (String, usize, Pose, f64, Vector3<f64>);
 
 /// What the simulation knows.
 #[derive(Clone, Debug)]
@@ -264,14 +257,6 @@ fn fly(spec: &NavSpec, rng: &mut Rng) -> Vec<NavImage> {
     images
 }
 
-/// Where `x` lands in the image, when inside the format 100 px from the edges.
-pub(super) fn seen(cam: &Camera, pose: &Pose, x: &Vector3<f64>) -> Option<Vector2<f64>> {
-    let xy = cam.project(pose, x)?;
-    let px = cam.image_to_pixel(xy);
-    let inside = |v: f64, n: usize| (100.0..n as f64 - 100.0).contains(&v);
-    (inside(px.x, WIDTH_PX) && inside(px.y, HEIGHT_PX)).then_some(xy)
-}
-
 /// Control and check points at random over the block, each seen by at least one image.
 fn place(spec: &NavSpec, cam: &Camera, images: &[NavImage], rng: &mut Rng) -> Vec<Point> {
     let (along, base, spacing) = layout(spec);
@@ -293,13 +278,6 @@ fn place(spec: &NavSpec, cam: &Camera, images: &[NavImage], rng: &mut Rng) -> Ve
         }
     }
     points
-}
-
-/// An image measurement: image index, point index, image coordinates (m).
-pub(super) type Meas = (usize, usize, Vector2<f64>);
-
-pub(super) fn noisy(xy: Vector2<f64>, rng: &mut Rng) -> Vector2<f64> {
-    xy + Vector2::new(rng.normal(), rng.normal()) * (SIGMA_PX * PIXEL)
 }
 
 /// Each point measured in 1–6 (at most all) of the images that see it, picked at random.

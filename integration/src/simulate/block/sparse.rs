@@ -6,7 +6,7 @@
 //! the ground points of [`super::nav`]. What leaves: the measurements (image, point, image
 //! coordinates with noise), sorted by image and point. Deterministic per seed.
 
-use super::nav::{noisy, seen, Meas, NavImage};
+use super::nav_images::{noisy, seen, Meas, NavImage};
 use crate::simulate::ground_points::Point;
 use crate::simulate::rng::Rng;
 use nalgebra::Vector2;
