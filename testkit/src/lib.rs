@@ -5,7 +5,11 @@
 //!   (`target/tmp/<test binary>/`), not the system's temporary folder: each test binary empties
 //!   its folder when it first asks for one, so a run leaves only its own files — there for a
 //!   look after a failure — and the next run replaces them. Before, every run left ~300 MB of
-//!   folders named by process id in `/tmp`.
+//!   folders named by process id in `/tmp`;
+//! - [`imports::assert_no_import_circles`] fails a crate whose files import each other in a
+//!   circle.
+
+pub mod imports;
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
