@@ -81,7 +81,7 @@ pub fn html(r: &PpkReport, settings: &[String], events: &[Epoch]) -> String {
     let _ = writeln!(
         s,
         "<h1>Carrier-phase positioning (PPK)</h1><pre>{}</pre>",
-        html_escape(&r.to_string())
+        html_escape(&crate::pipeline::ppk_summary::Untimed(r).to_string())
     );
     let tr = &r.result.trajectory;
     s += &fix_table(r);

@@ -141,7 +141,11 @@ pub fn ppp(job: &PppJob, progress: &dyn gnss::progress::Progress) -> Result<PppR
     })?;
     report.ztd = Some(ztd_path);
     let html_path = side_path(&job.out, ".html");
-    let page = crate::ppp_report::html(&report, &job.obs.display().to_string());
+    let page = crate::ppp_report::html(
+        &report,
+        &job.obs.display().to_string(),
+        &Untimed(&report).to_string(),
+    );
     write_atomic(&html_path, |w| w.write_all(page.as_bytes()))?;
     report.html = Some(html_path);
     Ok(report)
@@ -325,75 +329,93 @@ impl PppReport {
 
 impl fmt::Display for PppReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        for w in &self.result.warnings {
-            writeln!(f, "warning: {w}")?;
-        }
-        let r = &self.result;
+        write_summary(self, f, true)
+    }
+}
+
+/// A [`PppReport`] shown without its wall time, for files that must be the same bytes on
+/// every run (the HTML report).
+struct Untimed<'a>(&'a PppReport);
+
+impl fmt::Display for Untimed<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write_summary(self.0, f, false)
+    }
+}
+
+/// What `ppkat ppp` prints of a run, with the wall time when `timed`.
+fn write_summary(this: &PppReport, f: &mut fmt::Formatter<'_>, timed: bool) -> fmt::Result {
+    for w in &this.result.warnings {
+        writeln!(f, "warning: {w}")?;
+    }
+    let r = &this.result;
+    writeln!(
+        f,
+        "{} epochs read, {} solved, {} without 4 usable satellites; {} ambiguity restarts at slips",
+        r.input_epochs,
+        r.epochs.len(),
+        r.unsolved,
+        r.slips
+    )?;
+    for (k, n) in &r.rejected {
+        writeln!(f, "  {n} satellite-epochs {}", k.describe())?;
+    }
+    writeln!(
+        f,
+        "post-fit residuals RMS: phase {:.1} mm, code {:.2} m; σ scaled by √{:.1} for their size and correlation (lag-one {:.2}) plus a floor of {:.0}/{:.0} mm horizontal/up",
+        r.residual_rms(0) * 1e3,
+        r.residual_rms(1),
+        r.inflation.0,
+        r.inflation.1,
+        r.floor.0 * 1e3,
+        r.floor.1 * 1e3,
+    )?;
+    if let Some((pos, cov)) = this.last {
+        let g = pos.to_geodetic();
+        let sd = enu_sigmas(&pos, &cov);
         writeln!(
             f,
-            "{} epochs read, {} solved, {} without 4 usable satellites; {} ambiguity restarts at slips",
-            r.input_epochs,
-            r.epochs.len(),
-            r.unsolved,
-            r.slips
+            "static {}: X {:.4} Y {:.4} Z {:.4} m (lat {:.9} lon {:.9} h {:.4} m), σ E/N/U {:.1}/{:.1}/{:.1} mm, frame {} at epoch {:.3}",
+            refer_name(this.refer),
+            pos.0.x,
+            pos.0.y,
+            pos.0.z,
+            g.lat.to_degrees(),
+            g.lon.to_degrees(),
+            g.h,
+            sd[0] * 1e3,
+            sd[1] * 1e3,
+            sd[2] * 1e3,
+            this.frame,
+            match (this.result.epochs.first(), this.result.epochs.last()) {
+                (Some(a), Some(b)) => decimal_year(a.time, b.time),
+                _ => f64::NAN,
+            }
         )?;
-        for (k, n) in &r.rejected {
-            writeln!(f, "  {n} satellite-epochs {}", k.describe())?;
-        }
-        writeln!(
-            f,
-            "post-fit residuals RMS: phase {:.1} mm, code {:.2} m; σ scaled by √{:.1} for their size and correlation (lag-one {:.2}) plus a floor of {:.0}/{:.0} mm horizontal/up",
-            r.residual_rms(0) * 1e3,
-            r.residual_rms(1),
-            r.inflation.0,
-            r.inflation.1,
-            r.floor.0 * 1e3,
-            r.floor.1 * 1e3,
-        )?;
-        if let Some((pos, cov)) = self.last {
-            let g = pos.to_geodetic();
-            let sd = enu_sigmas(&pos, &cov);
+        if let Some(h) = this.header_position {
+            let d = h.enu_from(&pos).0;
             writeln!(
                 f,
-                "static {}: X {:.4} Y {:.4} Z {:.4} m (lat {:.9} lon {:.9} h {:.4} m), σ E/N/U {:.1}/{:.1}/{:.1} mm, frame {} at epoch {:.3}",
-                refer_name(self.refer),
-                pos.0.x,
-                pos.0.y,
-                pos.0.z,
-                g.lat.to_degrees(),
-                g.lon.to_degrees(),
-                g.h,
-                sd[0] * 1e3,
-                sd[1] * 1e3,
-                sd[2] * 1e3,
-                self.frame,
-                match (self.result.epochs.first(), self.result.epochs.last()) {
-                    (Some(a), Some(b)) => decimal_year(a.time, b.time),
-                    _ => f64::NAN,
-                }
+                "  {:.3} m from the header's approximate position (E/N/U {:+.3}/{:+.3}/{:+.3} m: header minus PPP; a header in another frame, e.g. ETRS89, differs by decimetres)",
+                d.norm(),
+                d.x,
+                d.y,
+                d.z
             )?;
-            if let Some(h) = self.header_position {
-                let d = h.enu_from(&pos).0;
-                writeln!(
-                    f,
-                    "  {:.3} m from the header's approximate position (E/N/U {:+.3}/{:+.3}/{:+.3} m: header minus PPP; a header in another frame, e.g. ETRS89, differs by decimetres)",
-                    d.norm(),
-                    d.x,
-                    d.y,
-                    d.z
-                )?;
-            }
         }
-        write!(f, "wrote {}", self.out.display())?;
-        if let Some(s) = &self.summary {
-            write!(f, ", {}", s.display())?;
-        }
-        if let Some(s) = &self.ztd {
-            write!(f, ", {}", s.display())?;
-        }
-        if let Some(s) = &self.html {
-            write!(f, ", {}", s.display())?;
-        }
-        writeln!(f, " in {:.1} s", self.seconds)
     }
+    write!(f, "wrote {}", this.out.display())?;
+    if let Some(s) = &this.summary {
+        write!(f, ", {}", s.display())?;
+    }
+    if let Some(s) = &this.ztd {
+        write!(f, ", {}", s.display())?;
+    }
+    if let Some(s) = &this.html {
+        write!(f, ", {}", s.display())?;
+    }
+    if timed {
+        write!(f, " in {:.1} s", this.seconds)?;
+    }
+    writeln!(f)
 }

@@ -62,14 +62,14 @@ fn enu_from(r: &PppReport, origin: &Ecef) -> Vec<[f64; 3]> {
         .collect()
 }
 
-/// The report page.
-pub fn html(r: &PppReport, input: &str) -> String {
+/// The report page; `summary` is what `ppkat ppp` printed of the run, without its wall time.
+pub fn html(r: &PppReport, input: &str, summary: &str) -> String {
     let mut s = String::from("<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>ppkat ppp</title><style>body{font-family:sans-serif;max-width:960px;margin:auto}td,th{padding:2px 8px;text-align:right}pre{white-space:pre-wrap}</style></head><body>\n");
     let _ = writeln!(
         s,
         "<h1>Precise point positioning</h1><p>{}</p><pre>{}</pre>",
         html_escape(input),
-        html_escape(&r.to_string())
+        html_escape(summary)
     );
     let Some((axis, t)) = times(r) else {
         return s + "</body></html>\n";

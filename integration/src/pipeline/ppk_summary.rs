@@ -36,16 +36,37 @@ pub struct PpkReport {
 
 impl fmt::Display for PpkReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.write(f, true)
+    }
+}
+
+/// A [`PpkReport`] shown without its wall time, for files that must be the same bytes on
+/// every run (the HTML report).
+pub struct Untimed<'a>(pub &'a PpkReport);
+
+impl fmt::Display for Untimed<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.0.write(f, false)
+    }
+}
+
+impl PpkReport {
+    /// The summary, with the wall time when `timed`.
+    fn write(&self, f: &mut fmt::Formatter<'_>, timed: bool) -> fmt::Result {
         let r = &self.result;
         let solved = r.trajectory.epochs.len();
+        let took = if timed {
+            format!(" in {:.2} s", self.seconds)
+        } else {
+            String::new()
+        };
         writeln!(
             f,
-            "ppk: {} rover epochs, {} solved, {} fixed ({:.1} % of solved) in {:.2} s → {}",
+            "ppk: {} rover epochs, {} solved, {} fixed ({:.1} % of solved){took} → {}",
             r.rover_epochs,
             solved,
             r.fixed(),
             100.0 * r.fixed() as f64 / solved.max(1) as f64,
-            self.seconds,
             self.out.display()
         )?;
         writeln!(f, "  {}", models_line(&r.models))?;
