@@ -15,6 +15,7 @@ use super::write::{CameraOut, ProjectOut, StartOut};
 use gnss::frame::{enu_rotation, Ecef, Geodetic};
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use photo::camera_convert::ColmapCamera;
+use photo::relative::similarity;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -167,8 +168,6 @@ fn read_tracks(path: &Path) -> Result<BTreeMap<i64, usize>, ImportError> {
     Ok(out)
 }
 
-use photo::relative::similarity;
-
 /// Import a COLMAP sparse text model: the ppkat project and what was read and skipped.
 pub fn import(job: &ColmapJob) -> Result<(ProjectOut, Summary), ImportError> {
     let Some(photos) = &job.gnss_exif else {
@@ -187,8 +186,47 @@ pub fn import(job: &ColmapJob) -> Result<(ProjectOut, Summary), ImportError> {
         notes: vec!["written by ppkat import colmap; datum from the photos' EXIF GPS".into()],
         ..Default::default()
     };
+    add_cameras(job, &cameras, &mut out, &mut sum)?;
+    let gps = exif_positions(job, photos, &images, &mut sum);
+    let datum = Datum::fit(photos, &images, &gps, &mut sum)?;
+    let mut counts = ObsCounts::default();
+    for (id, im) in &images {
+        if !cameras.contains_key(&im.camera) {
+            return Err(ferr(
+                &job.dir.join("images.txt"),
+                None,
+                format!(
+                    "image {} uses camera {} that cameras.txt does not list",
+                    im.name, im.camera
+                ),
+            ));
+        }
+        out.images
+            .push((im.name.clone(), format!("c{}", im.camera)));
+        out.starts.push(datum.start(im));
+        if let Some(g) = gps.get(id) {
+            out.gnss.push((
+                im.name.clone(),
+                g.to_ecef(),
+                [job.gnss_sigma[0], job.gnss_sigma[0], job.gnss_sigma[1]],
+            ));
+        }
+        add_observations(job, im, &tracks, &mut out, &mut sum, &mut counts);
+    }
+    counts.say(job, &mut sum);
+    Ok((out, sum))
+}
+
+/// The cameras of the model as ppkat cameras (`c<id>`), with how far each conversion is from
+/// COLMAP's model in a note.
+fn add_cameras(
+    job: &ColmapJob,
+    cameras: &BTreeMap<u64, ColmapCamera>,
+    out: &mut ProjectOut,
+    sum: &mut Summary,
+) -> Result<(), ImportError> {
     let cpath = job.dir.join("cameras.txt");
-    for (id, c) in &cameras {
+    for (id, c) in cameras {
         let conv = c
             .to_camera(job.pixel_um * 1e-6)
             .map_err(|e| ferr(&cpath, None, format!("camera {id}: {e}")))?;
@@ -203,9 +241,18 @@ pub fn import(job: &ColmapJob) -> Result<(ProjectOut, Summary), ImportError> {
             self_calibrate: Vec::new(),
         });
     }
-    // EXIF positions of the registered images.
+    Ok(())
+}
+
+/// The EXIF GPS positions of the registered images (those without one skipped, named).
+fn exif_positions(
+    job: &ColmapJob,
+    photos: &Path,
+    images: &BTreeMap<u64, Image>,
+    sum: &mut Summary,
+) -> BTreeMap<u64, Geodetic> {
     let mut gps: BTreeMap<u64, Geodetic> = BTreeMap::new();
-    for (id, im) in &images {
+    for (id, im) in images {
         match crate::exposure::photos::read_position(&photos.join(&im.name)) {
             Some((lat, lon, h)) => {
                 gps.insert(*id, Geodetic::from_degrees(lat, lon, h));
@@ -221,110 +268,146 @@ pub fn import(job: &ColmapJob) -> Result<(ProjectOut, Summary), ImportError> {
         "GNSS positions from EXIF GPS: σ {} m horizontal, {} m vertical (--gnss-sigma; consumer GPS by default); no drift: the block takes their datum, a bias of their heights included",
         job.gnss_sigma[0], job.gnss_sigma[1]
     ));
-    let origin = gps.values().next().copied().ok_or_else(|| {
-        ferr(
-            photos,
-            None,
-            "no photo with EXIF GPS: the model has no datum",
-        )
-    })?;
-    let o_ecef = origin.to_ecef();
-    let r0 = enu_rotation(&origin);
-    let enu = |g: &Geodetic| r0 * (g.to_ecef().0 - o_ecef.0);
-    let (from, to): (Vec<_>, Vec<_>) = gps
-        .iter()
-        .map(|(id, g)| (images[id].centre, enu(g)))
-        .unzip();
-    let (scale, rot, shift) = similarity(&from, &to).ok_or_else(|| {
-        ferr(
-            photos,
-            None,
-            "fewer than 3 EXIF positions, or all on a line: no datum for the model",
-        )
-    })?;
-    let rms = (from
-        .iter()
-        .zip(&to)
-        .map(|(a, b)| (scale * rot * a + shift - b).norm_squared())
-        .sum::<f64>()
-        / from.len() as f64)
-        .sqrt();
-    sum.notes.push(format!(
-        "model moved onto the EXIF GPS: scale {scale:.4}, 3D RMS {rms:.2} m"
-    ));
-    let flip = Matrix3::from_diagonal(&Vector3::new(1.0, -1.0, -1.0));
-    let mut skipped_short = 0usize;
-    let mut twice = 0usize;
-    let mut kept = 0usize;
-    for (id, im) in &images {
-        let cam = format!("c{}", im.camera);
-        if !cameras.contains_key(&im.camera) {
-            return Err(ferr(
-                &job.dir.join("images.txt"),
+    gps
+}
+
+/// The model moved onto the EXIF positions: the ENU frame at the first of them and the
+/// similarity (scale, rotation, shift) from model to ENU.
+struct Datum {
+    o_ecef: Ecef,
+    r0: Matrix3<f64>,
+    scale: f64,
+    rot: Matrix3<f64>,
+    shift: Vector3<f64>,
+}
+
+impl Datum {
+    /// Fit the similarity of the image centres onto their EXIF positions (3D RMS in a note).
+    fn fit(
+        photos: &Path,
+        images: &BTreeMap<u64, Image>,
+        gps: &BTreeMap<u64, Geodetic>,
+        sum: &mut Summary,
+    ) -> Result<Datum, ImportError> {
+        let origin = gps.values().next().copied().ok_or_else(|| {
+            ferr(
+                photos,
                 None,
+                "no photo with EXIF GPS: the model has no datum",
+            )
+        })?;
+        let o_ecef = origin.to_ecef();
+        let r0 = enu_rotation(&origin);
+        let enu = |g: &Geodetic| r0 * (g.to_ecef().0 - o_ecef.0);
+        let (from, to): (Vec<_>, Vec<_>) = gps
+            .iter()
+            .map(|(id, g)| (images[id].centre, enu(g)))
+            .unzip();
+        let (scale, rot, shift) = similarity(&from, &to).ok_or_else(|| {
+            ferr(
+                photos,
+                None,
+                "fewer than 3 EXIF positions, or all on a line: no datum for the model",
+            )
+        })?;
+        let rms = (from
+            .iter()
+            .zip(&to)
+            .map(|(a, b)| (scale * rot * a + shift - b).norm_squared())
+            .sum::<f64>()
+            / from.len() as f64)
+            .sqrt();
+        sum.notes.push(format!(
+            "model moved onto the EXIF GPS: scale {scale:.4}, 3D RMS {rms:.2} m"
+        ));
+        Ok(Datum {
+            o_ecef,
+            r0,
+            scale,
+            rot,
+            shift,
+        })
+    }
+
+    /// The start orientation of an image: its centre in ECEF and camera → local ENU.
+    fn start(&self, im: &Image) -> StartOut {
+        let flip = Matrix3::from_diagonal(&Vector3::new(1.0, -1.0, -1.0));
+        let c_enu = self.scale * self.rot * im.centre + self.shift;
+        let pos = Ecef(self.o_ecef.0 + self.r0.transpose() * c_enu);
+        let r_here = enu_rotation(&pos.to_geodetic()) * self.r0.transpose();
+        StartOut {
+            image: im.name.clone(),
+            pos,
+            r_enu: r_here * self.rot * im.r.transpose() * flip,
+        }
+    }
+}
+
+/// Observations left out in bulk (counted, said once) and kept.
+#[derive(Default)]
+struct ObsCounts {
+    /// Of points seen in fewer than `--min-track` images.
+    short: usize,
+    /// Second observations of a point in one image.
+    twice: usize,
+    /// Kept.
+    kept: usize,
+}
+
+impl ObsCounts {
+    /// The counts into the summary.
+    fn say(&self, job: &ColmapJob, sum: &mut Summary) {
+        if self.twice > 0 {
+            sum.skipped.push((
+                format!("{} observations", self.twice),
+                "a second observation of a point in the same image (the first is kept)".into(),
+            ));
+        }
+        if self.short > 0 {
+            sum.skipped.push((
+                format!("{} observations", self.short),
                 format!(
-                    "image {} uses camera {} that cameras.txt does not list",
-                    im.name, im.camera
+                    "their points are seen in fewer than {} images (--min-track)",
+                    job.min_track
                 ),
             ));
         }
-        out.images.push((im.name.clone(), cam));
-        let c_enu = scale * rot * im.centre + shift;
-        let pos = Ecef(o_ecef.0 + r0.transpose() * c_enu);
-        let r_here = enu_rotation(&pos.to_geodetic()) * r0.transpose();
-        out.starts.push(StartOut {
-            image: im.name.clone(),
-            pos,
-            r_enu: r_here * rot * im.r.transpose() * flip,
-        });
-        if let Some(g) = gps.get(id) {
-            out.gnss.push((
-                im.name.clone(),
-                g.to_ecef(),
-                [job.gnss_sigma[0], job.gnss_sigma[0], job.gnss_sigma[1]],
-            ));
+        sum.read.push(("observations kept".into(), self.kept));
+    }
+}
+
+/// The observations of one image whose points are in at least `--min-track` images.
+fn add_observations(
+    job: &ColmapJob,
+    im: &Image,
+    tracks: &BTreeMap<i64, usize>,
+    out: &mut ProjectOut,
+    sum: &mut Summary,
+    counts: &mut ObsCounts,
+) {
+    let mut in_image = std::collections::BTreeSet::new();
+    for &(x, y, p) in &im.obs {
+        if p < 0 {
+            continue;
         }
-        let mut in_image = std::collections::BTreeSet::new();
-        for &(x, y, p) in &im.obs {
-            if p < 0 {
-                continue;
+        if !in_image.insert(p) {
+            // COLMAP may keep two keypoints of one image in one track: one is kept.
+            counts.twice += 1;
+            continue;
+        }
+        match tracks.get(&p) {
+            Some(&n) if n >= job.min_track => {
+                counts.kept += 1;
+                out.measurements
+                    .push((im.name.clone(), format!("t{p}"), x, y));
             }
-            if !in_image.insert(p) {
-                // COLMAP may keep two keypoints of one image in one track: one is kept.
-                twice += 1;
-                continue;
-            }
-            match tracks.get(&p) {
-                Some(&n) if n >= job.min_track => {
-                    kept += 1;
-                    out.measurements
-                        .push((im.name.clone(), format!("t{p}"), x, y));
-                }
-                Some(_) => skipped_short += 1,
-                None => sum.skipped.push((
-                    format!("observation of point {p} in {}", im.name),
-                    "point not in points3D.txt".into(),
-                )),
-            }
+            Some(_) => counts.short += 1,
+            None => sum.skipped.push((
+                format!("observation of point {p} in {}", im.name),
+                "point not in points3D.txt".into(),
+            )),
         }
     }
-    if twice > 0 {
-        sum.skipped.push((
-            format!("{twice} observations"),
-            "a second observation of a point in the same image (the first is kept)".into(),
-        ));
-    }
-    if skipped_short > 0 {
-        sum.skipped.push((
-            format!("{skipped_short} observations"),
-            format!(
-                "their points are seen in fewer than {} images (--min-track)",
-                job.min_track
-            ),
-        ));
-    }
-    sum.read.push(("observations kept".into(), kept));
-    Ok((out, sum))
 }
 
 #[cfg(test)]

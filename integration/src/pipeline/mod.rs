@@ -304,6 +304,71 @@ pub struct PpkJob {
     pub report: Option<PathBuf>,
 }
 
+/// The `.pos` header lines of a PPK run (RTKLIB's layout, with ppkat's own lines):
+/// program, inputs, mode, the point the positions describe, mask, systems, the base and how
+/// it was found (`base_line`), the epoch counts and GLONASS's ambiguities.
+fn pos_header(
+    job: &PpkJob,
+    result: &gnss::ppk::PpkResult,
+    rover: &ObsFile,
+    base_line: Option<String>,
+) -> Vec<String> {
+    let o = &job.options;
+    let b = result.base_marker;
+    let motion = match o.motion {
+        gnss::ppk::Motion::Kinematic => "kinematic",
+        gnss::ppk::Motion::Static => "static",
+    };
+    let d = rover.header.antenna_delta;
+    let point = match o.refer {
+        gnss::ppk::Reference::Arp => "rover antenna reference point (ARP)",
+        gnss::ppk::Reference::Marker => "rover marker (ARP minus the antenna delta)",
+    };
+    let mut header = vec![
+        format!(
+            "program   : ppkat {} (carrier-phase {motion})",
+            env!("CARGO_PKG_VERSION")
+        ),
+        format!("inp file  : {}", job.rover.display()),
+        format!("inp file  : {}", job.base.display()),
+        format!(
+            "pos mode  : {motion}, filter {:?}, ambiguities {:?}, ratio {:.1}",
+            if o.motion == gnss::ppk::Motion::Static {
+                gnss::ppk::FilterMode::Forward
+            } else {
+                o.filter
+            },
+            o.ar,
+            o.ratio_threshold
+        ),
+        format!(
+            "positions : {point}; rover ANTENNA: DELTA H/E/N {:.4} {:.4} {:.4} m",
+            d.up, d.east, d.north
+        ),
+        format!("elev mask : {:.1} deg", o.elev_mask.to_degrees()),
+        format!(
+            "systems   : {}",
+            o.systems.iter().map(|s| s.letter()).collect::<String>()
+        ),
+        gnss::solution::ref_pos_line(&b, job.format.pos_format()),
+        "ref point : base marker, in the coordinates of the body (RTKLIB's layout)".into(),
+        base_line.unwrap_or_else(|| "base from : given position or the base header".into()),
+        format!(
+            "epochs    : {} rover, {} solved, {} fixed",
+            result.rover_epochs,
+            result.trajectory.epochs.len(),
+            result.fixed()
+        ),
+    ];
+    if result.models.glonass_float {
+        header.push(
+            "glonass   : ambiguities kept float (the receivers' inter-channel phase biases are not calibrated); inter-channel code bias estimated"
+                .into(),
+        );
+    }
+    header
+}
+
 /// Run PPK and write the `.pos` output; `progress` counts the epochs of each pass.
 /// `Err` when no epoch is solved.
 pub fn ppk(job: &PpkJob, progress: &dyn gnss::progress::Progress) -> Result<PpkReport> {
@@ -385,58 +450,7 @@ pub fn ppk(job: &PpkJob, progress: &dyn gnss::progress::Progress) -> Result<PpkR
     }
     warnings.extend(result.warnings.iter().cloned());
     let o = &job.options;
-    let b = result.base_marker;
-    let motion = match o.motion {
-        gnss::ppk::Motion::Kinematic => "kinematic",
-        gnss::ppk::Motion::Static => "static",
-    };
-    let d = rover.header.antenna_delta;
-    let point = match o.refer {
-        gnss::ppk::Reference::Arp => "rover antenna reference point (ARP)",
-        gnss::ppk::Reference::Marker => "rover marker (ARP minus the antenna delta)",
-    };
-    let mut header = vec![
-        format!(
-            "program   : ppkat {} (carrier-phase {motion})",
-            env!("CARGO_PKG_VERSION")
-        ),
-        format!("inp file  : {}", job.rover.display()),
-        format!("inp file  : {}", job.base.display()),
-        format!(
-            "pos mode  : {motion}, filter {:?}, ambiguities {:?}, ratio {:.1}",
-            if o.motion == gnss::ppk::Motion::Static {
-                gnss::ppk::FilterMode::Forward
-            } else {
-                o.filter
-            },
-            o.ar,
-            o.ratio_threshold
-        ),
-        format!(
-            "positions : {point}; rover ANTENNA: DELTA H/E/N {:.4} {:.4} {:.4} m",
-            d.up, d.east, d.north
-        ),
-        format!("elev mask : {:.1} deg", o.elev_mask.to_degrees()),
-        format!(
-            "systems   : {}",
-            o.systems.iter().map(|s| s.letter()).collect::<String>()
-        ),
-        gnss::solution::ref_pos_line(&b, job.format.pos_format()),
-        "ref point : base marker, in the coordinates of the body (RTKLIB's layout)".into(),
-        base_line.unwrap_or_else(|| "base from : given position or the base header".into()),
-        format!(
-            "epochs    : {} rover, {} solved, {} fixed",
-            result.rover_epochs,
-            result.trajectory.epochs.len(),
-            result.fixed()
-        ),
-    ];
-    if result.models.glonass_float {
-        header.push(
-            "glonass   : ambiguities kept float (the receivers' inter-channel phase biases are not calibrated); inter-channel code bias estimated"
-                .into(),
-        );
-    }
+    let header = pos_header(job, &result, rover, base_line);
     let records = result.trajectory.records();
     crate::vector::write(&job.out, &header, &records, job.format, &job.heights)?;
     let mut summary = None;

@@ -1,7 +1,7 @@
 //! Tracks across the block: completed in further photos, cut where they disagree with the
 //! epipolar geometry of their photos, and the connected components of the photos.
 
-use super::{Image, MatchJob, PairResult, COHERENCE_NEIGHBOURS, GUIDED_RADIUS, LONE_FACTOR};
+use super::job::{Image, MatchJob, PairResult, COHERENCE_NEIGHBOURS, GUIDED_RADIUS, LONE_FACTOR};
 use photo::features::matching::Match;
 use photo::features::tracks;
 

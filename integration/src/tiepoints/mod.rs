@@ -16,6 +16,8 @@ mod block;
 pub mod cache;
 pub mod camera;
 pub mod decode;
+mod job;
+mod matched;
 pub mod meta;
 pub mod pair_cache;
 pub mod pairs;
@@ -27,192 +29,16 @@ pub mod report;
 use photo::features::epipolar::{coherent, verify, RansacOptions};
 use photo::features::guided::{guided, GuidedOptions};
 use photo::features::matching::{match_descriptors, Match};
-use photo::features::{extract, tracks, FeatureOptions, Features};
+use photo::features::{extract, tracks, FeatureOptions};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
+pub use job::{
+    Image, MatchError, MatchJob, PairResult, COHERENCE_NEIGHBOURS, DECODED_BUDGET, GUIDED_RADIUS,
+    LONE_FACTOR,
+};
+pub use matched::Matched;
 pub use pairs::PairMode;
-
-/// What `ppkat match` is asked to do.
-#[derive(Clone, Debug)]
-pub struct MatchJob {
-    /// The folder of photographs.
-    pub photos: PathBuf,
-    /// An exposures table whose positions replace the photos' EXIF GPS.
-    pub exposures: Option<PathBuf>,
-    /// A camera file (`[[camera]]` tables) replacing the metadata's camera.
-    pub camera: Option<PathBuf>,
-    /// Features per photo.
-    pub max_features: usize,
-    /// Features per photo matched all against all (the strongest, spread over the photo);
-    /// the rest by guided matching.
-    pub seed_features: usize,
-    /// Longer side of the images features are extracted from, pixels.
-    pub max_image_size: u32,
-    /// How pairs are chosen.
-    pub pairs: PairMode,
-    /// σ of positions without their own, horizontal and vertical (m).
-    pub gnss_sigma: [f64; 2],
-    /// Ratio test threshold.
-    pub ratio: f64,
-    /// RANSAC threshold (Sampson distance) in the pixels features were extracted from; scaled
-    /// to the photograph by the reduction factor.
-    pub ransac_px: f64,
-    /// Fewest verified matches for a pair.
-    pub min_matches: usize,
-    /// Ratio test of guided matching, among the candidates near a keypoint's predicted
-    /// position on its epipolar line (0: no guided matching). 0.6, stricter than the 0.8 of
-    /// the matching all with all: at 0.8 the textured block's tracks were 99.04 % right and
-    /// Brighton Beach's image RMS 0.60 px; at 0.7 99.29 % and 0.53 px, for 4 % fewer tracks;
-    /// at 0.6 Brighton's RMS is 0.50 px for 5 % fewer again. At 0.7 the 28-photo free
-    /// network of `start_from_ties` ended singular (its start is sensitive to a few more
-    /// tracks: not understood yet).
-    pub guided_ratio: f64,
-    /// Ratio test of track completion, among the keypoints where two or more of a track's
-    /// epipolar lines cross in a photo it is not in (0: no completion). On Brighton Beach
-    /// completion turns 10 % more tracks into tracks of three or more photos.
-    pub complete_ratio: f64,
-    /// Refine every track's measurements by least-squares matching of its first one's patch
-    /// ([`refine`]), each then with its own σ.
-    pub refine: bool,
-    /// Use no position from the photos' metadata.
-    pub ignore_gps: bool,
-    /// Feature cache: the folder read from (a previous run's) and the folder written to
-    /// (this run's; every photo's features end up there). None: no cache.
-    pub cache: Option<(PathBuf, PathBuf)>,
-}
-
-impl MatchJob {
-    /// A job on `photos` with the default settings.
-    pub fn new(photos: PathBuf) -> MatchJob {
-        MatchJob {
-            photos,
-            exposures: None,
-            camera: None,
-            max_features: 16000,
-            seed_features: 6000,
-            max_image_size: 2000,
-            pairs: PairMode::Auto,
-            gnss_sigma: [3.0, 5.0],
-            ratio: 0.8,
-            ransac_px: 1.5,
-            min_matches: 20,
-            guided_ratio: 0.6,
-            complete_ratio: 0.8,
-            refine: true,
-            ignore_gps: false,
-            cache: None,
-        }
-    }
-}
-
-/// Radius of guided matching around a keypoint's predicted position, in RANSAC thresholds
-/// (12 px at 1.5 px: relief moves a point from where its neighbours go by a few pixels; a
-/// wider search found a few more tracks on Brighton Beach and more wrong ones on the
-/// textured block).
-pub const GUIDED_RADIUS: f64 = 8.0;
-
-/// Track completion takes a lone candidate whose descriptor distance² to the track is at most
-/// this many times the largest among the track's own (on Brighton Beach 1.5 gave 5,362 tracks
-/// in three or more photos against 5,223 at 1.0 and 5,070 taking none; the textured block's
-/// correct share stayed at 99.4 %).
-pub const LONE_FACTOR: f64 = 1.5;
-
-/// Bytes of decoded photos kept between patch measurement and refinement (each is decoded
-/// again beyond it).
-pub const DECODED_BUDGET: usize = 512 << 20;
-
-/// Neighbours a match's displacement is compared with (motion coherence).
-pub const COHERENCE_NEIGHBOURS: usize = 8;
-
-/// A photo that takes part: its metadata, its features, the reduced size's factor.
-#[derive(Clone, Debug)]
-pub struct Image {
-    /// Metadata.
-    pub meta: meta::PhotoMeta,
-    /// Photograph width and height, pixels.
-    pub size: (u32, u32),
-    /// Photograph pixels per pixel of the image features were extracted from.
-    pub scale: f64,
-    /// Keypoints (photograph pixels) and descriptors.
-    pub features: Features,
-    /// The keypoints matched all against all (indices into `features`), and their features:
-    /// the others are found by guided matching once a pair's geometry is known.
-    pub seeds: (Vec<u32>, Features),
-    /// The key its features are cached under (None without a cache).
-    pub key: Option<u64>,
-    /// Keypoints added at the end of `features` by measuring tracks' patches (not extracted).
-    pub measured: usize,
-}
-
-/// A matched pair: image indices, putative matches, verified matches.
-#[derive(Clone, Debug)]
-pub struct PairResult {
-    /// First image.
-    pub a: usize,
-    /// Second image.
-    pub b: usize,
-    /// Matches after the ratio and mutual tests.
-    pub putative: usize,
-    /// Matches RANSAC kept (empty when the pair failed).
-    pub verified: Vec<Match>,
-    /// The fundamental matrix of a verified pair (x_bᵀ·F·x_a = 0).
-    pub f: Option<nalgebra::Matrix3<f64>>,
-}
-
-/// Everything a match run found.
-#[derive(Clone, Debug)]
-pub struct Matched {
-    /// The photos that were read, in name order.
-    pub images: Vec<Image>,
-    /// The position of every photo (exposures table, else EXIF GPS).
-    pub positions: Vec<Option<positions::Position>>,
-    /// The same in a local east/north/up frame at the first position (m).
-    pub enu: Vec<Option<nalgebra::Vector3<f64>>>,
-    /// Every pair tried.
-    pub pairs: Vec<PairResult>,
-    /// How pairs were chosen.
-    pub pair_note: String,
-    /// Tracks (image index, keypoint index).
-    pub tracks: tracks::Tracks,
-    /// Measurements track completion added (found in photos the track's pairs did not match).
-    pub completed: usize,
-    /// Measurements added by fitting a track's patch where its epipolar lines cross in a photo
-    /// with no keypoint there.
-    pub patch_measured: usize,
-    /// Sub-pixel positions of the tracks' measurements.
-    pub refinement: refine::Refinement,
-    /// Measurements cut from tracks for disagreeing with the epipolar geometry of the track's
-    /// other photos.
-    pub inconsistent: usize,
-    /// Component number of every image (0 = the largest block).
-    pub component: Vec<usize>,
-    /// Photos left out: (file name, reason).
-    pub skipped: Vec<(String, String)>,
-    /// Other files in the folder that are not photographs.
-    pub other_files: usize,
-    /// Seconds per stage: (stage, seconds).
-    pub timing: Vec<(String, f64)>,
-    /// Photos whose features were read from the cache.
-    pub from_cache: usize,
-    /// Photos whose features were extracted but could not be cached.
-    pub not_cached: usize,
-    /// Pairs whose matches were read from the cache.
-    pub pairs_from_cache: usize,
-    /// Whether the pairs could not be written to the cache (a cache was asked for).
-    pub pairs_not_cached: bool,
-}
-
-/// Why a match run failed as a whole.
-#[derive(Debug, thiserror::Error)]
-pub enum MatchError {
-    /// A problem with a file given by the user.
-    #[error("{0}")]
-    Input(String),
-    /// Nothing usable came out.
-    #[error("{0}")]
-    Nothing(String),
-}
 
 /// The photographs of a folder (JPEG, PNG by extension), sorted by name; other files counted.
 fn list(dir: &Path) -> Result<(Vec<PathBuf>, usize), MatchError> {
@@ -424,6 +250,126 @@ fn match_pairs(
     (results, hits.into_inner())
 }
 
+/// The photos read: the usable ones, those left out (file name, reason), and how many came
+/// from the feature cache or could not be stored in it.
+struct Photos {
+    images: Vec<Image>,
+    skipped: Vec<(String, String)>,
+    from_cache: usize,
+    not_cached: usize,
+}
+
+/// Read every photo's metadata and features in parallel (the "features" stage); an error
+/// when fewer than two are usable.
+fn read_photos(
+    job: &MatchJob,
+    files: &[PathBuf],
+    opts: &FeatureOptions,
+    progress: &(dyn Fn(&str, usize, usize) + Sync),
+) -> Result<Photos, MatchError> {
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let read: Vec<Result<(Image, Source), String>> = files
+        .par_iter()
+        .map(|p| {
+            let r = read_one(p, job, opts);
+            let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress("features", k, files.len());
+            r
+        })
+        .collect();
+    let mut out = Photos {
+        images: Vec::new(),
+        skipped: Vec::new(),
+        from_cache: 0,
+        not_cached: 0,
+    };
+    for (p, r) in files.iter().zip(read) {
+        let r = r.map(|(im, source)| {
+            match source {
+                Source::Cache => out.from_cache += 1,
+                Source::Extracted { cached: false } if job.cache.is_some() => out.not_cached += 1,
+                Source::Extracted { .. } => {}
+            }
+            im
+        });
+        let name = p
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned();
+        match r {
+            Ok(im) if im.features.keypoints.len() < job.min_matches => out.skipped.push((
+                name,
+                format!(
+                    "only {} features found (texture too weak or image too small)",
+                    im.features.keypoints.len()
+                ),
+            )),
+            Ok(im) => out.images.push(im),
+            Err(e) => out.skipped.push((name, e)),
+        }
+    }
+    if out.images.len() < 2 {
+        return Err(MatchError::Nothing(format!(
+            "{}: {} usable photograph(s); matching needs at least two{}",
+            job.photos.display(),
+            out.images.len(),
+            out.skipped
+                .iter()
+                .map(|(n, r)| format!("\n  {n}: {r}"))
+                .collect::<String>()
+        )));
+    }
+    Ok(out)
+}
+
+/// Store the pairs' matches in the cache when one is kept; `false` when they could not be
+/// written.
+fn store_pairs(job: &MatchJob, images: &[Image], results: &[PairResult]) -> bool {
+    !job.cache.as_ref().is_some_and(|(_, new)| {
+        let keyed = results.iter().filter_map(|p| {
+            let (ka, kb) = images[p.a].key.zip(images[p.b].key)?;
+            Some((
+                (
+                    ka,
+                    kb,
+                    pair_cache::settings(job, pair_cache::seed(p.a, p.b)),
+                ),
+                p,
+            ))
+        });
+        pair_cache::store(&pair_cache::path(new), keyed).is_err()
+    })
+}
+
+/// The verified matches of the pairs: (photo a, photo b, keypoint pairs).
+type PairMatches = Vec<(usize, usize, Vec<Match>)>;
+
+/// Each photo's keypoints joined by position (keypoints of other orientations at the same
+/// place join their first: one measurement per image position), and the verified matches of
+/// every pair in those terms, sorted and without repeats.
+fn verified_matches(images: &[Image], results: &[PairResult]) -> (Vec<Vec<u32>>, PairMatches) {
+    let canon: Vec<Vec<u32>> = images
+        .iter()
+        .map(|i| photo::features::same_position(&i.features.keypoints))
+        .collect();
+    let verified = results
+        .iter()
+        .filter(|p| !p.verified.is_empty())
+        .map(|p| {
+            let mut v: Vec<Match> = p
+                .verified
+                .iter()
+                .map(|&(i, j)| (canon[p.a][i as usize], canon[p.b][j as usize]))
+                .collect();
+            v.sort_unstable();
+            v.dedup();
+            (p.a, p.b, v)
+        })
+        .collect();
+    (canon, verified)
+}
+
 /// Run the matching stages; `progress(stage, done, total)` is called as work completes.
 pub fn run(
     job: &MatchJob,
@@ -446,57 +392,13 @@ pub fn run(
         ..FeatureOptions::default()
     };
     let t = std::time::Instant::now();
-    let done = std::sync::atomic::AtomicUsize::new(0);
-    let read: Vec<Result<(Image, Source), String>> = files
-        .par_iter()
-        .map(|p| {
-            let r = read_one(p, job, &opts);
-            let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            progress("features", k, files.len());
-            r
-        })
-        .collect();
+    let Photos {
+        mut images,
+        skipped,
+        from_cache,
+        not_cached,
+    } = read_photos(job, &files, &opts, progress)?;
     let mut timing = vec![("features".to_string(), t.elapsed().as_secs_f64())];
-    let mut images = Vec::new();
-    let mut skipped = Vec::new();
-    let (mut from_cache, mut not_cached) = (0, 0);
-    for (p, r) in files.iter().zip(read) {
-        let r = r.map(|(im, source)| {
-            match source {
-                Source::Cache => from_cache += 1,
-                Source::Extracted { cached: false } if job.cache.is_some() => not_cached += 1,
-                Source::Extracted { .. } => {}
-            }
-            im
-        });
-        let name = p
-            .file_name()
-            .unwrap_or_default()
-            .to_string_lossy()
-            .into_owned();
-        match r {
-            Ok(im) if im.features.keypoints.len() < job.min_matches => skipped.push((
-                name,
-                format!(
-                    "only {} features found (texture too weak or image too small)",
-                    im.features.keypoints.len()
-                ),
-            )),
-            Ok(im) => images.push(im),
-            Err(e) => skipped.push((name, e)),
-        }
-    }
-    if images.len() < 2 {
-        return Err(MatchError::Nothing(format!(
-            "{}: {} usable photograph(s); matching needs at least two{}",
-            job.photos.display(),
-            images.len(),
-            skipped
-                .iter()
-                .map(|(n, r)| format!("\n  {n}: {r}"))
-                .collect::<String>()
-        )));
-    }
     let positions = if job.ignore_gps && table.is_none() {
         vec![None; images.len()]
     } else {
@@ -514,42 +416,10 @@ pub fn run(
         pairs::choose(job.pairs, &enu, &radius, alike.as_deref()).map_err(MatchError::Input)?;
     let t = std::time::Instant::now();
     let (results, pairs_from_cache) = match_pairs(&images, &list, job, progress);
-    let pairs_not_cached = job.cache.as_ref().is_some_and(|(_, new)| {
-        let keyed = results.iter().filter_map(|p| {
-            let (ka, kb) = images[p.a].key.zip(images[p.b].key)?;
-            Some((
-                (
-                    ka,
-                    kb,
-                    pair_cache::settings(job, pair_cache::seed(p.a, p.b)),
-                ),
-                p,
-            ))
-        });
-        pair_cache::store(&pair_cache::path(new), keyed).is_err()
-    });
+    let pairs_not_cached = !store_pairs(job, &images, &results);
     timing.push(("matching".into(), t.elapsed().as_secs_f64()));
     let counts: Vec<usize> = images.iter().map(|i| i.features.keypoints.len()).collect();
-    // One measurement per image position: keypoints of other orientations at the same place
-    // join their first.
-    let canon: Vec<Vec<u32>> = images
-        .iter()
-        .map(|i| photo::features::same_position(&i.features.keypoints))
-        .collect();
-    let verified: Vec<(usize, usize, Vec<Match>)> = results
-        .iter()
-        .filter(|p| !p.verified.is_empty())
-        .map(|p| {
-            let mut v: Vec<Match> = p
-                .verified
-                .iter()
-                .map(|&(i, j)| (canon[p.a][i as usize], canon[p.b][j as usize]))
-                .collect();
-            v.sort_unstable();
-            v.dedup();
-            (p.a, p.b, v)
-        })
-        .collect();
+    let (canon, verified) = verified_matches(&images, &results);
     let mut tracks = tracks::build(&counts, &verified);
     let t = std::time::Instant::now();
     let (completed, misses) =

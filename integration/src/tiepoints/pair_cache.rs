@@ -11,7 +11,7 @@
 //! whole (`gnss::atomic::write_atomic`) and one that does not read back whole is ignored.
 
 use super::cache::{fnv, write_whole, Reader};
-use super::{MatchJob, PairResult, COHERENCE_NEIGHBOURS, GUIDED_RADIUS};
+use super::job::{MatchJob, PairResult, COHERENCE_NEIGHBOURS, GUIDED_RADIUS};
 use photo::features::matching::Match;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};

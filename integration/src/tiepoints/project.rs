@@ -4,12 +4,13 @@
 //! start orientations from DJI gimbal angles where present.
 
 use super::camera::from_meta;
+use super::job::{Image, MatchError, MatchJob};
+use super::matched::Matched;
 use super::positions::Position;
-use super::{MatchError, MatchJob, Matched};
 use crate::adjust::compass_rotation;
 use crate::import::{CameraOut, ProjectOut, StartOut};
 use gnss::frame::{enu_rotation, Geodetic};
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use photo::camera::Pose;
 use photo::intersection::{intersect, Ray};
 use rayon::prelude::*;
@@ -56,7 +57,7 @@ pub struct Written {
 /// (with the DJI RTK σ of fixed solutions).
 pub fn image_positions(
     table: Option<&BTreeMap<String, Position>>,
-    m: &[super::Image],
+    m: &[Image],
 ) -> Vec<Option<Position>> {
     m.iter()
         .map(|im| {
@@ -104,7 +105,7 @@ pub fn local_enu(pos: &[Option<Position>]) -> Vec<Option<Vector3<f64>>> {
 
 /// Footprint radius of each image (m) from its height above take-off and its field of view,
 /// when the metadata give both.
-pub fn footprint_radii(images: &[super::Image]) -> Vec<Option<f64>> {
+pub fn footprint_radii(images: &[Image]) -> Vec<Option<f64>> {
     images
         .iter()
         .map(|im| {
@@ -404,26 +405,7 @@ pub fn build(job: &MatchJob, m: &Matched) -> Result<Written, MatchError> {
             .unwrap_or([job.gnss_sigma[0], job.gnss_sigma[0], job.gnss_sigma[1]]);
         p.gnss.push((im.meta.id.clone(), g.to_ecef(), s));
         w.with_position += 1;
-        // Near-nadir photos take the heading their overlaps give; others the gimbal's.
-        let nadir = im.meta.dji.gimbal.is_none_or(|g| g[1] < -60.0);
-        let start = match (heading[i], im.meta.dji.gimbal) {
-            (Some(h), _) if nadir => {
-                if let Some([_, _, yaw]) = im.meta.dji.gimbal {
-                    let d = (h.to_degrees() - yaw).rem_euclid(360.0);
-                    if d.min(360.0 - d) > 30.0 {
-                        w.heading_disagrees
-                            .push((im.meta.id.clone(), d.min(360.0 - d)));
-                    }
-                }
-                Some(compass_rotation(h, -std::f64::consts::FRAC_PI_2, 0.0))
-            }
-            (_, Some([roll, pitch, yaw])) => Some(compass_rotation(
-                yaw.to_radians(),
-                pitch.to_radians(),
-                roll.to_radians(),
-            )),
-            _ => None,
-        };
+        let start = start_rotation(im, heading[i], &mut w);
         if let (Some(r), Some(c)) = (start, enu[i]) {
             pose_of[i] = Some((Pose { r, centre: c }, k));
         }
@@ -437,6 +419,71 @@ pub fn build(job: &MatchJob, m: &Matched) -> Result<Written, MatchError> {
         }
     }
     let depth_ok = depth_check(m, &pose_of, &cams);
+    add_tracks(m, &in_project, &depth_ok, &mut p, &mut w);
+    w.observations = p.measurements.len();
+    let mut used: BTreeMap<String, usize> = BTreeMap::new();
+    for (_, c) in &p.images {
+        *used.entry(c.clone()).or_default() += 1;
+    }
+    w.cameras = cams
+        .iter()
+        .filter(|(c, _)| used.contains_key(&c.id))
+        .map(|(c, s)| (c.id.clone(), s.clone(), used[&c.id]))
+        .collect();
+    p.cameras = cams
+        .into_iter()
+        .filter(|(c, _)| used.contains_key(&c.id))
+        .map(|x| x.0)
+        .collect();
+    p.notes = vec![
+        format!("written by ppkat match from {}", job.photos.display()),
+        "positions: ".to_string()
+            + if job.exposures.is_some() { "the exposures table" } else if job.ignore_gps { "none (--ignore-gps)" } else { "EXIF GPS (altitudes taken as ellipsoidal heights: consumer GPS heights are often biased, the block shifts with them)" },
+        "start attitudes: nadir photos headed as their overlaps with neighbours say, others from DJI gimbal yaw/pitch/roll".into(),
+    ];
+    if p.gnss.is_empty() {
+        p.free_datum = true;
+        p.notes.push("no positions: a free network (coordinates arbitrary) until control points or positions are added; adjust starts it from the relative orientation of its best pair".into());
+    }
+    w.project = p;
+    Ok(w)
+}
+
+/// The start rotation (camera → ENU) of a photo: near-nadir photos take the heading their
+/// overlaps give (`heading`, noted when the gimbal's yaw disagrees by more than 30°), others
+/// the DJI gimbal's angles; `None` without either.
+fn start_rotation(im: &Image, heading: Option<f64>, w: &mut Written) -> Option<Matrix3<f64>> {
+    let nadir = im.meta.dji.gimbal.is_none_or(|g| g[1] < -60.0);
+    match (heading, im.meta.dji.gimbal) {
+        (Some(h), _) if nadir => {
+            if let Some([_, _, yaw]) = im.meta.dji.gimbal {
+                let d = (h.to_degrees() - yaw).rem_euclid(360.0);
+                if d.min(360.0 - d) > 30.0 {
+                    w.heading_disagrees
+                        .push((im.meta.id.clone(), d.min(360.0 - d)));
+                }
+            }
+            Some(compass_rotation(h, -std::f64::consts::FRAC_PI_2, 0.0))
+        }
+        (_, Some([roll, pitch, yaw])) => Some(compass_rotation(
+            yaw.to_radians(),
+            pitch.to_radians(),
+            roll.to_radians(),
+        )),
+        _ => None,
+    }
+}
+
+/// The measurements of every track seen in two or more photos of the project whose depths
+/// are plausible (`depth_ok`), each with its σ: the sub-pixel measurement's where there is
+/// one, else the feature's.
+fn add_tracks(
+    m: &Matched,
+    in_project: &[bool],
+    depth_ok: &[bool],
+    p: &mut ProjectOut,
+    w: &mut Written,
+) {
     for (k, t) in m.tracks.tracks.iter().enumerate() {
         let nodes: Vec<_> = t
             .iter()
@@ -471,33 +518,6 @@ pub fn build(job: &MatchJob, m: &Matched) -> Result<Written, MatchError> {
             });
         }
     }
-    w.observations = p.measurements.len();
-    let mut used: BTreeMap<String, usize> = BTreeMap::new();
-    for (_, c) in &p.images {
-        *used.entry(c.clone()).or_default() += 1;
-    }
-    w.cameras = cams
-        .iter()
-        .filter(|(c, _)| used.contains_key(&c.id))
-        .map(|(c, s)| (c.id.clone(), s.clone(), used[&c.id]))
-        .collect();
-    p.cameras = cams
-        .into_iter()
-        .filter(|(c, _)| used.contains_key(&c.id))
-        .map(|x| x.0)
-        .collect();
-    p.notes = vec![
-        format!("written by ppkat match from {}", job.photos.display()),
-        "positions: ".to_string()
-            + if job.exposures.is_some() { "the exposures table" } else if job.ignore_gps { "none (--ignore-gps)" } else { "EXIF GPS (altitudes taken as ellipsoidal heights: consumer GPS heights are often biased, the block shifts with them)" },
-        "start attitudes: nadir photos headed as their overlaps with neighbours say, others from DJI gimbal yaw/pitch/roll".into(),
-    ];
-    if p.gnss.is_empty() {
-        p.free_datum = true;
-        p.notes.push("no positions: a free network (coordinates arbitrary) until control points or positions are added; adjust starts it from the relative orientation of its best pair".into());
-    }
-    w.project = p;
-    Ok(w)
 }
 
 /// A project without positions (a free network) given the start orientations `adjust` finds

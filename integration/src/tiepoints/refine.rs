@@ -8,7 +8,8 @@
 //! every other measurement in it. A measurement whose fit fails (flat, leaves the image,
 //! moves more than a few pixels, correlates weakly) keeps its keypoint position.
 
-use super::{decode, Image, MatchJob};
+use super::decode;
+use super::job::{Image, MatchJob};
 use nalgebra::{Matrix2, Vector2};
 use photo::features::lsm::{LsmOptions, Template};
 use photo::features::tracks::Tracks;

@@ -3,8 +3,8 @@
 //! at the photos' positions (or on a circle without them), each verified pair a line whose
 //! width grows with its matches, photos outside the main block in red.
 
+use super::matched::Matched;
 use super::project::Written;
-use super::Matched;
 use serde_json::json;
 use std::fmt::Write as _;
 
