@@ -279,9 +279,7 @@ fn camera_of(r: &Matrix3<f64>, v: &DVector<f64>) -> BalCamera {
 }
 
 impl Factor for BalFactor {
-    fn keys(&self) -> &[Key] {
-        &self.keys
-    }
+    crate::keys_in_field!();
     fn dim(&self) -> usize {
         2
     }

@@ -55,9 +55,7 @@ impl InnerConstraints {
 }
 
 impl Factor for InnerConstraints {
-    fn keys(&self) -> &[Key] {
-        &self.keys
-    }
+    crate::keys_in_field!();
     fn dim(&self) -> usize {
         if self.scale {
             7

@@ -83,9 +83,7 @@ impl ImagePoint {
 }
 
 impl Factor for ImagePoint {
-    fn keys(&self) -> &[Key] {
-        &self.keys
-    }
+    crate::keys_in_field!();
     fn dim(&self) -> usize {
         2
     }
@@ -188,9 +186,7 @@ impl Prior {
 }
 
 impl Factor for Prior {
-    fn keys(&self) -> &[Key] {
-        &self.keys
-    }
+    crate::keys_in_field!();
     fn dim(&self) -> usize {
         if self.axes.is_empty() {
             self.value.len()
@@ -262,9 +258,7 @@ impl Distance {
 }
 
 impl Factor for Distance {
-    fn keys(&self) -> &[Key] {
-        &self.keys
-    }
+    crate::keys_in_field!();
     fn dim(&self) -> usize {
         1
     }

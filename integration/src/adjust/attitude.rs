@@ -37,9 +37,7 @@ impl AttitudeObs {
 }
 
 impl Factor for AttitudeObs {
-    fn keys(&self) -> &[Key] {
-        &self.keys
-    }
+    photo::keys_in_field!();
     fn dim(&self) -> usize {
         3
     }

@@ -133,9 +133,7 @@ impl DdFactor {
 }
 
 impl Factor for DdFactor {
-    fn keys(&self) -> &[Key] {
-        &self.keys
-    }
+    photo::keys_in_field!();
     fn dim(&self) -> usize {
         self.rows.len()
     }
@@ -212,9 +210,7 @@ impl IntegerFix {
 }
 
 impl Factor for IntegerFix {
-    fn keys(&self) -> &[Key] {
-        &self.keys
-    }
+    photo::keys_in_field!();
     fn dim(&self) -> usize {
         1
     }

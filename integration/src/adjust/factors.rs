@@ -109,9 +109,7 @@ impl GnssCentre {
 }
 
 impl Factor for GnssCentre {
-    fn keys(&self) -> &[Key] {
-        &self.keys
-    }
+    photo::keys_in_field!();
     fn dim(&self) -> usize {
         3
     }

@@ -32,6 +32,18 @@ pub trait Factor: Any + Send + Sync {
     ) -> bool;
 }
 
+/// The [`Factor::keys`] of a factor that keeps its keys in a field `keys` (a `Vec<Key>`):
+/// the one method every factor writes alike, written once. Use it inside the `impl Factor`:
+/// `photo::keys_in_field!();`.
+#[macro_export]
+macro_rules! keys_in_field {
+    () => {
+        fn keys(&self) -> &[$crate::lsq::Key] {
+            &self.keys
+        }
+    };
+}
+
 /// The values of a factor's blocks, in the order of its keys.
 pub struct Params<'a> {
     values: &'a [Value],

@@ -17,9 +17,7 @@ struct Centre {
 }
 
 impl Factor for Centre {
-    fn keys(&self) -> &[Key] {
-        &self.keys
-    }
+    crate::keys_in_field!();
     fn dim(&self) -> usize {
         3
     }
