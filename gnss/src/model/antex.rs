@@ -141,25 +141,10 @@ impl Antex {
                 }
                 b"TYPE / SERIAL NO" => {
                     if let Some(a) = cur.as_mut() {
-                        a.name = String::from_utf8_lossy(cols(line, 0, 20))
-                            .trim_end()
-                            .to_string();
-                        // Satellite antennas carry a satellite code in columns 21–23.
-                        let serial = cols(line, 20, 23);
-                        satellite = serial.len() == 3
-                            && serial[1].is_ascii_digit()
-                            && serial[0].is_ascii_uppercase();
-                        // Relative-model files name blocks without a satellite.
-                        if satellite || a.name.starts_with("BLOCK") || a.name.starts_with("GLONASS")
-                        {
-                            satellite = true;
-                            sat = Some(SatAntenna {
-                                block: a.name.clone(),
-                                sv: Sv::parse(serial),
-                                valid_from: None,
-                                valid_until: None,
-                                freqs: BTreeMap::new(),
-                            });
+                        let s = type_serial(a, line);
+                        satellite = s.is_some();
+                        if s.is_some() {
+                            sat = s;
                         }
                     }
                 }
@@ -177,27 +162,11 @@ impl Antex {
                     zen1 = parse_real(cols(line, 2, 8)).ok().flatten().unwrap_or(0.0);
                     dzen = parse_real(cols(line, 14, 20)).ok().flatten().unwrap_or(5.0);
                 }
-                b"START OF FREQUENCY" => {
-                    let code = String::from_utf8_lossy(cols(line, 3, 6)).trim().to_string();
-                    freq = Some((
-                        code,
-                        FreqPcv {
-                            neu: [0.0; 3],
-                            zen1,
-                            dzen,
-                            noazi: Vec::new(),
-                        },
-                    ));
-                }
+                b"START OF FREQUENCY" => freq = Some(start_frequency(line, zen1, dzen)),
                 b"NORTH / EAST / UP" => {
                     if let Some((_, f)) = freq.as_mut() {
-                        for (k, v) in f.neu.iter_mut().enumerate() {
-                            *v = parse_real(cols(line, 10 * k, 10 * k + 10))
-                                .ok()
-                                .flatten()
-                                .ok_or_else(|| bad("unreadable NORTH / EAST / UP"))?
-                                / 1000.0;
-                        }
+                        read_neu(line, &mut f.neu)
+                            .ok_or_else(|| bad("unreadable NORTH / EAST / UP"))?;
                     }
                 }
                 b"END OF FREQUENCY" => {
@@ -219,12 +188,7 @@ impl Antex {
                 _ => {
                     if let Some((_, f)) = freq.as_mut() {
                         if cols(line, 3, 8) == b"NOAZI" {
-                            let txt = String::from_utf8_lossy(cols(line, 8, line.len()));
-                            f.noazi = txt
-                                .split_whitespace()
-                                .map(|t| t.parse::<f64>().map(|v| v / 1000.0))
-                                .collect::<std::result::Result<_, _>>()
-                                .map_err(|_| bad("unreadable NOAZI values"))?;
+                            f.noazi = noazi(line).ok_or_else(|| bad("unreadable NOAZI values"))?;
                         }
                     }
                 }
@@ -296,6 +260,63 @@ impl Antex {
             .find(|a| norm(&a.name) == format!("{bare} NONE") || norm(&a.name) == bare)
             .map(|a| (a, true))
     }
+}
+
+/// Name antenna `a` from its `TYPE / SERIAL NO` line; the satellite entry to fill when the
+/// antenna is a satellite's (a satellite code in columns 21–23, or a block name as
+/// relative-model files give without a satellite), None for a receiver antenna.
+fn type_serial(a: &mut AntennaPcv, line: &[u8]) -> Option<SatAntenna> {
+    a.name = String::from_utf8_lossy(cols(line, 0, 20))
+        .trim_end()
+        .to_string();
+    // Satellite antennas carry a satellite code in columns 21–23.
+    let serial = cols(line, 20, 23);
+    let satellite =
+        serial.len() == 3 && serial[1].is_ascii_digit() && serial[0].is_ascii_uppercase();
+    // Relative-model files name blocks without a satellite.
+    (satellite || a.name.starts_with("BLOCK") || a.name.starts_with("GLONASS")).then(|| {
+        SatAntenna {
+            block: a.name.clone(),
+            sv: Sv::parse(serial),
+            valid_from: None,
+            valid_until: None,
+            freqs: BTreeMap::new(),
+        }
+    })
+}
+
+/// The frequency code of a `START OF FREQUENCY` line and its empty calibration, with the
+/// antenna's zenith grid `zen1`, `dzen` (degrees).
+fn start_frequency(line: &[u8], zen1: f64, dzen: f64) -> (String, FreqPcv) {
+    let code = String::from_utf8_lossy(cols(line, 3, 6)).trim().to_string();
+    (
+        code,
+        FreqPcv {
+            neu: [0.0; 3],
+            zen1,
+            dzen,
+            noazi: Vec::new(),
+        },
+    )
+}
+
+/// Read the offsets of a `NORTH / EAST / UP` line (millimetres) into `neu` in metres; None
+/// at the first unreadable value.
+fn read_neu(line: &[u8], neu: &mut [f64; 3]) -> Option<()> {
+    for (k, v) in neu.iter_mut().enumerate() {
+        *v = parse_real(cols(line, 10 * k, 10 * k + 10)).ok().flatten()? / 1000.0;
+    }
+    Some(())
+}
+
+/// The non-azimuthal variations of a `NOAZI` line (millimetres), in metres; None when one is
+/// unreadable.
+fn noazi(line: &[u8]) -> Option<Vec<f64>> {
+    let txt = String::from_utf8_lossy(cols(line, 8, line.len()));
+    txt.split_whitespace()
+        .map(|t| t.parse::<f64>().map(|v| v / 1000.0))
+        .collect::<std::result::Result<_, _>>()
+        .ok()
 }
 
 /// The GPST epoch of a `VALID FROM` / `VALID UNTIL` line (year, month, day, hour, minute,
