@@ -302,36 +302,9 @@ pub fn epoch_field(sys: Constellation, t_ms: i64) -> u32 {
 /// Each lock arc's phase is shifted by the whole cycles that bring it near the pseudorange
 /// (a constant integer per arc, which ambiguity resolution absorbs).
 pub fn rtcm_from_obs(obs: &ObsFile, nav: &[NavRecord]) -> (Vec<u8>, u64) {
-    let mut out = Vec::new();
-    if let Some(p) = obs.header.approx_position {
-        // the ARP above the marker (RTCM carries no horizontal antenna offset)
-        let h = obs.header.antenna_delta.up;
-        let arp = crate::frame::Enu(nalgebra::Vector3::new(0.0, 0.0, h)).to_ecef(&p);
-        out.extend(station_1006([arp.0.x, arp.0.y, arp.0.z], h));
-    }
-    let mut with_eph = std::collections::BTreeSet::new();
-    for r in nav {
-        if let Some(f) = super::rtcm_eph_write::ephemeris_frame(r) {
-            out.extend(f);
-            with_eph.insert(r.sv);
-        }
-    }
-    let t_ms =
-        |e: &crate::rinex::ObsEpoch| (e.time.to_gpst_nanoseconds().unwrap_or(0) / 1_000_000) as i64;
-    if let Some(e) = obs.epochs.first().filter(|_| with_eph.is_empty()) {
-        let t = t_ms(e);
-        let week = (t / super::rtcm_msm::WEEK_MS) as u16;
-        let tow = (t % super::rtcm_msm::WEEK_MS / 1000) as u32;
-        out.extend(week_1019(week, tow / 16 * 16));
-    }
-    for (&slot, &ch) in &obs.header.glonass_channels {
-        if !with_eph.contains(&Sv::new(Constellation::Glonass, slot)) {
-            out.extend(channel_1020(slot, ch));
-        }
-    }
-    let mut locks: HashMap<(Sv, [u8; 2]), (u64, f64)> = HashMap::new();
+    let mut out = header_frames(obs, nav);
+    let mut arcs = LockArcs::default();
     let mut last_t: Option<i64> = None;
-    let mut dropped = 0u64;
     let systems = [
         Constellation::Gps,
         Constellation::Glonass,
@@ -340,7 +313,7 @@ pub fn rtcm_from_obs(obs: &ObsFile, nav: &[NavRecord]) -> (Vec<u8>, u64) {
         Constellation::BeiDou,
     ];
     for e in &obs.epochs {
-        let t = t_ms(e);
+        let t = epoch_ms(e);
         let dt = last_t.map_or(0, |l| (t - l).max(0) as u64);
         last_t = Some(t);
         let present: Vec<Constellation> = systems
@@ -356,51 +329,7 @@ pub fn rtcm_from_obs(obs: &ObsFile, nav: &[NavRecord]) -> (Vec<u8>, u64) {
             let mut sats = Vec::new();
             for s in e.sats.iter().filter(|s| s.sv.sys == sys) {
                 let ch = obs.header.glonass_channels.get(&s.sv.prn).copied();
-                let mut sigs = Vec::new();
-                let mut codes: Vec<[u8; 2]> =
-                    types.iter().map(|t| [t.band(), t.attribute()]).collect();
-                codes.sort_unstable();
-                codes.dedup();
-                for code in codes {
-                    let col = |k: u8| {
-                        types
-                            .iter()
-                            .position(|t| t.0 == [k, code[0], code[1]])
-                            .and_then(|i| s.obs.get(i))
-                            .map_or((f64::NAN, 0), |o| (o.value, o.lli))
-                    };
-                    let (pr, _) = col(b'C');
-                    let (cp, lli) = col(b'L');
-                    if pr.is_nan() {
-                        dropped += u64::from(!cp.is_nan());
-                        continue;
-                    }
-                    let Some(id) =
-                        (1..=32).find(|&i| super::rtcm_msm::msm_code(sys, i) == Some(code))
-                    else {
-                        dropped += 1;
-                        continue;
-                    };
-                    // whole cycles taken off the phase (per lock arc, as encoders do) so that
-                    // it stays within the message's reach of the pseudorange
-                    let shift = (cp - pr / lambda(sys, id, ch)).round();
-                    let (lock, off) = locks.entry((s.sv, code)).or_insert((600_000, shift));
-                    if lli & 1 != 0 || !off.is_finite() {
-                        (*lock, *off) = (if lli & 1 != 0 { 0 } else { *lock }, shift);
-                    } else {
-                        *lock += dt;
-                    }
-                    let cp = if off.is_finite() { cp - *off } else { cp };
-                    sigs.push(MsmSignal {
-                        id,
-                        pr,
-                        cp,
-                        doppler: col(b'D').0,
-                        cno: col(b'S').0,
-                        lock_ms: *lock,
-                        half: lli & 2 != 0,
-                    });
-                }
+                let sigs = arcs.signals(sys, types, dt, s, ch);
                 if !sigs.is_empty() {
                     sats.push(MsmSat {
                         id: s.sv.prn,
@@ -409,20 +338,136 @@ pub fn rtcm_from_obs(obs: &ObsFile, nav: &[NavRecord]) -> (Vec<u8>, u64) {
                     });
                 }
             }
-            let mut ids: Vec<u8> = sats
-                .iter()
-                .flat_map(|s: &MsmSat| s.sigs.iter().map(|g| g.id))
-                .collect();
-            ids.sort_unstable();
-            ids.dedup();
-            // at most 64 cells (satellites × signals) per message
-            let per = (64 / ids.len().max(1)).max(1);
-            let chunks: Vec<&[MsmSat]> = sats.chunks(per).collect();
-            for (k, c) in chunks.iter().enumerate() {
-                let more = n + 1 < present.len() || k + 1 < chunks.len();
-                out.extend(msm(sys, 7, epoch_field(sys, t), more, c));
-            }
+            let last = n + 1 == present.len();
+            out.extend(msm_frames(sys, epoch_field(sys, t), last, &sats));
         }
     }
-    (out, dropped)
+    (out, arcs.dropped)
+}
+
+/// The GPST time tag of an epoch, ms since the GPS epoch.
+fn epoch_ms(e: &crate::rinex::ObsEpoch) -> i64 {
+    (e.time.to_gpst_nanoseconds().unwrap_or(0) / 1_000_000) as i64
+}
+
+/// The frames of [`rtcm_from_obs`] before the observations: 1006 (the header's approximate
+/// position), the ephemerides `nav` (a week-only 1019 when there are none), and 1020 channel
+/// messages for GLONASS slots without an ephemeris.
+fn header_frames(obs: &ObsFile, nav: &[NavRecord]) -> Vec<u8> {
+    let mut out = Vec::new();
+    if let Some(p) = obs.header.approx_position {
+        // the ARP above the marker (RTCM carries no horizontal antenna offset)
+        let h = obs.header.antenna_delta.up;
+        let arp = crate::frame::Enu(nalgebra::Vector3::new(0.0, 0.0, h)).to_ecef(&p);
+        out.extend(station_1006([arp.0.x, arp.0.y, arp.0.z], h));
+    }
+    let mut with_eph = std::collections::BTreeSet::new();
+    for r in nav {
+        if let Some(f) = super::rtcm_eph_write::ephemeris_frame(r) {
+            out.extend(f);
+            with_eph.insert(r.sv);
+        }
+    }
+    if let Some(e) = obs.epochs.first().filter(|_| with_eph.is_empty()) {
+        let t = epoch_ms(e);
+        let week = (t / super::rtcm_msm::WEEK_MS) as u16;
+        let tow = (t % super::rtcm_msm::WEEK_MS / 1000) as u32;
+        out.extend(week_1019(week, tow / 16 * 16));
+    }
+    for (&slot, &ch) in &obs.header.glonass_channels {
+        if !with_eph.contains(&Sv::new(Constellation::Glonass, slot)) {
+            out.extend(channel_1020(slot, ch));
+        }
+    }
+    out
+}
+
+/// The lock arcs of [`rtcm_from_obs`] across the epochs: each signal's lock time and the whole
+/// cycles taken off its phase, and the count of measurements RTCM could not carry.
+#[derive(Default)]
+struct LockArcs {
+    /// Lock time (ms) and phase shift (cycles) by satellite and signal code.
+    locks: HashMap<(Sv, [u8; 2]), (u64, f64)>,
+    /// Measurements dropped so far.
+    dropped: u64,
+}
+
+impl LockArcs {
+    /// The MSM signals of satellite `s` of system `sys` (observation types `types`, GLONASS
+    /// channel `ch`), one per signal code with a pseudorange and an MSM signal id, in code
+    /// order; its lock arcs grown by `dt` ms since the previous epoch, or restarted.
+    fn signals(
+        &mut self,
+        sys: Constellation,
+        types: &[crate::rinex::ObsCode],
+        dt: u64,
+        s: &crate::rinex::SatObs,
+        ch: Option<i8>,
+    ) -> Vec<MsmSignal> {
+        let mut sigs = Vec::new();
+        let mut codes: Vec<[u8; 2]> = types.iter().map(|t| [t.band(), t.attribute()]).collect();
+        codes.sort_unstable();
+        codes.dedup();
+        for code in codes {
+            let col = |k: u8| {
+                types
+                    .iter()
+                    .position(|t| t.0 == [k, code[0], code[1]])
+                    .and_then(|i| s.obs.get(i))
+                    .map_or((f64::NAN, 0), |o| (o.value, o.lli))
+            };
+            let (pr, _) = col(b'C');
+            let (cp, lli) = col(b'L');
+            if pr.is_nan() {
+                self.dropped += u64::from(!cp.is_nan());
+                continue;
+            }
+            let Some(id) = (1..=32).find(|&i| super::rtcm_msm::msm_code(sys, i) == Some(code))
+            else {
+                self.dropped += 1;
+                continue;
+            };
+            // whole cycles taken off the phase (per lock arc, as encoders do) so that
+            // it stays within the message's reach of the pseudorange
+            let shift = (cp - pr / lambda(sys, id, ch)).round();
+            let (lock, off) = self.locks.entry((s.sv, code)).or_insert((600_000, shift));
+            if lli & 1 != 0 || !off.is_finite() {
+                (*lock, *off) = (if lli & 1 != 0 { 0 } else { *lock }, shift);
+            } else {
+                *lock += dt;
+            }
+            let cp = if off.is_finite() { cp - *off } else { cp };
+            sigs.push(MsmSignal {
+                id,
+                pr,
+                cp,
+                doppler: col(b'D').0,
+                cno: col(b'S').0,
+                lock_ms: *lock,
+                half: lli & 2 != 0,
+            });
+        }
+        sigs
+    }
+}
+
+/// The MSM7 frames of one system's satellites `sats` at one epoch (`epoch` the MSM time
+/// field), at most 64 cells (satellites × signals) each; the multiple-message bit is set on
+/// all but the last frame of the last system (`last`) of the epoch.
+fn msm_frames(sys: Constellation, epoch: u32, last: bool, sats: &[MsmSat]) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut ids: Vec<u8> = sats
+        .iter()
+        .flat_map(|s: &MsmSat| s.sigs.iter().map(|g| g.id))
+        .collect();
+    ids.sort_unstable();
+    ids.dedup();
+    // at most 64 cells (satellites × signals) per message
+    let per = (64 / ids.len().max(1)).max(1);
+    let chunks: Vec<&[MsmSat]> = sats.chunks(per).collect();
+    for (k, c) in chunks.iter().enumerate() {
+        let more = !last || k + 1 < chunks.len();
+        out.extend(msm(sys, 7, epoch, more, c));
+    }
+    out
 }
