@@ -33,6 +33,7 @@ use crate::orbit::C;
 use crate::sv::{Constellation, Sv};
 use nalgebra::{DMatrix, DVector, Vector3};
 use std::collections::{BTreeMap, BTreeSet};
+use std::ops::Range;
 
 /// Carrier phase or code.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -257,6 +258,148 @@ impl StateOffsets {
     }
 }
 
+/// The single differences of one slot and kind at the current state: what the rows of one
+/// group read of each pair (by index `i` into `pairs`).
+struct SlotModel<'a> {
+    /// The epoch's rover–base pairs.
+    pairs: &'a [Pair],
+    /// Their SD model pieces.
+    pre: &'a [Pre],
+    /// Their state offsets.
+    offsets: &'a StateOffsets,
+    /// The state vector.
+    x: &'a DVector<f64>,
+    /// Zenith wet delay state.
+    ztd: Option<usize>,
+    /// GLONASS inter-channel code bias state.
+    glo_bias: Option<usize>,
+    /// The options (variance model).
+    o: &'a PpkOptions,
+    /// Variance correlation factors (phase, code), see [`correlation`].
+    corr: (f64, f64),
+    /// Frequency slot.
+    f: usize,
+    /// Phase or code.
+    kind: ObsKind,
+    /// Whether `kind` is phase.
+    phase: bool,
+}
+
+impl SlotModel<'_> {
+    /// SD ambiguity state of pair `i`.
+    fn amb(&self, i: usize) -> Option<usize> {
+        self.offsets.ambiguity[i][self.f]
+    }
+
+    /// SD code-bias state of pair `i` (code rows only).
+    fn code_bias(&self, i: usize) -> Option<usize> {
+        self.offsets.code_bias[i][self.f].filter(|_| self.kind == ObsKind::Code)
+    }
+
+    /// Observed SD of pair `i`, metres.
+    fn obs_sd(&self, i: usize) -> f64 {
+        let (p, f) = (&self.pairs[i], self.f);
+        if self.phase {
+            p.r.wavelength(f) * (p.r.l[f] - p.b.l[f])
+        } else {
+            p.r.p[f] - p.b.p[f]
+        }
+    }
+
+    /// SD variance of pair `i`, m².
+    fn sd_var(&self, i: usize) -> f64 {
+        sd_variance(&self.pairs[i], self.f, self.phase, self.o, self.corr)
+    }
+
+    /// GLONASS code: the inter-channel bias state and the channel of pair `i`.
+    fn chan(&self, i: usize) -> Option<(usize, f64)> {
+        self.glo_bias
+            .filter(|_| !self.phase)
+            .and_then(|k| Some((k, glonass_channel(&self.pairs[i].r, self.f)?)))
+    }
+
+    /// Ionosphere scale of this slot relative to the first (delays code, advances phase).
+    fn mu(&self, i: usize) -> f64 {
+        let p = &self.pairs[i];
+        (p.r.freq[0] / p.r.freq[self.f]).powi(2) * if self.phase { -1.0 } else { 1.0 }
+    }
+
+    /// Modelled SD of pair `i` at the state, metres.
+    fn model_sd(&self, i: usize) -> f64 {
+        let mut m = self.pre[i].sd_model + self.pairs[i].ant[self.f];
+        if self.phase {
+            let k = self.amb(i).unwrap_or(0);
+            m += self.pairs[i].r.wavelength(self.f) * self.x[k];
+        }
+        if let Some(k) = self.offsets.iono[i] {
+            m += self.mu(i) * self.x[k];
+        }
+        if let Some(k) = self.ztd {
+            m += self.pairs[i].map_wet * self.x[k];
+        }
+        if let Some((k, ch)) = self.chan(i) {
+            m += ch * self.x[k];
+        }
+        if let Some(k) = self.code_bias(i) {
+            m += self.x[k];
+        }
+        m
+    }
+
+    /// Design row of the DD of pair `i` against pivot `refi`; `pos` the position block.
+    fn design_row(&self, i: usize, refi: usize, pos: &Range<usize>) -> SparseRow {
+        let mut hr = SparseRow::default();
+        let de = -(self.pre[i].e - self.pre[refi].e);
+        for (k, v) in pos.clone().zip(de.iter()) {
+            hr.set(k, *v);
+        }
+        if let (Some(ki), Some(kr)) = (self.offsets.iono[i], self.offsets.iono[refi]) {
+            hr.set(ki, self.mu(i));
+            hr.set(kr, -self.mu(refi));
+        }
+        if let Some(k) = self.ztd {
+            hr.set(k, self.pairs[i].map_wet - self.pairs[refi].map_wet);
+        }
+        if let (Some((k, a)), Some((_, b))) = (self.chan(i), self.chan(refi)) {
+            hr.set(k, a - b);
+        }
+        if let Some(k) = self.code_bias(i) {
+            hr.set(k, 1.0);
+        }
+        if let Some(k) = self.code_bias(refi) {
+            hr.set(k, -1.0);
+        }
+        if self.phase {
+            if let (Some(ki), Some(kr)) = (self.amb(i), self.amb(refi)) {
+                hr.set(ki, self.pairs[i].r.wavelength(self.f));
+                hr.set(kr, -self.pairs[refi].r.wavelength(self.f));
+            }
+        }
+        hr
+    }
+
+    /// Append the rows of `group` to `out`, and its pivot's SD variance.
+    fn push_group(&self, group: &DdGroup<usize>, pos: &Range<usize>, out: &mut Residuals) {
+        let refi = group.pivot;
+        let y_ref = self.obs_sd(refi) - self.model_sd(refi);
+        let gi = out.pivot_var.len();
+        for &i in &group.others {
+            let v = (self.obs_sd(i) - self.model_sd(i)) - y_ref;
+            out.rows.push(Row {
+                kind: self.kind,
+                sv: self.pairs[i].r.sv,
+                pivot: self.pairs[refi].r.sv,
+                slot: group.slot,
+                group: gi,
+                h: self.design_row(i, refi, pos),
+                innovation: v,
+                var: self.sd_var(i),
+            });
+        }
+        out.pivot_var.push(self.sd_var(refi));
+    }
+}
+
 /// Every DD row of the epoch at the current state, none rejected.
 pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residuals {
     let x = &state.x;
@@ -280,17 +423,26 @@ pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residu
         }
         for f in 0..o.nf {
             for kind in [ObsKind::Phase, ObsKind::Code] {
-                let amb = |i: usize| offsets.ambiguity[i][f];
-                let iono = |i: usize| offsets.iono[i];
-                let code_bias =
-                    |i: usize| offsets.code_bias[i][f].filter(|_| kind == ObsKind::Code);
+                let model = SlotModel {
+                    pairs,
+                    pre: &pre,
+                    offsets: &offsets,
+                    x,
+                    ztd,
+                    glo_bias,
+                    o,
+                    corr,
+                    f,
+                    kind,
+                    phase: kind == ObsKind::Phase,
+                };
                 // Members with the needed data (and an ambiguity state for phase).
                 let members: Vec<usize> = (0..pairs.len())
                     .filter(|&i| {
                         let p = &pairs[i];
                         p.r.sv.sys == sys
                             && match kind {
-                                ObsKind::Phase => has_phase(p, f) && amb(i).is_some(),
+                                ObsKind::Phase => has_phase(p, f) && model.amb(i).is_some(),
                                 ObsKind::Code => has_code(p, f),
                             }
                     })
@@ -298,91 +450,7 @@ pub(super) fn residuals(pairs: &[Pair], state: &State, o: &PpkOptions) -> Residu
                 let Some(group) = DdGroup::form(f, members, |&i| pairs[i].el) else {
                     continue;
                 };
-                let phase = kind == ObsKind::Phase;
-                let obs_sd = |i: usize| -> f64 {
-                    let p = &pairs[i];
-                    if phase {
-                        p.r.wavelength(f) * (p.r.l[f] - p.b.l[f])
-                    } else {
-                        p.r.p[f] - p.b.p[f]
-                    }
-                };
-                let sd_var = |i: usize| sd_variance(&pairs[i], f, phase, o, corr);
-                // GLONASS code: the inter-channel bias of the channel.
-                let chan = |i: usize| {
-                    glo_bias
-                        .filter(|_| !phase)
-                        .and_then(|k| Some((k, glonass_channel(&pairs[i].r, f)?)))
-                };
-                // Ionosphere scale of this slot relative to the first (delays code, advances phase).
-                let mu = |i: usize| {
-                    (pairs[i].r.freq[0] / pairs[i].r.freq[f]).powi(2)
-                        * if phase { -1.0 } else { 1.0 }
-                };
-                let model_sd = |i: usize| -> f64 {
-                    let mut m = pre[i].sd_model + pairs[i].ant[f];
-                    if phase {
-                        let k = amb(i).unwrap_or(0);
-                        m += pairs[i].r.wavelength(f) * x[k];
-                    }
-                    if let Some(k) = iono(i) {
-                        m += mu(i) * x[k];
-                    }
-                    if let Some(k) = ztd {
-                        m += pairs[i].map_wet * x[k];
-                    }
-                    if let Some((k, ch)) = chan(i) {
-                        m += ch * x[k];
-                    }
-                    if let Some(k) = code_bias(i) {
-                        m += x[k];
-                    }
-                    m
-                };
-                let refi = group.pivot;
-                let y_ref = obs_sd(refi) - model_sd(refi);
-                let gi = out.pivot_var.len();
-                for &i in &group.others {
-                    let v = (obs_sd(i) - model_sd(i)) - y_ref;
-                    let mut hr = SparseRow::default();
-                    let de = -(pre[i].e - pre[refi].e);
-                    for (k, v) in pos.clone().zip(de.iter()) {
-                        hr.set(k, *v);
-                    }
-                    if let (Some(ki), Some(kr)) = (iono(i), iono(refi)) {
-                        hr.set(ki, mu(i));
-                        hr.set(kr, -mu(refi));
-                    }
-                    if let Some(k) = ztd {
-                        hr.set(k, pairs[i].map_wet - pairs[refi].map_wet);
-                    }
-                    if let (Some((k, a)), Some((_, b))) = (chan(i), chan(refi)) {
-                        hr.set(k, a - b);
-                    }
-                    if let Some(k) = code_bias(i) {
-                        hr.set(k, 1.0);
-                    }
-                    if let Some(k) = code_bias(refi) {
-                        hr.set(k, -1.0);
-                    }
-                    if phase {
-                        if let (Some(ki), Some(kr)) = (amb(i), amb(refi)) {
-                            hr.set(ki, pairs[i].r.wavelength(f));
-                            hr.set(kr, -pairs[refi].r.wavelength(f));
-                        }
-                    }
-                    out.rows.push(Row {
-                        kind,
-                        sv: pairs[i].r.sv,
-                        pivot: pairs[refi].r.sv,
-                        slot: group.slot,
-                        group: gi,
-                        h: hr,
-                        innovation: v,
-                        var: sd_var(i),
-                    });
-                }
-                out.pivot_var.push(sd_var(refi));
+                model.push_group(&group, &pos, &mut out);
             }
         }
     }
