@@ -7,6 +7,8 @@
 //!
 //! Comments, string and character literals are blanked first, so a path in a doc comment or a
 //! message is not an edge, and braces in them do not confuse the module nesting.
+//!
+//! Also here, from the same reading: functions longer than a limit ([`long_functions`]).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -53,6 +55,72 @@ pub fn assert_no_import_circles(manifest_dir: &str) {
         circles
             .iter()
             .map(|c| format!("[{}]", c.join(" ↔ ")))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+}
+
+/// The functions of the crate whose `src` folder is `src` that are longer than `max_lines`
+/// lines (from the line of `fn` to the closing brace): file (relative to `src`), name and
+/// length, longest first.
+pub fn long_functions(src: &Path, max_lines: usize) -> Vec<(String, String, usize)> {
+    let mut out = Vec::new();
+    for path in module_files(src).values() {
+        let text = blank(&std::fs::read_to_string(path).unwrap_or_default());
+        let b = text.as_bytes();
+        let mut i = 0;
+        while let Some(k) = text[i..].find("fn ") {
+            let at = i + k;
+            i = at + 3;
+            if at > 0 && (b[at - 1].is_ascii_alphanumeric() || b[at - 1] == b'_') {
+                continue;
+            }
+            let (name, after) = ident(b, skip_ws(b, at + 3));
+            if name.is_empty() {
+                continue;
+            }
+            // The body: the first `{` before any `;` (a declaration without body has none).
+            let Some(open) = text[after..].find(['{', ';']).map(|o| after + o) else {
+                continue;
+            };
+            if b[open] == b';' {
+                continue;
+            }
+            let mut depth = 0usize;
+            let mut close = open;
+            for (j, c) in b.iter().enumerate().skip(open) {
+                match c {
+                    b'{' => depth += 1,
+                    b'}' => {
+                        depth -= 1;
+                        if depth == 0 {
+                            close = j;
+                            break;
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            let lines = text[at..=close].matches('\n').count() + 1;
+            if lines > max_lines {
+                out.push((rel_name(path, src), name, lines));
+            }
+        }
+    }
+    out.sort_by(|a, b| b.2.cmp(&a.2).then(a.0.cmp(&b.0)));
+    out
+}
+
+/// Panic naming every function of the crate at `manifest_dir` longer than `max_lines` lines.
+pub fn assert_no_long_functions(manifest_dir: &str, max_lines: usize) {
+    let src = Path::new(manifest_dir).join("src");
+    let long = long_functions(&src, max_lines);
+    assert!(
+        long.is_empty(),
+        "functions over {max_lines} lines in {}: {}. Split each into steps that do one thing.",
+        src.display(),
+        long.iter()
+            .map(|(f, n, l)| format!("{f}: {n} ({l} lines)"))
             .collect::<Vec<_>>()
             .join(", ")
     );
@@ -267,7 +335,9 @@ fn paths(text: &str, file_mod: &ModPath) -> Vec<(ModPath, Vec<String>)> {
             }
             _ => {}
         }
-        let word_start = i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_');
+        // `$crate::…` in a macro is resolved where the macro is used: not an edge here.
+        let word_start =
+            i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_' || b[i - 1] == b'$');
         if word_start && keyword_at(b, i, "mod") {
             let j = skip_ws(b, i + 3);
             let (name, k) = ident(b, j);
