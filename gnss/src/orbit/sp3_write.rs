@@ -151,7 +151,7 @@ mod tests {
             sats,
             ..Sp3::default()
         };
-        let back = Sp3::read(&testkit::scratch_file("w.sp3", &sp3_text(&sp3))).unwrap();
+        let back = Sp3::read(&testkit::scratch_file("w.sp3", sp3_text(&sp3))).unwrap();
         assert_eq!(back.epochs, epochs);
         assert_eq!((back.version, back.frame.as_str()), ('c', "IGS20"));
         assert_eq!(back.interval, 300.0);
