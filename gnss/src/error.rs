@@ -64,6 +64,16 @@ pub fn read_advice(e: &std::io::Error) -> String {
     }
 }
 
+/// A failed whole-output write (`common::atomic`) as the same variant, with the same message.
+impl From<common::atomic::Error> for Error {
+    fn from(e: common::atomic::Error) -> Self {
+        match e {
+            common::atomic::Error::Write { path, cause } => Error::Write { path, cause },
+            common::atomic::Error::Input { path, what } => Error::Input { path, what },
+        }
+    }
+}
+
 /// Result alias of the `gnss` crate.
 pub type Result<T> = std::result::Result<T, Error>;
 

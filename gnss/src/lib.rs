@@ -8,7 +8,8 @@
 //! - [`orbit`]: satellite positions and clocks from broadcast ephemerides (GPS, Galileo,
 //!   BeiDou, QZSS, GLONASS) or SP3 precise orbits.
 //! - [`model`], [`signal`]: troposphere, ionosphere, frequencies.
-//! - [`frame`], [`tmerc`]: ECEF, geodetic, ENU and transverse Mercator coordinates.
+//! - [`frame`], [`tmerc`]: ECEF, geodetic, ENU and transverse Mercator coordinates, from the
+//!   `common` crate (as are [`atomic`], [`progress`] and [`memory`]), re-exported here.
 //! - [`spp`]: single-point positioning; [`ppk`]: carrier-phase kinematic positioning.
 //! - [`trajectory`]: the rover trajectory in memory (with ambiguity segments) and its
 //!   interpolation; [`solution`]: its RTKLIB-compatible `.pos` serialisation.
@@ -17,16 +18,12 @@
 
 #![deny(missing_docs)]
 
-pub mod atomic;
 pub mod error;
-pub mod frame;
-pub mod memory;
 pub mod model;
 pub mod obs;
 pub mod orbit;
 pub mod ppk;
 pub mod ppp;
-pub mod progress;
 pub mod raw;
 pub mod rinex;
 pub mod signal;
@@ -34,7 +31,12 @@ pub mod solution;
 pub mod spp;
 pub mod sv;
 pub mod time;
-pub mod tmerc;
 pub mod trajectory;
 
 pub use error::{Error, Result};
+
+/// What every layer of ppkat shares, kept in the `common` crate and re-exported here so that
+/// `gnss::frame::…` (and `crate::frame::…` inside this crate) still name it: [`frame`] and
+/// [`tmerc`] (coordinates and projection), [`atomic`] (outputs written whole), [`progress`]
+/// (the reporting trait of long stages), [`memory`] (freed pages handed back).
+pub use common::{atomic, frame, memory, progress, tmerc};

@@ -245,6 +245,7 @@ pub fn write_pos_framed(
         }
         Ok(())
     })
+    .map_err(Error::from)
 }
 
 /// Inverse of [`sqvar`].

@@ -50,7 +50,7 @@ fn onsa_static_ppp_reaches_centimetres_with_honest_sigmas() {
     };
     // The header's approximate position (0.42 m off) as the start.
     let start = obs.header.approx_position.unwrap();
-    let r = process(&obs, &orbits, &opts, start, &gnss::progress::NoProgress).unwrap();
+    let r = process(&obs, &orbits, &opts, start, &::common::progress::NoProgress).unwrap();
     assert_eq!(r.epochs.len(), 2880, "every epoch solved");
     assert!(
         r.warnings
@@ -128,7 +128,7 @@ fn esbc_static_ppp_within_centimetres_of_itrf() {
         &orbits,
         &PppOptions::default(),
         obs.header.approx_position.unwrap(),
-        &gnss::progress::NoProgress,
+        &::common::progress::NoProgress,
     )
     .unwrap();
     let (a, b) = (

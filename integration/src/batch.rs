@@ -309,7 +309,7 @@ pub fn outcome_word(o: Outcome) -> &'static str {
 /// Write the summary table to `path` (whole or not at all).
 pub fn write_summary(path: &Path, rows: &[SummaryRow]) -> Result<()> {
     let text = summary_csv(rows);
-    gnss::atomic::write_atomic(path, |w| w.write_all(text.as_bytes()))
+    common::atomic::write_atomic(path, |w| w.write_all(text.as_bytes())).map_err(Error::from)
 }
 
 #[cfg(test)]

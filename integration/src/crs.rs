@@ -1,7 +1,7 @@
 //! Projected coordinate reference systems named by an EPSG code (`--crs EPSG:CODE`): UTM
 //! zones on any datum, national grids. The definitions come from `crs-definitions` (the EPSG
 //! dataset as PROJ.4 strings) and the projections from `proj4rs`, both pure Rust — no system
-//! PROJ. Our own transverse Mercator (`gnss::tmerc`) stays the projection of `utm` and `gk`;
+//! PROJ. Our own transverse Mercator (`common::tmerc`) stays the projection of `utm` and `gk`;
 //! the tests hold the two to the millimetre on a UTM zone.
 //!
 //! Enters: WGS84 geodetic positions. Leaves: easting and northing (metres) in the system;
@@ -77,7 +77,7 @@ impl EpsgProjection {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use gnss::tmerc::TransverseMercator;
+    use common::tmerc::TransverseMercator;
 
     /// proj4rs' UTM (EPSG:32632) equals our Krüger-series transverse Mercator to 1 mm
     /// over the zone and beyond its edges, north and south (EPSG:32732).

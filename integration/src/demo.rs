@@ -46,6 +46,13 @@ pub enum ChainError {
     },
 }
 
+/// A failed whole-output write, as the [`gnss::Error`] of the same message.
+impl From<common::atomic::Error> for ChainError {
+    fn from(e: common::atomic::Error) -> Self {
+        ChainError::Gnss(e.into())
+    }
+}
+
 /// A truth trajectory sample: GPST seconds, ECEF position and velocity.
 #[derive(Clone, Copy, Debug)]
 pub struct TruthSample {
@@ -143,7 +150,7 @@ impl SimInputs {
             BasePosition::Given(sim.base_position),
             &self.orbits,
             opts,
-            &gnss::progress::NoProgress,
+            &common::progress::NoProgress,
         )?)
     }
 }
@@ -378,7 +385,7 @@ pub(crate) fn exposures(
             att.push_str(&format!("{},{},{},{},{}\n", f[0], f[1], f[10], f[9], f[8]));
         }
     }
-    gnss::solution::write_atomic(&att_path, |w| w.write_all(att.as_bytes()))?;
+    common::atomic::write_atomic(&att_path, |w| w.write_all(att.as_bytes()))?;
     let attitude = AttitudeTable::read_csv(&att_path, AngleConvention::YawPitchRoll)?;
     let lever = photo::lever::LeverArm::new(Vector3::from(scenario.camera.lever_arm));
     let opts = crate::exposure::ExposureOptions {
@@ -485,14 +492,14 @@ pub(crate) fn write_adjust_project(
             images.push_str(&format!("{},{}\n", f[0], f[1]));
         }
     }
-    gnss::solution::write_atomic(&out.join("images.csv"), |w| w.write_all(images.as_bytes()))?;
+    common::atomic::write_atomic(&out.join("images.csv"), |w| w.write_all(images.as_bytes()))?;
     let c = &scenario.camera;
     let l = c.lever_arm;
     let project = format!(
         "name = \"ppkat demo flight\"\noutput = \"utm\"\n\n[[camera]]\nid = \"demo\"\nfocal_mm = {}\npixel_um = {}\nwidth_px = {}\nheight_px = {}\n\n[images]\nlist = \"images.csv\"\nmeasurements = \"image_observations.csv\"\n\n[ground]\nfile = \"ground_points.csv\"\n\n[gnss]\nantennas = \"antennas.csv\"\nlever_arm = [{}, {}, {}]\nlever_arm_sigma = [0.005, 0.005, 0.005]\ndrift = \"auto\"\n",
         c.focal_mm, c.pixel_um, c.width_px, c.height_px, l[0], l[1], l[2]
     );
-    gnss::solution::write_atomic(&out.join("project.toml"), |w| {
+    common::atomic::write_atomic(&out.join("project.toml"), |w| {
         w.write_all(project.as_bytes())
     })?;
     Ok(())

@@ -87,7 +87,7 @@ pub fn run_scenario(out: &Path, scenario: &simulate::Scenario) -> Result<HardSky
             format!("{perfect}coupling = \"loose\"\n"),
         ),
     ] {
-        gnss::solution::write_atomic(&out.join(name), |w| w.write_all(text.as_bytes()))?;
+        common::atomic::write_atomic(&out.join(name), |w| w.write_all(text.as_bytes()))?;
     }
     Ok(HardSky {
         ppk_epochs: res.trajectory.epochs.len(),
@@ -141,7 +141,7 @@ fn write_perfect(out: &Path) -> Result<(), ChainError> {
             _ => text += &format!("{l}\n"),
         }
     }
-    gnss::solution::write_atomic(&out.join("antennas_perfect.csv"), |w| {
+    common::atomic::write_atomic(&out.join("antennas_perfect.csv"), |w| {
         w.write_all(text.as_bytes())
     })?;
     Ok(())

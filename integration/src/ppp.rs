@@ -8,7 +8,8 @@
 use crate::orbits::{check_overlap, load_orbits};
 pub use crate::ppp_report::PppReport;
 use crate::survey::{enu_sigmas, refer_name};
-use gnss::atomic::side_path;
+use common::atomic::side_path;
+use common::atomic::write_atomic;
 use gnss::error::{Error, Result};
 use gnss::frame::{enu_rotation, Ecef};
 use gnss::model::antex::Antex;
@@ -16,7 +17,7 @@ use gnss::orbit::{ClockSource, Orbits};
 use gnss::ppk::{Motion, Reference};
 use gnss::ppp::PppOptions;
 use gnss::rinex::ObsFile;
-use gnss::solution::{write_atomic, PosRecord, Quality};
+use gnss::solution::{PosRecord, Quality};
 use gnss::spp::{solve_epoch, SppOptions};
 use gnss::time::format_ymdhms;
 use serde_json::json;
@@ -52,10 +53,10 @@ pub struct PppJob {
 }
 
 /// Run PPP as the job says.
-pub fn ppp(job: &PppJob, progress: &dyn gnss::progress::Progress) -> Result<PppReport> {
+pub fn ppp(job: &PppJob, progress: &dyn common::progress::Progress) -> Result<PppReport> {
     let t0 = std::time::Instant::now();
     for ext in ["", ".json", ".ztd.csv", ".html"] {
-        gnss::atomic::clean_stale(&side_path(&job.out, ext));
+        common::atomic::clean_stale(&side_path(&job.out, ext));
     }
     // RINEX or a raw receiver log, told from the content unless the job says.
     let input = crate::observations::read_observations(&job.obs, job.obs_format, job.time_hint)?;
@@ -171,7 +172,7 @@ pub fn base_from_ppp(
         ..PppOptions::default()
     };
     let start = start_position(base, orbits)?;
-    let r = gnss::ppp::process(base, orbits, &options, start, &gnss::progress::NoProgress)?;
+    let r = gnss::ppp::process(base, orbits, &options, start, &common::progress::NoProgress)?;
     let Some(last) = r.epochs.last() else {
         return Err(Error::input(
             &base.path,

@@ -11,9 +11,10 @@
 //! as data.
 
 use crate::height::Heights;
+use common::atomic::write_atomic;
 use gnss::error::Result;
 use gnss::frame::{enu_rotation, Geodetic};
-use gnss::solution::{write_atomic, write_pos, write_pos_framed, PosFormat, PosRecord, Quality};
+use gnss::solution::{write_pos, write_pos_framed, PosFormat, PosRecord, Quality};
 use gnss::time::format_ymdhms_us;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -104,7 +105,7 @@ pub fn write_named(
         TrajectoryFormat::GeoJson => geojson(header, &pts, heights),
         TrajectoryFormat::Gpx => gpx(header, &pts, heights),
     };
-    write_atomic(path, |w| w.write_all(text.as_bytes()))
+    write_atomic(path, |w| w.write_all(text.as_bytes())).map_err(gnss::Error::from)
 }
 
 /// One epoch in the numbers the vector formats carry.

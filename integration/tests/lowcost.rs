@@ -177,7 +177,7 @@ fn walk_ppk_in(
         gnss::ppk::BasePosition::Header,
         &orbits,
         &opts,
-        &gnss::progress::NoProgress,
+        &common::progress::NoProgress,
     )
     .unwrap();
     against_truth(&r.trajectory, &walk.join("truth_trajectory.csv"))
@@ -366,7 +366,7 @@ fn the_drone_flight_is_fixed_right_and_its_exposures_placed() {
         gnss::ppk::BasePosition::Given(rep.drone_report.base_position),
         &orbits,
         &gnss::ppk::PpkOptions::default(),
-        &gnss::progress::NoProgress,
+        &common::progress::NoProgress,
     )
     .unwrap();
     let f = figures(&against_truth(

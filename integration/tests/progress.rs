@@ -2,7 +2,7 @@
 //! check of which receiver moves, each pass), counts that reach no more than each stage's
 //! length, and outputs byte-identical to a run nobody watches.
 
-use gnss::progress::{NoProgress, Progress};
+use common::progress::{NoProgress, Progress};
 use gnss::solution::PosFormat;
 use integration::pipeline::{self, PpkJob, SppJob};
 use integration::simulate;

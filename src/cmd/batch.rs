@@ -4,8 +4,8 @@
 use super::config;
 use anyhow::{bail, Context, Result};
 use clap::{CommandFactory, Parser};
+use common::progress::{NoProgress, Progress};
 use integration::batch::{self, Flight, Outcome, SummaryRow};
-use integration::gnss::progress::{NoProgress, Progress};
 use integration::pipeline;
 use rayon::prelude::*;
 use std::collections::BTreeSet;

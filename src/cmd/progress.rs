@@ -1,7 +1,7 @@
 //! The library's [`Progress`] drawn as an indicatif bar with an ETA on standard error — only
 //! when standard error is a terminal and `--quiet` was not given. Drawing changes no output.
 
-use integration::gnss::progress::Progress;
+use common::progress::Progress;
 use std::io::IsTerminal;
 use std::sync::Mutex;
 

@@ -121,7 +121,7 @@ pub fn run(args: Args) -> Result<()> {
     job.ignore_gps = args.ignore_gps;
     // Staged first: the features of this run are cached in the new folder as they are made,
     // those of an earlier run read from the old one.
-    let staged = gnss::atomic::StagedDir::new(&args.out, &OUTPUTS)?;
+    let staged = common::atomic::StagedDir::new(&args.out, &OUTPUTS)?;
     job.cache = Some((args.out.join("features"), staged.path().join("features")));
     let bar = indicatif::ProgressBar::new(0);
     if super::quiet() {

@@ -53,7 +53,7 @@ pub fn ppk_on(
         BasePosition::Given(base_pos),
         &orbits,
         opts,
-        &gnss::progress::NoProgress,
+        &::common::progress::NoProgress,
     )
     .unwrap()
 }

@@ -8,7 +8,7 @@ use super::estimated::Estimated;
 use super::project::{Mode, Project};
 use super::results::Results;
 use crate::plot::{axes, range, svg};
-use gnss::solution::write_atomic;
+use common::atomic::write_atomic;
 use plotters::prelude::*;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -43,8 +43,8 @@ pub fn write_all(p: &Project, r: &Results, out: &Path) -> Result<(), AdjustError
         std::fs::create_dir_all(parent).map_err(|e| werr(parent, e))?;
     }
     // Their messages name the folder already.
-    let named = |e: gnss::Error| AdjustError::Problem(e.to_string());
-    let staged = gnss::atomic::StagedDir::new(out, &OUTPUTS).map_err(named)?;
+    let named = |e: common::atomic::Error| AdjustError::Problem(e.to_string());
+    let staged = common::atomic::StagedDir::new(out, &OUTPUTS).map_err(named)?;
     write_files(p, r, staged.path())?;
     staged.commit().map_err(named)
 }

@@ -233,7 +233,7 @@ fn estimated(
 struct Context<'a> {
     pr: &'a Problem,
     frame: &'a super::frame::LocalFrame,
-    tm: Option<gnss::tmerc::TransverseMercator>,
+    tm: Option<common::tmerc::TransverseMercator>,
     keys: Vec<Key>,
     covs: photo::lsq::Covariances,
 }

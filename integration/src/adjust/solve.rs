@@ -33,7 +33,7 @@ pub fn solve(project: &Project, opts: &RunOptions) -> Result<Solved, AdjustError
 }
 
 /// Progress shared with the solver (it outlives the call, so it is shared, not borrowed).
-pub type SharedProgress = std::sync::Arc<dyn gnss::progress::Progress + Send>;
+pub type SharedProgress = std::sync::Arc<dyn common::progress::Progress + Send>;
 
 /// [`solve`], telling `progress` each solve and snooping round as a stage whose steps (the
 /// Levenberg–Marquardt iterations) are not known beforehand.

@@ -368,7 +368,7 @@ impl Coords {
         &self,
         path: &Path,
         crs: Option<&str>,
-    ) -> Result<Option<(gnss::tmerc::TransverseMercator, String)>, AdjustError> {
+    ) -> Result<Option<(common::tmerc::TransverseMercator, String)>, AdjustError> {
         match (self, crs) {
             (Coords::Proj(..), Some(c)) => {
                 let p = Projection::parse(c)
@@ -397,7 +397,7 @@ impl Coords {
         t: &Table,
         line: usize,
         row: &[String],
-        tm: Option<&gnss::tmerc::TransverseMercator>,
+        tm: Option<&common::tmerc::TransverseMercator>,
     ) -> Result<Ecef, AdjustError> {
         let n = |c: usize| t.num(line, row, c);
         Ok(match *self {
@@ -405,7 +405,7 @@ impl Coords {
             Coords::Xyz(a, b, c) => Ecef::new(n(a)?, n(b)?, n(c)?),
             Coords::Proj(a, b, c) => {
                 let tm = tm.ok_or_else(|| perr(&t.path, "crs missing"))?;
-                let p = gnss::tmerc::Projected {
+                let p = common::tmerc::Projected {
                     easting: n(a)?,
                     northing: n(b)?,
                 };

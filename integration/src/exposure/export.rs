@@ -6,7 +6,7 @@
 //! Enters: camera stations ([`super::CameraStation`], ECEF with ECEF covariance). Leaves: files
 //! written atomically; times GPST, sigmas in the local ENU frame (m), angles degrees (R camera
 //! → ENU). Also the antenna table that [`crate::adjust`] reads ([`antenna_table`]), shared with
-//! the simulator. Uses `gnss::tmerc` for UTM and Gauss–Krüger, [`crate::crs`] for EPSG codes,
+//! the simulator. Uses `common::tmerc` for UTM and Gauss–Krüger, [`crate::crs`] for EPSG codes,
 //! and `gnss::solution` for `.pos`.
 
 use super::attitude::omega_phi_kappa;
@@ -14,10 +14,11 @@ use super::CameraStation;
 use crate::crs::EpsgProjection;
 use crate::height::Heights;
 use crate::vector::TrajectoryFormat;
+use common::atomic::write_atomic;
+use common::tmerc::{Projected, TransverseMercator};
 use gnss::error::Result;
 use gnss::frame::enu_rotation;
-use gnss::solution::{write_atomic, PosFormat, PosRecord};
-use gnss::tmerc::{Projected, TransverseMercator};
+use gnss::solution::{PosFormat, PosRecord};
 use std::io::Write;
 use std::path::Path;
 
@@ -269,7 +270,7 @@ pub fn write(
     };
     let (rows, crs) = rows(st, proj, heights)?;
     let geo = proj == Projection::Geodetic;
-    write_atomic(path, |w| text_format(w, &rows, &crs, geo))
+    write_atomic(path, |w| text_format(w, &rows, &crs, geo)).map_err(gnss::Error::from)
 }
 
 /// A writer of one text layout: the rows, the names of their coordinate system, and whether
@@ -476,5 +477,5 @@ fn write_antenna(path: &Path, st: &[CameraStation]) -> Result<()> {
         })
         .collect();
     let text = antenna_table("ppkat antenna positions at the exposures", &rows);
-    write_atomic(path, |w| w.write_all(text.as_bytes()))
+    write_atomic(path, |w| w.write_all(text.as_bytes())).map_err(gnss::Error::from)
 }

@@ -149,7 +149,7 @@ pub struct Geotagged {
 
 /// Write geotagged copies of the photos into the folder `out_dir`, the originals untouched.
 /// Photo k gets station k's projection centre. The folder is written whole
-/// ([`gnss::atomic::StagedDir`]): it holds the previous run's copies or this run's, never a
+/// ([`common::atomic::StagedDir`]): it holds the previous run's copies or this run's, never a
 /// mix, and an existing folder holding other files than these photos' names is refused. A
 /// photo that cannot be tagged (not a JPEG, damaged, EXIF unreadable) is named in
 /// [`Geotagged::skipped`] and the others are still written. `Err` only when nothing can be
@@ -166,7 +166,7 @@ pub fn geotag(
 }
 
 /// [`geotag`] without the last step: the tagged copies wait in the returned staging folder,
-/// which [`gnss::atomic::StagedDir::commit`] swaps in (dropped, it is removed and `out_dir`
+/// which [`common::atomic::StagedDir::commit`] swaps in (dropped, it is removed and `out_dir`
 /// stays as it was). So a caller writing another output beside them commits both at the end,
 /// one right after the other.
 pub fn geotag_staged(
@@ -174,7 +174,7 @@ pub fn geotag_staged(
     stations: &[CameraStation],
     out_dir: &Path,
     heights: &Heights,
-) -> Result<(Geotagged, gnss::atomic::StagedDir)> {
+) -> Result<(Geotagged, common::atomic::StagedDir)> {
     for p in photos {
         let dest = out_dir.join(&p.name);
         let folder = p.path.parent().filter(|d| !d.as_os_str().is_empty());
@@ -189,7 +189,7 @@ pub fn geotag_staged(
         }
     }
     let owned: Vec<&str> = photos.iter().map(|p| p.name.as_str()).collect();
-    let staged = gnss::atomic::StagedDir::new(out_dir, &owned)?;
+    let staged = common::atomic::StagedDir::new(out_dir, &owned)?;
     let mut done = Geotagged::default();
     for (p, s) in photos.iter().zip(stations) {
         let g = s.centre.to_geodetic();
@@ -208,7 +208,7 @@ pub fn geotag_staged(
         match tagged {
             Ok(bytes) => {
                 let staged_copy = staged.path().join(&p.name);
-                gnss::solution::write_atomic(&staged_copy, |w| w.write_all(&bytes))?;
+                common::atomic::write_atomic(&staged_copy, |w| w.write_all(&bytes))?;
                 done.written.push(out_dir.join(&p.name));
             }
             Err(why) => done.skipped.push((p.path.clone(), why)),

@@ -2,8 +2,8 @@
 //! the [`Summary`] of what was read and skipped, the [`GroundFrame`] of an import, and the data
 //! lines of a text file.
 
+use common::tmerc::{Projected, TransverseMercator};
 use gnss::frame::{Ecef, Geodetic};
-use gnss::tmerc::{Projected, TransverseMercator};
 use nalgebra::Vector3;
 use std::path::Path;
 

@@ -4,8 +4,8 @@
 //! [`ProjectOut::write_folder`] the folder as a whole.
 
 use super::common::{ferr, ImportError};
+use common::atomic::write_atomic;
 use gnss::frame::Ecef;
-use gnss::solution::write_atomic;
 use nalgebra::{Matrix3, Vector2};
 use photo::camera::Camera;
 use photo::rotation::Angles;
@@ -142,13 +142,13 @@ impl ProjectOut {
         s
     }
 
-    /// Write the folder `dir` as a whole ([`gnss::atomic::StagedDir`]): into a staging folder
+    /// Write the folder `dir` as a whole ([`common::atomic::StagedDir`]): into a staging folder
     /// beside it, swapped in at the end, so that `dir` holds an earlier run's project or this
     /// one, never a mix. An existing `dir` holding other files than [`FILES`] is refused.
     pub fn write_folder(&self, dir: &Path) -> Result<(), ImportError> {
         // Its messages name the folder already.
-        let named = |e: gnss::Error| ImportError::Usage(e.to_string());
-        let staged = gnss::atomic::StagedDir::new(dir, &FILES).map_err(named)?;
+        let named = |e: common::atomic::Error| ImportError::Usage(e.to_string());
+        let staged = common::atomic::StagedDir::new(dir, &FILES).map_err(named)?;
         self.write(staged.path())?;
         staged.commit().map_err(named)
     }

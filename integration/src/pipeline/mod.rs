@@ -24,8 +24,8 @@ use std::path::PathBuf;
 mod exposures;
 pub(crate) mod ppk_summary;
 mod swap;
+use common::atomic::side_path;
 pub use exposures::{exposures, EventSource, ExposureJob, ExposureReport};
-use gnss::atomic::side_path;
 pub use ppk_summary::PpkReport;
 
 /// Inputs of a single-point run.
@@ -107,8 +107,8 @@ fn nothing_solved(what: &str, epochs: usize, reasons: Vec<String>, details: &[St
 
 /// Run single-point positioning over a file and write the `.pos` output; `progress` shows
 /// the reading and counts the epochs solved. `Err` when no epoch is solved.
-pub fn spp(job: &SppJob, progress: &dyn gnss::progress::Progress) -> Result<SppReport> {
-    gnss::atomic::clean_stale(&job.out);
+pub fn spp(job: &SppJob, progress: &dyn common::progress::Progress) -> Result<SppReport> {
+    common::atomic::clean_stale(&job.out);
     progress.set_len("reading the observations", 0);
     let input = read_observations(&job.obs, job.obs_format, job.time_hint)?;
     let log_nav = input.nav.as_ref();
@@ -371,9 +371,9 @@ fn pos_header(
 
 /// Run PPK and write the `.pos` output; `progress` counts the epochs of each pass.
 /// `Err` when no epoch is solved.
-pub fn ppk(job: &PpkJob, progress: &dyn gnss::progress::Progress) -> Result<PpkReport> {
+pub fn ppk(job: &PpkJob, progress: &dyn common::progress::Progress) -> Result<PpkReport> {
     let t0 = std::time::Instant::now();
-    gnss::atomic::clean_stale(&job.out);
+    common::atomic::clean_stale(&job.out);
     progress.set_len("reading rover and base", 0);
     let mut rover_in = read_observations(&job.rover, job.obs_format, job.time_hint)?;
     let mut base_in = read_observations(&job.base, job.obs_format, job.time_hint)?;
@@ -457,7 +457,7 @@ pub fn ppk(job: &PpkJob, progress: &dyn gnss::progress::Progress) -> Result<PpkR
     if let Some(st) = &result.static_solution {
         let path = side_path(&job.out, ".json");
         let text = crate::survey::json(st, o.refer, &result.base_marker, &job.heights)?;
-        gnss::solution::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
+        common::atomic::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
         summary = Some(path);
     }
     let mut report = PpkReport {
@@ -481,7 +481,7 @@ pub fn ppk(job: &PpkJob, progress: &dyn gnss::progress::Progress) -> Result<PpkR
             .collect();
         report.report = Some(path.clone());
         let page = crate::ppk_report::html(&report, &header, &events);
-        gnss::solution::write_atomic(path, |w| w.write_all(page.as_bytes()))?;
+        common::atomic::write_atomic(path, |w| w.write_all(page.as_bytes()))?;
     }
     Ok(report)
 }

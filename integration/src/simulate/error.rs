@@ -1,8 +1,9 @@
 //! The error of the simulator: a scenario key and what is wrong with it, or a failure to
 //! write or read back a file.
 //!
-//! What enters: the messages of the validation and `gnss` errors. What leaves: [`SimError`],
-//! returned by every part of the simulator; this module uses none of them.
+//! What enters: the messages of the validation, `gnss` and `common::atomic` errors. What
+//! leaves: [`SimError`], returned by every part of the simulator; this module uses none of
+//! them.
 
 /// Errors of the simulator: a scenario key and what is wrong with it, or an I/O failure.
 #[derive(Debug, thiserror::Error)]
@@ -30,4 +31,11 @@ pub enum SimError {
         /// What went wrong, and what to do.
         what: String,
     },
+}
+
+/// A failed whole-output write, as the [`gnss::Error`] of the same message.
+impl From<common::atomic::Error> for SimError {
+    fn from(e: common::atomic::Error) -> Self {
+        SimError::Gnss(e.into())
+    }
 }

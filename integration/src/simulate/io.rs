@@ -15,6 +15,6 @@ pub(super) fn write(dir: &Path, name: &str, text: &str) -> Result<PathBuf, SimEr
 pub(super) fn write_bytes(dir: &Path, name: &str, bytes: &[u8]) -> Result<PathBuf, SimError> {
     std::fs::create_dir_all(dir).map_err(gnss::Error::io(dir))?;
     let p = dir.join(name);
-    gnss::solution::write_atomic(&p, |w| w.write_all(bytes))?;
+    common::atomic::write_atomic(&p, |w| w.write_all(bytes))?;
     Ok(p)
 }

@@ -6,7 +6,7 @@
 //! per photo, grid) and the format's version. A file whose key differs (the photo or the
 //! settings changed) or that does not read back whole is extracted again and replaced. Values
 //! are stored as their exact bits, so a run from the cache writes the same bytes as one
-//! without. Files are written whole (`gnss::atomic::write_atomic`); a cache that cannot be
+//! without. Files are written whole (`common::atomic::write_atomic`); a cache that cannot be
 //! written costs the next run time, never this run's result.
 
 use photo::features::{Descriptor, FeatureOptions, Features, Keypoint, DESCRIPTOR_LEN};
@@ -110,7 +110,7 @@ pub fn load(file: &Path, key: u64) -> Option<Cached> {
     })
 }
 
-/// Write `c` under `key` to `file`, whole or not at all (`gnss::atomic::write_atomic`).
+/// Write `c` under `key` to `file`, whole or not at all (`common::atomic::write_atomic`).
 pub fn store(file: &Path, key: u64, c: &Cached) -> Result<(), gnss::error::Error> {
     let f = &c.features;
     write_whole(file, |w| {
@@ -136,7 +136,7 @@ pub fn store(file: &Path, key: u64, c: &Cached) -> Result<(), gnss::error::Error
     })
 }
 
-/// Write `file` whole or not at all (`gnss::atomic::write_atomic`), its folder made first.
+/// Write `file` whole or not at all (`common::atomic::write_atomic`), its folder made first.
 pub(crate) fn write_whole(
     file: &Path,
     body: impl FnOnce(&mut dyn std::io::Write) -> std::io::Result<()>,
@@ -147,7 +147,7 @@ pub(crate) fn write_whole(
             cause,
         })?;
     }
-    gnss::atomic::write_atomic(file, body)
+    common::atomic::write_atomic(file, body).map_err(gnss::error::Error::from)
 }
 
 /// Little-endian values read from the front of a byte slice; None past its end.

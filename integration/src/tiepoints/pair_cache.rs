@@ -8,7 +8,7 @@
 //! match it the same: on a rerun, and for the photos before the first added by name.
 //! (Seeding by the photos' names instead made one test block's free network end singular:
 //! its start is sensitive to which matches RANSAC keeps, not yet understood.) Values are stored as their exact bits; the file is written
-//! whole (`gnss::atomic::write_atomic`) and one that does not read back whole is ignored.
+//! whole (`common::atomic::write_atomic`) and one that does not read back whole is ignored.
 
 use super::cache::{fnv, write_whole, Reader};
 use super::job::{MatchJob, PairResult, COHERENCE_NEIGHBOURS, GUIDED_RADIUS};

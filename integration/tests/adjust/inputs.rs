@@ -71,7 +71,7 @@ fn ground_point_formats_agree() {
     )
     .unwrap();
     let text = std::fs::read_to_string(dir.join("ground_points.csv")).unwrap();
-    let tm = gnss::tmerc::TransverseMercator::utm(50, true);
+    let tm = common::tmerc::TransverseMercator::utm(50, true);
     let (mut utm, mut xyz) = (
         String::from("point,kind,easting,northing,h,sigma_xy,sigma_z\n"),
         String::from("point,kind,x,y,z,sigma_xy,sigma_z\n"),

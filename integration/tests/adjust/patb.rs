@@ -58,7 +58,7 @@ fn write_patb_images(sim: &Path, units: Units, out: &Path) {
 /// The simulated ground points as a PATB control file in UTM zone 50 N: `ID E N h σxy σz`,
 /// with the kind column when `kinds`.
 fn write_patb_control(sim: &Path, kinds: bool, out: &Path) {
-    let tm = gnss::tmerc::TransverseMercator::utm(50, true);
+    let tm = common::tmerc::TransverseMercator::utm(50, true);
     let mut s = String::new();
     for r in rows(&sim.join("ground_points.csv")) {
         let num = |k: &str| r[k].parse::<f64>().unwrap();

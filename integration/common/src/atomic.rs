@@ -8,9 +8,44 @@
 //! intermediate file, where it cannot be unlinked while open), `.NAME.PID.new` and
 //! `.NAME.PID.old` (folders); one whose process is gone is stale.
 
-use crate::error::{Error, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
+
+/// What can go wrong while writing an output whole. The messages are those of the same
+/// variants of `gnss::Error`, which converts from this one.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The output file could not be written.
+    #[error("{path}: cannot write: {cause}; check that its folder exists and is writable")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// What the system said.
+        cause: std::io::Error,
+    },
+    /// The output as a whole is not what was asked for (a file where a folder is wanted, a
+    /// folder holding files of others …).
+    #[error("{path}: {what}")]
+    Input {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong and what to do.
+        what: String,
+    },
+}
+
+/// Result of the writes of this module.
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    /// An [`Error::Input`] about `path`.
+    fn input(path: &Path, what: impl Into<String>) -> Self {
+        Error::Input {
+            path: path.to_path_buf(),
+            what: what.into(),
+        }
+    }
+}
 
 /// The folder of `path` (`.` for a bare name) and its file name.
 fn split(path: &Path) -> (PathBuf, String) {
@@ -25,8 +60,8 @@ fn split(path: &Path) -> (PathBuf, String) {
     (dir.to_path_buf(), name)
 }
 
-/// The hidden sibling of `path` for this process, with `kind` (`tmp`, `new`, `old`).
-pub(crate) fn sibling(path: &Path, kind: &str) -> PathBuf {
+/// The hidden sibling of `path` for this process, with `kind` (`tmp`, `spill`, `new`, `old`).
+pub fn sibling(path: &Path, kind: &str) -> PathBuf {
     let (dir, name) = split(path);
     dir.join(format!(".{name}.{}.{kind}", std::process::id()))
 }
