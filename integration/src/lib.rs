@@ -47,6 +47,7 @@ pub mod orbits;
 pub mod pipeline;
 mod plot;
 mod ppk_report;
+pub mod ppk_summary;
 pub mod ppp;
 mod ppp_report;
 pub mod rtklib_conf;

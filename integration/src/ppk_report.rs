@@ -10,8 +10,8 @@
 //! they never cover data; long runs are thinned to at most [`MAX_POINTS`] drawn epochs per
 //! series (the tables count every epoch).
 
-use crate::pipeline::ppk_summary::PpkReport;
 use crate::plot::{axes, decimals, html_escape, range, svg_sized, tick, LengthAxis, TimeAxis};
+use crate::ppk_summary::{PpkReport, Untimed};
 use gnss::frame::{enu_rotation, Ecef};
 use gnss::solution::Quality;
 use gnss::time::format_ymdhms;
@@ -81,7 +81,7 @@ pub fn html(r: &PpkReport, settings: &[String], events: &[Epoch]) -> String {
     let _ = writeln!(
         s,
         "<h1>Carrier-phase positioning (PPK)</h1><pre>{}</pre>",
-        html_escape(&crate::pipeline::ppk_summary::Untimed(r).to_string())
+        html_escape(&Untimed(r).to_string())
     );
     let tr = &r.result.trajectory;
     s += &fix_table(r);

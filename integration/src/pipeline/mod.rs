@@ -22,11 +22,10 @@ use std::fmt;
 use std::path::PathBuf;
 
 mod exposures;
-pub(crate) mod ppk_summary;
 mod swap;
+pub use crate::ppk_summary::PpkReport;
 use common::atomic::side_path;
 pub use exposures::{exposures, EventSource, ExposureJob, ExposureReport};
-pub use ppk_summary::PpkReport;
 
 /// Inputs of a single-point run.
 #[derive(Clone, Debug)]

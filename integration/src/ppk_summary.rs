@@ -1,6 +1,7 @@
-//! What a carrier-phase run did ([`PpkReport`]) and what `ppkat ppk` prints of it (its `Display`, also the head of
-//! the PPK report page): the fix rate, what was estimated, how the ambiguities went, why epochs
-//! stayed unsolved, each pass's resets, the static solution and the warnings.
+//! What a carrier-phase run did ([`PpkReport`]) and what `ppkat ppk` prints of it (its
+//! `Display`, also the head of the PPK report page): the fix rate, what was estimated, how the
+//! ambiguities went, why epochs stayed unsolved, each pass's resets, the static solution and
+//! the warnings. `pipeline` makes it and `ppk_report` draws it; it uses neither.
 
 use gnss::ppk::{AmbiguityRates, Models, PassStats};
 use gnss::time::format_ymdhms;
