@@ -14,7 +14,7 @@ pub mod sp3_write;
 pub use clk::ClockFile;
 pub use glonass::GlonassEph;
 pub use kepler::{GalMessage, KeplerEph, SatPosClock, C};
-pub use precise::{ClockSource, MergeReport, PreciseOrbits, Unavailable};
+pub use precise::{relativistic_clock, ClockSource, MergeReport, PreciseOrbits, Unavailable};
 pub use sp3::Sp3;
 pub use sp3_write::sp3_text;
 

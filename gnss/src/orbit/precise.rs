@@ -265,11 +265,10 @@ impl PreciseOrbits {
     pub fn compute(&self, sv: Sv, t: Epoch) -> std::result::Result<SatPosClock, Unavailable> {
         let (pos, vel) = self.position(sv, t).ok_or(Unavailable::NoOrbit)?;
         let (clock, clock_rate) = self.clock(sv, t).ok_or(Unavailable::NoClock)?;
-        let rel = -2.0 * pos.dot(&vel) / (C * C);
         Ok(SatPosClock {
             pos: Ecef(pos),
             vel,
-            clock: clock + rel,
+            clock: clock + relativistic_clock(&pos, &vel),
             clock_rate,
         })
     }
@@ -440,6 +439,13 @@ fn interpolate_clock(v: &[Sample<f64>], t: Epoch) -> Option<(f64, f64)> {
     }
     let r = rate(k)?;
     Some((v[k].v + r * (t - v[k].t).to_seconds(), r))
+}
+
+/// The periodic relativistic clock correction −2 r·v/c² (s) of a satellite at ECEF `pos`
+/// (m) moving at `vel` (m/s): what a precise clock, which leaves it out, needs added, and what
+/// a broadcast clock with it applied needs taken off to be written as a precise one.
+pub fn relativistic_clock(pos: &Vector3<f64>, vel: &Vector3<f64>) -> f64 {
+    -2.0 * pos.dot(vel) / (C * C)
 }
 
 #[cfg(test)]

@@ -295,7 +295,6 @@ pub fn write_sbf(rep: &SimReport) -> Result<(PathBuf, PathBuf, u64), SimError> {
 /// no group delay). Lets `ppk`, `spp` and `ppp` be tried with `--sp3` and without `--nav`.
 /// Its path.
 pub fn write_sp3(rep: &SimReport) -> Result<PathBuf, SimError> {
-    use gnss::orbit::{Eph, Sp3};
     let eph = Ephemerides::from_nav(&[NavFile::read(&rep.nav)?]);
     let step = 300.0;
     let (week, sow) = gnss::time::week_tow(rep.start);
@@ -304,42 +303,45 @@ pub fn write_sp3(rep: &SimReport) -> Result<PathBuf, SimError> {
     let epochs: Vec<Epoch> = (0..n)
         .map(|k| gnss::time::from_week_tow(week, from + step * k as f64))
         .collect();
-    let mut sats = std::collections::BTreeMap::new();
-    for &sv in eph.satellites() {
-        let v = epochs
-            .iter()
-            .map(|&t| {
-                // Outside the broadcast validity a Keplerian record extrapolates exactly (the
-                // synthetic orbits have no perturbations); GLONASS records do not.
-                let e = eph.select(sv, t).or_else(|| {
-                    eph.of(sv)
-                        .iter()
-                        .filter(|e| matches!(e, Eph::Kepler(_)))
-                        .min_by(|a, b| {
-                            let d = |e: &&Eph| (t - e.toe()).to_seconds().abs();
-                            d(a).total_cmp(&d(b))
-                        })
-                });
-                match e {
-                    Some(e) => {
-                        let pc = e.compute(t);
-                        let rel = 2.0 * pc.pos.0.dot(&pc.vel) / (gnss::orbit::C * gnss::orbit::C);
-                        (pc.pos.0, pc.clock + rel)
-                    }
-                    None => (nalgebra::Vector3::repeat(f64::NAN), f64::NAN),
-                }
-            })
-            .collect();
-        sats.insert(sv, v);
-    }
-    let sp3 = Sp3 {
+    let sats = eph
+        .satellites()
+        .map(|&sv| {
+            (
+                sv,
+                epochs.iter().map(|&t| sp3_sample(&eph, sv, t)).collect(),
+            )
+        })
+        .collect();
+    let sp3 = gnss::orbit::Sp3 {
         frame: "WGS84".into(),
         epochs,
         interval: step,
         sats,
-        ..Sp3::default()
+        ..gnss::orbit::Sp3::default()
     };
     write(&rep.dir, "orbits.sp3", &gnss::orbit::sp3_text(&sp3))
+}
+
+/// The position (m) and clock (s, without the relativistic correction) of `sv` at `t` as the
+/// simulation computed them, NaN without a record. Outside the broadcast validity the
+/// nearest Keplerian record is extrapolated, which is exact for the synthetic orbits (no
+/// perturbations); GLONASS records are not.
+fn sp3_sample(eph: &Ephemerides, sv: gnss::sv::Sv, t: Epoch) -> (nalgebra::Vector3<f64>, f64) {
+    use gnss::orbit::Eph;
+    let nearest_kepler = || {
+        let d = |e: &&Eph| (t - e.toe()).to_seconds().abs();
+        (eph.of(sv).iter())
+            .filter(|e| matches!(e, Eph::Kepler(_)))
+            .min_by(|a, b| d(a).total_cmp(&d(b)))
+    };
+    match eph.select(sv, t).or_else(nearest_kepler) {
+        Some(e) => {
+            let pc = e.compute(t);
+            let rel = gnss::orbit::relativistic_clock(&pc.pos.0, &pc.vel);
+            (pc.pos.0, pc.clock - rel)
+        }
+        None => (nalgebra::Vector3::repeat(f64::NAN), f64::NAN),
+    }
 }
 
 /// The navigation file of the scenario's synthetic constellations for `[start, end]` (GPST),
