@@ -317,8 +317,9 @@ fn paths(text: &str, file_mod: &ModPath) -> Vec<(ModPath, Vec<String>)> {
     let mut stack: Vec<(ModPath, usize)> = vec![(file_mod.clone(), 0)];
     let mut depth = 0usize;
     let mut i = 0;
+    // The module at the current position (the stack never empties: the file's own stays).
+    let here = |stack: &[(ModPath, usize)]| stack[stack.len() - 1].0.clone();
     while i < b.len() {
-        let here = stack.last().map(|s| s.0.clone()).unwrap_or_default();
         match b[i] {
             b'{' => {
                 depth += 1;
@@ -343,7 +344,7 @@ fn paths(text: &str, file_mod: &ModPath) -> Vec<(ModPath, Vec<String>)> {
             let (name, k) = ident(b, j);
             let k = skip_ws(b, k);
             if !name.is_empty() && b.get(k) == Some(&b'{') {
-                let mut m = here.clone();
+                let mut m = here(&stack);
                 m.push(name);
                 depth += 1;
                 stack.push((m, depth));
@@ -359,7 +360,7 @@ fn paths(text: &str, file_mod: &ModPath) -> Vec<(ModPath, Vec<String>)> {
                 .collect::<Vec<_>>()
                 .join(" ");
             for p in expand(&decl) {
-                out.push((here.clone(), p));
+                out.push((here(&stack), p));
             }
             i = end + 1;
             continue;
@@ -367,7 +368,7 @@ fn paths(text: &str, file_mod: &ModPath) -> Vec<(ModPath, Vec<String>)> {
         if word_start
             && ["crate::", "super::", "self::"]
                 .iter()
-                .any(|k| text[i..].starts_with(k))
+                .any(|k| b[i..].starts_with(k.as_bytes()))
         {
             let mut segs = Vec::new();
             let mut j = i;
@@ -384,7 +385,7 @@ fn paths(text: &str, file_mod: &ModPath) -> Vec<(ModPath, Vec<String>)> {
                     break;
                 }
             }
-            out.push((here.clone(), segs));
+            out.push((here(&stack), segs));
             i = j.max(i + 1);
             continue;
         }

@@ -323,10 +323,10 @@ fn read_photos(
     Ok(out)
 }
 
-/// Store the pairs' matches in the cache when one is kept; `false` when they could not be
-/// written.
-fn store_pairs(job: &MatchJob, images: &[Image], results: &[PairResult]) -> bool {
-    !job.cache.as_ref().is_some_and(|(_, new)| {
+/// Store the pairs' matches in the cache when one is kept: whether all is well (no cache
+/// asked for, or the pairs written).
+fn cache_pairs(job: &MatchJob, images: &[Image], results: &[PairResult]) -> bool {
+    job.cache.as_ref().is_none_or(|(_, new)| {
         let keyed = results.iter().filter_map(|p| {
             let (ka, kb) = images[p.a].key.zip(images[p.b].key)?;
             Some((
@@ -338,7 +338,7 @@ fn store_pairs(job: &MatchJob, images: &[Image], results: &[PairResult]) -> bool
                 p,
             ))
         });
-        pair_cache::store(&pair_cache::path(new), keyed).is_err()
+        pair_cache::store(&pair_cache::path(new), keyed).is_ok()
     })
 }
 
@@ -416,7 +416,7 @@ pub fn run(
         pairs::choose(job.pairs, &enu, &radius, alike.as_deref()).map_err(MatchError::Input)?;
     let t = std::time::Instant::now();
     let (results, pairs_from_cache) = match_pairs(&images, &list, job, progress);
-    let pairs_not_cached = !store_pairs(job, &images, &results);
+    let pairs_not_cached = !cache_pairs(job, &images, &results);
     timing.push(("matching".into(), t.elapsed().as_secs_f64()));
     let counts: Vec<usize> = images.iter().map(|i| i.features.keypoints.len()).collect();
     let (canon, verified) = verified_matches(&images, &results);
