@@ -7,6 +7,7 @@
 
 use crate::orbits::{check_overlap, load_orbits};
 pub use crate::ppp_report::PppReport;
+use crate::ppp_report::{decimal_year, Untimed};
 use crate::survey::{enu_sigmas, refer_name};
 use common::atomic::side_path;
 use common::atomic::write_atomic;
@@ -21,7 +22,6 @@ use gnss::solution::{PosRecord, Quality};
 use gnss::spp::{solve_epoch, SppOptions};
 use gnss::time::format_ymdhms;
 use serde_json::json;
-use std::fmt;
 use std::path::PathBuf;
 
 /// Inputs of a PPP run.
@@ -113,13 +113,13 @@ pub fn ppp(job: &PppJob, progress: &dyn common::progress::Progress) -> Result<Pp
     };
     crate::vector::write(
         &job.out,
-        &report.header(job),
-        &report.records(),
+        &pos_header(&report, job),
+        &pos_records(&report),
         job.format,
         &job.heights,
     )?;
     let mut report = report;
-    if let Some(json) = report.json(&job.heights)? {
+    if let Some(json) = static_json(&report, &job.heights)? {
         let path = side_path(&job.out, ".json");
         write_atomic(&path, |w| w.write_all(json.as_bytes()))?;
         report.summary = Some(path);
@@ -238,185 +238,80 @@ fn header_point(obs: &ObsFile, refer: Reference) -> Option<Ecef> {
     })
 }
 
-/// The middle of a span as a decimal year (the epoch at which a station coordinate in a
-/// moving frame holds).
-fn decimal_year(a: hifitime::Epoch, b: hifitime::Epoch) -> f64 {
-    let mid = a + (b - a) * 0.5;
-    let (y, ..) = mid.to_gregorian_utc();
-    let start = hifitime::Epoch::from_gregorian_utc_at_midnight(y, 1, 1);
-    let end = hifitime::Epoch::from_gregorian_utc_at_midnight(y + 1, 1, 1);
-    y as f64 + (mid - start).to_seconds() / (end - start).to_seconds()
+/// The `.pos` header lines of a run.
+fn pos_header(this: &PppReport, job: &PppJob) -> Vec<String> {
+    let motion = match this.motion {
+        Motion::Static => "static",
+        Motion::Kinematic => "kinematic",
+    };
+    vec![
+        format!(
+            "program   : ppkat {} (PPP {motion})",
+            env!("CARGO_PKG_VERSION")
+        ),
+        format!("inp file  : {}", job.obs.display()),
+        format!("positions : {} (Q=6: PPP float)", refer_name(this.refer)),
+        format!(
+            "frame     : {} (the orbits' frame, at the epoch of the data)",
+            this.frame
+        ),
+        format!(
+            "epochs    : {} read, {} solved",
+            this.result.input_epochs,
+            this.result.epochs.len()
+        ),
+    ]
 }
 
-impl PppReport {
-    /// The `.pos` header lines.
-    fn header(&self, job: &PppJob) -> Vec<String> {
-        let motion = match self.motion {
-            Motion::Static => "static",
-            Motion::Kinematic => "kinematic",
-        };
-        vec![
-            format!(
-                "program   : ppkat {} (PPP {motion})",
-                env!("CARGO_PKG_VERSION")
-            ),
-            format!("inp file  : {}", job.obs.display()),
-            format!("positions : {} (Q=6: PPP float)", refer_name(self.refer)),
-            format!(
-                "frame     : {} (the orbits' frame, at the epoch of the data)",
-                self.frame
-            ),
-            format!(
-                "epochs    : {} read, {} solved",
-                self.result.input_epochs,
-                self.result.epochs.len()
-            ),
-        ]
-    }
-
-    /// The `.pos` records.
-    fn records(&self) -> Vec<PosRecord> {
-        self.result
-            .epochs
-            .iter()
-            .map(|e| PosRecord {
-                time: e.time,
-                pos: e.pos,
-                quality: Quality::Ppp,
-                nsat: e.nsat,
-                cov: e.cov,
-                age: 0.0,
-                ratio: 0.0,
-            })
-            .collect()
-    }
-
-    /// The JSON summary of a static run.
-    fn json(&self, heights: &crate::height::Heights) -> Result<Option<String>> {
-        let (Some((pos, cov)), Some(first), Some(lastep)) = (
-            self.last,
-            self.result.epochs.first(),
-            self.result.epochs.last(),
-        ) else {
-            return Ok(None);
-        };
-        let g = pos.to_geodetic();
-        let sd = enu_sigmas(&pos, &cov);
-        let mut v = json!({
-            "program": format!("ppkat {}", env!("CARGO_PKG_VERSION")),
-            "mode": "ppp-static",
-            "refers_to": refer_name(self.refer),
-            "frame": self.frame,
-            "epoch_decimal_year": decimal_year(first.time, lastep.time),
-            "position": {
-                "ecef_m": [pos.0.x, pos.0.y, pos.0.z],
-                "latitude_deg": g.lat.to_degrees(),
-                "longitude_deg": g.lon.to_degrees(),
-                "ellipsoidal_height_m": g.h,
-            },
-            "sigma_m": { "east": sd[0], "north": sd[1], "up": sd[2] },
-            "first_epoch_gpst": format_ymdhms(first.time),
-            "last_epoch_gpst": format_ymdhms(lastep.time),
-            "epochs": self.result.epochs.len(),
-            "zenith_total_delay_m": lastep.ztd.0,
-            "residual_rms_m": { "phase": self.result.residual_rms(0), "code": self.result.residual_rms(1) },
-            "rejected": self.result.rejected.iter().map(|(k, n)| (k.describe().to_string(), *n)).collect::<std::collections::BTreeMap<_, _>>(),
-            "ambiguity_restarts": self.result.slips,
-        });
-        crate::survey::add_orthometric(&mut v["position"], &g, heights)?;
-        Ok(serde_json::to_string_pretty(&v).ok().map(|s| s + "\n"))
-    }
+/// The `.pos` records of a run.
+fn pos_records(this: &PppReport) -> Vec<PosRecord> {
+    this.result
+        .epochs
+        .iter()
+        .map(|e| PosRecord {
+            time: e.time,
+            pos: e.pos,
+            quality: Quality::Ppp,
+            nsat: e.nsat,
+            cov: e.cov,
+            age: 0.0,
+            ratio: 0.0,
+        })
+        .collect()
 }
 
-impl fmt::Display for PppReport {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write_summary(self, f, true)
-    }
-}
-
-/// A [`PppReport`] shown without its wall time, for files that must be the same bytes on
-/// every run (the HTML report).
-struct Untimed<'a>(&'a PppReport);
-
-impl fmt::Display for Untimed<'_> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write_summary(self.0, f, false)
-    }
-}
-
-/// What `ppkat ppp` prints of a run, with the wall time when `timed`.
-fn write_summary(this: &PppReport, f: &mut fmt::Formatter<'_>, timed: bool) -> fmt::Result {
-    for w in &this.result.warnings {
-        writeln!(f, "warning: {w}")?;
-    }
-    let r = &this.result;
-    writeln!(
-        f,
-        "{} epochs read, {} solved, {} without 4 usable satellites; {} ambiguity restarts at slips",
-        r.input_epochs,
-        r.epochs.len(),
-        r.unsolved,
-        r.slips
-    )?;
-    for (k, n) in &r.rejected {
-        writeln!(f, "  {n} satellite-epochs {}", k.describe())?;
-    }
-    writeln!(
-        f,
-        "post-fit residuals RMS: phase {:.1} mm, code {:.2} m; σ scaled by √{:.1} for their size and correlation (lag-one {:.2}) plus a floor of {:.0}/{:.0} mm horizontal/up",
-        r.residual_rms(0) * 1e3,
-        r.residual_rms(1),
-        r.inflation.0,
-        r.inflation.1,
-        r.floor.0 * 1e3,
-        r.floor.1 * 1e3,
-    )?;
-    if let Some((pos, cov)) = this.last {
-        let g = pos.to_geodetic();
-        let sd = enu_sigmas(&pos, &cov);
-        writeln!(
-            f,
-            "static {}: X {:.4} Y {:.4} Z {:.4} m (lat {:.9} lon {:.9} h {:.4} m), σ E/N/U {:.1}/{:.1}/{:.1} mm, frame {} at epoch {:.3}",
-            refer_name(this.refer),
-            pos.0.x,
-            pos.0.y,
-            pos.0.z,
-            g.lat.to_degrees(),
-            g.lon.to_degrees(),
-            g.h,
-            sd[0] * 1e3,
-            sd[1] * 1e3,
-            sd[2] * 1e3,
-            this.frame,
-            match (this.result.epochs.first(), this.result.epochs.last()) {
-                (Some(a), Some(b)) => decimal_year(a.time, b.time),
-                _ => f64::NAN,
-            }
-        )?;
-        if let Some(h) = this.header_position {
-            let d = h.enu_from(&pos).0;
-            writeln!(
-                f,
-                "  {:.3} m from the header's approximate position (E/N/U {:+.3}/{:+.3}/{:+.3} m: header minus PPP; a header in another frame, e.g. ETRS89, differs by decimetres)",
-                d.norm(),
-                d.x,
-                d.y,
-                d.z
-            )?;
-        }
-    }
-    write!(f, "wrote {}", this.out.display())?;
-    if let Some(s) = &this.summary {
-        write!(f, ", {}", s.display())?;
-    }
-    if let Some(s) = &this.ztd {
-        write!(f, ", {}", s.display())?;
-    }
-    if let Some(s) = &this.html {
-        write!(f, ", {}", s.display())?;
-    }
-    if timed {
-        write!(f, " in {:.1} s", this.seconds)?;
-    }
-    writeln!(f)
+/// The JSON summary of a static run.
+fn static_json(this: &PppReport, heights: &crate::height::Heights) -> Result<Option<String>> {
+    let (Some((pos, cov)), Some(first), Some(lastep)) = (
+        this.last,
+        this.result.epochs.first(),
+        this.result.epochs.last(),
+    ) else {
+        return Ok(None);
+    };
+    let g = pos.to_geodetic();
+    let sd = enu_sigmas(&pos, &cov);
+    let mut v = json!({
+        "program": format!("ppkat {}", env!("CARGO_PKG_VERSION")),
+        "mode": "ppp-static",
+        "refers_to": refer_name(this.refer),
+        "frame": this.frame,
+        "epoch_decimal_year": decimal_year(first.time, lastep.time),
+        "position": {
+            "ecef_m": [pos.0.x, pos.0.y, pos.0.z],
+            "latitude_deg": g.lat.to_degrees(),
+            "longitude_deg": g.lon.to_degrees(),
+            "ellipsoidal_height_m": g.h,
+        },
+        "sigma_m": { "east": sd[0], "north": sd[1], "up": sd[2] },
+        "first_epoch_gpst": format_ymdhms(first.time),
+        "last_epoch_gpst": format_ymdhms(lastep.time),
+        "epochs": this.result.epochs.len(),
+        "zenith_total_delay_m": lastep.ztd.0,
+        "residual_rms_m": { "phase": this.result.residual_rms(0), "code": this.result.residual_rms(1) },
+        "rejected": this.result.rejected.iter().map(|(k, n)| (k.describe().to_string(), *n)).collect::<std::collections::BTreeMap<_, _>>(),
+        "ambiguity_restarts": this.result.slips,
+    });
+    crate::survey::add_orthometric(&mut v["position"], &g, heights)?;
+    Ok(serde_json::to_string_pretty(&v).ok().map(|s| s + "\n"))
 }

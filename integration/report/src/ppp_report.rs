@@ -2,15 +2,18 @@
 //! converged (static: each epoch's running solution against the final one; kinematic: the
 //! positions about their mean), of the zenith total delay and of the satellites used.
 //!
-//! Enters: a [`PppReport`] (what a run did, defined here; `crate::ppp` makes it). Leaves: a
-//! self-contained HTML text.
+//! Enters: a [`PppReport`] (what a run did, defined here; `integration::ppp` makes it).
+//! Leaves: a self-contained HTML text, and the report's lines ([`PppReport`]'s `Display`, and
+//! [`Untimed`] for the page, without the wall time).
 
 use crate::plot::{axes, html_escape, range, svg, TimeAxis};
+use crate::survey::{enu_sigmas, refer_name};
 use gnss::frame::Ecef;
 use gnss::ppk::{Motion, Reference};
 use gnss::ppp::PppResult;
 use nalgebra::Matrix3;
 use plotters::prelude::*;
+use std::fmt;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -150,4 +153,107 @@ fn mean(r: &PppReport) -> Ecef {
             .sum::<nalgebra::Vector3<f64>>()
             / n,
     )
+}
+
+/// The middle of a span as a decimal year (the epoch at which a station coordinate in a
+/// moving frame holds).
+pub fn decimal_year(a: hifitime::Epoch, b: hifitime::Epoch) -> f64 {
+    let mid = a + (b - a) * 0.5;
+    let (y, ..) = mid.to_gregorian_utc();
+    let start = hifitime::Epoch::from_gregorian_utc_at_midnight(y, 1, 1);
+    let end = hifitime::Epoch::from_gregorian_utc_at_midnight(y + 1, 1, 1);
+    y as f64 + (mid - start).to_seconds() / (end - start).to_seconds()
+}
+
+impl fmt::Display for PppReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write_summary(self, f, true)
+    }
+}
+
+/// A [`PppReport`] shown without its wall time, for files that must be the same bytes on
+/// every run (the HTML report).
+pub struct Untimed<'a>(pub &'a PppReport);
+
+impl fmt::Display for Untimed<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write_summary(self.0, f, false)
+    }
+}
+
+/// What `ppkat ppp` prints of a run, with the wall time when `timed`.
+fn write_summary(this: &PppReport, f: &mut fmt::Formatter<'_>, timed: bool) -> fmt::Result {
+    for w in &this.result.warnings {
+        writeln!(f, "warning: {w}")?;
+    }
+    let r = &this.result;
+    writeln!(
+        f,
+        "{} epochs read, {} solved, {} without 4 usable satellites; {} ambiguity restarts at slips",
+        r.input_epochs,
+        r.epochs.len(),
+        r.unsolved,
+        r.slips
+    )?;
+    for (k, n) in &r.rejected {
+        writeln!(f, "  {n} satellite-epochs {}", k.describe())?;
+    }
+    writeln!(
+        f,
+        "post-fit residuals RMS: phase {:.1} mm, code {:.2} m; σ scaled by √{:.1} for their size and correlation (lag-one {:.2}) plus a floor of {:.0}/{:.0} mm horizontal/up",
+        r.residual_rms(0) * 1e3,
+        r.residual_rms(1),
+        r.inflation.0,
+        r.inflation.1,
+        r.floor.0 * 1e3,
+        r.floor.1 * 1e3,
+    )?;
+    if let Some((pos, cov)) = this.last {
+        let g = pos.to_geodetic();
+        let sd = enu_sigmas(&pos, &cov);
+        writeln!(
+            f,
+            "static {}: X {:.4} Y {:.4} Z {:.4} m (lat {:.9} lon {:.9} h {:.4} m), σ E/N/U {:.1}/{:.1}/{:.1} mm, frame {} at epoch {:.3}",
+            refer_name(this.refer),
+            pos.0.x,
+            pos.0.y,
+            pos.0.z,
+            g.lat.to_degrees(),
+            g.lon.to_degrees(),
+            g.h,
+            sd[0] * 1e3,
+            sd[1] * 1e3,
+            sd[2] * 1e3,
+            this.frame,
+            match (this.result.epochs.first(), this.result.epochs.last()) {
+                (Some(a), Some(b)) => decimal_year(a.time, b.time),
+                _ => f64::NAN,
+            }
+        )?;
+        if let Some(h) = this.header_position {
+            let d = h.enu_from(&pos).0;
+            writeln!(
+                f,
+                "  {:.3} m from the header's approximate position (E/N/U {:+.3}/{:+.3}/{:+.3} m: header minus PPP; a header in another frame, e.g. ETRS89, differs by decimetres)",
+                d.norm(),
+                d.x,
+                d.y,
+                d.z
+            )?;
+        }
+    }
+    write!(f, "wrote {}", this.out.display())?;
+    if let Some(s) = &this.summary {
+        write!(f, ", {}", s.display())?;
+    }
+    if let Some(s) = &this.ztd {
+        write!(f, ", {}", s.display())?;
+    }
+    if let Some(s) = &this.html {
+        write!(f, ", {}", s.display())?;
+    }
+    if timed {
+        write!(f, " in {:.1} s", this.seconds)?;
+    }
+    writeln!(f)
 }

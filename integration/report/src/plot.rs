@@ -6,9 +6,10 @@ use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
 /// A plot into an SVG string; drawing errors leave a note instead of the plot.
-pub(crate) type Plot = Result<(), Box<dyn std::error::Error>>;
+pub type Plot = Result<(), Box<dyn std::error::Error>>;
 
-pub(crate) fn svg(
+/// `draw` run on a 900 × 420 SVG canvas, returned under an `<h3>` title as HTML.
+pub fn svg(
     title: &str,
     draw: impl FnOnce(&DrawingArea<SVGBackend, plotters::coord::Shift>) -> Plot,
 ) -> String {
@@ -16,7 +17,7 @@ pub(crate) fn svg(
 }
 
 /// [`svg`] of a given size in pixels (width, height).
-pub(crate) fn svg_sized(
+pub fn svg_sized(
     title: &str,
     size: (u32, u32),
     draw: impl FnOnce(&DrawingArea<SVGBackend, plotters::coord::Shift>) -> Plot,
@@ -33,11 +34,12 @@ pub(crate) fn svg_sized(
     }
 }
 
-pub(crate) type Chart<'a, 'b> =
+/// A chart of two linear axes on an SVG canvas, as [`axes`] returns it.
+pub type Chart<'a, 'b> =
     ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
 /// The report's axes: margins, label areas, a mesh with the axis descriptions.
-pub(crate) fn axes<'a, 'b>(
+pub fn axes<'a, 'b>(
     root: &'a DrawingArea<SVGBackend<'b>, plotters::coord::Shift>,
     x: std::ops::Range<f64>,
     y: std::ops::Range<f64>,
@@ -61,7 +63,7 @@ pub(crate) fn axes<'a, 'b>(
 
 /// Decimals a tick label needs on an axis spanning `span` (plotters puts about ten ticks a
 /// 1-2-5 step apart): none for a span of ten or more ("5", not "5.0").
-pub(crate) fn decimals(span: f64) -> usize {
+pub fn decimals(span: f64) -> usize {
     if span.is_finite() && span > 0.0 {
         (-(span / 10.0).log10()).ceil().clamp(0.0, 6.0) as usize
     } else {
@@ -70,7 +72,7 @@ pub(crate) fn decimals(span: f64) -> usize {
 }
 
 /// A tick label with `decimals` decimals (no "-0").
-pub(crate) fn tick(v: f64, decimals: usize) -> String {
+pub fn tick(v: f64, decimals: usize) -> String {
     let s = format!("{v:.decimals$}");
     if s.starts_with('-') && s[1..].chars().all(|c| c == '0' || c == '.') {
         s[1..].to_string()
@@ -79,7 +81,9 @@ pub(crate) fn tick(v: f64, decimals: usize) -> String {
     }
 }
 
-pub(crate) fn range(v: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
+/// The span of the values widened by 5 % on each side ((−1, 1) when there is no span),
+/// so that no point sits on the frame.
+pub fn range(v: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
     let lo = v.clone().fold(f64::INFINITY, f64::min);
     let hi = v.fold(f64::NEG_INFINITY, f64::max);
     if lo.is_finite() && hi.is_finite() && hi > lo {
@@ -91,7 +95,7 @@ pub(crate) fn range(v: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
 }
 
 /// Text safe inside HTML.
-pub(crate) fn html_escape(s: &str) -> String {
+pub fn html_escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
@@ -101,7 +105,7 @@ pub(crate) fn html_escape(s: &str) -> String {
 /// many decimals as the tick step needs, so that neighbouring ticks never read alike (a
 /// sub-metre track labelled in whole metres read "-0 -0 0 0").
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct LengthAxis {
+pub struct LengthAxis {
     factor: f64,
     /// The unit the labels are in (`km`, `m`, `cm`, `mm`).
     pub unit: &'static str,
@@ -143,7 +147,7 @@ impl LengthAxis {
 /// A time axis counted from a round time: minutes since the whole minute (runs under two
 /// hours) or hours since the whole hour at or before the first epoch (taken to the second, so
 /// a receiver's 23:59:59.999 counts from 00:00), GPST.
-pub(crate) struct TimeAxis {
+pub struct TimeAxis {
     t0: hifitime::Epoch,
     unit: f64,
     /// The axis description, e.g. `hours since 2002-01-30 00:00 GPST`.

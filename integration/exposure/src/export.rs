@@ -1,19 +1,19 @@
 //! Exports of camera stations: Metashape and Pix4D reference CSVs, OpenDroneMap `geo.txt`, a
 //! full CSV (time, coordinates, sigmas, quality, attitude, flags) and an RTKLIB `.pos`; in
 //! geodetic coordinates or projected (UTM, Gauss–Krüger, any projected EPSG code), with
-//! ellipsoidal or orthometric heights ([`crate::height`]).
+//! ellipsoidal or orthometric heights ([`georef::height`]).
 //!
 //! Enters: camera stations ([`super::CameraStation`], ECEF with ECEF covariance). Leaves: files
 //! written atomically; times GPST, sigmas in the local ENU frame (m), angles degrees (R camera
-//! → ENU). Also the antenna table that [`crate::adjust`] reads ([`antenna_table`]), shared with
-//! the simulator. Uses `common::tmerc` for UTM and Gauss–Krüger, [`crate::crs`] for EPSG codes,
+//! → ENU). Also the antenna table that `adjust` reads ([`antenna_table`]), shared with
+//! the simulator. Uses `common::tmerc` for UTM and Gauss–Krüger, [`georef::crs`] for EPSG codes,
 //! and `gnss::solution` for `.pos`.
 
 use super::attitude::omega_phi_kappa;
 use super::CameraStation;
-use crate::crs::EpsgProjection;
-use crate::height::Heights;
-use crate::vector::TrajectoryFormat;
+use georef::crs::EpsgProjection;
+use georef::height::Heights;
+use georef::vector::TrajectoryFormat;
 use common::atomic::write_atomic;
 use common::tmerc::{Projected, TransverseMercator};
 use gnss::error::Result;
@@ -300,7 +300,7 @@ fn write_centres(
         .collect();
     let names: Vec<String> = st.iter().map(|s| s.id.clone()).collect();
     let header = ["program   : ppkat exposures (projection centres)".to_string()];
-    crate::vector::write_named(path, &header, &recs, &names, format, heights)
+    georef::vector::write_named(path, &header, &recs, &names, format, heights)
 }
 
 /// Metashape reference CSV: label, longitude/latitude (or easting/northing), altitude,

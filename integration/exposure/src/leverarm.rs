@@ -42,7 +42,7 @@ impl fmt::Display for TapeSolution {
 ///
 /// Parsed from "D0,DX,DY,DZ" (four numbers separated by commas, blanks allowed):
 /// ```
-/// # use integration::exposure::leverarm::Tapes;
+/// # use exposure::leverarm::Tapes;
 /// let t: Tapes = "1.84, 1.87, 2.09, 0.90".parse().unwrap();
 /// assert_eq!((t.d0, t.d), (1.84, [1.87, 2.09, 0.90]));
 /// assert!("1.0,0.5,0.5".parse::<Tapes>().is_err());

@@ -10,7 +10,7 @@
 use super::exif_io;
 use super::station::CameraStation;
 use super::xmp::PositionTag;
-use crate::height::Heights;
+use georef::height::Heights;
 use gnss::error::{Error, Result};
 use std::path::{Path, PathBuf};
 

@@ -1,4 +1,7 @@
-//! Exposures: camera exposure times (RINEX events, DJI MRK, CSV) → antenna position
+#![deny(missing_docs)]
+//! # exposure — from exposure times to camera stations
+//!
+//! Camera exposure times (RINEX events, DJI MRK, CSV) → antenna position
 //! interpolated on the trajectory → lever arm rotated by the camera attitude → projection
 //! centres with covariance and quality, and exports for photogrammetry software.
 //!
@@ -10,7 +13,8 @@
 //! [`export`] writes and [`photos`] geotags; [`names`] names the exposures beforehand (photos,
 //! a names file, DJI numbers, `E0001`). [`leverarm`] solves a lever arm
 //! from tape measurements. Uses `gnss` (trajectory, frames, time) and `photo` (rotations,
-//! lever arm); used by [`crate::pipeline`] and [`crate::demo`].
+//! lever arm) and `georef` (systems, heights, trajectory files); used by the adjustment, the
+//! importers, the simulator and `integration`'s pipelines and demo.
 //!
 //! Lever-arm convention (as the whole project): X_A = X_S + R·(u, v, w), (u, v, w) the antenna
 //! phase centre in the camera frame, R camera → local ENU.

@@ -19,13 +19,13 @@ fn enu_cov(pos: &Ecef, cov: &Matrix3<f64>) -> Matrix3<f64> {
 }
 
 /// σ east, north, up (m) of a position at `pos` with ECEF covariance `cov` (m²).
-pub(crate) fn enu_sigmas(pos: &Ecef, cov: &Matrix3<f64>) -> [f64; 3] {
+pub fn enu_sigmas(pos: &Ecef, cov: &Matrix3<f64>) -> [f64; 3] {
     let c = enu_cov(pos, cov);
     [0, 1, 2].map(|i| c[(i, i)].max(0.0).sqrt())
 }
 
 /// Name of a reference point, as the CLI spells it.
-pub(crate) fn refer_name(refer: Reference) -> &'static str {
+pub fn refer_name(refer: Reference) -> &'static str {
     match refer {
         Reference::Arp => "arp",
         Reference::Marker => "marker",
@@ -39,7 +39,7 @@ pub fn json(
     s: &StaticSolution,
     refer: Reference,
     base_marker: &Ecef,
-    heights: &crate::height::Heights,
+    heights: &georef::height::Heights,
 ) -> gnss::error::Result<String> {
     let g = s.pos.to_geodetic();
     let enu = enu_cov(&s.pos, &s.cov);
@@ -86,7 +86,7 @@ pub fn json(
 pub fn add_orthometric(
     position: &mut serde_json::Value,
     g: &gnss::frame::Geodetic,
-    heights: &crate::height::Heights,
+    heights: &georef::height::Heights,
 ) -> gnss::error::Result<()> {
     if heights.orthometric() {
         let n = heights.undulation(g)?;
