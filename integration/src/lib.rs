@@ -31,7 +31,6 @@
 //! `simulate` and `adjust`; `simulate` writes the files `adjust` reads. Times are GPST, angles
 //! radians unless a file says degrees, lengths metres.
 
-pub mod adjust;
 pub mod batch;
 pub mod bench;
 pub mod bench_match;
@@ -46,8 +45,9 @@ pub mod rtklib_conf;
 pub mod simulate;
 pub mod tiepoints;
 
-use report::{plot, ppk_report, ppp_report};
+use report::{ppk_report, ppp_report};
 pub use report::{ppk_summary, survey};
+pub use adjust;
 pub use exposure;
 pub use georef::{crs, geoid_grid, height, vector};
 pub use gnss;

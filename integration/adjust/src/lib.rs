@@ -1,4 +1,7 @@
-//! The joint GNSS-supported bundle adjustment (`ppkat adjust`): image points, control and
+#![deny(missing_docs)]
+//! # adjust — the joint GNSS-supported bundle adjustment
+//!
+//! `ppkat adjust`: image points, control and
 //! check points, GNSS antenna positions with their full covariance, an unknown lever arm,
 //! drift per block, strip or ambiguity segment, optional self-calibration — all factors on
 //! `photo::lsq`, the one least-squares core. Then data snooping with removal, variance

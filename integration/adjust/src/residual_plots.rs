@@ -9,7 +9,7 @@
 
 use super::project::Project;
 use super::results::Results;
-use crate::plot::{svg_sized, Plot};
+use ::report::plot::{svg_sized, Plot};
 use plotters::prelude::*;
 use std::collections::BTreeMap;
 

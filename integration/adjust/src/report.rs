@@ -7,7 +7,7 @@ use super::error::AdjustError;
 use super::estimated::Estimated;
 use super::project::{Mode, Project};
 use super::results::Results;
-use crate::plot::{axes, range, svg};
+use ::report::plot::{axes, range, svg};
 use common::atomic::write_atomic;
 use plotters::prelude::*;
 use std::fmt::Write as _;
@@ -451,7 +451,7 @@ fn exposure_axis(
     let last = v.iter().map(|x| x.time).max();
     match first.zip(last) {
         Some((a, b)) if !numbered => {
-            let axis = crate::plot::TimeAxis::new(a, b);
+            let axis = ::report::plot::TimeAxis::new(a, b);
             (axis.desc.clone(), Box::new(move |t| axis.x(t)))
         }
         _ => (
@@ -469,7 +469,7 @@ fn plot_gnss(r: &Results) -> String {
     let (t0, t1) = range(xs.iter().copied());
     let (y0, y1) = range(v.iter().flat_map(|x| x.v));
     // In the unit the residuals' span suits (millimetres for a good flight).
-    let unit = crate::plot::LengthAxis::for_span(y1 - y0);
+    let unit = ::report::plot::LengthAxis::for_span(y1 - y0);
     let k = unit.factor();
     svg(
         &format!(

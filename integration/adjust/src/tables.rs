@@ -7,7 +7,7 @@ use super::input::{
     perr, Antenna, CameraDef, ControlAxes, GroundPoint, ImageDef, MeasuredDistance, Measurement,
     PointKind,
 };
-use crate::exposure::export::Projection;
+use exposure::export::Projection;
 use gnss::frame::{Ecef, Geodetic};
 use gnss::trajectory::{InterpError, Trajectory};
 use nalgebra::{Matrix3, Vector2, Vector3};

@@ -19,7 +19,7 @@ use super::tables::{
     antennas_from_trajectory, read_antennas, read_distances, read_ground, read_images,
     read_measurements, read_patb, read_trajectory,
 };
-use crate::exposure::export::Projection;
+use exposure::export::Projection;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
