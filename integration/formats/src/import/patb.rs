@@ -27,7 +27,7 @@
 
 use super::common::{ferr, GroundFrame, ImportError, Summary};
 use super::write::{CameraOut, GroundOut, ProjectOut};
-use crate::adjust::camera_section::{camera_def, CameraSection, INTERIOR_NAMES};
+use adjust::camera_section::{camera_def, CameraSection, INTERIOR_NAMES};
 use nalgebra::{Vector2, Vector3};
 use photo::camera::Camera;
 use std::collections::{BTreeMap, BTreeSet, HashMap};
@@ -317,7 +317,7 @@ fn cameras(source: &CameraSource) -> Result<Vec<CameraOut>, ImportError> {
 
 /// The `[[camera]]` tables of a ppkat camera file (the format of `project.toml`'s cameras);
 /// also `ppkat match --camera`.
-pub(crate) fn camera_file(path: &Path) -> Result<Vec<CameraOut>, ImportError> {
+pub fn camera_file(path: &Path) -> Result<Vec<CameraOut>, ImportError> {
     #[derive(serde::Deserialize)]
     struct CameraFile {
         #[serde(default)]

@@ -253,7 +253,7 @@ fn exif_positions(
 ) -> BTreeMap<u64, Geodetic> {
     let mut gps: BTreeMap<u64, Geodetic> = BTreeMap::new();
     for (id, im) in images {
-        match crate::exposure::photos::read_position(&photos.join(&im.name)) {
+        match exposure::photos::read_position(&photos.join(&im.name)) {
             Some((lat, lon, h)) => {
                 gps.insert(*id, Geodetic::from_degrees(lat, lon, h));
             }
