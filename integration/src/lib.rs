@@ -41,7 +41,6 @@ pub mod orbits;
 pub mod pipeline;
 pub mod ppp;
 pub mod simulate;
-pub mod tiepoints;
 
 use report::{ppk_report, ppp_report};
 pub use report::{ppk_summary, survey};
@@ -50,4 +49,5 @@ pub use exposure;
 pub use formats::{import, rtklib_conf};
 pub use georef::{crs, geoid_grid, height, vector};
 pub use gnss;
+pub use tiepoints;
 pub use photo;

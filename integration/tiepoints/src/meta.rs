@@ -5,7 +5,7 @@
 //!
 //! Enters: a photo's path. Leaves: [`PhotoMeta`], or why the photo cannot be used.
 
-use crate::exposure::exif_io;
+use exposure::exif_io;
 use exif::{In, Tag, Value};
 use std::io::Read;
 use std::path::{Path, PathBuf};

@@ -90,7 +90,7 @@ pub fn from_meta(m: &PhotoMeta, w: u32, h: u32) -> Result<FoundCamera, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::tiepoints::meta::DjiXmp;
+    use crate::meta::DjiXmp;
 
     fn meta() -> PhotoMeta {
         PhotoMeta {

@@ -1,3 +1,6 @@
+#![deny(missing_docs)]
+//! # tiepoints — photographs in, a block of tie points out
+//!
 //! `ppkat match`: automatic tie points from a folder of photographs, written as a ppkat
 //! project that `ppkat adjust` runs as it is.
 //!

@@ -7,8 +7,8 @@ use super::camera::from_meta;
 use super::job::{Image, MatchError, MatchJob};
 use super::matched::Matched;
 use super::positions::Position;
-use crate::adjust::compass_rotation;
-use crate::import::{CameraOut, ProjectOut, StartOut};
+use adjust::compass_rotation;
+use formats::import::{CameraOut, ProjectOut, StartOut};
 use gnss::frame::{enu_rotation, Geodetic};
 use nalgebra::{Matrix3, Vector3};
 use photo::camera::Pose;
@@ -127,7 +127,7 @@ fn cameras(
     let mut cams: Vec<(CameraOut, String)> = Vec::new();
     if let Some(path) = &job.camera {
         let file =
-            crate::import::patb::camera_file(path).map_err(|e| MatchError::Input(e.to_string()))?;
+            formats::import::patb::camera_file(path).map_err(|e| MatchError::Input(e.to_string()))?;
         cams = file
             .into_iter()
             .map(|c| (c, "--camera".to_string()))
@@ -524,7 +524,7 @@ fn add_tracks(
 /// from its tie points alone (the relative orientation of its best pair, grown by resection),
 /// rewritten into `dir` where it was written; returns the photos with a start.
 pub fn tie_starts(p: &mut ProjectOut, dir: &std::path::Path) -> Result<usize, MatchError> {
-    use crate::adjust::{build::start_poses, project::Project};
+    use adjust::{build::start_poses, project::Project};
     let loaded =
         Project::load(&dir.join("project.toml")).map_err(|e| MatchError::Nothing(e.to_string()))?;
     let poses = start_poses(&loaded).map_err(|e| MatchError::Nothing(e.to_string()))?;
