@@ -40,7 +40,6 @@ pub mod observations;
 pub mod orbits;
 pub mod pipeline;
 pub mod ppp;
-pub mod simulate;
 
 use report::{ppk_report, ppp_report};
 pub use report::{ppk_summary, survey};
@@ -49,5 +48,6 @@ pub use exposure;
 pub use formats::{import, rtklib_conf};
 pub use georef::{crs, geoid_grid, height, vector};
 pub use gnss;
+pub use sim as simulate;
 pub use tiepoints;
 pub use photo;

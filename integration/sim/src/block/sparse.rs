@@ -7,8 +7,8 @@
 //! coordinates with noise), sorted by image and point. Deterministic per seed.
 
 use super::nav_images::{noisy, seen, Meas, NavImage};
-use crate::simulate::ground_points::Point;
-use crate::simulate::rng::Rng;
+use crate::ground_points::Point;
+use crate::rng::Rng;
 use nalgebra::Vector2;
 use photo::camera::Camera;
 

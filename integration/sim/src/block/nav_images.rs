@@ -3,7 +3,7 @@
 //! an image (`seen`) and the measurement noise (`noisy`). Shared by [`super::nav`], which flies
 //! the block, and `sparse`, which measures sparse control in it.
 
-use crate::simulate::rng::Rng;
+use crate::rng::Rng;
 use nalgebra::{Vector2, Vector3};
 use photo::camera::{Camera, Pose};
 

@@ -1,14 +1,14 @@
 //! The files of a simulated aerial block: the image list, the measurements, the antenna table
 //! with its `.pos` trajectory, and `project.toml` (the ground points are written by
-//! [`crate::simulate::ground_points`], shared with the close-range pair). Coordinates go out geodetic (degrees, ellipsoidal metres),
+//! [`crate::ground_points`], shared with the close-range pair). Coordinates go out geodetic (degrees, ellipsoidal metres),
 //! times as GPS week and seconds of week, covariances in ENU (m²).
 
 use super::spec::{BlockSpec, Image, Measurement, T_FIRST};
-use crate::exposure::export::{antenna_table, AntennaRow};
-use crate::simulate::error::SimError;
-use crate::simulate::ground_points::{geodetic, Point};
-use crate::simulate::io::write;
-use crate::simulate::rng::Rng;
+use exposure::export::{antenna_table, AntennaRow};
+use crate::error::SimError;
+use crate::ground_points::{geodetic, Point};
+use crate::io::write;
+use crate::rng::Rng;
 use gnss::frame::{enu_rotation, Geodetic};
 use nalgebra::{Matrix3, Vector3};
 use photo::camera::Camera;

@@ -1,10 +1,13 @@
-//! The flight simulator. Enters: a [`Scenario`] (TOML or built-in) and a folder. Leaves, in
+#![deny(missing_docs)]
+//! # sim — the simulator, with exact truth
+//!
+//! The flight simulator (`ppkat simulate`). Enters: a [`Scenario`] (TOML or built-in) and a folder. Leaves, in
 //! that folder: base and rover RINEX 3.04 observations with flag-5 exposure events
 //! ([`gnss_obs`]), a navigation file of synthetic constellations ([`constellation`]: GPS-
 //! and Galileo-like by default, GLONASS- and QZSS-like when the scenario asks), the
 //! exact truth (antenna trajectory, projection centres and attitudes, ground points, image
 //! observations, blunders; written by `truth`) and a [`SimReport`]. Uses `gnss` (frames,
-//! orbits, models, the navigation reader) and [`crate::exposure::attitude`]; `demo` and the
+//! orbits, models, the navigation reader) and [`exposure::attitude`]; `demo` and the
 //! tests consume its files. Deterministic for a seed ([`rng`]).
 //!
 //! Also here: simulated adjustment projects with truth ([`block`], [`closerange`]), which

@@ -5,11 +5,11 @@
 //! Enters: the [`Flight`], a [`CameraSpec`] and a random stream. Leaves: [`Exposure`]s,
 //! [`GroundPoint`]s and [`ImageObs`]. Everything is in the site's ENU frame (metres); the
 //! camera rotation R maps the camera frame (x along track, z up, looking down −z) into ENU
-//! and comes from yaw/pitch/roll through [`crate::exposure::attitude::from_yaw_pitch_roll`].
+//! and comes from yaw/pitch/roll through [`exposure::attitude::from_yaw_pitch_roll`].
 
 use super::flight::{Flight, FlightState};
 use super::rng::Rng;
-use crate::exposure::attitude::from_yaw_pitch_roll;
+use exposure::attitude::from_yaw_pitch_roll;
 use nalgebra::{Matrix3, Vector3};
 
 /// Camera of the simulation (pinhole, principal point at the image centre).

@@ -41,7 +41,7 @@ relief = 15.0
 
 /// A built-in scenario by name: `demo` (about 4 minutes), `block20` (20 minutes, 10 Hz),
 /// `long` (one hour, 10 Hz, for benchmarks) or `hard-sky` (5 strips where GNSS alone stays
-/// float at every strip start: see [`crate::hard_sky`]).
+/// float at every strip start: see `integration::hard_sky`).
 pub fn builtin(name: &str) -> Option<Scenario> {
     let mut s: Scenario = toml::from_str(DEMO).ok()?;
     match name {

@@ -11,7 +11,7 @@
 //! Deterministic for the seed; elements are found through a grid of 2 m cells.
 
 use super::terrain::Extent;
-use crate::simulate::rng::Rng;
+use crate::rng::Rng;
 use nalgebra::Vector2;
 
 /// A shape on the ground plane (east, north; m).

@@ -20,7 +20,7 @@
 
 use super::terrain::{pixel_ray, Terrain};
 use super::texture::Texture;
-use crate::simulate::rng::Rng;
+use crate::rng::Rng;
 use nalgebra::Vector2;
 use photo::camera::{Camera, Pose};
 

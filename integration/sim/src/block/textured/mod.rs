@@ -47,10 +47,10 @@ pub use truth::Truth;
 
 use super::files::{images_table, write_antennas};
 use super::spec::{BlockSpec, Image, T_FIRST};
-use crate::simulate::error::SimError;
-use crate::simulate::ground_points::{write_ground_points, Point};
-use crate::simulate::io::{write, write_bytes};
-use crate::simulate::rng::Rng;
+use crate::error::SimError;
+use crate::ground_points::{write_ground_points, Point};
+use crate::io::{write, write_bytes};
+use crate::rng::Rng;
 use gnss::frame::Geodetic;
 use nalgebra::{Vector2, Vector3};
 use photo::camera::Camera;

@@ -6,7 +6,7 @@
 //! file texts; nothing is written here.
 
 use super::TexturedSpec;
-use crate::simulate::ground_points::Point;
+use crate::ground_points::Point;
 use std::fmt::Write as _;
 
 /// σ written with each exact image measurement, pixels (they are exact to 1e-6 px).

@@ -11,7 +11,7 @@
 //! so the height along a ray is monotonic: a ray meets the terrain exactly once (no
 //! occlusion), and Newton converges from any start.
 
-use crate::simulate::rng::Rng;
+use crate::rng::Rng;
 use nalgebra::{Matrix2, Vector2, Vector3};
 use photo::camera::{Camera, Pose};
 

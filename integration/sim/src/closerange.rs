@@ -5,15 +5,15 @@
 //! Enters: a [`CloseRangeSpec`] and a folder. Leaves: `project.toml`, `images.csv` (with
 //! compass azimuth, elevation, roll), `image_observations.csv`, `ground_points.csv` and
 //! `antennas.csv` in the folder, and the [`CloseRangeTruth`]. Uses the compass rotation of
-//! [`crate::adjust::build`] and the ground-point writer shared with [`super::block`]. Frame:
+//! [`adjust::build`] and the ground-point writer shared with [`super::block`]. Frame:
 //! ENU at the site, the target to the north; angles in the files are degrees.
 
 use super::error::SimError;
 use super::ground_points::{geodetic, write_ground_points, Point};
 use super::io::write;
 use super::rng::Rng;
-use crate::adjust::build::compass_rotation;
-use crate::exposure::export::{antenna_table, AntennaRow};
+use adjust::build::compass_rotation;
+use exposure::export::{antenna_table, AntennaRow};
 use gnss::frame::Geodetic;
 use nalgebra::{Matrix3, Vector2, Vector3};
 use photo::camera::{Camera, Pose};

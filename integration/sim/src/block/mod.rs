@@ -7,9 +7,9 @@
 //!
 //! Enters: a [`BlockSpec`] and a folder. Leaves: `project.toml`, `images.csv`,
 //! `image_observations.csv`, `ground_points.csv`, `antennas.csv` (written by
-//! [`crate::exposure::export::antenna_table`]) and `trajectory.pos` in the folder, and the
+//! [`exposure::export::antenna_table`]) and `trajectory.pos` in the folder, and the
 //! [`BlockTruth`]. Uses `photo` (camera, rotations, lever arm) and `gnss` (frames, time,
-//! `.pos`); read back by [`crate::adjust`]. This module simulates; `files` writes the tables;
+//! `.pos`); read back by [`adjust`]. This module simulates; `files` writes the tables;
 //! `spec` holds the spec, the truth and the records both share.
 //!
 //! Frame: ENU tangent plane at the site (`lat`, `lon`, `ground_h`); files carry geodetic

@@ -108,7 +108,7 @@ fn exposures(site: &SiteFrame, start: Epoch, exps: &[Exposure]) -> String {
         let (w, tow) = gnss::time::week_tow(start + Duration::from_seconds(e.t));
         let sx = site.to_ecef(&e.centre);
         let ax = site.to_ecef(&e.state.pos);
-        let [om, ph, ka] = crate::exposure::attitude::omega_phi_kappa(&e.r);
+        let [om, ph, ka] = exposure::attitude::omega_phi_kappa(&e.r);
         let _ = writeln!(ex, "{},{},{w},{tow:.6},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5},{:.6},{:.6},{:.6}", e.id, e.strip + 1, sx.0.x, sx.0.y, sx.0.z, ax.0.x, ax.0.y, ax.0.z, e.centre.x, e.centre.y, e.centre.z, e.state.roll.to_degrees(), e.state.pitch.to_degrees(), e.state.yaw.to_degrees(), om.to_degrees(), ph.to_degrees(), ka.to_degrees());
     }
     ex

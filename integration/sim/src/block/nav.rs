@@ -28,11 +28,11 @@
 
 use super::nav_images::{noisy, seen, Meas, NavImage, HEIGHT_PX, PIXEL, SIGMA_PX, WIDTH_PX};
 use super::spec::T_FIRST;
-use crate::exposure::export::{antenna_table, AntennaRow};
-use crate::simulate::error::SimError;
-use crate::simulate::ground_points::{geodetic, write_ground_points, Point};
-use crate::simulate::io::write;
-use crate::simulate::rng::Rng;
+use exposure::export::{antenna_table, AntennaRow};
+use crate::error::SimError;
+use crate::ground_points::{geodetic, write_ground_points, Point};
+use crate::io::write;
+use crate::rng::Rng;
 use gnss::frame::{enu_rotation, Geodetic};
 use nalgebra::{Matrix3, Vector2, Vector3};
 use photo::camera::{Camera, Pose};
@@ -456,7 +456,7 @@ fn truth_exposures(images: &[NavImage]) -> String {
     let mut s = String::from("# true exposures: projection centre in the site ENU (m), omega/phi/kappa (deg) of R camera->ENU, true antenna velocity ENU (m/s); GPST\nid,strip,week,tow,e,n,u,omega,phi,kappa,ve,vn,vu\n");
     for (id, strip, pose, t, v) in images {
         let (week, tow) = gnss::time::week_tow(gnss::time::from_week_tow(0, *t));
-        let [o, p, k] = crate::exposure::attitude::omega_phi_kappa(&pose.r).map(f64::to_degrees);
+        let [o, p, k] = exposure::attitude::omega_phi_kappa(&pose.r).map(f64::to_degrees);
         let c = pose.centre;
         let _ = writeln!(
             s,
