@@ -1,8 +1,8 @@
 //! Benchmarks run by `ppkat bench`: throughput and peak memory of the stages. Enters: an
 //! observation file ([`ingest`]: RINEX plain, gzip or Hatanaka, parsed by `gnss::rinex`; or a
-//! raw receiver log, converted by `gnss::raw::convert`) or a block
-//! size ([`adjust`]: simulated by [`crate::simulate::block`], adjusted by [`crate::adjust`]),
-//! or a finished `ppk` run ([`PpkBench::of`]). Leaves: an [`Ingest`], [`PpkBench`] or
+//! raw receiver log, converted by `gnss::raw::convert`) or a block size
+//! ([`adjust`](fn@adjust): simulated by [`crate::simulate::block`], adjusted by the `adjust`
+//! crate), or a finished `ppk` run ([`PpkBench::of`]). Leaves: an [`Ingest`], [`PpkBench`] or
 //! [`AdjustBench`] with wall times (s) and the peak resident memory of the process (Linux
 //! `VmHWM`, KiB); nothing is kept but temporary files (removed), the benchmark block's
 //! folder and the `ppk` run's outputs.

@@ -11,11 +11,11 @@
 
 use super::attitude::omega_phi_kappa;
 use super::CameraStation;
+use common::atomic::write_atomic;
+use common::tmerc::{Projected, TransverseMercator};
 use georef::crs::EpsgProjection;
 use georef::height::Heights;
 use georef::vector::TrajectoryFormat;
-use common::atomic::write_atomic;
-use common::tmerc::{Projected, TransverseMercator};
 use gnss::error::Result;
 use gnss::frame::enu_rotation;
 use gnss::solution::{PosFormat, PosRecord};

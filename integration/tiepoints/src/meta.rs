@@ -5,8 +5,8 @@
 //!
 //! Enters: a photo's path. Leaves: [`PhotoMeta`], or why the photo cannot be used.
 
-use exposure::exif_io;
 use exif::{In, Tag, Value};
+use exposure::exif_io;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 

@@ -126,8 +126,8 @@ fn cameras(
 ) -> Result<(Vec<Result<usize, String>>, Vec<(CameraOut, String)>), MatchError> {
     let mut cams: Vec<(CameraOut, String)> = Vec::new();
     if let Some(path) = &job.camera {
-        let file =
-            formats::import::patb::camera_file(path).map_err(|e| MatchError::Input(e.to_string()))?;
+        let file = formats::import::patb::camera_file(path)
+            .map_err(|e| MatchError::Input(e.to_string()))?;
         cams = file
             .into_iter()
             .map(|c| (c, "--camera".to_string()))

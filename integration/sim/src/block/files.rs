@@ -4,11 +4,11 @@
 //! times as GPS week and seconds of week, covariances in ENU (m²).
 
 use super::spec::{BlockSpec, Image, Measurement, T_FIRST};
-use exposure::export::{antenna_table, AntennaRow};
 use crate::error::SimError;
 use crate::ground_points::{geodetic, Point};
 use crate::io::write;
 use crate::rng::Rng;
+use exposure::export::{antenna_table, AntennaRow};
 use gnss::frame::{enu_rotation, Geodetic};
 use nalgebra::{Matrix3, Vector3};
 use photo::camera::Camera;

@@ -28,11 +28,11 @@
 
 use super::nav_images::{noisy, seen, Meas, NavImage, HEIGHT_PX, PIXEL, SIGMA_PX, WIDTH_PX};
 use super::spec::T_FIRST;
-use exposure::export::{antenna_table, AntennaRow};
 use crate::error::SimError;
 use crate::ground_points::{geodetic, write_ground_points, Point};
 use crate::io::write;
 use crate::rng::Rng;
+use exposure::export::{antenna_table, AntennaRow};
 use gnss::frame::{enu_rotation, Geodetic};
 use nalgebra::{Matrix3, Vector2, Vector3};
 use photo::camera::{Camera, Pose};

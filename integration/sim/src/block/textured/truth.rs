@@ -14,8 +14,8 @@
 //! `truth_exposures.csv`.
 
 use super::terrain::{pixel_ray, Extent, Terrain};
-use adjust::camera_section::{camera_def, CameraSection};
 use crate::error::SimError;
+use adjust::camera_section::{camera_def, CameraSection};
 use gnss::frame::{Ecef, Enu, Geodetic};
 use nalgebra::{Vector2, Vector3};
 use photo::camera::{Camera, Pose};

@@ -3,8 +3,8 @@
 //! from the crop as PROJ lays its grids out, each held to the four values PROJ computes from
 //! the full grid (the crop's README), and a point outside named with the grid's extent.
 
-use integration::geoid_grid::{GeoidGrid, Placement};
-use integration::height::Heights;
+use georef::geoid_grid::{GeoidGrid, Placement};
+use georef::height::Heights;
 use std::path::{Path, PathBuf};
 
 /// PROJ 9.8.1 with `us_nga_egm08_25.tif`, bilinear (the crop's README).
