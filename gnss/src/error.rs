@@ -74,6 +74,26 @@ impl From<common::atomic::Error> for Error {
     }
 }
 
+/// A failed line read (`common::lines`, every text input of this crate) as the error the
+/// readers gave before they shared it: I/O as [`Error::Io`], an overlong line as a parse error
+/// naming the kinds of file read here.
+impl From<common::lines::Error> for Error {
+    fn from(e: common::lines::Error) -> Self {
+        match e {
+            common::lines::Error::Io { path, cause } => Error::Io { path, cause },
+            common::lines::Error::TooLong { path, line } => Error::parse(
+                &path,
+                line,
+                format!(
+                    "line longer than {} KiB: not a text file of the expected kind (RINEX, SP3, \
+                     clock or ANTEX); check that the right file was given",
+                    common::lines::MAX_LINE >> 10
+                ),
+            ),
+        }
+    }
+}
+
 /// Result alias of the `gnss` crate.
 pub type Result<T> = std::result::Result<T, Error>;
 

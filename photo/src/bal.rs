@@ -13,33 +13,8 @@ use nalgebra::{DMatrixViewMut, DVector, Matrix2x3, Matrix3, SMatrix, Vector2, Ve
 use rayon::prelude::*;
 use std::path::Path;
 
-/// Errors reading a BAL file.
-#[derive(Debug, thiserror::Error)]
-pub enum BalError {
-    /// The file cannot be read.
-    #[error("{path}: cannot read: {}", if cause.kind() == std::io::ErrorKind::InvalidData {
-        "it is not text (not valid UTF-8): check that it is the BAL file meant".to_string()
-    } else {
-        cause.to_string()
-    })]
-    Io {
-        /// The file.
-        path: String,
-        /// Why (part of the message, not a chained source: a report says it once).
-        cause: std::io::Error,
-    },
-    /// The file is not a BAL problem.
-    #[error("{path}: {what}")]
-    Format {
-        /// The file and line, `path:line`.
-        path: String,
-        /// What is wrong.
-        what: String,
-    },
-    /// The adjustment failed.
-    #[error("the adjustment failed: {0}")]
-    Solve(String),
-}
+pub use crate::bal_text::BalError;
+use crate::bal_text::Numbers;
 
 /// A BAL camera as the solver holds it.
 #[derive(Clone, Debug)]
@@ -79,71 +54,35 @@ pub struct BalProblem {
 }
 
 impl BalProblem {
-    /// Read a BAL file (counts, observations, cameras, points); every number is checked, and
-    /// an error names the file, the line and the element. Counts are whole numbers and nothing
-    /// is reserved beyond what the file's size can hold.
+    /// Read a BAL file (counts, observations, cameras, points), plain or gzip, streamed line by
+    /// line (`common::lines`: no line over 1 MiB, the text never held whole); every number is
+    /// checked, and an error names the file, the line and the element. Counts are whole
+    /// numbers and nothing is reserved beyond what the file's size can hold.
     pub fn read(path: &Path) -> Result<BalProblem, BalError> {
         let p = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|cause| BalError::Io {
-            path: p.clone(),
-            cause,
-        })?;
-        let mut it = text
-            .lines()
-            .enumerate()
-            .flat_map(|(i, l)| l.split_ascii_whitespace().map(move |t| (i + 1, t)));
-        let line = std::cell::Cell::new(1);
-        let mut next = |what: &str| -> Result<f64, BalError> {
-            let (l, tok) = it.next().ok_or_else(|| BalError::Format {
-                path: format!("{p}:{}", line.get()),
-                what: format!("the file ends before {what}"),
-            })?;
-            line.set(l);
-            let at = format!("{p}:{l}");
-            let v: f64 = tok.parse().map_err(|_| BalError::Format {
-                path: at.clone(),
-                what: format!("'{tok}' is not a number ({what})"),
-            })?;
-            if v.is_finite() {
-                Ok(v)
-            } else {
-                Err(BalError::Format {
-                    path: at,
-                    what: format!("{what} is not finite"),
-                })
-            }
-        };
-        let mut count = |what: &str| -> Result<usize, BalError> {
-            let v = next(what)?;
-            if v < 0.0 || v.fract() != 0.0 || v > 1e12 {
-                return Err(BalError::Format {
-                    path: format!("{p}:{}", line.get()),
-                    what: format!("{what} {v} is not a whole number of at most 10¹²"),
-                });
-            }
-            Ok(v as usize)
-        };
+        let mut src = Numbers::open(path)?;
         let (nc, np, no) = (
-            count("the camera count")?,
-            count("the point count")?,
-            count("the observation count")?,
+            src.count("the camera count")?,
+            src.count("the point count")?,
+            src.count("the observation count")?,
         );
         // An observation takes at least 8 bytes, a camera 18, a point 6.
-        let room = |n: usize, bytes: usize| n.min(text.len() / bytes + 1);
+        let size = src.size;
+        let room = |n: usize, bytes: usize| n.min(size / bytes + 1);
         let mut obs = Vec::with_capacity(room(no, 8));
         for k in 0..no {
             let (cam_v, pt_v) = (
-                next("an observation's camera")?,
-                next("an observation's point")?,
+                src.next("an observation's camera")?,
+                src.next("an observation's point")?,
             );
-            let (u, v) = (next("an image x")?, next("an image y")?);
+            let (u, v) = (src.next("an image x")?, src.next("an image y")?);
             // A negative or fractional index is no index (`as usize` made it camera 0).
             let index = |x: f64, n: usize| {
                 (x >= 0.0 && x.fract() == 0.0 && x < n as f64).then_some(x as usize)
             };
             let (Some(cam), Some(pt)) = (index(cam_v, nc), index(pt_v, np)) else {
                 return Err(BalError::Format {
-                    path: format!("{p}:{}", line.get()),
+                    path: format!("{p}:{}", src.line),
                     what: format!(
                         "observation {k} names camera {cam_v} / point {pt_v}: not indices below {nc} / {np}"
                     ),
@@ -159,7 +98,7 @@ impl BalProblem {
         for _ in 0..nc {
             let mut c = [0.0; 9];
             for x in c.iter_mut() {
-                *x = next("camera parameters")?;
+                *x = src.next("camera parameters")?;
             }
             cameras.push(BalCamera {
                 r: exp_so3(&Vector3::new(c[0], c[1], c[2])),
@@ -172,9 +111,9 @@ impl BalProblem {
         let mut points = Vec::with_capacity(room(np, 6));
         for _ in 0..np {
             points.push(Vector3::new(
-                next("a point")?,
-                next("a point")?,
-                next("a point")?,
+                src.next("a point")?,
+                src.next("a point")?,
+                src.next("a point")?,
             ));
         }
         Ok(BalProblem {
@@ -533,5 +472,38 @@ mod run_tests {
         let e = run(&path, &LmOptions::default()).unwrap_err();
         assert!(matches!(e, BalError::Format { .. }), "{e}");
         assert!(e.to_string().contains("bal-run.txt"), "{e}");
+    }
+
+    #[test]
+    fn gzip_reads_as_plain_and_an_overlong_line_or_binary_is_refused_by_line() {
+        let text = "2 2 3\n0 0 1.5 -2.5\n1 1 3.0 4.0\n1 0  5.0\t6.0\n\
+                    0 0 0 0 0 -10 1000 0 0\n0.1 0 0 1 2 -10 900 1e-3 0\n1 2 3\n4 5 6\n";
+        let plain = testkit::scratch_file("bal-plain.txt", text);
+        let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        std::io::Write::write_all(&mut enc, text.as_bytes()).unwrap();
+        let gz = testkit::scratch_file("bal-plain.txt.gz", enc.finish().unwrap());
+        let (a, b) = (
+            BalProblem::read(&plain).unwrap(),
+            BalProblem::read(&gz).unwrap(),
+        );
+        for p in [&a, &b] {
+            assert_eq!((p.cameras.len(), p.points.len(), p.obs.len()), (2, 2, 3));
+            assert_eq!((p.obs[2].cam, p.obs[2].pt, p.obs[2].uv.y), (1, 0, 6.0));
+            assert_eq!((p.cameras[1].f, p.cameras[1].k1), (900.0, 1e-3));
+            assert_eq!(p.points[1], Vector3::new(4.0, 5.0, 6.0));
+        }
+        let long = format!("1 1 1\n{}\n", "0 ".repeat(common::lines::MAX_LINE));
+        let e = BalProblem::read(&testkit::scratch_file("bal-long.txt", long)).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("bal-long.txt:2: a line longer than 1024 KiB"),
+            "{e}"
+        );
+        let binary = testkit::scratch_file("bal-binary.txt", b"1 1 1\n0 0 \xff\xfe 2\n");
+        let e = BalProblem::read(&binary).unwrap_err().to_string();
+        assert!(
+            e.contains("bal-binary.txt: cannot read: it is not text"),
+            "{e}"
+        );
     }
 }

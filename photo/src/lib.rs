@@ -17,13 +17,17 @@
 //!   loss, Levenberg–Marquardt with the Schur complement, statistics, data snooping, variance
 //!   components.
 //! - [`factors`]: image points (with self-calibration), priors, distances on [`lsq`].
-//! - [`bal`]: the "Bundle Adjustment in the Large" file format and camera factor on [`lsq`].
+//! - [`bal`]: the "Bundle Adjustment in the Large" file format and camera factor on [`lsq`]
+//!   (the file's text read by `bal_text` through `common::lines`).
+//!
+//! Its one ppkat dependency is `common`, for bounded text input; it writes no files.
 //!
 //! Conventions (see the house plan): R maps the camera frame into the object frame; image
 //! coordinates are metric with x right, y up, origin at the image centre; a rotation step is a
 //! left perturbation R ← exp(\[δ\]×)·R.
 
 pub mod bal;
+mod bal_text;
 pub mod camera;
 pub mod camera_convert;
 pub mod datum;

@@ -1,110 +1,12 @@
-//! Line sources: plain or gzip-compressed text read line by line into a reused buffer, so that
-//! a file is streamed rather than held in memory.
+//! Line sources and fixed-column fields: the files are read by `common::lines` (plain or
+//! gzip-compressed text, line by line into a reused buffer, every line bounded), re-exported
+//! here; its errors become `crate::error::Error`s naming the kinds of file read here.
 
-use crate::error::{Error, Result};
-use flate2::read::MultiGzDecoder;
-use std::fs::File;
-use std::io::{BufRead, BufReader, Read};
-use std::path::{Path, PathBuf};
+pub use common::lines::{Lines, MAX_LINE};
 
 /// Cap on the warnings a reader stores, so that a file of garbage cannot exhaust memory; the
 /// count goes on.
 pub(super) const MAX_WARNINGS: usize = 1000;
-
-/// The longest line read, end-of-line included (1 MiB). A RINEX 3 observation line with 999
-/// types is 16 kB; Hatanaka lines are shorter.
-pub const MAX_LINE: usize = 1 << 20;
-
-/// A text file read line by line, transparently gunzipped when it starts with the gzip magic.
-pub struct Lines {
-    inner: Box<dyn BufRead + Send>,
-    buf: Vec<u8>,
-    /// 1-based number of the line last returned.
-    pub line_no: usize,
-    /// The file.
-    pub path: PathBuf,
-    /// Bytes of (decompressed) text read so far.
-    pub bytes: u64,
-}
-
-impl Lines {
-    /// Open a file (gzip detected by its magic bytes).
-    pub fn open(path: &Path) -> Result<Self> {
-        let io = Error::io(path);
-        let mut file = File::open(path).map_err(io)?;
-        let mut magic = [0u8; 2];
-        let n = read_up_to(&mut file, &mut magic).map_err(io)?;
-        let file = File::open(path).map_err(io)?;
-        let inner: Box<dyn BufRead + Send> = if n == 2 && magic == [0x1f, 0x8b] {
-            Box::new(BufReader::with_capacity(
-                1 << 16,
-                MultiGzDecoder::new(BufReader::new(file)),
-            ))
-        } else {
-            Box::new(BufReader::with_capacity(1 << 16, file))
-        };
-        Ok(Lines {
-            inner,
-            buf: Vec::with_capacity(256),
-            line_no: 0,
-            path: path.to_path_buf(),
-            bytes: 0,
-        })
-    }
-
-    /// Lines from any reader (used by tests and by in-memory sources).
-    pub fn from_reader(path: &Path, r: impl Read + Send + 'static) -> Self {
-        Lines {
-            inner: Box::new(BufReader::new(r)),
-            buf: Vec::with_capacity(256),
-            line_no: 0,
-            path: path.to_path_buf(),
-            bytes: 0,
-        }
-    }
-
-    /// The next line without its end-of-line characters, or `None` at the end of the file.
-    /// A line longer than [`MAX_LINE`] is an error: no text format read here has one, and
-    /// reading on would hold a whole file of garbage (or of gzip) in one buffer.
-    pub fn next_line(&mut self) -> Result<Option<&[u8]>> {
-        self.buf.clear();
-        let n = (&mut self.inner)
-            .take(MAX_LINE as u64 + 1)
-            .read_until(b'\n', &mut self.buf)
-            .map_err(Error::io(&self.path))?;
-        if n == 0 {
-            return Ok(None);
-        }
-        self.bytes += n as u64;
-        self.line_no += 1;
-        if n > MAX_LINE {
-            return Err(Error::parse(
-                &self.path,
-                self.line_no,
-                format!(
-                    "line longer than {} KiB: not a text file of the expected kind (RINEX, SP3, \
-                     clock or ANTEX); check that the right file was given",
-                    MAX_LINE >> 10
-                ),
-            ));
-        }
-        while matches!(self.buf.last(), Some(b'\n' | b'\r')) {
-            self.buf.pop();
-        }
-        Ok(Some(&self.buf))
-    }
-}
-
-fn read_up_to(r: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
-    let mut n = 0;
-    while n < buf.len() {
-        match r.read(&mut buf[n..])? {
-            0 => break,
-            k => n += k,
-        }
-    }
-    Ok(n)
-}
 
 /// Columns `a..b` (0-based, end exclusive) of a line, clipped to its length.
 pub fn cols(line: &[u8], a: usize, b: usize) -> &[u8] {

@@ -166,14 +166,32 @@ impl GroundFrame {
     }
 }
 
-/// The data lines of a text file (not `#` comments) with their 1-based line numbers.
+/// The data lines of a text file (not `#` comments) with their 1-based line numbers, read
+/// through `common::lines` (plain or gzip, no line over 1 MiB).
 pub(crate) fn lines(path: &Path) -> Result<Vec<(usize, String)>, ImportError> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| ferr(path, None, format!("cannot read: {e}")))?;
-    Ok(text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim_start().starts_with('#'))
-        .map(|(i, l)| (i + 1, l.to_string()))
-        .collect())
+    use ::common::lines::{Error, Lines};
+    let read_err = |e: Error| match e {
+        Error::Io { cause, .. } => ferr(path, None, format!("cannot read: {cause}")),
+        Error::TooLong { line, .. } => ferr(
+            path,
+            Some(line),
+            "a line longer than 1 MiB: not a text file of the kind expected; check that the \
+             right file was given",
+        ),
+    };
+    let mut src = Lines::open(path).map_err(read_err)?;
+    let mut out = Vec::new();
+    loop {
+        let n = src.line_no + 1;
+        let Some(line) = src.next_line().map_err(read_err)? else {
+            return Ok(out);
+        };
+        let Ok(l) = std::str::from_utf8(line) else {
+            let what = "not text (not valid UTF-8): check that it is the file meant";
+            return Err(ferr(path, Some(n), what));
+        };
+        if !l.trim_start().starts_with('#') {
+            out.push((n, l.to_string()));
+        }
+    }
 }
