@@ -8,9 +8,9 @@
 //! `ppkat ppk` and `ppkat exposures` as their `--config` files take them. What a file names
 //! wins over what was found.
 
+use common::lines::Lines;
 use gnss::error::{Error, Result};
 use gnss::obs::{detect_format, ObsFormat};
-use gnss::rinex::lines::Lines;
 use std::path::{Path, PathBuf};
 
 /// One flight: its folder and the files found in it.

@@ -111,7 +111,7 @@ pub fn load(file: &Path, key: u64) -> Option<Cached> {
 }
 
 /// Write `c` under `key` to `file`, whole or not at all (`common::atomic::write_atomic`).
-pub fn store(file: &Path, key: u64, c: &Cached) -> Result<(), gnss::error::Error> {
+pub fn store(file: &Path, key: u64, c: &Cached) -> Result<(), common::atomic::Error> {
     let f = &c.features;
     write_whole(file, |w| {
         w.write_all(MAGIC)?;
@@ -140,14 +140,14 @@ pub fn store(file: &Path, key: u64, c: &Cached) -> Result<(), gnss::error::Error
 pub(crate) fn write_whole(
     file: &Path,
     body: impl FnOnce(&mut dyn std::io::Write) -> std::io::Result<()>,
-) -> Result<(), gnss::error::Error> {
+) -> Result<(), common::atomic::Error> {
     if let Some(dir) = file.parent() {
-        std::fs::create_dir_all(dir).map_err(|cause| gnss::error::Error::Write {
+        std::fs::create_dir_all(dir).map_err(|cause| common::atomic::Error::Write {
             path: dir.to_path_buf(),
             cause,
         })?;
     }
-    common::atomic::write_atomic(file, body).map_err(gnss::error::Error::from)
+    common::atomic::write_atomic(file, body)
 }
 
 /// Little-endian values read from the front of a byte slice; None past its end.

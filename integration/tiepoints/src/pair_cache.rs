@@ -129,7 +129,7 @@ fn read(bytes: &[u8]) -> Option<HashMap<PairKey, Stored>> {
 pub fn store<'a>(
     file: &Path,
     results: impl Iterator<Item = (PairKey, &'a PairResult)>,
-) -> Result<(), gnss::error::Error> {
+) -> Result<(), common::atomic::Error> {
     let results: Vec<(PairKey, &PairResult)> = results.collect();
     write_whole(file, |w| {
         w.write_all(MAGIC)?;

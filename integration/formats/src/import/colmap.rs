@@ -12,7 +12,7 @@
 
 use super::common::{ferr, lines, ImportError, Summary};
 use super::write::{CameraOut, ProjectOut, StartOut};
-use gnss::frame::{enu_rotation, Ecef, Geodetic};
+use ::common::frame::{enu_rotation, Ecef, Geodetic};
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use photo::camera_convert::ColmapCamera;
 use photo::relative::similarity;

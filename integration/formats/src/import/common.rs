@@ -2,8 +2,8 @@
 //! the [`Summary`] of what was read and skipped, the [`GroundFrame`] of an import, and the data
 //! lines of a text file.
 
+use ::common::frame::{Ecef, Geodetic};
 use common::tmerc::{Projected, TransverseMercator};
-use gnss::frame::{Ecef, Geodetic};
 use nalgebra::Vector3;
 use std::path::Path;
 
@@ -119,7 +119,7 @@ impl GroundFrame {
         match *self {
             GroundFrame::Local => {
                 let o = Geodetic::from_degrees(LOCAL_ORIGIN[0], LOCAL_ORIGIN[1], LOCAL_ORIGIN[2]);
-                let r = gnss::frame::enu_rotation(&o);
+                let r = ::common::frame::enu_rotation(&o);
                 Ecef(o.to_ecef().0 + r.transpose() * p)
             }
             GroundFrame::Utm(zone, north) => TransverseMercator::utm(zone, north)
@@ -139,7 +139,7 @@ impl GroundFrame {
         match *self {
             GroundFrame::Local => {
                 let o = Geodetic::from_degrees(LOCAL_ORIGIN[0], LOCAL_ORIGIN[1], LOCAL_ORIGIN[2]);
-                gnss::frame::enu_rotation(&o) * (e.0 - o.to_ecef().0)
+                ::common::frame::enu_rotation(&o) * (e.0 - o.to_ecef().0)
             }
             GroundFrame::Utm(zone, north) => {
                 let g = e.to_geodetic();

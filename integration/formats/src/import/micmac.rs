@@ -388,9 +388,9 @@ fn enu_at(frame: &GroundFrame, p: &Vector3<f64>) -> Matrix3<f64> {
     match frame {
         GroundFrame::Utm(..) => Matrix3::identity(),
         GroundFrame::Local => {
-            let o = gnss::frame::Geodetic::from_degrees(0.0, 0.0, 0.0);
+            let o = ::common::frame::Geodetic::from_degrees(0.0, 0.0, 0.0);
             let at = frame.to_ecef(p).to_geodetic();
-            gnss::frame::enu_rotation(&at) * gnss::frame::enu_rotation(&o).transpose()
+            ::common::frame::enu_rotation(&at) * ::common::frame::enu_rotation(&o).transpose()
         }
     }
 }

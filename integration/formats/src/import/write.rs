@@ -4,8 +4,8 @@
 //! [`ProjectOut::write_folder`] the folder as a whole.
 
 use super::common::{ferr, ImportError};
+use ::common::frame::Ecef;
 use common::atomic::write_atomic;
-use gnss::frame::Ecef;
 use nalgebra::{Matrix3, Vector2};
 use photo::camera::Camera;
 use photo::rotation::Angles;
