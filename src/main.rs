@@ -3,6 +3,10 @@
 //! and counted on standard error, [`cmd::Incomplete`]), 1 failed or produced nothing usable;
 //! clap exits with 2 on bad usage.
 
+// The doc comments of the argument structs are clap's `--help` text, written for people at a
+// terminal (`[[camera]]` tables, `<image id>`), not rustdoc markdown.
+#![allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
+
 mod cmd;
 
 use anyhow::{Context, Result};

@@ -150,7 +150,7 @@ impl Prior {
     }
 
     /// Observing only the components `axes` of the block (e.g. [0, 1]: a planimetric
-    /// control point, [2]: a height); the residual has one row per axis, in that order.
+    /// control point, \[2\]: a height); the residual has one row per axis, in that order.
     pub fn on_axes(mut self, axes: &[usize]) -> Self {
         self.axes = axes.to_vec();
         self

@@ -65,7 +65,7 @@ fn epoch_misfits(prev: &[SatMeas], cur: &[SatMeas], dt: f64) -> Vec<(f64, bool)>
 }
 
 /// The noise of a receiver's misfit over its consecutive epochs at most `max_gap` apart;
-/// None with fewer than [`MIN_SAMPLES`] clean misfits (no Doppler, or no C/N0 to tell clean
+/// None with fewer than `MIN_SAMPLES` clean misfits (no Doppler, or no C/N0 to tell clean
 /// signals by).
 pub fn misfit_noise(times: &[Epoch], meas: &[Vec<SatMeas>], max_gap: f64) -> Option<MisfitNoise> {
     let mut res = Vec::new();

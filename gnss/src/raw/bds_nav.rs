@@ -278,7 +278,7 @@ fn read(f: &Field, sf: &[&[u8; SUBFRAME_BYTES]]) -> i64 {
     parts_value(&s, f.1, f.2, f.3)
 }
 
-/// Write a field's value (its low bits) into the subframes (the inverse of [`read`]).
+/// Write a field's value (its low bits) into the subframes (the inverse of `read`).
 pub fn write(f: &Field, v: i64, sf: &mut [[u8; SUBFRAME_BYTES]]) {
     let (_, first, _, parts) = *f;
     let mut left: usize = parts.iter().map(|p| p.1).sum();

@@ -1,6 +1,6 @@
 //! Bit fields of navigation messages: unsigned and two's-complement fields of up to 32 bits
 //! at any bit offset of a big-endian bit string (bit 0 is the most significant bit of byte 0),
-//! as the interface documents number them; and [`Writer`], which writes such fields.
+//! as the interface documents number them; and `Writer`, which writes such fields.
 
 /// An unsigned field of `len` (≤ 32) bits starting at bit `pos`; bits past the end read as 0.
 #[inline]
@@ -62,7 +62,7 @@ pub fn set_bits(buf: &mut [u8], pos: usize, len: usize, v: u32) {
 /// CRC-24Q (the Qualcomm CRC of Galileo I/NAV, RTCM 3 and SBAS) of whole bytes.
 ///
 /// Four bytes a step ("slicing by four"): the CRC is kept in the top 24 bits of a 32-bit
-/// register, where a step is that of a 32-bit CRC with the tables of [`CRC24Q_SLICES`].
+/// register, where a step is that of a 32-bit CRC with the tables of `CRC24Q_SLICES`.
 pub fn crc24q(data: &[u8]) -> u32 {
     let t = &CRC24Q_SLICES;
     let mut chunks = data.chunks_exact(4);

@@ -4,7 +4,7 @@
 //! What enters: the path of a log and the user's time hint. What leaves: each [`RawItem`]
 //! handed to a callback, and the [`RawStats`] of everything read and dropped.
 //!
-//! The log is surveyed once first ([`Survey`]): whether it has RXM-RAWX with a known week,
+//! The log is surveyed once first (`Survey`): whether it has RXM-RAWX with a known week,
 //! MSM observations, and which ephemeris messages with which weeks. Then:
 //! - observations come from RXM-RAWX when the log has them (richer: half-cycle flags, C/N0,
 //!   lock times), else from the MSMs; the other kind is counted as not used, naming why;

@@ -4,7 +4,7 @@
 //! [`crate::rinex`] ([`ObsEpoch`](crate::rinex::ObsEpoch), [`SatObs`](crate::rinex::SatObs)) (so that the RINEX writer and every engine take them as they take a
 //! RINEX file), camera events, and [`RawStats`] counting everything that was dropped.
 //! Uses [`crate::rinex::write`] to write RINEX. Formats: u-blox UBX ([`ubx`]), RTCM 3
-//! MSM observations ([`rtcm`], [`rtcm_msm`], [`rtcm_items`]) and Septentrio SBF ([`sbf`],
+//! MSM observations ([`rtcm`], [`rtcm_msm`], [`log_items`]) and Septentrio SBF ([`sbf`],
 //! [`sbf_obs`], [`sbf_nav`], [`sbf_items`]).
 //!
 //! The UBX decoder is our own rather than the `ublox` crate: the conversion must reproduce

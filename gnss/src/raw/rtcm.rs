@@ -2,7 +2,7 @@
 //!
 //! What enters: a byte stream ([`FrameReader`]). What leaves: message payloads with a valid
 //! CRC and their message numbers, and counts of everything skipped in [`RawStats`].
-//! Messages are decoded in [`super::rtcm_msm`] (observations) and [`super::rtcm_items`]
+//! Messages are decoded in [`super::rtcm_msm`] (observations) and [`super::log_items`]
 //! (the loop over a log, station position, GLONASS channels, the week hint).
 //!
 //! A frame is `D3`, six reserved bits and a 10-bit payload length, the payload (its first

@@ -1,6 +1,6 @@
 //! An RTCM 3 encoder for MSM4 and MSM7 and the few other messages the decoder uses, to build
 //! test data and synthetic logs (the inverse of [`super::rtcm_msm`] and
-//! [`super::rtcm_items`]).
+//! [`super::log_items`]).
 //!
 //! What enters: per satellite its signals in physical units (pseudorange m, phase cycles,
 //! Doppler Hz, C/N0 dB-Hz, lock time ms, half-cycle flag). What leaves: whole frames with

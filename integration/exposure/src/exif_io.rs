@@ -209,7 +209,7 @@ pub fn xmp_packet(jpeg: &[u8]) -> Option<String> {
 
 /// A copy of the JPEG `jpeg` whose EXIF and XMP carry the position of `tag`: the EXIF fields
 /// the photo had are kept (the thumbnail too while it fits), its GPS directory replaced (an
-/// altitude only for orthometric heights, see [`gps_fields`]); its XMP packet edited (or one
+/// altitude only for orthometric heights, see `gps_fields`); its XMP packet edited (or one
 /// added) by [`xmp::packet`]. `Err` says why the photo cannot be tagged (not a JPEG, damaged,
 /// EXIF unreadable, XMP too large); the input is never changed.
 pub fn geotagged(jpeg: &[u8], tag: &PositionTag) -> Result<Vec<u8>, String> {

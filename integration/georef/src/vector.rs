@@ -55,7 +55,7 @@ pub fn write(
     write_named(path, header, records, &[], format, heights)
 }
 
-/// [`write`] with a name per record (photo labels; records beyond `names` are named by their
+/// [`write()`] with a name per record (photo labels; records beyond `names` are named by their
 /// GPST). A `.pos` has no room for names. Orthometric heights need llh coordinates: an ECEF
 /// `.pos` with them is refused.
 pub fn write_named(

@@ -5,14 +5,14 @@
 //! QZSS-like set (three quasi-zenith satellites on one figure-eight centred on 135° E and a
 //! geostationary one at 127° E, Keplerian LNAV records broadcast every hour, as ppkat uses a
 //! QZSS record within ±1 h of toe) and a GLONASS-like one (state-vector records every 30 min,
-//! [`super::glonass_nav`]).
+//! `glonass_nav`).
 //!
 //! The simulator computes every satellite position from this file as read back by our own
 //! reader, so simulated observations and processing use the very same numbers. Every
 //! Keplerian value lies on the grid of the broadcast messages (semicircles 2^-31, e 2^-33, √A
 //! 2^-19, clock terms at GPS or Galileo resolution), as a satellite's would: encoding the file
 //! as RTCM 3 (`simulate --raw rtcm3`) or navigation words then loses nothing. (GLONASS values
-//! are not on the RTCM grid: see [`super::glonass_nav`].)
+//! are not on the RTCM grid: see `glonass_nav`.)
 //!
 //! Enters: the GPST span of the flight, a seed and the systems. Leaves: the text of the
 //! navigation file (times of ephemeris every 2 h for GPS and Galileo, 1 h for QZSS, GPST;
@@ -177,7 +177,7 @@ pub fn navigation_text(start: Epoch, end: Epoch, seed: u64) -> String {
 
 /// RINEX 3.04 navigation text of the synthetic constellations of `systems` (any of GPS,
 /// Galileo, GLONASS, QZSS) covering `[start − 2 h, end + 2 h]`: GPS and Galileo records every
-/// 2 h, QZSS every hour, then GLONASS every 30 min ([`super::glonass_nav`]). The GPS and
+/// 2 h, QZSS every hour, then GLONASS every 30 min (`glonass_nav`). The GPS and
 /// Galileo values do not depend on which other systems are asked for.
 pub fn navigation_text_of(
     start: Epoch,

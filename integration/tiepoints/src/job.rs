@@ -48,7 +48,7 @@ pub struct MatchJob {
     /// completion turns 10 % more tracks into tracks of three or more photos.
     pub complete_ratio: f64,
     /// Refine every track's measurements by least-squares matching of its first one's patch
-    /// ([`refine`]), each then with its own σ.
+    /// ([`crate::refine`]), each then with its own σ.
     pub refine: bool,
     /// Use no position from the photos' metadata.
     pub ignore_gps: bool,

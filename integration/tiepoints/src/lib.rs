@@ -8,7 +8,7 @@
 //! positions (an exposures table from [`positions`] before EXIF GPS), features of every photo
 //! decoded at a reduced size ([`decode`], `photo::features`; one photo per thread at a time,
 //! only keypoints and descriptors kept), pairs ([`pairs`]), matching and RANSAC per pair,
-//! tracks, their completion and consistency ([`block`]), sub-pixel measurements
+//! tracks, their completion and consistency (`block`), sub-pixel measurements
 //! ([`refine`]), the connected block, and the project ([`project`]) with a report
 //! ([`report`]).
 //!

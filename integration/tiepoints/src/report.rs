@@ -163,7 +163,7 @@ pub fn html(m: &Matched, w: &Written) -> String {
     )
 }
 
-/// [`json`] as pretty-printed text.
+/// [`json()`] as pretty-printed text.
 pub fn json_text(m: &Matched, w: &Written) -> String {
     serde_json::to_string_pretty(&json(m, w)).unwrap_or_default()
 }

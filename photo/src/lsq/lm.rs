@@ -187,7 +187,7 @@ impl Problem {
 
 impl Problem {
     /// Every free block that its own observations do not determine, at the current values
-    /// (see [`Model::undetermined_blocks`]); the caller may leave them out and solve the rest.
+    /// (see `Model::undetermined_blocks`); the caller may leave them out and solve the rest.
     pub fn undetermined(&mut self) -> Result<Vec<super::key::Key>, SolveError> {
         let st = self.structure();
         let mut lins = Linearisation::default();

@@ -26,7 +26,7 @@ impl Problem {
     /// block of an eliminated kind that a removal leaves undetermined (no more residual rows
     /// than unknowns) is fixed out, its remaining factors following with w = 0. A factor whose
     /// removal would leave any other block undetermined is kept (never an abort): it is
-    /// listed by [`Self::kept_suspects`], its σ multiplied by [`KEPT_SIGMA_FACTOR`] (so its
+    /// listed by [`Self::kept_suspects`], its σ multiplied by `KEPT_SIGMA_FACTOR` (so its
     /// blunder does not spread into its neighbours), and the next largest |w| is tested.
     pub fn data_snooping(
         &mut self,

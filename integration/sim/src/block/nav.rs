@@ -80,7 +80,7 @@ pub struct NavSpec {
     pub offset_enu: [f64; 3],
     /// Weights of 1, 2, 3, 4 and 5 control points measured per image (each image draws its
     /// count, then that many of the control points it sees; check points in 2–4 images
-    /// each, see [`super::sparse`]); `None`: each point measured in 1–6 images as drawn.
+    /// each, see `block::sparse`); `None`: each point measured in 1–6 images as drawn.
     pub control_per_image: Option<[f64; 5]>,
 }
 
