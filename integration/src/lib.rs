@@ -26,8 +26,8 @@
 //! - [`tiepoints`]: `ppkat match`, photographs → a block of tie points.
 //! - `sim` → [`simulate`]: flights and projects with exact truth.
 //!
-//! Below them all: `gnss`, `photo` and `common` (atomic outputs, progress, frames, transverse
-//! Mercator). Times are GPST, angles radians unless a file says degrees, lengths metres.
+//! Below them all: `gnss`, `photo` and `common` (atomic outputs, bounded text input,
+//! progress, frames, transverse Mercator). Times are GPST, angles radians unless a file says degrees, lengths metres.
 
 pub mod batch;
 pub mod bench;

@@ -57,7 +57,8 @@ impl BalProblem {
     /// Read a BAL file (counts, observations, cameras, points), plain or gzip, streamed line by
     /// line (`common::lines`: no line over 1 MiB, the text never held whole); every number is
     /// checked, and an error names the file, the line and the element. Counts are whole
-    /// numbers and nothing is reserved beyond what the file's size can hold.
+    /// numbers and nothing is reserved beyond what the file's size can hold. What follows the
+    /// last point is not read.
     pub fn read(path: &Path) -> Result<BalProblem, BalError> {
         let p = path.display().to_string();
         let mut src = Numbers::open(path)?;
@@ -501,8 +502,11 @@ mod run_tests {
         );
         let binary = testkit::scratch_file("bal-binary.txt", b"1 1 1\n0 0 \xff\xfe 2\n");
         let e = BalProblem::read(&binary).unwrap_err().to_string();
+        assert!(e.contains("bal-binary.txt:2: it is not text"), "{e}");
+        let nbsp = testkit::scratch_file("bal-nbsp.txt", "1 1 1\n0 0 1.0\u{a0}2.0\n");
+        let e = BalProblem::read(&nbsp).unwrap_err().to_string();
         assert!(
-            e.contains("bal-binary.txt: cannot read: it is not text"),
+            e.contains("bal-nbsp.txt:2: '1.0\u{a0}2.0' is not a number"),
             "{e}"
         );
     }

@@ -67,7 +67,10 @@ impl Numbers {
     fn word(&mut self) -> Result<Option<std::ops::Range<usize>>, BalError> {
         loop {
             let rest = &self.text[self.at..];
-            let skip = rest.len() - rest.trim_start().len();
+            let skip = rest.len()
+                - rest
+                    .trim_start_matches(|c: char| c.is_ascii_whitespace())
+                    .len();
             self.at += skip;
             if self.at < self.text.len() {
                 let rest = &self.text[self.at..];
@@ -79,16 +82,18 @@ impl Numbers {
                 self.line = self.src.line_no;
                 return Ok(Some(start..start + len));
             }
-            let path = self.src.path.display().to_string();
             let Some(l) = self.src.next_line().map_err(BalError::from_lines)? else {
                 return Ok(None);
             };
-            self.text = std::str::from_utf8(l)
-                .map_err(|_| BalError::Io {
-                    path,
-                    cause: std::io::ErrorKind::InvalidData.into(),
-                })?
-                .to_string();
+            let Ok(l) = std::str::from_utf8(l) else {
+                return Err(BalError::Format {
+                    path: format!("{}:{}", self.src.path.display(), self.src.line_no),
+                    what: "it is not text (not valid UTF-8): check that it is the BAL file meant"
+                        .into(),
+                });
+            };
+            self.text.clear();
+            self.text.push_str(l);
             self.at = 0;
         }
     }
@@ -140,7 +145,7 @@ impl BalError {
             common::lines::Error::TooLong { path, line } => BalError::Format {
                 path: format!("{}:{line}", path.display()),
                 what: format!(
-                    "a line longer than {} KiB: not a BAL file; check that the right file was given",
+                    "a line longer than {} KiB: BAL files have far shorter lines; check that the right file was given",
                     common::lines::MAX_LINE >> 10
                 ),
             },

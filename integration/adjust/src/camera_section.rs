@@ -121,7 +121,7 @@ fn interior_indices(
 }
 
 /// A camera section as a camera with its estimation choices; `path` (the file the section
-/// came from) names it in errors. Also used by `import::patb` for `--camera FILE.toml`.
+/// came from) names it in errors. Also used by `formats::import::patb` for `--camera FILE.toml`.
 pub fn camera_def(c: &CameraSection, path: &Path) -> Result<CameraDef, AdjustError> {
     let focal = one_of(
         path,

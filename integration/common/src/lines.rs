@@ -27,7 +27,7 @@ pub enum Error {
         cause: std::io::Error,
     },
     /// A line is longer than [`MAX_LINE`]: not a text file of the kind expected.
-    #[error("{path}, line {line}: line longer than {} KiB: not a text file of the expected kind; check that the right file was given", MAX_LINE >> 10)]
+    #[error("{path}:{line}: line longer than {} KiB: not a text file of the expected kind; check that the right file was given", MAX_LINE >> 10)]
     TooLong {
         /// The file.
         path: PathBuf,

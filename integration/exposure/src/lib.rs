@@ -14,7 +14,7 @@
 //! a names file, DJI numbers, `E0001`). [`leverarm`] solves a lever arm
 //! from tape measurements. Uses `gnss` (trajectory, frames, time) and `photo` (rotations,
 //! lever arm) and `georef` (systems, heights, trajectory files); used by the adjustment, the
-//! importers, the simulator and `integration`'s pipelines and demo.
+//! importers, the tie points (EXIF), the simulator and `integration`'s pipelines and demo.
 //!
 //! Lever-arm convention (as the whole project): X_A = X_S + R·(u, v, w), (u, v, w) the antenna
 //! phase centre in the camera frame, R camera → local ENU.

@@ -11,8 +11,8 @@
 //! - [`ppp_report`]: what a PPP run did ([`ppp_report::PppReport`]) and its page.
 //! - [`survey`]: the summary of a static run (`OUT.pos.json` and report lines).
 //!
-//! Dependency direction: the pages → `ppk_summary` → `survey` → `georef::height`; every page →
-//! `plot`. Times are GPST, lengths metres.
+//! Dependency direction: the PPK page → `ppk_summary` → `survey`; the PPP page → `survey`;
+//! `survey` → `georef::height`; every page → `plot`. Times are GPST, lengths metres.
 
 pub mod plot;
 pub mod ppk_report;

@@ -5,7 +5,8 @@
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
-/// A plot into an SVG string; drawing errors leave a note instead of the plot.
+/// What a drawing closure given to [`svg`] or [`svg_sized`] returns; on `Err` the page shows
+/// a note instead of the plot.
 pub type Plot = Result<(), Box<dyn std::error::Error>>;
 
 /// `draw` run on a 900 × 420 SVG canvas, returned under an `<h3>` title as HTML.
@@ -94,7 +95,7 @@ pub fn range(v: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
     }
 }
 
-/// Text safe inside HTML.
+/// Text safe inside an HTML element (`&`, `<`, `>` escaped; not for attribute values).
 pub fn html_escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")

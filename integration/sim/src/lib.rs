@@ -7,8 +7,9 @@
 //! and Galileo-like by default, GLONASS- and QZSS-like when the scenario asks), the
 //! exact truth (antenna trajectory, projection centres and attitudes, ground points, image
 //! observations, blunders; written by `truth`) and a [`SimReport`]. Uses `gnss` (frames,
-//! orbits, models, the navigation reader) and [`exposure::attitude`]; `demo` and the
-//! tests consume its files. Deterministic for a seed ([`rng`]).
+//! orbits, models, the navigation reader and the raw-log writers), `photo` (cameras,
+//! rotations), `exposure` (attitude, exports), `adjust` (camera sections, project schema)
+//! and `common` (atomic outputs); `integration`'s demo and the tests consume its files. Deterministic for a seed ([`rng`]).
 //!
 //! Also here: simulated adjustment projects with truth ([`block`], [`closerange`]), which
 //! write `ppkat adjust` inputs instead of GNSS files.

@@ -175,8 +175,11 @@ pub(crate) fn lines(path: &Path) -> Result<Vec<(usize, String)>, ImportError> {
         Error::TooLong { line, .. } => ferr(
             path,
             Some(line),
-            "a line longer than 1 MiB: not a text file of the kind expected; check that the \
-             right file was given",
+            format!(
+                "a line longer than {} KiB: not a text file of the kind expected; check that \
+                 the right file was given",
+                ::common::lines::MAX_LINE >> 10
+            ),
         ),
     };
     let mut src = Lines::open(path).map_err(read_err)?;

@@ -5,7 +5,7 @@
 //! What enters: the OriConvert-style file, the job, the ground frame. What leaves: the
 //! positions in the project, the strips, the notes.
 
-use super::common::{ferr, GroundFrame, ImportError, Summary};
+use super::common::{ferr, lines, GroundFrame, ImportError, Summary};
 use super::micmac_job::{GnssKind, MicMacJob};
 use super::write::ProjectOut;
 use nalgebra::Vector3;
@@ -115,13 +115,11 @@ fn read_gnss(path: &Path, format: &str) -> Result<Vec<(String, Vector3<f64>, usi
             "--gnss-format '{format}': name the columns with N X Y Z, e.g. '#F=N X Y Z'"
         )));
     };
-    let text =
-        std::fs::read_to_string(path).map_err(|e| ferr(path, None, format!("cannot read: {e}")))?;
     let mut out: Vec<(String, Vector3<f64>, usize)> = Vec::new();
     let mut names = HashSet::new();
-    for (i, l) in text.lines().enumerate() {
+    for (line, l) in lines(path)? {
         let f: Vec<&str> = l.split_whitespace().collect();
-        if f.is_empty() || f[0].starts_with('#') {
+        if f.is_empty() {
             continue;
         }
         let num = |c: usize| {
@@ -132,18 +130,18 @@ fn read_gnss(path: &Path, format: &str) -> Result<Vec<(String, Vector3<f64>, usi
         let (Some(name), Some(a), Some(b), Some(c)) = (f.get(n), num(xc), num(yc), num(zc)) else {
             return Err(ferr(
                 path,
-                Some(i + 1),
+                Some(line),
                 format!("expected the columns '{format}'"),
             ));
         };
         if !names.insert(name.to_string()) {
             return Err(ferr(
                 path,
-                Some(i + 1),
+                Some(line),
                 format!("image {name} has two positions: keep one"),
             ));
         }
-        out.push((name.to_string(), Vector3::new(a, b, c), i + 1));
+        out.push((name.to_string(), Vector3::new(a, b, c), line));
     }
     Ok(out)
 }
