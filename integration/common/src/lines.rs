@@ -15,11 +15,12 @@ use std::path::{Path, PathBuf};
 /// types is 16 kB, a BAL or CSV line far less.
 pub const MAX_LINE: usize = 1 << 20;
 
-/// What can go wrong while reading lines.
+/// What can go wrong while reading lines. Shown as `path:line: reason` (`path: reason` without
+/// a line); readers with their own error type take [`Error::line`] and [`Error::reason`].
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// The file could not be opened or read.
-    #[error("{path}: cannot read: {cause}")]
+    #[error("{}: {}", path.display(), self.reason())]
     Io {
         /// The file.
         path: PathBuf,
@@ -27,13 +28,35 @@ pub enum Error {
         cause: std::io::Error,
     },
     /// A line is longer than [`MAX_LINE`]: not a text file of the kind expected.
-    #[error("{path}:{line}: line longer than {} KiB: not a text file of the expected kind; check that the right file was given", MAX_LINE >> 10)]
+    #[error("{}:{line}: {}", path.display(), self.reason())]
     TooLong {
         /// The file.
         path: PathBuf,
         /// 1-based number of the line.
         line: usize,
     },
+}
+
+impl Error {
+    /// The line the error is at, when it is at one.
+    pub fn line(&self) -> Option<usize> {
+        match self {
+            Error::Io { .. } => None,
+            Error::TooLong { line, .. } => Some(*line),
+        }
+    }
+
+    /// What is wrong and what to do, without the file and line.
+    pub fn reason(&self) -> String {
+        match self {
+            Error::Io { cause, .. } => format!("cannot read: {cause}"),
+            Error::TooLong { .. } => format!(
+                "line longer than {} KiB: not a text file of the expected kind; check that the \
+                 right file was given",
+                MAX_LINE >> 10
+            ),
+        }
+    }
 }
 
 /// A text file read line by line, transparently gunzipped when it starts with the gzip magic.
@@ -166,7 +189,13 @@ mod tests {
         let mut src = Lines::from_reader(Path::new("big.bin"), std::io::Cursor::new(text));
         assert_eq!(src.next_line().unwrap(), Some(&b"short"[..]));
         match src.next_line() {
-            Err(Error::TooLong { line: 2, .. }) => {}
+            Err(e @ Error::TooLong { line: 2, .. }) => {
+                let text = e.to_string();
+                assert!(
+                    text.starts_with("big.bin:2: line longer than 1024 KiB"),
+                    "{text}"
+                );
+            }
             other => panic!("expected TooLong at line 2, got {:?}", other.map(|_| ())),
         }
         let e = Lines::open(Path::new("/nonexistent/lines.txt"))

@@ -170,18 +170,7 @@ impl GroundFrame {
 /// through `common::lines` (plain or gzip, no line over 1 MiB).
 pub(crate) fn lines(path: &Path) -> Result<Vec<(usize, String)>, ImportError> {
     use ::common::lines::{Error, Lines};
-    let read_err = |e: Error| match e {
-        Error::Io { cause, .. } => ferr(path, None, format!("cannot read: {cause}")),
-        Error::TooLong { line, .. } => ferr(
-            path,
-            Some(line),
-            format!(
-                "a line longer than {} KiB: not a text file of the kind expected; check that \
-                 the right file was given",
-                ::common::lines::MAX_LINE >> 10
-            ),
-        ),
-    };
+    let read_err = |e: Error| ferr(path, e.line(), e.reason());
     let mut src = Lines::open(path).map_err(read_err)?;
     let mut out = Vec::new();
     loop {
