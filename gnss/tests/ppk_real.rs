@@ -360,11 +360,12 @@ fn bell_ebre_115_km_baseline() {
     assert!(r.models.iono && r.models.tropo, "{:?}", r.models);
     assert!((r.models.longest_baseline - 115_284.0).abs() < 100.0);
     assert_eq!(r.trajectory.epochs.len(), r.rover_epochs);
-    // Issue figures: ≥ 50 % fixed (measured 57.1 %, the smoother holding the fixes both
-    // halves confirm), no fixed epoch off by more than 15 cm (worst 11.2 cm), 3D RMS after
-    // the first hour ≤ 15 cm (5.2 cm); RTKLIB demo5's best on these files is 18.7 % fixed
-    // and 1.47 m. Issue 49 asks for 85 % with none beyond 10 cm: not yet.
-    assert!(s.fixed_pct >= 55.0, "fix rate {}", s.fixed_pct);
+    // Issue figures: ≥ 50 % fixed (measured 73.7 %, the smoother holding the fixes both
+    // halves confirm; 57.1 % before the stale ephemerides of older uploads were passed over),
+    // no fixed epoch off by more than 15 cm (worst 13.9 cm), 3D RMS after the first hour
+    // ≤ 15 cm (4.4 cm); RTKLIB demo5's best on these files is 18.7 % fixed and 1.47 m.
+    // Issue 49 asks for 85 % with none beyond 10 cm: not yet.
+    assert!(s.fixed_pct >= 72.0, "fix rate {}", s.fixed_pct);
     assert!(s.max_fixed_err <= 0.15, "worst fixed {}", s.max_fixed_err);
     assert!(late.d3_rms <= 0.10, "3D RMS after 1 h {}", late.d3_rms);
     assert!(s.d3_rms <= 0.10, "3D RMS {}", s.d3_rms);
@@ -413,7 +414,7 @@ fn bell_ebre_115_km_baseline() {
 }
 
 /// BELL–EBRE as a static survey over 24 h: one position within 3 cm of the truth (measured
-/// 7.8 mm), fixed, with σ that cover the error; the ARP lies 5.4 cm above the marker.
+/// 6.6 mm), fixed, with σ that cover the error; the ARP lies 5.4 cm above the marker.
 #[test]
 fn bell_ebre_static_24_h() {
     let Some(dir) = common::data("gnss/bell-ebre-2002-030") else {
@@ -451,12 +452,15 @@ fn bell_ebre_static_24_h() {
     assert!(e.norm() <= 0.03, "3D error {}", e.norm());
     assert!(
         e.norm() <= 0.015,
-        "regression: measured 7.8 mm, now {}",
+        "regression: measured 6.6 mm, now {}",
         e.norm()
     );
     assert_eq!(st.quality, Quality::Fixed);
     assert_eq!(st.epochs, 2880);
-    assert!(st.fixed_epochs >= 2600, "fixed epochs {}", st.fixed_epochs);
+    // Measured 2,528 (2,767 while stale ephemerides were taken by toe): with PRN 15 on its
+    // fresh upload the held solution loses its fix 17:00–19:30, when PRN 21 flies on a
+    // day-old upload that no fresher set replaces until 22:00 (9 m from it then).
+    assert!(st.fixed_epochs >= 2500, "fixed epochs {}", st.fixed_epochs);
     for i in 0..3 {
         assert!(
             e[i].abs() <= 3.0 * sd[i],

@@ -60,6 +60,13 @@ pub fn load_orbits(
             eph.stats.unhealthy
         ));
     }
+    if eph.stats.superseded > 0 {
+        warnings.push(format!(
+            "{} ephemerides of older uploads passed over for fresher ones of the same satellites \
+             (merged navigation files hold both; the stale sets are metres off)",
+            eph.stats.superseded
+        ));
+    }
     if eph.stats.unused > 0 {
         warnings.push(format!(
             "{} navigation records of unused message types (SBAS, CNAV …) ignored",

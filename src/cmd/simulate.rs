@@ -25,7 +25,8 @@ use std::path::{Path, PathBuf};
 ///
 /// long-baseline is a 250 km pair of static geodetic receivers (GPS L1/L2, 30 s, 24 h) with
 /// the ionosphere and troposphere differing between the ends beyond the broadcast models and
-/// code biases of two receiver types: OUT/ppk.toml, rover.obs, base.obs, nav.rnx,
+/// code biases of two receiver types, and a navigation file that also holds stale sets of an
+/// older upload as merged daily files do: OUT/ppk.toml, rover.obs, base.obs, nav.rnx,
 /// truth_trajectory.csv, truth.toml, README.txt; the same pair observing Galileo E1/E5a
 /// beside GPS in OUT/gps-galileo/.
 ///

@@ -84,6 +84,10 @@ pub struct KeplerEph {
     pub valid_after: f64,
     /// Line of the record in its file.
     pub line: usize,
+    /// When the message was transmitted (GPST), if the record says so plausibly (from a day
+    /// before toe to the end of the validity window): the later of two sets valid at a time
+    /// is the fresher prediction (see [`super::Ephemerides::select`]).
+    pub transmitted: Option<Epoch>,
 }
 
 /// Position, velocity and clock of a satellite at a transmission time.
@@ -107,6 +111,26 @@ fn system_tow(sys: Constellation, t: Epoch) -> f64 {
         t
     };
     crate::time::week_tow(t).1
+}
+
+/// The transmission time of a record given in seconds of week `sow`, placed at the instant
+/// nearest `toe` with those seconds of (system) week; `None` when the record has no such
+/// field, says it is unknown (RINEX writes 0.9999E9) or the time is implausible (more than a
+/// day before toe or after the validity window, when no receiver could have received it).
+fn transmission_time(
+    sys: Constellation,
+    toe: Epoch,
+    sow: Option<f64>,
+    valid_after: f64,
+) -> Option<Epoch> {
+    let sow = sow.filter(|s| s.is_finite() && s.abs() < 9.0e8)?;
+    let mut d = (sow - system_tow(sys, toe)).rem_euclid(WEEK_SECONDS);
+    if d > WEEK_SECONDS / 2.0 {
+        d -= WEEK_SECONDS;
+    }
+    (-86_400.0..=valid_after)
+        .contains(&d)
+        .then(|| toe + Duration::from_seconds(d))
 }
 
 impl KeplerEph {
@@ -177,6 +201,7 @@ impl KeplerEph {
             valid_before,
             valid_after,
             line: r.line,
+            transmitted: transmission_time(sys, toe, o.get(24).copied(), valid_after),
         })
     }
 

@@ -81,6 +81,13 @@ impl Eph {
             Eph::Glonass(_) => 0.0,
         }
     }
+    /// When the message was transmitted, if the record says so (Keplerian systems only).
+    pub fn transmitted(&self) -> Option<Epoch> {
+        match self {
+            Eph::Kepler(k) => k.transmitted,
+            Eph::Glonass(_) => None,
+        }
+    }
     fn preference(&self) -> u8 {
         match self {
             Eph::Kepler(KeplerEph {
@@ -103,6 +110,9 @@ pub struct EphStats {
     pub unused: usize,
     /// Records that could not be read or were incomplete (file, line, why).
     pub skipped: Vec<String>,
+    /// Healthy ephemerides passed over for a fresher upload's (see [`supersedes`]): merged
+    /// daily files keep both.
+    pub superseded: usize,
 }
 
 /// All broadcast ephemerides, indexed per satellite and sorted by toe.
@@ -160,6 +170,34 @@ fn implausible(r: &NavRecord) -> Option<String> {
     }
 }
 
+/// Whether ephemeris `newer` makes `older` stale: the same message, transmitted later, and
+/// either for the same or an earlier toe (a re-upload of the span) or a set of a new upload
+/// (GPS marks the first sets after an upload with a toe off the hour grid,
+/// BELL–EBRE's hh:59:44) less than two hours after `older`'s toe, i.e. not its regular
+/// successor: such a set's predictions are fresher than any sent before it.
+pub fn supersedes(newer: &Eph, older: &Eph) -> bool {
+    let (Some(tn), Some(to)) = (newer.transmitted(), older.transmitted()) else {
+        return false;
+    };
+    let ahead = (newer.toe() - older.toe()).to_seconds();
+    tn > to
+        && newer.preference() == older.preference()
+        && (ahead <= 0.0 || (opens_upload(newer) && ahead < REGULAR_SPACING_S - 1.0))
+}
+
+/// The spacing of successive GPS ephemerides of one upload, seconds.
+const REGULAR_SPACING_S: f64 = 7200.0;
+
+/// A GPS ephemeris whose toe is off the hour grid: one of the first sets after an upload.
+fn opens_upload(e: &Eph) -> bool {
+    match e {
+        Eph::Kepler(k) if k.sys == Constellation::Gps => {
+            crate::time::week_tow(k.toe).1.rem_euclid(3600.0) > 0.5
+        }
+        _ => false,
+    }
+}
+
 impl Ephemerides {
     /// Index the ephemerides of navigation files (one satellite's records sorted by toe).
     pub fn from_nav(navs: &[NavFile]) -> Self {
@@ -211,11 +249,33 @@ impl Ephemerides {
                     .partial_cmp(&b.toe())
                     .unwrap_or(std::cmp::Ordering::Equal)
                     .then(a.preference().cmp(&b.preference()))
+                    .then(a.transmitted().cmp(&b.transmitted()))
             });
-            // Keep the last of exact duplicates (same toe and message): files often repeat them.
-            v.dedup_by(|b, a| a.toe() == b.toe() && a.preference() == b.preference());
+            // Of records with the same toe and message (files repeat them; a new upload may
+            // reuse a toe) keep the last transmitted.
+            v.reverse();
+            v.dedup_by(|later, kept| {
+                later.toe() == kept.toe() && later.preference() == kept.preference()
+            });
+            v.reverse();
         }
+        e.stats.superseded = e.passed_over();
         e
+    }
+
+    /// How many healthy ephemerides are not the one [`Self::select`] gives at their own toe:
+    /// superseded by a fresher upload.
+    fn passed_over(&self) -> usize {
+        self.by_sv
+            .iter()
+            .flat_map(|(sv, v)| v.iter().map(move |e| (*sv, e)))
+            .filter(|(sv, e)| {
+                e.healthy()
+                    && self
+                        .select(*sv, e.toe())
+                        .is_some_and(|s| !std::ptr::eq(s, *e) && s.preference() == e.preference())
+            })
+            .count()
     }
 
     /// Satellites with at least one ephemeris.
@@ -228,23 +288,25 @@ impl Ephemerides {
         self.by_sv.get(&sv).map(|v| v.as_slice()).unwrap_or(&[])
     }
 
-    /// The ephemeris to use at `t`: healthy, within its validity, toe nearest to `t`;
-    /// for Galileo I/NAV is preferred over F/NAV.
+    /// The ephemeris to use at `t`: healthy, within its validity, not superseded (see
+    /// [`supersedes`]), toe nearest to `t`; for Galileo I/NAV is preferred over F/NAV.
+    /// Daily merged files hold sets of an older upload beside the fresh ones (BELL–EBRE
+    /// 2002-01-30: PRN 15's 14:00 set, sent at 12:00, lies 9 m from the 13:59:44 set of the
+    /// upload sent at 12:05): chosen by toe alone, the stale set puts a satellite metres off
+    /// for an hour — centimetres in double differences at 100 km.
     pub fn select(&self, sv: Sv, t: Epoch) -> Option<&Eph> {
         let v = self.by_sv.get(&sv)?;
         let i = v.partition_point(|e| e.toe() <= t);
         let lo = i.saturating_sub(4);
         let hi = (i + 4).min(v.len());
-        v[lo..hi]
-            .iter()
-            .filter(|e| e.healthy() && e.valid_at(t))
-            .map(|e| (e, (t - e.toe()).to_seconds().abs()))
-            .min_by(|(a, da), (b, db)| {
+        let usable = || v[lo..hi].iter().filter(|e| e.healthy() && e.valid_at(t));
+        usable()
+            .filter(|e| !usable().any(|o| supersedes(o, e)))
+            .min_by(|a, b| {
                 a.preference()
                     .cmp(&b.preference())
-                    .then(da.partial_cmp(db).unwrap_or(std::cmp::Ordering::Equal))
+                    .then((t - a.toe()).abs().cmp(&(t - b.toe()).abs()))
             })
-            .map(|(e, _)| e)
     }
 
     /// First and last toe over all satellites.

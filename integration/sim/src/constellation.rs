@@ -218,6 +218,49 @@ pub fn navigation_text_with(
     s
 }
 
+/// Records of an older upload that daily merged navigation files keep beside the fresh ones
+/// (issue 49, BELL–EBRE 2002-01-30: PRN 21's 23:00 set of a day-old upload, sent before the
+/// fresh 22:00 one, lies 9 m from it): for every `every`-th GPS satellite of the layout, a set
+/// at each odd hour of `[start − 2 h, end + 2 h]`, sent 2.5 h before its toe (before the fresh
+/// set of the hour before it), with the satellite `along_track_m` metres ahead of the truth.
+/// A selection by toe alone takes it for the second half of every odd hour; one that knows
+/// the fresher upload passes it over. Returns the records' text and their count.
+pub fn stale_gps_records(
+    (start, end): (Epoch, Epoch),
+    seed: u64,
+    gps: GpsLayout,
+    every: usize,
+    along_track_m: f64,
+) -> (String, usize) {
+    let mut rng = Rng::new(seed).fork(0x6e6176);
+    let (week0, _) = week_tow(start);
+    let t_ref = from_week_tow(week0, 0.0);
+    let stale: Vec<Sat> = sats(&mut rng, gps)
+        .into_iter()
+        .filter(|s| s.sys == 'G')
+        .step_by(every.max(1))
+        .map(|s| Sat {
+            m_ref: s.m_ref + along_track_m / (s.sqrt_a * s.sqrt_a),
+            ..s
+        })
+        .collect();
+    let sent = Sent {
+        before_toe_s: 9000.0,
+        iod_shift: 128.0,
+    };
+    let (mut text, mut n) = (String::new(), 0);
+    let (w, tow) = week_tow(start - hifitime::Duration::from_seconds(7200.0));
+    let mut toe = from_week_tow(w, (tow / 7200.0).floor() * 7200.0 + 3600.0);
+    while toe <= end + hifitime::Duration::from_seconds(7200.0) {
+        for sat in &stale {
+            kepler_record(&mut text, sat, toe, t_ref, 7200.0, sent);
+            n += 1;
+        }
+        toe += hifitime::Duration::from_seconds(7200.0);
+    }
+    (text, n)
+}
+
 /// The header: version, program, comment, GPS Klobuchar parameters, leap seconds.
 fn header() -> String {
     let mut s = String::new();
@@ -269,7 +312,7 @@ fn kepler_records(
     let mut toe = from_week_tow(w, (tow / period).floor() * period);
     while toe <= last {
         for sat in sats {
-            kepler_record(s, sat, toe, t_ref, period);
+            kepler_record(s, sat, toe, t_ref, period, REGULAR);
         }
         toe += hifitime::Duration::from_seconds(period);
     }
@@ -277,7 +320,21 @@ fn kepler_records(
 
 /// One LNAV-like (or Galileo) record of `sat` at `toe`, with the issue of data counted in
 /// `period`s since `t_ref`.
-fn kepler_record(s: &mut String, sat: &Sat, toe: Epoch, t_ref: Epoch, period: f64) {
+/// When a record was transmitted and which issue of data it carries: the regular sets are sent
+/// an hour before their toe with the issue counted in periods; a stale upload's earlier, with
+/// the issue shifted by 128.
+#[derive(Clone, Copy)]
+struct Sent {
+    before_toe_s: f64,
+    iod_shift: f64,
+}
+
+const REGULAR: Sent = Sent {
+    before_toe_s: 3600.0,
+    iod_shift: 0.0,
+};
+
+fn kepler_record(s: &mut String, sat: &Sat, toe: Epoch, t_ref: Epoch, period: f64, sent: Sent) {
     let (week, sow) = week_tow(toe);
     let dt_ref = (toe - t_ref).to_seconds();
     let week_start = from_week_tow(week, 0.0);
@@ -288,7 +345,7 @@ fn kepler_record(s: &mut String, sat: &Sat, toe: Epoch, t_ref: Epoch, period: f6
     // Ω(t) = RAAN − ωe·(t − t_ref): broadcast Ω0 refers to the record's week start.
     let omega0 = grid_angle(wrap(sat.raan - gnss::frame::OMEGA_E * dweek), -31);
     let af0 = grid(sat.af0 + sat.af1 * dt_ref, clock_exp(sat.sys).0);
-    let iod = (dt_ref / period).rem_euclid(256.0).floor();
+    let iod = (dt_ref / period + sent.iod_shift).rem_euclid(256.0).floor();
     let _ = writeln!(
         s,
         "{}{:02} {y:04} {mo:02} {d:02} {h:02} {mi:02} {sec:02}{}{}{}",
@@ -313,7 +370,7 @@ fn kepler_record(s: &mut String, sat: &Sat, toe: Epoch, t_ref: Epoch, period: f6
         [2.0, 0.0, 0.0, if sat.sys == 'E' { 0.0 } else { iod }],
         // Transmission time; fit interval: GPS 4 h, QZSS the flag 0 (2 h).
         [
-            sow - 3600.0_f64.min(sow),
+            sow - sent.before_toe_s.min(sow),
             if sat.sys == 'J' { 0.0 } else { 4.0 },
             0.0,
             0.0,

@@ -5,7 +5,8 @@
 //! of its own at each station (a random walk about an offset, and north/east gradients), and
 //! receivers of different types whose code biases do not cancel (the base tracks GPS C/A,
 //! the rover P(Y): each satellite's C1 − P1 bias stays in the double differences, as when a
-//! C1 file meets a P1 file). The truth is exact; the
+//! C1 file meets a P1 file), and a navigation file that, like merged daily files, also holds
+//! sets of an older upload metres off (issue 49). The truth is exact; the
 //! folder is processed by `ppkat ppk --config ppk.toml` like the other benches. The same
 //! pair with Galileo E1/E5a beside GPS (same atmosphere, same receivers) is written to
 //! `gps-galileo/`.
@@ -15,7 +16,7 @@
 //! at every epoch), `truth.toml` (both positions, the baseline and the atmosphere simulated)
 //! and `README.txt`.
 
-use super::constellation::GpsLayout;
+use super::constellation::{navigation_text_with, stale_gps_records, GpsLayout};
 use super::error::SimError;
 use super::io::write;
 use super::lowcost::receiver::{self, GpsL1, LowCost, Profile, TrackStats};
@@ -44,6 +45,11 @@ const TID: (f64, f64, f64) = (0.03, 1800.0, 300.0);
 /// its random walk (m per √hour), north and east gradients (m).
 const TROPO_BASE: (f64, f64, [f64; 2]) = (0.02, 0.008, [0.0006, -0.0003]);
 const TROPO_ROVER: (f64, f64, [f64; 2]) = (-0.03, 0.012, [-0.0004, 0.0008]);
+/// Stale ephemerides of an older upload, as merged daily navigation files carry them: one
+/// GPS satellite in this many gets a set at every odd hour, this far (m) along its track
+/// from the truth (see [`stale_gps_records`]).
+const STALE_EVERY: usize = 4;
+const STALE_ALONG_TRACK_M: f64 = 8.0;
 /// Code biases of the two receiver types on L1 and L2, metres.
 const BIAS_BASE: [f64; 2] = [0.0, -0.45];
 const BIAS_ROVER: [f64; 2] = [0.3, 1.10];
@@ -59,6 +65,8 @@ pub struct LongBaselineReport {
     pub positions: [Ecef; 2],
     /// The baseline, km.
     pub baseline_km: f64,
+    /// Records of an older upload in `nav.rnx` (stale by 8 m), all to be passed over.
+    pub stale_records: usize,
 }
 
 /// A geodetic receiver: open sky, low noise, no half cycles, no unflagged slips.
@@ -151,6 +159,17 @@ fn simulate_variant(dir: &Path, seed: u64, v: Variant) -> Result<LongBaselineRep
     let start = gpst(START)?;
     let end = start + Duration::from_seconds(SPAN_S);
     let (nav, eph) = constellation(dir, (start, end), seed, v.systems, GpsLayout::Operational31)?;
+    // The receivers observe the true orbits (`eph`); the navigation file processed also holds
+    // an older upload's sets.
+    let (stale, stale_records) = stale_gps_records(
+        (start, end),
+        seed,
+        GpsLayout::Operational31,
+        STALE_EVERY,
+        STALE_ALONG_TRACK_M,
+    );
+    let fresh = navigation_text_with(start, end, seed, v.systems, GpsLayout::Operational31);
+    write(dir, "nav.rnx", &(fresh + &stale))?;
     let klob = nav.gps_iono.unwrap_or_default();
     let geo = |(lat, lon, h): (f64, f64, f64)| Geodetic::from_degrees(lat, lon, h);
     let (gb, gr) = (geo(BASE), geo(ROVER));
@@ -215,6 +234,7 @@ fn simulate_variant(dir: &Path, seed: u64, v: Variant) -> Result<LongBaselineRep
         base: bstats,
         positions: [pb, pr],
         baseline_km,
+        stale_records,
     };
     write(dir, "README.txt", &readme(&report, v))?;
     Ok(report)
@@ -256,7 +276,7 @@ fn readme(r: &LongBaselineReport, v: Variant) -> String {
         _ => "The same pair with GPS alone: the folder above.",
     };
     format!(
-        "long-baseline: two static geodetic receivers {:.1} km apart, {} every {INTERVAL_S} s for 24 h from {START} GPST. {other}\nWhat the broadcast models leave out: an ionosphere factor growing {IONO_GRADIENT_PER_DEG} per degree of pierce-point latitude north of the base, with travelling disturbances of {} % ({} s, {} km); a zenith wet delay at each station (offsets {} m and {} m, random walks {} and {} m/√h) with north/east gradients; code biases on the first/second signal of {:?} m (base) and {:?} m (rover); the base tracks GPS C/A (C1C), the rover P(Y) (C1W), so each GPS satellite's C1 − P1 bias (σ 0.3 m, listed in truth.toml) stays in the double differences.\nEpochs: rover {}, base {}; satellites per epoch (median) {}.\nProcess: ppkat ppk --config ppk.toml; compare: posstat.py ppk.pos --truth-sim truth_trajectory.csv\n",
+        "long-baseline: two static geodetic receivers {:.1} km apart, {} every {INTERVAL_S} s for 24 h from {START} GPST. {other}\nWhat the broadcast models leave out: an ionosphere factor growing {IONO_GRADIENT_PER_DEG} per degree of pierce-point latitude north of the base, with travelling disturbances of {} % ({} s, {} km); a zenith wet delay at each station (offsets {} m and {} m, random walks {} and {} m/√h) with north/east gradients; code biases on the first/second signal of {:?} m (base) and {:?} m (rover); the base tracks GPS C/A (C1C), the rover P(Y) (C1W), so each GPS satellite's C1 − P1 bias (σ 0.3 m, listed in truth.toml) stays in the double differences; nav.rnx also holds {} sets of an older upload (every {STALE_EVERY}th GPS satellite at odd hours, {STALE_ALONG_TRACK_M} m along track from the truth, sent before the fresh sets), as merged daily files do.\nEpochs: rover {}, base {}; satellites per epoch (median) {}.\nProcess: ppkat ppk --config ppk.toml; compare: posstat.py ppk.pos --truth-sim truth_trajectory.csv\n",
         r.baseline_km,
         v.signals,
         TID.0 * 100.0,
@@ -268,6 +288,7 @@ fn readme(r: &LongBaselineReport, v: Variant) -> String {
         TROPO_ROVER.1,
         BIAS_BASE,
         BIAS_ROVER,
+        r.stale_records,
         r.rover.epochs,
         r.base.epochs,
         r.rover.median_sats(),
