@@ -84,6 +84,9 @@ pub(super) struct Fix {
     /// precisely (3D σ at most `max_fixed_sigma`: a fix in a weak geometry is no better than
     /// a float solution and is not reported as one).
     pub(super) complete: bool,
+    /// The satellite whose ambiguities were kept float for this fix (see
+    /// [`resolve_without`]), if any.
+    pub(super) left_out: Option<Sv>,
 }
 
 /// Whether the DD integers a fix determines (`dd_integers`, in the rows of `groups`) fix
@@ -347,9 +350,29 @@ pub(super) fn resolve(
     pairs: &[Pair],
     best_ratio: &mut Option<f64>,
 ) -> Option<Fix> {
+    resolve_without(st, o, pairs, best_ratio, None)
+}
+
+/// The satellites with an ambiguity that may be fixed this epoch, in order.
+pub(super) fn candidate_satellites(st: &State, o: &PpkOptions, pairs: &[Pair]) -> Vec<Sv> {
+    let mut out: Vec<Sv> = candidates(st, o, pairs).iter().map(Candidate::sv).collect();
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// [`resolve`] with the ambiguities of satellite `left_out` (when given) kept float.
+pub(super) fn resolve_without(
+    st: &State,
+    o: &PpkOptions,
+    pairs: &[Pair],
+    best_ratio: &mut Option<f64>,
+    left_out: Option<Sv>,
+) -> Option<Fix> {
     *best_ratio = None;
     let cands = candidates(st, o, pairs);
-    let groups = dd_groups(&cands, &[], o.mature_lock);
+    let excluded: Vec<Sv> = left_out.into_iter().collect();
+    let groups = dd_groups(&cands, &excluded, o.mature_lock);
     let fl = FloatDd::of(st, &groups);
     if fl.a.len() < o.min_fix_ambiguities {
         return None;
@@ -381,6 +404,7 @@ pub(super) fn resolve(
                 groups,
                 dd_integers,
                 widelanes,
+                left_out,
             });
         }
         k -= 1;

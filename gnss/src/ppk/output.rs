@@ -80,6 +80,9 @@ pub struct PassStats {
     /// Smoothed fixes rejected because the data before or after the epoch alone fixed an
     /// ambiguity to another integer.
     pub smoothed_fixes_rejected: usize,
+    /// Fixed solutions found with one satellite's ambiguities left float (long baselines,
+    /// when the whole set would not fix).
+    pub left_out_fixes: usize,
     /// Ambiguity-epochs kept float because a receiver had not resolved the half-cycle
     /// ambiguity of the phase.
     pub half_cycle_float: usize,

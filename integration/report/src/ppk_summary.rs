@@ -176,7 +176,7 @@ fn pass_line(name: &str, s: &PassStats) -> String {
         .map(|(c, n)| format!("{c:?} {n}"))
         .collect();
     format!(
-        "{name}: ambiguity resets {} [{}], post-fit outliers {}, innovations rejected {} [{}], satellite-epochs below mask {}, without orbit {}{}",
+        "{name}: ambiguity resets {} [{}], post-fit outliers {}, innovations rejected {} [{}], satellite-epochs below mask {}, without orbit {}{}{}",
         s.slips.values().sum::<usize>(),
         slips.join(", "),
         s.outlier_resets,
@@ -186,6 +186,11 @@ fn pass_line(name: &str, s: &PassStats) -> String {
         s.no_orbit,
         if s.half_cycle_float > 0 {
             format!(", ambiguity-epochs kept float for an unresolved half cycle {}", s.half_cycle_float)
+        } else {
+            String::new()
+        },
+        if s.left_out_fixes > 0 {
+            format!(", fixes with one satellite left float {}", s.left_out_fixes)
         } else {
             String::new()
         }

@@ -5,12 +5,14 @@
 use super::Filter;
 use crate::frame::Ecef;
 use crate::ppk::ar;
-use crate::ppk::options::ArMode;
+use crate::ppk::options::{ArMode, Estimate, PpkOptions};
 use crate::ppk::output::EpochSol;
 use crate::ppk::pair::Pair;
 use crate::ppk::segment::FixedIntegers;
 use crate::ppk::smooth::Prior;
+use crate::ppk::state::State;
 use crate::solution::Quality;
+use crate::sv::Sv;
 use hifitime::Epoch;
 
 /// What the two halves of the data (before and after an epoch) say of a smoothed fix.
@@ -20,6 +22,55 @@ struct HalvesSay {
     agree: bool,
     /// Each alone fixes every integer of it (and they agree).
     confirm: bool,
+}
+
+/// Satellites with candidate ambiguities needed before one is left out: six must remain to
+/// carry the fix and show the seventh's error (with fewer, BELL–EBRE's late evening gave
+/// fixes 12–16 cm high at a 15° mask).
+const LEAVE_OUT_MIN_SATELLITES: usize = 7;
+/// The ratio a fix with a satellite left out must reach, as a multiple of the threshold:
+/// one satellite after another is tried, and the best of several searches is held to more.
+const LEAVE_OUT_RATIO_FACTOR: f64 = 1.25;
+
+/// Resolve on `st` as [`ar::resolve`] does; on long baselines (the ionosphere estimated),
+/// when the whole set gives no fixed solution, each satellite is left out in turn: one
+/// satellite's model error — an orbit metres off, as a stale upload leaves it (BELL–EBRE's
+/// PRN 21 in the afternoon), or multipath — spoils every integer set it is in. The fixes
+/// that pass without one satellite (at [`LEAVE_OUT_RATIO_FACTOR`] times the ratio threshold,
+/// with [`LEAVE_OUT_MIN_SATELLITES`]) are taken only when they agree on every integer they
+/// share (else the model error is not one satellite's); then the one with the highest ratio.
+fn resolve_leaving_one_out(
+    st: &State,
+    o: &PpkOptions,
+    pairs: &[Pair],
+    best_ratio: &mut Option<f64>,
+) -> Option<ar::Fix> {
+    let full = ar::resolve(st, o, pairs, best_ratio);
+    if o.iono != Estimate::On || full.as_ref().is_some_and(|f| f.complete) {
+        return full;
+    }
+    let sats = ar::candidate_satellites(st, o, pairs);
+    if sats.len() < LEAVE_OUT_MIN_SATELLITES {
+        return full;
+    }
+    let passing: Vec<ar::Fix> = sats
+        .into_iter()
+        .filter_map(|sv| ar::resolve_without(st, o, pairs, &mut None, Some(sv)))
+        .filter(|f| f.complete)
+        .filter(|f| f.ratio >= o.ratio_threshold * LEAVE_OUT_RATIO_FACTOR)
+        .collect();
+    let named: Vec<FixedIntegers<Sv>> = passing.iter().map(FixedIntegers::by_satellite).collect();
+    let agree = named
+        .iter()
+        .enumerate()
+        .all(|(i, a)| named[i + 1..].iter().all(|b| !a.conflicts(b)));
+    if !agree {
+        return full;
+    }
+    passing
+        .into_iter()
+        .reduce(|a, b| if b.ratio > a.ratio { b } else { a })
+        .or(full)
 }
 
 impl Filter<'_> {
@@ -35,8 +86,8 @@ impl Filter<'_> {
         let halves: Vec<Option<FixedIntegers<crate::sv::Sv>>> = [Some(&self.state), None]
             .into_iter()
             .map(|s| match s {
-                Some(s) => ar::resolve(s, self.opts, pairs, &mut unused),
-                None => ar::resolve(&prior.to_state(), self.opts, pairs, &mut unused),
+                Some(s) => resolve_leaving_one_out(s, self.opts, pairs, &mut unused),
+                None => resolve_leaving_one_out(&prior.to_state(), self.opts, pairs, &mut unused),
             })
             .map(|h| h.map(|h| FixedIntegers::by_satellite(&h)))
             .collect();
@@ -81,7 +132,12 @@ impl Filter<'_> {
             return sol;
         }
         let mut best_ratio = None;
-        let raw = ar::resolve(st, o, pairs, &mut best_ratio);
+        // A fix found with a satellite left out is taken only where the halves check it
+        // (the smoother): held by a single pass, a wrong one spreads along the arcs.
+        let raw = match smoothed {
+            Some(_) => resolve_leaving_one_out(st, o, pairs, &mut best_ratio),
+            None => ar::resolve(st, o, pairs, &mut best_ratio),
+        };
         sol.widelanes = raw.as_ref().map_or(0, |f| f.widelanes);
         let mut fix = raw.filter(|f| f.complete);
         let mut confirmed = false;
@@ -101,6 +157,7 @@ impl Filter<'_> {
             sol.quality = Quality::Fixed;
             sol.ratio = fix.ratio;
             sol.nfix = fix.n_fixed;
+            self.stats.left_out_fixes += usize::from(fix.left_out.is_some());
             // A smoothed fix is held (into the forward state, so it carries forward along
             // its arcs) only when each half alone fixed every integer of it: holding one
             // that a single half or the smoothed float alone reaches held wrong integers for
