@@ -226,33 +226,99 @@ pub fn navigation_text_with(
 /// A selection by toe alone takes it for the second half of every odd hour; one that knows
 /// the fresher upload passes it over. Returns the records' text and their count.
 pub fn stale_gps_records(
-    (start, end): (Epoch, Epoch),
+    span: (Epoch, Epoch),
     seed: u64,
     gps: GpsLayout,
     every: usize,
     along_track_m: f64,
 ) -> (String, usize) {
-    let mut rng = Rng::new(seed).fork(0x6e6176);
-    let (week0, _) = week_tow(start);
-    let t_ref = from_week_tow(week0, 0.0);
-    let stale: Vec<Sat> = sats(&mut rng, gps)
-        .into_iter()
-        .filter(|s| s.sys == 'G')
-        .step_by(every.max(1))
-        .map(|s| Sat {
-            m_ref: s.m_ref + along_track_m / (s.sqrt_a * s.sqrt_a),
-            ..s
-        })
-        .collect();
     let sent = Sent {
         before_toe_s: 9000.0,
         iod_shift: 128.0,
     };
+    offset_gps_records(
+        span,
+        seed,
+        gps,
+        &|k, _| k % every.max(1) == 0,
+        along_track_m,
+        3600.0,
+        sent,
+    )
+}
+
+/// The records of GPS satellite `prn` on the regular 2 h grid, with the satellite
+/// `along_track_m` metres ahead of the truth: a satellite flying on a stale upload with no
+/// fresher set in the file (BELL–EBRE's PRN 21 all afternoon, 9 m from its next upload). With
+/// [`without_gps`] they replace its true records.
+pub fn off_gps_records(
+    span: (Epoch, Epoch),
+    seed: u64,
+    gps: GpsLayout,
+    prn: u8,
+    along_track_m: f64,
+) -> String {
+    offset_gps_records(
+        span,
+        seed,
+        gps,
+        &|_, p| p == prn,
+        along_track_m,
+        0.0,
+        REGULAR,
+    )
+    .0
+}
+
+/// Navigation text without the records of GPS satellite `prn` (RINEX 3: eight lines each).
+pub fn without_gps(text: &str, prn: u8) -> String {
+    let head = format!("G{prn:02} ");
+    let mut out = String::with_capacity(text.len());
+    let mut skip = 0;
+    for line in text.lines() {
+        if skip == 0 && line.starts_with(&head) {
+            skip = 8;
+        }
+        if skip > 0 {
+            skip -= 1;
+            continue;
+        }
+        out.push_str(line);
+        out.push('\n');
+    }
+    out
+}
+
+/// Records of the GPS satellites `pick` (index among the GPS satellites, PRN) moved
+/// `along_track_m` metres ahead, on the 2 h grid shifted by `toe_offset_s`, sent as `sent`
+/// says, over `[start − 2 h, end + 2 h]`; their text and count.
+fn offset_gps_records(
+    (start, end): (Epoch, Epoch),
+    seed: u64,
+    gps: GpsLayout,
+    pick: &dyn Fn(usize, u8) -> bool,
+    along_track_m: f64,
+    toe_offset_s: f64,
+    sent: Sent,
+) -> (String, usize) {
+    let mut rng = Rng::new(seed).fork(0x6e6176);
+    let (week0, _) = week_tow(start);
+    let t_ref = from_week_tow(week0, 0.0);
+    let moved: Vec<Sat> = sats(&mut rng, gps)
+        .into_iter()
+        .filter(|s| s.sys == 'G')
+        .enumerate()
+        .filter(|(k, s)| pick(*k, s.prn))
+        .map(|(_, s)| Sat {
+            m_ref: s.m_ref + along_track_m / (s.sqrt_a * s.sqrt_a),
+            ..s
+        })
+        .collect();
     let (mut text, mut n) = (String::new(), 0);
     let (w, tow) = week_tow(start - hifitime::Duration::from_seconds(7200.0));
-    let mut toe = from_week_tow(w, (tow / 7200.0).floor() * 7200.0 + 3600.0);
+    let mut toe = from_week_tow(w, (tow / 7200.0).floor() * 7200.0 + toe_offset_s);
     while toe <= end + hifitime::Duration::from_seconds(7200.0) {
-        for sat in &stale {
+        for sat in &moved {
             kepler_record(&mut text, sat, toe, t_ref, 7200.0, sent);
             n += 1;
         }

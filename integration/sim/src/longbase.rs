@@ -6,7 +6,8 @@
 //! receivers of different types whose code biases do not cancel (the base tracks GPS C/A,
 //! the rover P(Y): each satellite's C1 − P1 bias stays in the double differences, as when a
 //! C1 file meets a P1 file), and a navigation file that, like merged daily files, also holds
-//! sets of an older upload metres off (issue 49). The truth is exact; the
+//! sets of an older upload metres off, and for one satellite only such sets (issue 49). The
+//! truth is exact; the
 //! folder is processed by `ppkat ppk --config ppk.toml` like the other benches. The same
 //! pair with Galileo E1/E5a beside GPS (same atmosphere, same receivers) is written to
 //! `gps-galileo/`.
@@ -16,7 +17,9 @@
 //! at every epoch), `truth.toml` (both positions, the baseline and the atmosphere simulated)
 //! and `README.txt`.
 
-use super::constellation::{navigation_text_with, stale_gps_records, GpsLayout};
+use super::constellation::{
+    navigation_text_with, off_gps_records, stale_gps_records, without_gps, GpsLayout,
+};
 use super::error::SimError;
 use super::io::write;
 use super::lowcost::receiver::{self, GpsL1, LowCost, Profile, TrackStats};
@@ -50,6 +53,10 @@ const TROPO_ROVER: (f64, f64, [f64; 2]) = (-0.03, 0.012, [-0.0004, 0.0008]);
 /// from the truth (see [`stale_gps_records`]).
 const STALE_EVERY: usize = 4;
 const STALE_ALONG_TRACK_M: f64 = 8.0;
+/// A GPS satellite whose every set in the navigation file is of a stale upload, this far (m)
+/// along its track from the truth, with no fresher set to replace it (BELL–EBRE's PRN 21).
+const OFF_PRN: u8 = 5;
+const OFF_ALONG_TRACK_M: f64 = 8.0;
 /// Code biases of the two receiver types on L1 and L2, metres.
 const BIAS_BASE: [f64; 2] = [0.0, -0.45];
 const BIAS_ROVER: [f64; 2] = [0.3, 1.10];
@@ -169,7 +176,18 @@ fn simulate_variant(dir: &Path, seed: u64, v: Variant) -> Result<LongBaselineRep
         STALE_ALONG_TRACK_M,
     );
     let fresh = navigation_text_with(start, end, seed, v.systems, GpsLayout::Operational31);
-    write(dir, "nav.rnx", &(fresh + &stale))?;
+    let off = off_gps_records(
+        (start, end),
+        seed,
+        GpsLayout::Operational31,
+        OFF_PRN,
+        OFF_ALONG_TRACK_M,
+    );
+    write(
+        dir,
+        "nav.rnx",
+        &(without_gps(&fresh, OFF_PRN) + &off + &stale),
+    )?;
     let klob = nav.gps_iono.unwrap_or_default();
     let geo = |(lat, lon, h): (f64, f64, f64)| Geodetic::from_degrees(lat, lon, h);
     let (gb, gr) = (geo(BASE), geo(ROVER));
@@ -276,7 +294,7 @@ fn readme(r: &LongBaselineReport, v: Variant) -> String {
         _ => "The same pair with GPS alone: the folder above.",
     };
     format!(
-        "long-baseline: two static geodetic receivers {:.1} km apart, {} every {INTERVAL_S} s for 24 h from {START} GPST. {other}\nWhat the broadcast models leave out: an ionosphere factor growing {IONO_GRADIENT_PER_DEG} per degree of pierce-point latitude north of the base, with travelling disturbances of {} % ({} s, {} km); a zenith wet delay at each station (offsets {} m and {} m, random walks {} and {} m/√h) with north/east gradients; code biases on the first/second signal of {:?} m (base) and {:?} m (rover); the base tracks GPS C/A (C1C), the rover P(Y) (C1W), so each GPS satellite's C1 − P1 bias (σ 0.3 m, listed in truth.toml) stays in the double differences; nav.rnx also holds {} sets of an older upload (every {STALE_EVERY}th GPS satellite at odd hours, {STALE_ALONG_TRACK_M} m along track from the truth, sent before the fresh sets), as merged daily files do.\nEpochs: rover {}, base {}; satellites per epoch (median) {}.\nProcess: ppkat ppk --config ppk.toml; compare: posstat.py ppk.pos --truth-sim truth_trajectory.csv\n",
+        "long-baseline: two static geodetic receivers {:.1} km apart, {} every {INTERVAL_S} s for 24 h from {START} GPST. {other}\nWhat the broadcast models leave out: an ionosphere factor growing {IONO_GRADIENT_PER_DEG} per degree of pierce-point latitude north of the base, with travelling disturbances of {} % ({} s, {} km); a zenith wet delay at each station (offsets {} m and {} m, random walks {} and {} m/√h) with north/east gradients; code biases on the first/second signal of {:?} m (base) and {:?} m (rover); the base tracks GPS C/A (C1C), the rover P(Y) (C1W), so each GPS satellite's C1 − P1 bias (σ 0.3 m, listed in truth.toml) stays in the double differences; nav.rnx also holds {} sets of an older upload (every {STALE_EVERY}th GPS satellite at odd hours, {STALE_ALONG_TRACK_M} m along track from the truth, sent before the fresh sets), as merged daily files do, and G{OFF_PRN:02}'s sets are all of a stale upload ({OFF_ALONG_TRACK_M} m along track from the truth, nothing fresher to replace them).\nEpochs: rover {}, base {}; satellites per epoch (median) {}.\nProcess: ppkat ppk --config ppk.toml; compare: posstat.py ppk.pos --truth-sim truth_trajectory.csv\n",
         r.baseline_km,
         v.signals,
         TID.0 * 100.0,

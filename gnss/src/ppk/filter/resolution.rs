@@ -77,7 +77,8 @@ impl Filter<'_> {
     /// What the data before and after this epoch, each alone, say of a smoothed fix: they
     /// agree when neither the forward state nor the backward `prior` resolves any ambiguity
     /// to another integer than `fix` (they may resolve fewer); they confirm it when each
-    /// alone fixes every integer of `fix`. Independent halves agreeing is what makes a fix of
+    /// alone fixes every integer of `fix` (each with the satellite `fix` left float, if it
+    /// left one out, left float too). Independent halves agreeing is what makes a fix of
     /// long-baseline data trustworthy: a model error that biases the smoothed float rarely
     /// biases both halves to the same wrong integer.
     fn halves_agree(&self, fix: &ar::Fix, prior: &Prior, pairs: &[Pair]) -> HalvesSay {
@@ -86,8 +87,11 @@ impl Filter<'_> {
         let halves: Vec<Option<FixedIntegers<crate::sv::Sv>>> = [Some(&self.state), None]
             .into_iter()
             .map(|s| match s {
-                Some(s) => resolve_leaving_one_out(s, self.opts, pairs, &mut unused),
-                None => resolve_leaving_one_out(&prior.to_state(), self.opts, pairs, &mut unused),
+                Some(s) => ar::resolve_without(s, self.opts, pairs, &mut unused, fix.left_out),
+                None => {
+                    let s = prior.to_state();
+                    ar::resolve_without(&s, self.opts, pairs, &mut unused, fix.left_out)
+                }
             })
             .map(|h| h.map(|h| FixedIntegers::by_satellite(&h)))
             .collect();
