@@ -141,3 +141,28 @@ fn bell_ebre_day_uses_the_fresh_uploads() {
         e.stats.superseded
     );
 }
+
+#[test]
+fn transmission_times_in_the_week_before_toe_count_as_earlier() {
+    // Toe at the start of a GPS week (Sunday 2020-06-28 00:00): the fresh set was sent an
+    // hour before, written as −3600 s of toe's week (RINEX allows it) or as 601,200 s of the
+    // week before; the stale 01:00 set of the older upload was sent at −5400 s.
+    let week_start = gnss::time::gpst(2020, 6, 28, 0, 0, 0, 0);
+    let h = |x: f64| week_start + hifitime::Duration::from_seconds(x * 3600.0);
+    for fresh_sent in [-3600.0, 601_200.0] {
+        let mut fresh = record(h(0.0), h(-1.0), 10.0);
+        fresh.orbit[24] = fresh_sent;
+        let mut stale = record(h(1.0), h(-1.5), 138.0);
+        stale.orbit[24] = -5400.0;
+        let nav = NavFile {
+            path: PathBuf::from("week.nav"),
+            version: 3.04,
+            records: vec![stale, fresh],
+            ..NavFile::default()
+        };
+        let e = Ephemerides::from_nav(&[nav]);
+        let sv = Sv::new(Constellation::Gps, 1);
+        assert_eq!(iode(e.select(sv, h(0.75)).unwrap()), 10.0, "{fresh_sent}");
+        assert_eq!(e.stats.superseded, 1, "{fresh_sent}");
+    }
+}

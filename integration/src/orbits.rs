@@ -62,8 +62,8 @@ pub fn load_orbits(
     }
     if eph.stats.superseded > 0 {
         warnings.push(format!(
-            "{} ephemerides of older uploads passed over for fresher ones of the same satellites \
-             (merged navigation files hold both; the stale sets are metres off)",
+            "{} ephemerides of older uploads passed over for later uploads' sets of the same \
+             satellites (files that span an upload hold both; they may differ by metres)",
             eph.stats.superseded
         ));
     }

@@ -20,10 +20,13 @@
 //!   (Q = 1) only when that position σ is at most `max_partial_fix_sigma`: a wide-lane-only
 //!   fix improves the float solution but is no fixed solution.
 //! - Fix-and-hold: the float state is constrained to C·x = ž with variance `hold_variance`.
+//! - [`resolve_without`] resolves with one satellite's ambiguities kept float (the filter's
+//!   smoother tries each of [`candidate_satellites`] when the whole set will not fix); the
+//!   [`Fix`] names the satellite left out.
 //!
 //! What enters: the filter state (read only), the options and the epoch's pairs. What leaves:
-//! a [`Fix`] (or none) and the best ratio tried, from [`resolve`]; [`hold`] constrains the
-//! state. The filter calls both; this module does not know the filter.
+//! a [`Fix`] (or none) and the best ratio tried, from [`resolve`] or [`resolve_without`];
+//! [`hold`] constrains the state. The filter calls them; this module does not know the filter.
 
 use super::dd::DdGroup;
 use super::lambda::{decorrelate, Decorrelated, IntegerCandidates};

@@ -223,7 +223,7 @@ pub fn navigation_text_with(
 /// fresh 22:00 one, lies 9 m from it): for every `every`-th GPS satellite of the layout, a set
 /// at each odd hour of `[start − 2 h, end + 2 h]`, sent 2.5 h before its toe (before the fresh
 /// set of the hour before it), with the satellite `along_track_m` metres ahead of the truth.
-/// A selection by toe alone takes it for the second half of every odd hour; one that knows
+/// A selection by toe alone takes it for the hour centred on each odd hour; one that knows
 /// the fresher upload passes it over. Returns the records' text and their count.
 pub fn stale_gps_records(
     span: (Epoch, Epoch),
@@ -270,21 +270,22 @@ pub fn off_gps_records(
     .0
 }
 
-/// Navigation text without the records of GPS satellite `prn` (RINEX 3: eight lines each).
+/// Navigation text without the records of GPS satellite `prn` (RINEX 3: a record's first
+/// line names the satellite, its continuation lines start with four spaces).
 pub fn without_gps(text: &str, prn: u8) -> String {
     let head = format!("G{prn:02} ");
     let mut out = String::with_capacity(text.len());
-    let mut skip = 0;
+    let mut skipping = false;
     for line in text.lines() {
-        if skip == 0 && line.starts_with(&head) {
-            skip = 8;
+        if line.starts_with(&head) {
+            skipping = true;
+        } else if !line.starts_with("    ") {
+            skipping = false;
         }
-        if skip > 0 {
-            skip -= 1;
-            continue;
+        if !skipping {
+            out.push_str(line);
+            out.push('\n');
         }
-        out.push_str(line);
-        out.push('\n');
     }
     out
 }
@@ -384,8 +385,6 @@ fn kepler_records(
     }
 }
 
-/// One LNAV-like (or Galileo) record of `sat` at `toe`, with the issue of data counted in
-/// `period`s since `t_ref`.
 /// When a record was transmitted and which issue of data it carries: the regular sets are sent
 /// an hour before their toe with the issue counted in periods; a stale upload's earlier, with
 /// the issue shifted by 128.
@@ -400,6 +399,9 @@ const REGULAR: Sent = Sent {
     iod_shift: 0.0,
 };
 
+/// One LNAV-like (or Galileo) record of `sat` at `toe`, with the issue of data counted in
+/// `period`s since `t_ref` and the transmission time as `sent` says (negative seconds of week
+/// when it falls in the week before toe's, as RINEX allows).
 fn kepler_record(s: &mut String, sat: &Sat, toe: Epoch, t_ref: Epoch, period: f64, sent: Sent) {
     let (week, sow) = week_tow(toe);
     let dt_ref = (toe - t_ref).to_seconds();
@@ -436,7 +438,7 @@ fn kepler_record(s: &mut String, sat: &Sat, toe: Epoch, t_ref: Epoch, period: f6
         [2.0, 0.0, 0.0, if sat.sys == 'E' { 0.0 } else { iod }],
         // Transmission time; fit interval: GPS 4 h, QZSS the flag 0 (2 h).
         [
-            sow - sent.before_toe_s.min(sow),
+            sow - sent.before_toe_s,
             if sat.sys == 'J' { 0.0 } else { 4.0 },
             0.0,
             0.0,

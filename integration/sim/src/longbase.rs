@@ -55,6 +55,7 @@ const STALE_EVERY: usize = 4;
 const STALE_ALONG_TRACK_M: f64 = 8.0;
 /// A GPS satellite whose every set in the navigation file is of a stale upload, this far (m)
 /// along its track from the truth, with no fresher set to replace it (BELL–EBRE's PRN 21).
+/// It is also one of the every-`STALE_EVERY`-th satellites: its odd-hour sets lie as far off.
 const OFF_PRN: u8 = 5;
 const OFF_ALONG_TRACK_M: f64 = 8.0;
 /// Code biases of the two receiver types on L1 and L2, metres.
