@@ -32,6 +32,16 @@ fn record(toe: Epoch, sent: Epoch, iode: f64) -> NavRecord {
     }
 }
 
+/// The ephemerides of `records`, as read from one navigation file.
+fn index(records: Vec<NavRecord>) -> Ephemerides {
+    let nav = NavFile {
+        path: PathBuf::from("test.nav"),
+        records,
+        ..NavFile::default()
+    };
+    Ephemerides::from_nav(&[nav])
+}
+
 fn iode(e: &Eph) -> f64 {
     match e {
         Eph::Kepler(k) => k.iode,
@@ -52,13 +62,7 @@ fn a_fresh_upload_wins_over_the_stale_set_with_the_nearer_toe() {
     let stale14 = record(at(14, 0, 0), at(12, 0, 0), 179.0);
     let fresh = record(at(13, 59, 44), at(12, 5, 0), 201.0);
     let next = record(at(16, 0, 0), at(14, 23, 0), 202.0);
-    let nav = NavFile {
-        path: PathBuf::from("merged.nav"),
-        version: 2.10,
-        records: vec![stale12, stale14, fresh, next],
-        ..NavFile::default()
-    };
-    let e = Ephemerides::from_nav(&[nav]);
+    let e = index(vec![stale12, stale14, fresh, next]);
     let sv = Sv::new(Constellation::Gps, 1);
     let pick = |t: Epoch| iode(e.select(sv, t).expect("an ephemeris"));
     // Before the new upload's sets are valid, the old one is all there is.
@@ -91,13 +95,7 @@ fn without_transmission_times_the_nearest_toe_is_kept() {
     let mut b = record(at(13, 59, 44), at(12, 5, 0), 201.0);
     a.orbit[24] = 0.9999e9;
     b.orbit[24] = 0.9999e9;
-    let nav = NavFile {
-        path: PathBuf::from("unknown.nav"),
-        version: 3.04,
-        records: vec![a, b],
-        ..NavFile::default()
-    };
-    let e = Ephemerides::from_nav(&[nav]);
+    let e = index(vec![a, b]);
     let sv = Sv::new(Constellation::Gps, 1);
     assert_eq!(iode(e.select(sv, at(14, 30, 0)).unwrap()), 179.0);
     assert_eq!(iode(e.select(sv, at(13, 30, 0)).unwrap()), 201.0);
@@ -154,13 +152,7 @@ fn transmission_times_in_the_week_before_toe_count_as_earlier() {
         fresh.orbit[24] = fresh_sent;
         let mut stale = record(h(1.0), h(-1.5), 138.0);
         stale.orbit[24] = -5400.0;
-        let nav = NavFile {
-            path: PathBuf::from("week.nav"),
-            version: 3.04,
-            records: vec![stale, fresh],
-            ..NavFile::default()
-        };
-        let e = Ephemerides::from_nav(&[nav]);
+        let e = index(vec![stale, fresh]);
         let sv = Sv::new(Constellation::Gps, 1);
         assert_eq!(iode(e.select(sv, h(0.75)).unwrap()), 10.0, "{fresh_sent}");
         assert_eq!(e.stats.superseded, 1, "{fresh_sent}");

@@ -117,10 +117,10 @@ fn determines_position(
     complete >= 3 && total >= min_total
 }
 
-/// Double-difference groups per system and slot over the candidates not excluded.
-fn dd_groups(cands: &[Candidate], excluded: &[Sv], mature: usize) -> Vec<DdGroup<Candidate>> {
+/// Double-difference groups per system and slot over the candidates but those of `left_out`.
+fn dd_groups(cands: &[Candidate], left_out: Option<Sv>, mature: usize) -> Vec<DdGroup<Candidate>> {
     let mut by_signal: BTreeMap<(Constellation, usize), Vec<Candidate>> = BTreeMap::new();
-    for c in cands.iter().filter(|c| !excluded.contains(&c.sv())) {
+    for c in cands.iter().filter(|c| Some(c.sv()) != left_out) {
         by_signal
             .entry((c.amb.sv.sys, c.amb.slot))
             .or_default()
@@ -374,8 +374,7 @@ pub(super) fn resolve_without(
 ) -> Option<Fix> {
     *best_ratio = None;
     let cands = candidates(st, o, pairs);
-    let excluded: Vec<Sv> = left_out.into_iter().collect();
-    let groups = dd_groups(&cands, &excluded, o.mature_lock);
+    let groups = dd_groups(&cands, left_out, o.mature_lock);
     let fl = FloatDd::of(st, &groups);
     if fl.a.len() < o.min_fix_ambiguities {
         return None;

@@ -207,10 +207,10 @@ pub fn navigation_text_with(
     let t_ref = from_week_tow(week0, 0.0);
     let first = start - hifitime::Duration::from_seconds(2.0 * 3600.0);
     let last = end + hifitime::Duration::from_seconds(2.0 * 3600.0);
-    kepler_records(&mut s, &sats, first, last, t_ref, 7200.0);
+    kepler_records(&mut s, &sats, (first, last), t_ref, (7200.0, 0.0), REGULAR);
     if letter_in(systems, 'J') {
         let qzss = qzss_sats(&mut Rng::new(seed).fork(0x717a7373));
-        kepler_records(&mut s, &qzss, first, last, t_ref, 3600.0);
+        kepler_records(&mut s, &qzss, (first, last), t_ref, (3600.0, 0.0), REGULAR);
     }
     if letter_in(systems, 'R') {
         s += &super::glonass_nav::records(first, last, t_ref, seed);
@@ -315,16 +315,16 @@ fn offset_gps_records(
             ..s
         })
         .collect();
-    let (mut text, mut n) = (String::new(), 0);
-    let (w, tow) = week_tow(start - hifitime::Duration::from_seconds(7200.0));
-    let mut toe = from_week_tow(w, (tow / 7200.0).floor() * 7200.0 + toe_offset_s);
-    while toe <= end + hifitime::Duration::from_seconds(7200.0) {
-        for sat in &moved {
-            kepler_record(&mut text, sat, toe, t_ref, 7200.0, sent);
-            n += 1;
-        }
-        toe += hifitime::Duration::from_seconds(7200.0);
-    }
+    let two_hours = hifitime::Duration::from_seconds(7200.0);
+    let mut text = String::new();
+    let n = kepler_records(
+        &mut text,
+        &moved,
+        (start - two_hours, end + two_hours),
+        t_ref,
+        (7200.0, toe_offset_s),
+        sent,
+    );
     (text, n)
 }
 
@@ -362,27 +362,31 @@ fn header() -> String {
 }
 
 /// The records of Keplerian satellites `sats` for every toe on the grid of `period` seconds
-/// (of the GPS week) from the last one at or before `first` to `last`; the orbits refer to
-/// `t_ref`, and the issue of data counts periods since it.
+/// (of the GPS week) shifted by `offset` seconds, from the last one at or before `first` to
+/// `last`, sent as `sent` says; the orbits refer to `t_ref`, and the issue of data counts
+/// periods since it. Returns how many were written.
 fn kepler_records(
     s: &mut String,
     sats: &[Sat],
-    first: Epoch,
-    last: Epoch,
+    (first, last): (Epoch, Epoch),
     t_ref: Epoch,
-    period: f64,
-) {
+    (period, offset): (f64, f64),
+    sent: Sent,
+) -> usize {
+    let mut n = 0;
     if sats.is_empty() {
-        return;
+        return n;
     }
     let (w, tow) = week_tow(first);
-    let mut toe = from_week_tow(w, (tow / period).floor() * period);
+    let mut toe = from_week_tow(w, (tow / period).floor() * period + offset);
     while toe <= last {
         for sat in sats {
-            kepler_record(s, sat, toe, t_ref, period, REGULAR);
+            kepler_record(s, sat, toe, t_ref, period, sent);
+            n += 1;
         }
         toe += hifitime::Duration::from_seconds(period);
     }
+    n
 }
 
 /// When a record was transmitted and which issue of data it carries: the regular sets are sent

@@ -23,7 +23,7 @@ use super::constellation::{
 use super::error::SimError;
 use super::io::write;
 use super::lowcost::receiver::{self, GpsL1, LowCost, Profile, TrackStats};
-use super::lowcost::{constellation, gpst, truth_csv};
+use super::lowcost::{gpst, nav_read_back, truth_csv};
 use super::rng::Rng;
 use gnss::frame::{Ecef, Geodetic};
 use gnss::sv::{Constellation, Sv};
@@ -166,9 +166,10 @@ fn simulate_variant(dir: &Path, seed: u64, v: Variant) -> Result<LongBaselineRep
     let rng = Rng::new(seed);
     let start = gpst(START)?;
     let end = start + Duration::from_seconds(SPAN_S);
-    let (nav, eph) = constellation(dir, (start, end), seed, v.systems, GpsLayout::Operational31)?;
-    // The receivers observe the true orbits (`eph`); the navigation file processed also holds
-    // an older upload's sets.
+    // The receivers observe the true orbits (`eph`); the navigation file processed, written
+    // over it below, also holds an older upload's sets.
+    let fresh = navigation_text_with(start, end, seed, v.systems, GpsLayout::Operational31);
+    let (nav, eph) = nav_read_back(dir, &fresh)?;
     let (stale, stale_records) = stale_gps_records(
         (start, end),
         seed,
@@ -176,7 +177,6 @@ fn simulate_variant(dir: &Path, seed: u64, v: Variant) -> Result<LongBaselineRep
         STALE_EVERY,
         STALE_ALONG_TRACK_M,
     );
-    let fresh = navigation_text_with(start, end, seed, v.systems, GpsLayout::Operational31);
     let off = off_gps_records(
         (start, end),
         seed,

@@ -177,11 +177,12 @@ pub(crate) fn constellation(
     systems: &[Constellation],
     gps: GpsLayout,
 ) -> Result<(NavFile, Ephemerides), SimError> {
-    let path = write(
-        dir,
-        "nav.rnx",
-        &navigation_text_with(start, end, seed, systems, gps),
-    )?;
+    nav_read_back(dir, &navigation_text_with(start, end, seed, systems, gps))
+}
+
+/// Navigation `text` written to `dir/nav.rnx` and read back, as a receiver would see it.
+pub(crate) fn nav_read_back(dir: &Path, text: &str) -> Result<(NavFile, Ephemerides), SimError> {
+    let path = write(dir, "nav.rnx", text)?;
     let nav = NavFile::read(&path)?;
     let eph = Ephemerides::from_nav(std::slice::from_ref(&nav));
     Ok((nav, eph))
