@@ -80,6 +80,9 @@ pub struct PassStats {
     /// Smoothed fixes rejected because the data before or after the epoch alone fixed an
     /// ambiguity to another integer.
     pub smoothed_fixes_rejected: usize,
+    /// Fixes refused on long baselines because they lay farther from the float solution than
+    /// its covariance allows (χ²(3) at 99 %).
+    pub far_from_float_fixes: usize,
     /// Fixed solutions found with one satellite's ambiguities left float (long baselines,
     /// when the whole set would not fix).
     pub left_out_fixes: usize,

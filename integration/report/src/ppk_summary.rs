@@ -176,7 +176,7 @@ fn pass_line(name: &str, s: &PassStats) -> String {
         .map(|(c, n)| format!("{c:?} {n}"))
         .collect();
     format!(
-        "{name}: ambiguity resets {} [{}], post-fit outliers {}, innovations rejected {} [{}], satellite-epochs below mask {}, without orbit {}{}{}",
+        "{name}: ambiguity resets {} [{}], post-fit outliers {}, innovations rejected {} [{}], satellite-epochs below mask {}, without orbit {}{}{}{}",
         s.slips.values().sum::<usize>(),
         slips.join(", "),
         s.outlier_resets,
@@ -193,6 +193,25 @@ fn pass_line(name: &str, s: &PassStats) -> String {
             format!(", fixes with one satellite left float {}", s.left_out_fixes)
         } else {
             String::new()
-        }
+        },
+        refused_fixes(s)
     )
+}
+
+/// The fixes a pass found but did not take, by reason (empty when none).
+fn refused_fixes(s: &PassStats) -> String {
+    let counts = [
+        (s.smoothed_fixes_rejected, "halves disagree"),
+        (s.far_from_float_fixes, "far from the float"),
+    ];
+    let total: usize = counts.iter().map(|(n, _)| n).sum();
+    if total == 0 {
+        return String::new();
+    }
+    let reasons: Vec<String> = counts
+        .iter()
+        .filter(|(n, _)| *n > 0)
+        .map(|(n, why)| format!("{why} {n}"))
+        .collect();
+    format!(", fixes refused {total} [{}]", reasons.join(", "))
 }

@@ -32,6 +32,27 @@ const LEAVE_OUT_MIN_SATELLITES: usize = 7;
 /// one satellite after another is tried, and the best of several searches is held to more.
 const LEAVE_OUT_RATIO_FACTOR: f64 = 1.25;
 
+/// The largest squared Mahalanobis distance (in the float covariance) from the float position
+/// to the fixed one that a long-baseline fix may move: χ²(3) at 99 %. A right fix lies
+/// within the float's own error of it; on long baselines the float also carries errors that
+/// last for hours (orbits, troposphere) and the integers that best absorb them can be wrong
+/// by a narrow-lane cycle yet pass the ratio test: BELL–EBRE with four satellites' orbits
+/// missing fixed 9 cm east of its float (3.5–5 σ) for an hour and a half, 252 fixed epochs
+/// more than 10 cm off, NEES 3.2; held to this, 15 and NEES 1.0, while the full day keeps
+/// 86 % fixed.
+const FLOAT_CONSISTENCY_CHI2: f64 = 11.34;
+
+/// Whether a fixed position lies within the float solution's own error of it: the squared Mahalanobis
+/// distance of the shift, in the float position covariance, at most
+/// [`FLOAT_CONSISTENCY_CHI2`] (a singular float covariance passes: nothing to test with).
+fn near_float(fixed: &nalgebra::Vector3<f64>, float: &State) -> bool {
+    let d = fixed - float.position();
+    float
+        .position_cov()
+        .cholesky()
+        .is_none_or(|c| d.dot(&c.solve(&d)) <= FLOAT_CONSISTENCY_CHI2)
+}
+
 /// Resolve on `st` as [`ar::resolve`] does; on long baselines (the ionosphere estimated),
 /// when the whole set gives no fixed solution, each satellite is left out in turn: one
 /// satellite's model error — an orbit metres off, as a stale upload leaves it (BELL–EBRE's
@@ -153,6 +174,12 @@ impl Filter<'_> {
                 fix = None;
             }
         }
+        // On long baselines a fix must also lie near the float it came from (see
+        // FLOAT_CONSISTENCY_CHI2), before it is reported or held.
+        if o.iono == Estimate::On && fix.as_ref().is_some_and(|f| !near_float(&f.position, st)) {
+            self.stats.far_from_float_fixes += 1;
+            fix = None;
+        }
         let mut fixed = None;
         if let Some(fix) = fix {
             sol.float = Some((sol.pos, sol.cov));
@@ -180,5 +207,31 @@ impl Filter<'_> {
         }
         sol.segment = self.segments.next(t, fixed);
         sol
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    /// The test is χ²(3) at 99 % in the float's own covariance: 3σ along an axis passes,
+    /// 3.5σ does not, and a correlated covariance judges by direction.
+    #[test]
+    fn a_fix_within_its_float_error_passes_and_beyond_it_is_refused() {
+        let mut st = State::new(0.02f64.powi(2));
+        st.x[0] = 4_775_849.4;
+        let at = |st: &State, d: Vector3<f64>| near_float(&(st.position() + d), st);
+        assert!(at(&st, Vector3::new(0.06, 0.0, 0.0)));
+        assert!(!at(&st, Vector3::new(0.07, 0.0, 0.0)));
+        assert!(!at(&st, Vector3::new(0.0, 0.0, -0.07)));
+        // x and y correlated 0.9: 4 cm along (1, 1) is 1.4σ, along (1, −1) 6.3σ.
+        st.p[(0, 1)] = 0.9 * 0.02f64.powi(2);
+        st.p[(1, 0)] = st.p[(0, 1)];
+        let k = 0.04 / 2f64.sqrt();
+        assert!(at(&st, Vector3::new(k, k, 0.0)));
+        assert!(!at(&st, Vector3::new(k, -k, 0.0)));
+        // Nothing to test with: a singular covariance passes.
+        assert!(at(&State::new(0.0), Vector3::new(1.0, 0.0, 0.0)));
     }
 }
