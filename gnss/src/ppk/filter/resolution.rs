@@ -38,12 +38,12 @@ const LEAVE_OUT_RATIO_FACTOR: f64 = 1.25;
 /// last for hours (orbits, troposphere) and the integers that best absorb them can be wrong
 /// by a narrow-lane cycle yet pass the ratio test: BELL–EBRE with four satellites' orbits
 /// missing fixed 9 cm east of its float (3.5–5 σ) for an hour and a half, 252 fixed epochs
-/// more than 10 cm off, NEES 3.2; held to this, 15 and NEES 1.0, while the full day keeps
-/// 86 % fixed.
+/// more than 10 cm off, NEES of the fixed epochs 3.7; held to this, 15 and 0.53, while the
+/// full day keeps 86 % fixed.
 const FLOAT_CONSISTENCY_CHI2: f64 = 11.34;
 
-/// Whether a fixed position lies within the float solution's own error of it: the squared Mahalanobis
-/// distance of the shift, in the float position covariance, at most
+/// Whether a fixed position lies within the float solution's own error of it: the squared
+/// Mahalanobis distance of the shift, in the float position covariance, at most
 /// [`FLOAT_CONSISTENCY_CHI2`] (a singular float covariance passes: nothing to test with).
 fn near_float(fixed: &nalgebra::Vector3<f64>, float: &State) -> bool {
     let d = fixed - float.position();
