@@ -319,14 +319,28 @@ const CSSRLIB_SEPARATION_V: f64 = 0.05;
 /// BELL (rover) against EBRE (base), two IGS stations 115 km apart, GPS L1/L2 at 30 s for
 /// 24 h. The ionosphere and the rover's zenith wet delay are estimated (chosen from the
 /// baseline length), the combined solution runs forward on the backward float prior.
+/// BELL–EBRE, 2002-01-30, 115 km at 30 s: the data folder, EBRE's marker (the base) and
+/// BELL's (the truth; its antenna reference point is 5.4 cm above it).
+struct BellEbre {
+    dir: std::path::PathBuf,
+    ebre: Ecef,
+    bell: Ecef,
+}
+
+/// BELL–EBRE's data, or None (skipped with a message, a failure on CI) when absent.
+fn bell_ebre() -> Option<BellEbre> {
+    Some(BellEbre {
+        dir: common::data("gnss/bell-ebre-2002-030")?,
+        ebre: Ecef::new(4833520.18645, 41537.04548, 4147461.51147),
+        bell: Ecef::new(4775849.42797, 116814.30786, 4213018.93112),
+    })
+}
+
 #[test]
 fn bell_ebre_115_km_baseline() {
-    let Some(dir) = common::data("gnss/bell-ebre-2002-030") else {
+    let Some(BellEbre { dir, ebre, bell }) = bell_ebre() else {
         return;
     };
-    let ebre = Ecef::new(4833520.18645, 41537.04548, 4147461.51147);
-    let bell = Ecef::new(4775849.42797, 116814.30786, 4213018.93112);
-    // The truth is the marker; BELL's antenna reference point is 5.4 cm above it.
     let opts = PpkOptions {
         systems: vec![gnss::sv::Constellation::Gps],
         refer: ppk::Reference::Marker,
@@ -442,11 +456,9 @@ fn bell_ebre_115_km_baseline() {
 /// beyond 10 cm, NEES fixed 0.53; 237 refused).
 #[test]
 fn bell_ebre_four_orbits_missing() {
-    let Some(dir) = common::data("gnss/bell-ebre-2002-030") else {
+    let Some(BellEbre { dir, ebre, bell }) = bell_ebre() else {
         return;
     };
-    let ebre = Ecef::new(4833520.18645, 41537.04548, 4147461.51147);
-    let bell = Ecef::new(4775849.42797, 116814.30786, 4213018.93112);
     let opts = PpkOptions {
         systems: vec![gnss::sv::Constellation::Gps],
         refer: ppk::Reference::Marker,
@@ -454,16 +466,13 @@ fn bell_ebre_four_orbits_missing() {
     };
     let mut nav = gnss::rinex::nav::NavFile::read(&dir.join("brdc0300.02n")).unwrap();
     nav.records.retain(|r| ![1, 7, 11, 20].contains(&r.sv.prn));
-    let orbits = gnss::orbit::Orbits::broadcast(gnss::orbit::Ephemerides::from_nav(&[nav]));
-    let r = ppk::process(
+    let r = common::ppk_with(
         &ObsFile::read(&dir.join("bell0300.02o")).unwrap(),
         &ObsFile::read(&dir.join("ebre0300.02o")).unwrap(),
-        ppk::BasePosition::Given(ebre),
-        &orbits,
+        &gnss::orbit::Orbits::broadcast(gnss::orbit::Ephemerides::from_nav(&[nav])),
+        ebre,
         &opts,
-        &gnss::progress::NoProgress,
-    )
-    .unwrap();
+    );
     let s = stats(&r, |_| Some(bell));
     let refused = r.forward.as_ref().map_or(0, |f| f.far_from_float_fixes);
     eprintln!(
@@ -487,11 +496,9 @@ fn bell_ebre_four_orbits_missing() {
 /// 6.6 mm), fixed, with σ that cover the error; the ARP lies 5.4 cm above the marker.
 #[test]
 fn bell_ebre_static_24_h() {
-    let Some(dir) = common::data("gnss/bell-ebre-2002-030") else {
+    let Some(BellEbre { dir, ebre, bell }) = bell_ebre() else {
         return;
     };
-    let ebre = Ecef::new(4833520.18645, 41537.04548, 4147461.51147);
-    let bell = Ecef::new(4775849.42797, 116814.30786, 4213018.93112);
     let mut opts = PpkOptions {
         systems: vec![gnss::sv::Constellation::Gps],
         motion: ppk::Motion::Static,

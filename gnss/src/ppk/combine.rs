@@ -35,10 +35,14 @@ fn mean_of(a: &EpochSol, b: &EpochSol) -> (nalgebra::Vector3<f64>, Matrix3<f64>)
     }
 }
 
+/// dᵀ·C⁻¹·d, infinite when `cov` is singular (nothing agrees with an unknown).
 fn mahalanobis2(d: &nalgebra::Vector3<f64>, cov: &Matrix3<f64>) -> f64 {
-    cov.try_inverse()
-        .map(|i| (d.transpose() * i * d)[0])
-        .unwrap_or(f64::INFINITY)
+    try_mahalanobis2(d, cov).unwrap_or(f64::INFINITY)
+}
+
+/// dᵀ·C⁻¹·d, None when `cov` is singular (the caller says what that means).
+pub(super) fn try_mahalanobis2(d: &nalgebra::Vector3<f64>, cov: &Matrix3<f64>) -> Option<f64> {
+    cov.try_inverse().map(|i| (d.transpose() * i * d)[0])
 }
 
 /// A smoothed solution checked against the backward pass's own solution of the epoch: a fix

@@ -288,7 +288,7 @@ fn run_pass(
 /// The warning of a kinematic run with integer resolution in one pass only on a long baseline
 /// (the ionosphere estimated): its fixes are held without the smoother's check against both
 /// halves of the data (BELL–EBRE, 115 km: 109 fixed epochs beyond 10 cm forward, 162
-/// backward, against 19 combined).
+/// backward, against 17 combined).
 fn single_pass_warning(opts: &PpkOptions, models: &Models) -> Option<String> {
     (models.iono
         && opts.filter != FilterMode::Combined

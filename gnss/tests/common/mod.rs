@@ -46,12 +46,28 @@ pub fn ppk_on(
         .iter()
         .map(|f| NavFile::read(&dir.join(f)).unwrap())
         .collect();
-    let orbits = Orbits::broadcast(Ephemerides::from_nav(&n));
+    ppk_with(
+        r,
+        b,
+        &Orbits::broadcast(Ephemerides::from_nav(&n)),
+        base_pos,
+        opts,
+    )
+}
+
+/// The carrier-phase engine on files in memory with the orbits given.
+pub fn ppk_with(
+    r: &ObsFile,
+    b: &ObsFile,
+    orbits: &Orbits,
+    base_pos: Ecef,
+    opts: &PpkOptions,
+) -> PpkResult {
     ppk::process(
         r,
         b,
         BasePosition::Given(base_pos),
-        &orbits,
+        orbits,
         opts,
         &::common::progress::NoProgress,
     )

@@ -5,6 +5,7 @@
 use super::Filter;
 use crate::frame::Ecef;
 use crate::ppk::ar;
+use crate::ppk::combine::try_mahalanobis2;
 use crate::ppk::options::{ArMode, Estimate, PpkOptions};
 use crate::ppk::output::EpochSol;
 use crate::ppk::pair::Pair;
@@ -46,11 +47,8 @@ const FLOAT_CONSISTENCY_CHI2: f64 = 11.34;
 /// Mahalanobis distance of the shift, in the float position covariance, at most
 /// [`FLOAT_CONSISTENCY_CHI2`] (a singular float covariance passes: nothing to test with).
 fn near_float(fixed: &nalgebra::Vector3<f64>, float: &State) -> bool {
-    let d = fixed - float.position();
-    float
-        .position_cov()
-        .cholesky()
-        .is_none_or(|c| d.dot(&c.solve(&d)) <= FLOAT_CONSISTENCY_CHI2)
+    try_mahalanobis2(&(fixed - float.position()), &float.position_cov())
+        .is_none_or(|m2| m2 <= FLOAT_CONSISTENCY_CHI2)
 }
 
 /// Resolve on `st` as [`ar::resolve`] does; on long baselines (the ionosphere estimated),
