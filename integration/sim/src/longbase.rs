@@ -1,16 +1,15 @@
 //! `long-baseline`: two static geodetic receivers 250 km apart observing GPS L1/L2 every 30 s
-//! for 24 h (31 GPS satellites, as flew in 2024: [`GpsLayout::Operational31`]), with what the broadcast models leave out at that distance: an ionosphere that
-//! differs between the two ends (a north–south gradient on top of Klobuchar's own, which
-//! follows its daily cycle, and travelling disturbances of a few percent), a wet troposphere
-//! of its own at each station (a random walk about an offset, and north/east gradients), and
-//! receivers of different types whose code biases do not cancel (the base tracks GPS C/A,
-//! the rover P(Y): each satellite's C1 − P1 bias stays in the double differences, as when a
-//! C1 file meets a P1 file), and a navigation file that, like merged daily files, also holds
-//! sets of an older upload metres off, and for one satellite only such sets (issue 49). The
-//! truth is exact; the
-//! folder is processed by `ppkat ppk --config ppk.toml` like the other benches. The same
-//! pair with Galileo E1/E5a beside GPS (same atmosphere, same receivers) is written to
-//! `gps-galileo/`.
+//! for 24 h (31 GPS satellites, as flew in 2024: [`GpsLayout::Operational31`]), with what the
+//! broadcast models leave out at that distance: an ionosphere that differs between the two
+//! ends (a north–south gradient on top of Klobuchar's own, which follows its daily cycle, and
+//! travelling disturbances of a few percent), a wet troposphere of its own at each station (a
+//! random walk about an offset, and north/east gradients), and receivers of different types
+//! whose code biases do not cancel (the base tracks GPS C/A, the rover P(Y): each satellite's
+//! C1 − P1 bias stays in the double differences, as when a C1 file meets a P1 file), and a
+//! navigation file that, like merged daily files, also holds sets of an older upload metres
+//! off, and for one satellite only such sets (issue 49). The truth is exact; the folder is
+//! processed by `ppkat ppk --config ppk.toml` like the other benches. The same pair with
+//! Galileo E1/E5a beside GPS (same atmosphere, same receivers) is written to `gps-galileo/`.
 //!
 //! Enters: the output folder and a seed. Leaves, in the folder and in `gps-galileo/`:
 //! `base.obs`, `rover.obs`, `nav.rnx`, `ppk.toml`, `truth_trajectory.csv` (the static rover
