@@ -325,6 +325,8 @@ struct BellEbre {
     dir: std::path::PathBuf,
     ebre: Ecef,
     bell: Ecef,
+    /// GPS, positions of the rover's marker: how every BELL–EBRE test processes the pair.
+    opts: PpkOptions,
 }
 
 /// BELL–EBRE's data, or None (skipped with a message, a failure on CI) when absent.
@@ -333,18 +335,24 @@ fn bell_ebre() -> Option<BellEbre> {
         dir: common::data("gnss/bell-ebre-2002-030")?,
         ebre: Ecef::new(4833520.18645, 41537.04548, 4147461.51147),
         bell: Ecef::new(4775849.42797, 116814.30786, 4213018.93112),
+        opts: PpkOptions {
+            systems: vec![gnss::sv::Constellation::Gps],
+            refer: ppk::Reference::Marker,
+            ..PpkOptions::default()
+        },
     })
 }
 
 #[test]
 fn bell_ebre_115_km_baseline() {
-    let Some(BellEbre { dir, ebre, bell }) = bell_ebre() else {
+    let Some(BellEbre {
+        dir,
+        ebre,
+        bell,
+        opts,
+    }) = bell_ebre()
+    else {
         return;
-    };
-    let opts = PpkOptions {
-        systems: vec![gnss::sv::Constellation::Gps],
-        refer: ppk::Reference::Marker,
-        ..PpkOptions::default()
     };
     let r = run(
         &dir,
@@ -456,13 +464,14 @@ fn bell_ebre_115_km_baseline() {
 /// beyond 10 cm, NEES fixed 0.53; 237 refused).
 #[test]
 fn bell_ebre_four_orbits_missing() {
-    let Some(BellEbre { dir, ebre, bell }) = bell_ebre() else {
+    let Some(BellEbre {
+        dir,
+        ebre,
+        bell,
+        opts,
+    }) = bell_ebre()
+    else {
         return;
-    };
-    let opts = PpkOptions {
-        systems: vec![gnss::sv::Constellation::Gps],
-        refer: ppk::Reference::Marker,
-        ..PpkOptions::default()
     };
     let mut nav = gnss::rinex::nav::NavFile::read(&dir.join("brdc0300.02n")).unwrap();
     nav.records.retain(|r| ![1, 7, 11, 20].contains(&r.sv.prn));
@@ -496,14 +505,18 @@ fn bell_ebre_four_orbits_missing() {
 /// 6.6 mm), fixed, with σ that cover the error; the ARP lies 5.4 cm above the marker.
 #[test]
 fn bell_ebre_static_24_h() {
-    let Some(BellEbre { dir, ebre, bell }) = bell_ebre() else {
+    let Some(BellEbre {
+        dir,
+        ebre,
+        bell,
+        opts,
+    }) = bell_ebre()
+    else {
         return;
     };
     let mut opts = PpkOptions {
-        systems: vec![gnss::sv::Constellation::Gps],
         motion: ppk::Motion::Static,
-        refer: ppk::Reference::Marker,
-        ..PpkOptions::default()
+        ..opts
     };
     let files = ("bell0300.02o", "ebre0300.02o", ["brdc0300.02n"]);
     let r = run(&dir, files.0, files.1, &files.2, ebre, &opts);
