@@ -31,16 +31,19 @@ use std::path::{Path, PathBuf};
 /// beside GPS in OUT/gps-galileo/.
 ///
 /// lowcost is the test bench of low-cost receivers, with exact truth: OUT/walk/ holds a u-blox
-/// M8P-like rover walking a river trail (20 min, 1 Hz, GPS/GLONASS/QZSS L1, under trees half
-/// the time: C/N0 falling, losses of lock, half cycles that clear after some seconds,
-/// multipath) as rover.ubx, against a base whose log base.ubx mixes UBX, RTCM 3 (1005, MSM7,
-/// 1230) and NMEA and lost epochs (gaps of 1–39 s), the GLONASS inter-channel biases of the two
-/// receivers unequal. OUT/drone/ holds a DJI Phantom 4 RTK-like flight (5.7 min, 5 Hz,
-/// GPS/GLONASS/Galileo L1/L2) as PPKRAW.bin (RTCM 3 MSM7 opening with stale GPS ephemerides
-/// of other weeks) with Timestamp.MRK, against a CORS's base.obs. Each folder has ppk.toml
-/// (`ppkat ppk --config OUT/walk/ppk.toml`),
-/// truth_trajectory.csv (the antenna at the true reception time of every rover epoch),
-/// nav.rnx, the RINEX of each receiver and README.txt with the figures simulated.
+/// M8P-like rover on a pole staking out points 3–30 m from a base of the same kind (20 min,
+/// 1 Hz, GPS/GLONASS L1, standing 70 % of the time), both receivers carrying what a real pair
+/// was measured to do (shared/data/lowcost-fingerprint: time tags milliseconds off GPS time,
+/// wandering clocks, losses of lock in bursts, unflagged phase jumps, slowly varying code
+/// errors with excursions of metres, heavy-tailed Doppler) as rover.ubx, against base.ubx
+/// mixing UBX, RTCM 3 (1005, MSM7, 1230) and NMEA, whose UBX and RTCM epochs each have gaps of
+/// their own. OUT/walk-open/ holds the kinder walk of before: a rover walking a river trail
+/// (GPS/GLONASS/QZSS L1, under trees half the time) against a base a few hundred metres away.
+/// OUT/drone/ holds a DJI Phantom 4 RTK-like flight (5.7 min, 5 Hz, GPS/GLONASS/Galileo L1/L2)
+/// as PPKRAW.bin (RTCM 3 MSM7 opening with stale GPS ephemerides of other weeks) with
+/// Timestamp.MRK, against a CORS's base.obs. Each folder has ppk.toml (`ppkat ppk --config
+/// OUT/walk/ppk.toml`), truth_trajectory.csv (the antenna at the true reception time of every
+/// rover epoch), nav.rnx, the RINEX of each receiver and README.txt with the figures simulated.
 ///
 /// An adjustment project (--builtin classic-block, close-range, block1000, nav-block,
 /// sparse-control or textured-block: the classic 2-strip 1:8000 block, a close-range pair, a
@@ -77,6 +80,12 @@ pub struct Args {
     /// Also write the rover and base as raw receiver logs of this format (flights only).
     #[arg(long, value_enum, value_name = "FORMAT")]
     raw: Option<RawArg>,
+    /// Draw another realisation of the built-in scenario (or of the scenario file): its noise,
+    /// losses of lock, slips, errors and, where they are drawn, its paths and points; the
+    /// layout stays. Without it each built-in keeps its own seed, so its files are those the
+    /// tests and benches know. Check several seeds before trusting a figure.
+    #[arg(long, value_name = "N")]
+    seed: Option<u64>,
     /// Also write orbits.sp3: the synthetic constellation as precise orbits (SP3-c, positions
     /// and clocks every 5 minutes from an hour before the flight to an hour after), for
     /// trying `--sp3` without `--nav` (flights only).
@@ -116,7 +125,7 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(r) = args
         .builtin
         .as_deref()
-        .and_then(|b| block::builtin(b, &args.out))
+        .and_then(|b| block::builtin_seeded(b, &args.out, args.seed))
     {
         println!("{}", r?);
         return Ok(());
@@ -125,14 +134,17 @@ pub fn run(args: Args) -> Result<()> {
         if args.raw.is_some() {
             bail!("--raw does not apply to lowcost: its folders hold the logs low-cost receivers write (u-blox UBX, a UBX + RTCM 3 + NMEA base log)");
         }
-        print!("{}", simulate::lowcost::run(&args.out, 47)?);
+        print!(
+            "{}",
+            simulate::lowcost::run(&args.out, args.seed.unwrap_or(simulate::lowcost::SEED))?
+        );
         return Ok(());
     }
     if args.builtin.as_deref() == Some("long-baseline") {
         if args.raw.is_some() {
             bail!("--raw does not apply to long-baseline: its receivers write RINEX");
         }
-        let r = simulate::longbase::run(&args.out, 49)?;
+        let r = simulate::longbase::run(&args.out, args.seed.unwrap_or(simulate::longbase::SEED))?;
         println!(
             "long-baseline: {:.1} km, rover {} epochs, base {} epochs → {} (ppkat ppk --config {})",
             r.baseline_km,
@@ -143,11 +155,14 @@ pub fn run(args: Args) -> Result<()> {
         );
         return Ok(());
     }
+    let mut s = scenario(args.scenario.as_deref(), args.builtin.as_deref())?;
+    if let Some(seed) = args.seed {
+        s.seed = seed;
+    }
     if args.builtin.as_deref() == Some("hard-sky") && args.raw.is_none() {
-        print!("{}", integration::hard_sky::run(&args.out)?);
+        print!("{}", integration::hard_sky::run_scenario(&args.out, &s)?);
         return Ok(());
     }
-    let s = scenario(args.scenario.as_deref(), args.builtin.as_deref())?;
     let rep = simulate::run(&s, &args.out)?;
     print!("{rep}");
     if args.sp3 {

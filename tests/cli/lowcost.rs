@@ -13,7 +13,7 @@ fn the_low_cost_folders_run_end_to_end() {
     assert!(t.contains("walk →") && t.contains("drone →"), "{t}");
 
     // The walk: the base position from the base log's RTCM 1005, GLONASS float and said so.
-    let walk = dir.join("walk");
+    let walk = dir.join("walk-open");
     let t = succeeds(&ppkat(&["ppk", "--config", p(&walk.join("ppk.toml"))]));
     assert!(t.contains("RTCM 1005"), "{t}");
     assert!(t.contains("read as a UBX + RTCM 3 + NMEA log"), "{t}");

@@ -153,6 +153,9 @@ const GPS_GALILEO: Variant = Variant {
     option: "G,E",
 };
 
+/// The seed of the bench's own files (`simulate --builtin long-baseline` without `--seed`).
+pub const SEED: u64 = 49;
+
 /// Simulate the pair into `dir` (GPS) and `dir/gps-galileo` (GPS and Galileo); the report is
 /// the GPS one's.
 pub fn run(dir: &Path, seed: u64) -> Result<LongBaselineReport, SimError> {
@@ -217,6 +220,7 @@ fn simulate_variant(dir: &Path, seed: u64, v: Variant) -> Result<LongBaselineRep
         bands: 2,
         mask_deg: 5.0,
         profile: geodetic(),
+        impair: None,
         atmosphere: Some(&base_atm),
         code_bias: BIAS_BASE,
         gps_l1: GpsL1::Ca,

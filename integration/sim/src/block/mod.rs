@@ -355,6 +355,17 @@ pub fn gnss_section(spec: &BlockSpec, tape_error: [f64; 3], group: &str, model: 
 /// rendered photos with exact truth, for feature matchers; see [`textured`]). Returns a
 /// one-line summary.
 pub fn builtin(name: &str, dir: &Path) -> Option<Result<String, SimError>> {
+    builtin_seeded(name, dir, None)
+}
+
+/// [`builtin`] drawn from `seed` instead of the project's own (another realisation of the
+/// same block: noise, blunders, terrain and points; the layout stays).
+pub fn builtin_seeded(
+    name: &str,
+    dir: &Path,
+    seed: Option<u64>,
+) -> Option<Result<String, SimError>> {
+    let seeded = |own: u64| seed.unwrap_or(own);
     let classic_gnss = |spec: &BlockSpec| gnss_section(spec, TAPE_ERROR, "block", "linear");
     let aerial_summary = |spec: BlockSpec| {
         aerial(&spec, dir).map(|t| {
@@ -371,16 +382,25 @@ pub fn builtin(name: &str, dir: &Path) -> Option<Result<String, SimError>> {
     match name {
         "classic-block" => {
             let mut spec = BlockSpec::classic();
+            spec.seed = seeded(spec.seed);
             spec.project_options = classic_gnss(&spec);
             Some(aerial_summary(spec))
         }
         "block1000" => {
             let mut spec = BlockSpec::large(20, 50);
+            spec.seed = seeded(spec.seed);
             spec.project_options = classic_gnss(&spec);
             Some(aerial_summary(spec))
         }
         "close-range" => Some(
-            super::closerange::close_range(&super::closerange::CloseRangeSpec::default(), dir).map(
+            super::closerange::close_range(
+                &super::closerange::CloseRangeSpec {
+                    seed: seeded(super::closerange::CloseRangeSpec::default().seed),
+                    ..Default::default()
+                },
+                dir,
+            )
+            .map(
                 |t| {
                     format!(
                         "close-range pair: {} stations, {} points → {}",
@@ -391,7 +411,7 @@ pub fn builtin(name: &str, dir: &Path) -> Option<Result<String, SimError>> {
                 },
             ),
         ),
-        "nav-block" => Some(nav_block(&NavSpec::awkward(), dir).map(|t| {
+        "nav-block" => Some(nav_block(&NavSpec { seed: seeded(NavSpec::awkward().seed), ..NavSpec::awkward() }, dir).map(|t| {
             format!(
                 "nav-block: {} images ({} without measurements), {} ground points, {} image measurements, GNSS latency {} s → {} (and project_gcp_only.toml)",
                 t.images.len(),
@@ -402,7 +422,7 @@ pub fn builtin(name: &str, dir: &Path) -> Option<Result<String, SimError>> {
                 dir.join("project.toml").display()
             )
         })),
-        "sparse-control" => Some(nav_block(&NavSpec::sparse_control(), dir).map(|t| {
+        "sparse-control" => Some(nav_block(&NavSpec { seed: seeded(NavSpec::sparse_control().seed), ..NavSpec::sparse_control() }, dir).map(|t| {
             let per = |n: usize| t.control_per_image.iter().filter(|&&c| c == n).count();
             format!(
                 "sparse-control: {} images (control measured: {} in one, {} in two, {} in three, {} in four or more), {} ground points, {} image measurements, GNSS offset 14 m, latency {} s → {} (and project_gcp_only.toml)",
@@ -417,7 +437,7 @@ pub fn builtin(name: &str, dir: &Path) -> Option<Result<String, SimError>> {
                 dir.join("project.toml").display()
             )
         })),
-        "textured-block" => Some(textured::textured_block(&textured::TexturedSpec::builtin(), dir).map(|r| {
+        "textured-block" => Some(textured::textured_block(&textured::TexturedSpec { seed: seeded(textured::TexturedSpec::builtin().seed), ..textured::TexturedSpec::builtin() }, dir).map(|r| {
             format!(
                 "textured-block: {} images of {} × {} px rendered in {:.1} s into {}, {} points, {} exact image measurements → {}",
                 r.images,

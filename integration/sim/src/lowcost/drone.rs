@@ -170,6 +170,7 @@ pub(super) fn drone(dir: &Path, rng: &Rng) -> Result<DroneReport, SimError> {
         atmosphere: None,
         code_bias: [0.0; 2],
         gps_l1: GpsL1::CaAsP,
+        impair: None,
         profile: drone_profile(),
     };
     let base = LowCost {
@@ -183,6 +184,7 @@ pub(super) fn drone(dir: &Path, rng: &Rng) -> Result<DroneReport, SimError> {
         atmosphere: None,
         code_bias: [0.0; 2],
         gps_l1: GpsL1::CaAsP,
+        impair: None,
         profile: cors_profile(),
     };
     let (rtext, rstats) = receiver::simulate(&rover, &eph, &klob, &rng.fork(1), &|_| true);

@@ -1,12 +1,16 @@
 //! `simulate --builtin lowcost`: the test bench of low-cost receivers as drones and
-//! surveyors fly and walk them, with exact truth. Shaped after two real cases (figures in
-//! issue 47), not to be easy:
+//! surveyors fly and walk them, with exact truth, not to be easy:
 //!
-//! - `walk/`: a u-blox M8P-like rover walking a river trail, 20 min at 1 Hz, GPS, GLONASS and
-//!   QZSS L1, under trees for half the walk (C/N0 falling, losses of lock, half cycles that
-//!   clear after some seconds, multipath), against a base of the same kind a few hundred
-//!   metres away whose log mixes UBX, RTCM 3 (1005, MSM7, 1230) and NMEA and lost epochs
-//!   (gaps of 1–39 s); GLONASS inter-channel biases differ between the two receivers.
+//! - `walk/` ([`fieldwalk`]): a u-blox M8P-like rover on a pole staking out points 3–30 m
+//!   from a base of the same kind, 20 min at 1 Hz, GPS and GLONASS L1, both receivers carrying
+//!   the impairments ([`impair`]) measured on a real pair (`shared/data/lowcost-fingerprint`);
+//!   the base's log mixes UBX, RTCM 3 and NMEA, its UBX and RTCM epochs each with gaps.
+//! - `walk-open/`: the kinder walk shaped after issue 47's words: a rover walking a river
+//!   trail, 20 min at 1 Hz, GPS, GLONASS and QZSS L1, under trees for half the walk (C/N0
+//!   falling, losses of lock, half cycles that clear after some seconds, multipath), against
+//!   a base a few hundred metres away whose log lost epochs (gaps of 1–39 s); GLONASS
+//!   inter-channel biases differ between the two receivers.
+//! - `drone/` ([`drone`]): the DJI Phantom 4 RTK-like flight.
 //!
 //! Each folder holds the logs, `nav.rnx` (the synthetic constellation), `ppk.toml` (the
 //! `ppk --config` file that processes it), `truth_trajectory.csv` (the antenna at the true
@@ -14,12 +18,15 @@
 //! receiver (`*_rinex.obs`, the same observations for other tools) and `README.txt` (what was
 //! simulated, with its figures).
 //!
-//! Enters: the output folder. Leaves: those files and a [`LowCostReport`]. Uses
-//! [`receiver`] (the tracking model), [`walk`] (the path), the constellation and the raw-log
-//! writers of `gnss`.
+//! Enters: the output folder and a seed ([`SEED`]: the bench's own files). Leaves: those
+//! files and a [`LowCostReport`]. Uses [`receiver`] (the tracking model), [`impair`],
+//! [`stakeout`] and [`walk`] (the paths), the constellation and the raw-log writers of `gnss`.
 
 pub mod drone;
+pub mod fieldwalk;
+pub mod impair;
 pub mod receiver;
+pub mod stakeout;
 pub mod walk;
 
 use super::constellation::{navigation_text_with, GpsLayout};
@@ -42,13 +49,18 @@ use std::path::{Path, PathBuf};
 /// What the bench wrote.
 #[derive(Clone, Debug)]
 pub struct LowCostReport {
-    /// The walk's folder.
+    /// The walk's folder (the walk shaped on the measured fingerprint).
     pub walk: PathBuf,
-    /// The rover of the walk.
+    /// What the walk holds.
+    pub field: fieldwalk::FieldWalk,
+    /// The open-sky walk's folder (`walk-open`: the river trail, kinder than the receivers
+    /// measured since).
+    pub open_walk: PathBuf,
+    /// The rover of the open-sky walk.
     pub walk_rover: TrackStats,
-    /// The base of the walk.
+    /// The base of the open-sky walk.
     pub walk_base: TrackStats,
-    /// The walk's base position (ARP), ECEF.
+    /// The open-sky walk's base position (ARP), ECEF.
     pub walk_base_position: Ecef,
     /// The drone's folder.
     pub drone: PathBuf,
@@ -58,6 +70,12 @@ pub struct LowCostReport {
 
 impl std::fmt::Display for LowCostReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "walk → {}\n{}",
+            self.walk.display(),
+            fieldwalk::text(&self.field)
+        )?;
         write!(f, "{}", walk_summary(self))?;
         write!(
             f,
@@ -142,17 +160,25 @@ fn base_log_gaps(n: usize, rng: &mut Rng) -> Vec<bool> {
     keep
 }
 
-/// Run the bench into `dir` (`dir/walk/`).
+/// The seed of the bench's own files (`simulate --builtin lowcost` without `--seed`).
+pub const SEED: u64 = 47;
+
+/// Run the bench into `dir` (`dir/walk/`, `dir/walk-open/`, `dir/drone/`); another `seed`
+/// draws another realisation of each.
 pub fn run(dir: &Path, seed: u64) -> Result<LowCostReport, SimError> {
     let rng = Rng::new(seed);
     let walk_dir = dir.join("walk");
+    let field = fieldwalk::walk(&walk_dir, &rng.fork(3))?;
+    let open_walk = dir.join("walk-open");
     let (walk_rover, walk_base, walk_base_position) =
-        walk(&walk_dir, &rng.fork(1), &WalkHalfCycles::default())?;
+        walk(&open_walk, &rng.fork(1), &WalkHalfCycles::default())?;
     let drone_dir = dir.join("drone");
     let drone_report = drone::drone(&drone_dir, &rng.fork(2))?;
     write(&drone_dir, "README.txt", &drone_text(&drone_report))?;
     Ok(LowCostReport {
         walk: walk_dir,
+        field,
+        open_walk,
         walk_rover,
         walk_base,
         walk_base_position,
@@ -188,8 +214,9 @@ pub(crate) fn nav_read_back(dir: &Path, text: &str) -> Result<(NavFile, Ephemeri
     Ok((nav, eph))
 }
 
-/// The walk with its half cycles as `half` says, into `dir`: rover and base simulated, logs,
-/// truth and the configuration written; what the rover and base hold, and the base position.
+/// The open-sky walk with its half cycles as `half` says, into `dir`: rover and base
+/// simulated, logs, truth and the configuration written; what the rover and base hold, and
+/// the base position.
 pub fn walk_into(
     dir: &Path,
     seed: u64,
@@ -240,6 +267,7 @@ fn walk(
         atmosphere: None,
         code_bias: [0.0; 2],
         gps_l1: GpsL1::CaAsP,
+        impair: None,
         profile: walk_rover_profile(half),
     };
     let open_sky = |_t: f64| 0.0;
@@ -254,6 +282,7 @@ fn walk(
         atmosphere: None,
         code_bias: [0.0; 2],
         gps_l1: GpsL1::CaAsP,
+        impair: None,
         profile: walk_base_profile(half),
     };
     let (rtext, rstats) = receiver::simulate(&rover, &eph, &klob, &rng.fork(1), &|_| true);
@@ -266,7 +295,12 @@ fn walk(
     let (ubx, _) = gnss::raw::ubx_write::ubx_from_obs(&rover_obs);
     write_bytes(dir, "rover.ubx", &ubx)?;
     let base_obs = ObsFile::read(&base_rinex)?;
-    write_bytes(dir, "base.ubx", &mixed_base_log(&base_obs, base_pos))?;
+    let all = |_: usize| true;
+    write_bytes(
+        dir,
+        "base.ubx",
+        &mixed_base_log(&base_obs, base_pos, &all, &all),
+    )?;
     let clock = rover.clock;
     write(
         dir,
@@ -289,22 +323,31 @@ systems = \"G,R,J\"\n\
 frequencies = 1\n\
 out = \"ppk.pos\"\n";
 
-/// The base's log as a u-blox base writes it: UBX RXM-RAWX of each epoch it kept, the
-/// RTCM 3 it sends beside (1005 every ten epochs, the MSM7 of the epoch, 1230 GLONASS
-/// biases) and an NMEA GGA.
-fn mixed_base_log(obs: &ObsFile, arp: Ecef) -> Vec<u8> {
-    let (ubx, _) = gnss::raw::ubx_write::ubx_from_obs(obs);
-    let (rtcm, _) = gnss::raw::rtcm_write::rtcm_from_obs(obs, &[]);
-    let msm_groups = msm_groups(&rtcm);
+/// The base's log as a u-blox base writes it: UBX RXM-RAWX of the epochs `ubx` keeps (by
+/// index in `obs`), the RTCM 3 it sends beside (1005 every ten epochs, the MSM7 of the
+/// epochs `rtcm` keeps, 1230 GLONASS biases) and an NMEA GGA of each epoch either kept.
+/// Lock times and phase shifts run over all the epochs of `obs`, as the receiver tracked.
+pub(crate) fn mixed_base_log(
+    obs: &ObsFile,
+    arp: Ecef,
+    ubx: &dyn Fn(usize) -> bool,
+    rtcm: &dyn Fn(usize) -> bool,
+) -> Vec<u8> {
+    let (ubx_bytes, _) = gnss::raw::ubx_write::ubx_from_obs(obs);
+    let (rtcm_bytes, _) = gnss::raw::rtcm_write::rtcm_from_obs(obs, &[]);
+    let msm_groups = msm_groups(&rtcm_bytes);
     let g = arp.to_geodetic();
     let mut out = gnss::raw::rtcm_write::station_1005([arp.0.x, arp.0.y, arp.0.z]);
     let mut i = 0;
     let mut epoch = 0;
-    while i + 8 <= ubx.len() {
-        let n = u16::from_le_bytes([ubx[i + 4], ubx[i + 5]]) as usize + 8;
-        out.extend_from_slice(&ubx[i..i + n]);
-        if ubx[i + 2] == 0x02 && ubx[i + 3] == 0x15 {
-            if let Some(group) = msm_groups.get(epoch) {
+    while i + 8 <= ubx_bytes.len() {
+        let n = u16::from_le_bytes([ubx_bytes[i + 4], ubx_bytes[i + 5]]) as usize + 8;
+        let rawx = ubx_bytes[i + 2] == 0x02 && ubx_bytes[i + 3] == 0x15;
+        if !rawx || ubx(epoch) {
+            out.extend_from_slice(&ubx_bytes[i..i + n]);
+        }
+        if rawx {
+            if let Some(group) = msm_groups.get(epoch).filter(|_| rtcm(epoch)) {
                 group.iter().for_each(|f| out.extend_from_slice(f));
             }
             if epoch % 10 == 9 {
@@ -313,7 +356,7 @@ fn mixed_base_log(obs: &ObsFile, arp: Ecef) -> Vec<u8> {
                 ]));
                 out.extend(gnss::raw::rtcm::frame(&[0x4c, 0xe0, 0, 0, 0]));
             }
-            if let Some(e) = obs.epochs.get(epoch) {
+            if let Some(e) = obs.epochs.get(epoch).filter(|_| ubx(epoch) || rtcm(epoch)) {
                 out.extend(gga(e.time, &g));
             }
             epoch += 1;
@@ -379,11 +422,23 @@ pub(crate) fn truth_csv(
     clock: (f64, f64),
     at: &dyn Fn(Epoch) -> (Ecef, Vector3<f64>),
 ) -> String {
-    let mut s = String::from("# antenna phase centre at the true reception time of each rover epoch (receiver tag − clock offset), GPST; ECEF metres; velocity m/s; attitude degrees (not simulated: 0)\nweek,tow,x,y,z,vx,vy,vz,roll,pitch,yaw\n");
     let n = (span / dt).floor() as usize;
-    for k in 0..=n {
-        let tag = k as f64 * dt;
-        let t = start + Duration::from_seconds(tag - (clock.0 + clock.1 * tag));
+    let instants: Vec<Epoch> = (0..=n)
+        .map(|k| {
+            let tag = k as f64 * dt;
+            start + Duration::from_seconds(tag - (clock.0 + clock.1 * tag))
+        })
+        .collect();
+    truth_at_instants(&instants, at)
+}
+
+/// The antenna at each true reception time of `instants` (see [`truth_csv`]).
+pub(crate) fn truth_at_instants(
+    instants: &[Epoch],
+    at: &dyn Fn(Epoch) -> (Ecef, Vector3<f64>),
+) -> String {
+    let mut s = String::from("# antenna phase centre at the true reception time of each rover epoch (receiver tag − clock offset), GPST; ECEF metres; velocity m/s; attitude degrees (not simulated: 0)\nweek,tow,x,y,z,vx,vy,vz,roll,pitch,yaw\n");
+    for &t in instants {
         let (p, v) = at(t);
         let (w, tow) = gnss::time::week_tow(t);
         let _ = writeln!(
@@ -451,11 +506,11 @@ fn drone_text(d: &drone::DroneReport) -> String {
     )
 }
 
-/// One line of the walk's figures for the command's summary.
+/// The open-sky walk's figures for the command's summary.
 fn walk_summary(r: &LowCostReport) -> String {
     format!(
-        "walk → {}\n{}",
-        r.walk.display(),
+        "walk-open → {}\n{}",
+        r.open_walk.display(),
         walk_text(&r.walk_rover, &r.walk_base, r.walk_base_position)
     )
 }

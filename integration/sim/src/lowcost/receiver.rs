@@ -15,6 +15,7 @@
 use super::super::gnss_obs::{frequencies, geometry};
 use super::super::obs_text::{header, write_epoch_bands, HeaderInfo, SatObs};
 use super::super::rng::Rng;
+use super::impair::{open_cn0, ClockSeries, Impairments, SatImpair};
 use gnss::frame::{az_el, Ecef};
 use gnss::model::{klobuchar_gps, troposphere};
 use gnss::orbit::{Ephemerides, C};
@@ -85,6 +86,9 @@ pub struct LowCost<'a> {
     pub code_bias: [f64; 2],
     /// Which GPS L1 code it tracks.
     pub gps_l1: GpsL1,
+    /// What it does beyond the tracking model, as real receivers were measured to (its
+    /// clock, losses of lock, unflagged jumps, code excursions …); None: the model alone.
+    pub impair: Option<Impairments>,
 }
 
 /// The GPS L1 code a receiver tracks.
@@ -134,6 +138,8 @@ pub struct TrackStats {
     pub reacquisitions: usize,
     /// Slips the receiver did not flag.
     pub unflagged_slips: usize,
+    /// The true reception time of each written epoch (its tag less the clock bias).
+    pub instants: Vec<Epoch>,
 }
 
 impl TrackStats {
@@ -197,6 +203,8 @@ struct Sat {
     canopy: Markov,
     code_mp: [Markov; 2],
     phase_mp: [Markov; 2],
+    /// The impairments' state (receivers with impairments).
+    imp: Option<SatImpair>,
 }
 
 /// How far above 45 dB-Hz noise and multipath scale (amplitude).
@@ -224,6 +232,7 @@ impl Sat {
                 Markov::new(p.phase.1, p.phase.2, rng),
                 Markov::new(p.phase.1, p.phase.2, rng),
             ],
+            imp: None,
         }
     }
 
@@ -252,24 +261,45 @@ struct Run<'a> {
     sats: Vec<(Sv, Option<i8>)>,
     state: BTreeMap<Sv, Sat>,
     rng: Rng,
+    /// The impairments' own stream (untouched without them).
+    irng: Rng,
     stats: TrackStats,
 }
 
+/// One satellite's geometry at an epoch, as [`Run::sat_obs`] uses it.
+struct Seen {
+    sv: Sv,
+    chan: Option<i8>,
+    freqs: Vec<f64>,
+    rho: f64,
+    rate: f64,
+    dts: f64,
+    dts_rate: f64,
+    az: f64,
+    el: f64,
+}
+
+/// The receiver's clock at an epoch: bias (s) and frequency (s/s).
+#[derive(Clone, Copy)]
+struct Clock {
+    bias: f64,
+    rate: f64,
+}
+
 impl Run<'_> {
-    /// The observations of epoch `tag` (receiver time), the receiver's true position.
-    fn epoch(&mut self, tag: Epoch) -> (Ecef, Vec<SatObs>) {
+    /// The observations of epoch `tag` (receiver time) with the clock at that epoch, the
+    /// receiver's true position.
+    fn epoch(&mut self, tag: Epoch, clock: Clock) -> (Ecef, Vec<SatObs>) {
         let rx = self.rx;
-        let p = &rx.profile;
-        let (start, _, dt) = rx.span;
+        let (start, _, _) = rx.span;
         let ts = (tag - start).to_seconds();
-        let dtr = rx.clock.0 + rx.clock.1 * ts;
-        let t = tag - Duration::from_seconds(dtr);
+        let t = tag - Duration::from_seconds(clock.bias);
         let (pos, vel) = (rx.at)(t);
         let g = pos.to_geodetic();
-        let (_, tow) = week_tow(t);
         let canopy = (rx.canopy)(ts);
         let mut out = Vec::new();
-        for &(sv, chan) in &self.sats {
+        for k in 0..self.sats.len() {
+            let (sv, chan) = self.sats[k];
             let Some(freqs) = frequencies(sv.sys, chan) else {
                 continue;
             };
@@ -282,79 +312,183 @@ impl Run<'_> {
                 self.state.remove(&sv);
                 continue;
             }
-            let rng = &mut self.rng;
-            let s = self.state.entry(sv).or_insert_with(|| Sat::new(p, rng));
-            // C/N0: elevation, canopy (worse through more foliage at low elevation), noise.
-            let open = p.cn0.0 + (p.cn0.1 - p.cn0.0) * el.sin();
-            let loss = canopy
-                * (p.canopy_db.0 + s.canopy.step(dt, &mut self.rng)).max(0.0)
-                * (1.0 + 0.5 * el.cos());
-            let cn0 = (open - loss + 0.7 * self.rng.normal()).round();
-            if s.locked && cn0 < p.lock.0 {
-                s.locked = false;
-            } else if !s.locked && cn0 >= p.lock.1 {
-                self.stats.reacquisitions += usize::from(s.ever);
-                s.ever = true;
-                s.acquire(sv.sys, ts, p, &mut self.rng);
-            }
-            if cn0 < p.lock.0 - 6.0 {
-                continue; // nothing tracked, not even code
-            }
-            if s.locked && cn0 < 32.0 && self.rng.uniform() < p.unflagged_slip_rate * dt {
-                s.amb[0] += if self.rng.uniform() < 0.5 { 1.0 } else { -1.0 };
-                self.stats.unflagged_slips += 1;
-            }
-            let half = s.locked && ts < s.half.0;
-            let k = f64::from(chan.unwrap_or(0));
-            let icb = (k * p.glonass_icb.0, k * p.glonass_icb.1);
-            let (iono_factor, trop_extra) = rx.atmosphere.map_or((1.0, 0.0), |f| f(t, az, el));
-            let trop = troposphere(&g, el) + trop_extra;
-            let l1_bias = match (sv.sys, rx.gps_l1) {
-                (Constellation::Gps, GpsL1::Ca) => c1_p1_bias(sv),
-                _ => 0.0,
-            };
-            let i1 = klobuchar_gps(self.klob, &g, az, el, tow) * iono_factor;
-            let base = rho + C * (dtr - dts);
-            let range_rate = rate + C * (rx.clock.1 - dts_rate);
-            let mut v = [f64::NAN; 8];
-            let sc = scale(cn0);
-            for (b, f) in freqs.iter().enumerate().take(rx.bands) {
-                let lam = C / f;
-                let iono = i1 * (F1 / f).powi(2);
-                let code_mp = s.code_mp[b].step(dt, &mut self.rng) * sc;
-                let phase_mp = (s.phase_mp[b].step(dt, &mut self.rng) * sc).clamp(-0.03, 0.03);
-                v[4 * b] = base
-                    + trop
-                    + iono
-                    + icb.1
-                    + rx.code_bias[b]
-                    + l1_bias * f64::from(u8::from(b == 0))
-                    + code_mp
-                    + p.code.0 * sc * self.rng.normal();
-                if s.locked {
-                    let phase =
-                        base + trop - iono + icb.0 + phase_mp + p.phase.0 * sc * self.rng.normal();
-                    let offset = if half { s.half.1 } else { 0.0 };
-                    v[4 * b + 1] = phase / lam + s.amb[b] + offset;
-                }
-                v[4 * b + 2] = -range_rate / lam + p.doppler * sc * self.rng.normal();
-                v[4 * b + 3] = cn0;
-            }
-            let lli_b = u8::from(s.locked && s.new_arc) | if half { 2 } else { 0 };
-            s.new_arc = false;
-            if v[1].is_finite() {
-                let e = self.stats.phases.entry(sv.sys).or_default();
-                e.0 += 1;
-                e.1 += usize::from(half);
-            }
-            self.stats.cn0.push(cn0);
-            out.push(SatObs {
+            let seen = Seen {
                 sv,
-                v,
-                lli: [lli_b, if rx.bands > 1 { lli_b } else { 0 }],
-            });
+                chan,
+                freqs: freqs.to_vec(),
+                rho,
+                rate,
+                dts,
+                dts_rate,
+                az,
+                el,
+            };
+            if let Some(o) = self.sat_obs(&seen, (t, ts), &g, canopy, clock) {
+                out.push(o);
+            }
         }
         (pos, out)
+    }
+
+    /// The C/N0 of a satellite this epoch (rounded to the dB-Hz a receiver reports).
+    fn cn0(&mut self, sv: Sv, el: f64, canopy: f64, dt: f64) -> f64 {
+        let p = &self.rx.profile;
+        let s = self.state.get_mut(&sv).expect("the satellite's state");
+        // C/N0: elevation, canopy (worse through more foliage at low elevation), noise.
+        let open = match &self.rx.impair {
+            Some(m) => open_cn0(m, el),
+            None => p.cn0.0 + (p.cn0.1 - p.cn0.0) * el.sin(),
+        };
+        let loss = canopy
+            * (p.canopy_db.0 + s.canopy.step(dt, &mut self.rng)).max(0.0)
+            * (1.0 + 0.5 * el.cos());
+        let noise = match (&self.rx.impair, s.imp.as_mut()) {
+            (Some(m), Some(i)) => i.cn0_offset(m, el, dt, &mut self.irng),
+            _ => 0.7 * self.rng.normal(),
+        };
+        (open - loss + noise).round()
+    }
+
+    /// Lock lost when the C/N0 falls below the threshold (or, with impairments, by chance),
+    /// acquired again when it is back above the other and any wait is over.
+    fn track(&mut self, sv: Sv, cn0: f64, ts: f64, dt: f64) {
+        let p = &self.rx.profile;
+        let s = self.state.get_mut(&sv).expect("the satellite's state");
+        let chance = match (&self.rx.impair, s.imp.as_mut()) {
+            (Some(m), Some(i)) => s.locked && i.loses_lock(m, ts, cn0, dt, &mut self.irng),
+            _ => false,
+        };
+        let waiting = s.imp.as_ref().is_some_and(|i| ts < i.reacquire_at);
+        if s.locked && (cn0 < p.lock.0 || chance) {
+            s.locked = false;
+        } else if !s.locked && cn0 >= p.lock.1 && !waiting {
+            self.stats.reacquisitions += usize::from(s.ever);
+            s.ever = true;
+            s.acquire(sv.sys, ts, p, &mut self.rng);
+        }
+    }
+
+    /// One satellite's record this epoch (None when not even its code is tracked).
+    fn sat_obs(
+        &mut self,
+        o: &Seen,
+        (t, ts): (Epoch, f64),
+        g: &gnss::frame::Geodetic,
+        canopy: f64,
+        clock: Clock,
+    ) -> Option<SatObs> {
+        let rx = self.rx;
+        let p = &rx.profile;
+        let dt = rx.span.2;
+        let (_, tow) = week_tow(t);
+        let sv = o.sv;
+        let rng = &mut self.rng;
+        let irng = &mut self.irng;
+        let s = self.state.entry(sv).or_insert_with(|| {
+            let mut s = Sat::new(p, rng);
+            s.imp = rx.impair.as_ref().map(|_| SatImpair::new(irng));
+            s
+        });
+        let _ = s;
+        let cn0 = self.cn0(sv, o.el, canopy, dt);
+        self.track(sv, cn0, ts, dt);
+        if cn0 < p.lock.0 - 6.0 {
+            return None; // nothing tracked, not even code
+        }
+        let s = self.state.get_mut(&sv).expect("the satellite's state");
+        match &rx.impair {
+            Some(m) if s.locked => {
+                if let Some(j) = SatImpair::phase_jump(m, cn0, dt, &mut self.irng) {
+                    s.amb[0] += j;
+                    self.stats.unflagged_slips += 1;
+                }
+            }
+            Some(_) => {}
+            None => {
+                if s.locked && cn0 < 32.0 && self.rng.uniform() < p.unflagged_slip_rate * dt {
+                    s.amb[0] += if self.rng.uniform() < 0.5 { 1.0 } else { -1.0 };
+                    self.stats.unflagged_slips += 1;
+                }
+            }
+        }
+        let half = s.locked && ts < s.half.0;
+        if let Some(m) = rx.impair.as_ref().filter(|_| half) {
+            // the loop, its half cycle unresolved, flips between the two polarities
+            if self.irng.uniform() < m.half_flips * dt {
+                s.half.1 = 0.5 - s.half.1;
+            }
+        }
+        let k = f64::from(o.chan.unwrap_or(0));
+        let icb = (k * p.glonass_icb.0, k * p.glonass_icb.1);
+        let (iono_factor, trop_extra) = rx.atmosphere.map_or((1.0, 0.0), |f| f(t, o.az, o.el));
+        let trop = troposphere(g, o.el) + trop_extra;
+        let l1_bias = match (sv.sys, rx.gps_l1) {
+            (Constellation::Gps, GpsL1::Ca) => c1_p1_bias(sv),
+            _ => 0.0,
+        };
+        let i1 = klobuchar_gps(self.klob, g, o.az, o.el, tow) * iono_factor;
+        let base = o.rho + C * (clock.bias - o.dts);
+        let range_rate = o.rate + C * (clock.rate - o.dts_rate);
+        let mut v = [f64::NAN; 8];
+        let sc = scale(cn0);
+        for (b, f) in o.freqs.iter().enumerate().take(rx.bands) {
+            let lam = C / f;
+            let iono = i1 * (F1 / f).powi(2);
+            // Errors as parts added one after the other (the model's own order of sums,
+            // so that receivers without impairments write the same digits as before).
+            let (code_err, phase_err, doppler_err) = match (&rx.impair, s.imp.as_mut()) {
+                (Some(m), Some(i)) => (
+                    [i.code_error(m, ts, cn0, dt, &mut self.irng), 0.0],
+                    SatImpair::phase_error(m, cn0, lam, &mut self.irng),
+                    SatImpair::doppler_error(m, cn0, &mut self.irng),
+                ),
+                _ => {
+                    let code_mp = s.code_mp[b].step(dt, &mut self.rng) * sc;
+                    let phase_mp = (s.phase_mp[b].step(dt, &mut self.rng) * sc).clamp(-0.03, 0.03);
+                    let code = [code_mp, p.code.0 * sc * self.rng.normal()];
+                    // the phase noise is drawn below, and only while locked
+                    (code, phase_mp, f64::NAN)
+                }
+            };
+            v[4 * b] = base
+                + trop
+                + iono
+                + icb.1
+                + rx.code_bias[b]
+                + l1_bias * f64::from(u8::from(b == 0))
+                + code_err[0]
+                + code_err[1];
+            if s.locked {
+                let phase = match rx.impair {
+                    Some(_) => base + trop - iono + icb.0 + phase_err,
+                    None => {
+                        base + trop - iono + icb.0 + phase_err + p.phase.0 * sc * self.rng.normal()
+                    }
+                };
+                let offset = if half { s.half.1 } else { 0.0 };
+                v[4 * b + 1] = phase / lam + s.amb[b] + offset;
+            }
+            let doppler_err = if doppler_err.is_nan() {
+                p.doppler * sc * self.rng.normal()
+            } else {
+                doppler_err
+            };
+            v[4 * b + 2] = -range_rate / lam + doppler_err;
+            v[4 * b + 3] = cn0;
+        }
+        let lli_b = u8::from(s.locked && s.new_arc) | if half { 2 } else { 0 };
+        s.new_arc = false;
+        if v[1].is_finite() {
+            let e = self.stats.phases.entry(sv.sys).or_default();
+            e.0 += 1;
+            e.1 += usize::from(half);
+        }
+        self.stats.cn0.push(cn0);
+        Some(SatObs {
+            sv,
+            v,
+            lli: [lli_b, if rx.bands > 1 { lli_b } else { 0 }],
+        })
     }
 }
 
@@ -385,17 +519,41 @@ pub fn simulate(
         sats,
         state: BTreeMap::new(),
         rng: seed.clone(),
+        irng: seed.fork(0x696d_7061_6972),
         stats: TrackStats::default(),
     };
+    let clocks = rx
+        .impair
+        .map(|m| ClockSeries::new(&m.clock, n, dt, &mut seed.fork(0x0063_6c6f_636b)));
     let mut body = String::with_capacity(n * 400);
     let mut first = None;
     for k in 0..n {
-        let tag = start + Duration::from_seconds(k as f64 * dt);
-        let (pos, recs) = run.epoch(tag);
+        let nominal = start + Duration::from_seconds(k as f64 * dt);
+        let (tag, clock) = match &clocks {
+            Some(c) => {
+                let (offset, bias, rate) = c.epochs[k];
+                (
+                    nominal + Duration::from_seconds(offset),
+                    Clock { bias, rate },
+                )
+            }
+            None => {
+                let ts = (nominal - start).to_seconds();
+                let clock = Clock {
+                    bias: rx.clock.0 + rx.clock.1 * ts,
+                    rate: rx.clock.1,
+                };
+                (nominal, clock)
+            }
+        };
+        let (pos, recs) = run.epoch(tag, clock);
         if !keep(k) || recs.is_empty() {
             continue;
         }
         first.get_or_insert(pos);
+        run.stats
+            .instants
+            .push(tag - Duration::from_seconds(clock.bias));
         run.stats.epochs += 1;
         run.stats.sats_per_epoch.push(recs.len());
         write_epoch_bands(&mut body, tag, &recs, rx.bands);
