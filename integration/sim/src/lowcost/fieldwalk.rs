@@ -106,13 +106,13 @@ fn base_impairments() -> Impairments {
         },
         fading: (1.0, 30.0, 0.25, 7.0),
         cn0: (25.0, 52.0, 0.6),
-        lock_loss: (0.0002, 6.0),
+        lock_loss: (0.00012, 6.0),
         trouble: (20.0, 6.0),
         half_flips: 1.0,
         excursion: (0.003, 20.0, 10.0, (15.0, 30.0)),
         jump_rate: (0.0, 20.0),
         code_mp: (1.0, 10.0, 1.4),
-        doppler: (0.08, 50.0, (0.0005, 10.0), 0.4),
+        doppler: (0.08, 50.0, (0.003, 12.0), 0.45),
         ..rover_impairments()
     }
 }

@@ -214,6 +214,12 @@ pub(crate) fn nav_read_back(dir: &Path, text: &str) -> Result<(NavFile, Ephemeri
     Ok((nav, eph))
 }
 
+/// The walk shaped on the measured fingerprint (`walk/` of [`run`]) drawn from `seed`, into
+/// `dir`: what it holds.
+pub fn field_walk_into(dir: &Path, seed: u64) -> Result<fieldwalk::FieldWalk, SimError> {
+    fieldwalk::walk(dir, &Rng::new(seed).fork(3))
+}
+
 /// The open-sky walk with its half cycles as `half` says, into `dir`: rover and base
 /// simulated, logs, truth and the configuration written; what the rover and base hold, and
 /// the base position.

@@ -288,8 +288,8 @@ struct Clock {
 
 impl Run<'_> {
     /// The observations of epoch `tag` (receiver time) with the clock at that epoch, the
-    /// receiver's true position.
-    fn epoch(&mut self, tag: Epoch, clock: Clock) -> (Ecef, Vec<SatObs>) {
+    /// receiver's true position; `logged`: whether the log keeps the epoch.
+    fn epoch(&mut self, tag: Epoch, clock: Clock, logged: bool) -> (Ecef, Vec<SatObs>) {
         let rx = self.rx;
         let (start, _, _) = rx.span;
         let ts = (tag - start).to_seconds();
@@ -323,7 +323,7 @@ impl Run<'_> {
                 az,
                 el,
             };
-            if let Some(o) = self.sat_obs(&seen, (t, ts), &g, canopy, clock) {
+            if let Some(o) = self.sat_obs(&seen, (t, ts), &g, canopy, (clock, logged)) {
                 out.push(o);
             }
         }
@@ -368,35 +368,12 @@ impl Run<'_> {
         }
     }
 
-    /// One satellite's record this epoch (None when not even its code is tracked).
-    fn sat_obs(
-        &mut self,
-        o: &Seen,
-        (t, ts): (Epoch, f64),
-        g: &gnss::frame::Geodetic,
-        canopy: f64,
-        clock: Clock,
-    ) -> Option<SatObs> {
-        let rx = self.rx;
-        let p = &rx.profile;
-        let dt = rx.span.2;
-        let (_, tow) = week_tow(t);
-        let sv = o.sv;
-        let rng = &mut self.rng;
-        let irng = &mut self.irng;
-        let s = self.state.entry(sv).or_insert_with(|| {
-            let mut s = Sat::new(p, rng);
-            s.imp = rx.impair.as_ref().map(|_| SatImpair::new(irng));
-            s
-        });
-        let _ = s;
-        let cn0 = self.cn0(sv, o.el, canopy, dt);
-        self.track(sv, cn0, ts, dt);
-        if cn0 < p.lock.0 - 6.0 {
-            return None; // nothing tracked, not even code
-        }
+    /// A jump of the phase the receiver does not flag, by chance, in the `dt` seconds before
+    /// this epoch: with impairments, as they say; without, a cycle now and then below 32 dB-Hz.
+    fn unflagged_jump(&mut self, sv: Sv, cn0: f64, dt: f64) {
+        let p = &self.rx.profile;
         let s = self.state.get_mut(&sv).expect("the satellite's state");
-        match &rx.impair {
+        match &self.rx.impair {
             Some(m) if s.locked => {
                 if let Some(j) = SatImpair::phase_jump(m, cn0, dt, &mut self.irng) {
                     s.amb[0] += j;
@@ -411,6 +388,36 @@ impl Run<'_> {
                 }
             }
         }
+    }
+
+    /// One satellite's record this epoch (None when not even its code is tracked).
+    fn sat_obs(
+        &mut self,
+        o: &Seen,
+        (t, ts): (Epoch, f64),
+        g: &gnss::frame::Geodetic,
+        canopy: f64,
+        (clock, logged): (Clock, bool),
+    ) -> Option<SatObs> {
+        let rx = self.rx;
+        let p = &rx.profile;
+        let dt = rx.span.2;
+        let (_, tow) = week_tow(t);
+        let sv = o.sv;
+        let rng = &mut self.rng;
+        let irng = &mut self.irng;
+        self.state.entry(sv).or_insert_with(|| {
+            let mut s = Sat::new(p, rng);
+            s.imp = rx.impair.as_ref().map(|_| SatImpair::new(irng));
+            s
+        });
+        let cn0 = self.cn0(sv, o.el, canopy, dt);
+        self.track(sv, cn0, ts, dt);
+        if cn0 < p.lock.0 - 6.0 {
+            return None; // nothing tracked, not even code
+        }
+        self.unflagged_jump(sv, cn0, dt);
+        let s = self.state.get_mut(&sv).expect("the satellite's state");
         let half = s.locked && ts < s.half.0;
         if let Some(m) = rx.impair.as_ref().filter(|_| half) {
             // the loop, its half cycle unresolved, flips between the two polarities
@@ -477,7 +484,11 @@ impl Run<'_> {
             v[4 * b + 3] = cn0;
         }
         let lli_b = u8::from(s.locked && s.new_arc) | if half { 2 } else { 0 };
-        s.new_arc = false;
+        // A new arc's flag stays until an epoch the log keeps carries it (its lock time
+        // restarted whether the epoch was logged or not).
+        if logged {
+            s.new_arc = false;
+        }
         if v[1].is_finite() {
             let e = self.stats.phases.entry(sv.sys).or_default();
             e.0 += 1;
@@ -546,7 +557,7 @@ pub fn simulate(
                 (nominal, clock)
             }
         };
-        let (pos, recs) = run.epoch(tag, clock);
+        let (pos, recs) = run.epoch(tag, clock, keep(k));
         if !keep(k) || recs.is_empty() {
             continue;
         }
