@@ -25,9 +25,10 @@ pub enum FormatArg {
 /// Convert a raw receiver log to a RINEX 3.04 observation file with flag-5 event records.
 ///
 /// Reads a u-blox UBX log (M8T/M8P/F9P/F9T…): RXM-RAWX measurements become pseudorange,
-/// carrier phase, Doppler and C/N0 with their loss-of-lock indicators, exactly as RTKLIB
-/// convbin writes them (signal codes with the combined attribute: GPS C1C/C2X, Galileo C1X/C7X,
-/// BeiDou C2I…); TIM-TM2 time marks become flag-5 event records (falling edges, as convbin)
+/// carrier phase, Doppler and C/N0 with their loss-of-lock indicators as RTKLIB convbin
+/// writes them (signal codes with the combined attribute: GPS C1C/C2X, Galileo C1X/C7X,
+/// BeiDou C2I…), and one slip more: a lock time that grew by less than the time since the
+/// signal's previous epoch (a loop that locked again inside a gap of the log); TIM-TM2 time marks become flag-5 event records (falling edges, as convbin)
 /// and, with --events, a CSV of every edge. With --nav, the ephemerides decoded from the
 /// navigation subframes (RXM-SFRBX; GPS/QZSS words parity-checked, Galileo pages CRC-checked,
 /// BeiDou D1/D2 words BCH-checked, GLONASS strings Hamming-checked) go to a RINEX 3.04

@@ -21,6 +21,12 @@
 //!   after a slip: lock time 0 or shorter than before, subHalfCyc changed, or cpStdev = 15.
 //!   A slip flagged on a measurement without phase is carried to the next phase (convbin's
 //!   save/restore of slips).
+//! - One rule beyond convbin's: a lock time that grew by less than the time since the
+//!   signal's previous epoch (less [`LOCK_TOLERANCE_S`], below the counter's 64.5 s ceiling)
+//!   is a slip too: the loop lost lock and locked again inside a gap of the log. A base that
+//!   logs one epoch in five loses such slips by the hundred to convbin's rule (the low-cost
+//!   walk's simulated base: 2 m jumps of the backward pass where an aged base epoch met an
+//!   arc that had restarted unseen). In a log without gaps both rules agree.
 
 use super::slots::SlotTable;
 use super::ubx::{Rawx, RawxMeas};
@@ -66,9 +72,18 @@ pub struct RawEpoch {
     pub glonass: Vec<(u8, i8)>,
 }
 
+/// How much less than the time elapsed a lock time may have grown (its millisecond counter
+/// against the epochs' tags) before the signal counts as having slipped, seconds.
+pub const LOCK_TOLERANCE_S: f64 = 0.5;
+
+/// The ceiling of RAWX's lock time counter, seconds.
+const LOCK_MAX_S: f64 = 64.5;
+
 #[derive(Clone, Copy, Default)]
 struct Lock {
     lockt: f64,
+    /// Time of the signal's previous epoch (s since the GPS epoch), once seen.
+    last: Option<f64>,
     halfc: bool,
     pending: bool,
     slip_carry: bool,
@@ -167,7 +182,8 @@ impl RawxConverter {
                 ));
                 continue;
             };
-            let s = self.signal(sv, idx, code, m, cp_max);
+            let t = f64::from(r.week) * crate::time::WEEK_SECONDS + r.rcv_tow;
+            let s = self.signal(sv, idx, code, m, (cp_max, t));
             let k = match e.sats.iter().position(|x| x.sv == sv) {
                 Some(k) => k,
                 None => {
@@ -182,7 +198,14 @@ impl RawxConverter {
     }
 
     /// Values and LLI of one measurement, updating the lock state of its slot.
-    fn signal(&mut self, sv: Sv, idx: usize, code: [u8; 2], m: &RawxMeas, cp_max: u8) -> RawSignal {
+    fn signal(
+        &mut self,
+        sv: Sv,
+        idx: usize,
+        code: [u8; 2],
+        m: &RawxMeas,
+        (cp_max, t): (u8, f64),
+    ) -> RawSignal {
         let pr = if m.pr_valid() { m.pr } else { 0.0 };
         let mut cp = m.cp;
         if !m.cp_valid() || cp == -0.5 || m.cp_stdev > cp_max {
@@ -200,11 +223,16 @@ impl RawxConverter {
         let halfc = m.sub_half_cyc();
         let st = self.locks.get_mut(sv, idx);
         let lockt = m.locktime as f64 * 1e-3;
-        let slip = m.locktime == 0 || lockt < st.lockt || halfc != st.halfc || m.cp_stdev >= 15;
+        // The lock time should have grown by the time since the signal's previous epoch.
+        let grown = st.last.map(|l| (st.lockt + (t - l)).min(LOCK_MAX_S));
+        let short = grown.is_some_and(|g| lockt < g - LOCK_TOLERANCE_S);
+        let slip =
+            m.locktime == 0 || lockt < st.lockt || short || halfc != st.halfc || m.cp_stdev >= 15;
         if slip {
             st.pending = true;
         }
         st.lockt = lockt;
+        st.last = Some(t);
         let mut lli = if !half_valid && cp != 0.0 { 2 } else { 0 };
         if halfc != st.halfc {
             lli |= 1;
@@ -275,6 +303,26 @@ mod tests {
             version: 1,
             meas: vec![m],
         }
+    }
+
+    /// Across a gap of the log, a lock time that grew by less than the gap is a slip (the
+    /// loop locked again inside it), where convbin's rule (only a lock time that went back)
+    /// sees none; one that grew by the gap, or sits at the counter's ceiling, is not.
+    #[test]
+    fn a_lock_time_short_of_the_gap_is_a_slip() {
+        let mut c = RawxConverter::new();
+        let mut st = RawStats::default();
+        let mut at = |tow: f64, lock: u16| {
+            let mut r = rawx(meas(lock, 7));
+            r.rcv_tow = tow;
+            c.epoch(&r, &mut st).unwrap().sats[0].sig[0].unwrap().lli
+        };
+        assert_eq!(at(100.0, 1000), 0);
+        assert_eq!(at(110.0, 5000), 1); // 10 s on, locked for 5 s only
+        assert_eq!(at(120.0, 15_000), 0);
+        assert_eq!(at(121.0, 15_800), 0); // within the tolerance
+        assert_eq!(at(200.0, 64_500), 0); // the ceiling
+        assert_eq!(at(260.0, 64_500), 0);
     }
 
     #[test]
