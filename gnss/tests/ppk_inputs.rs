@@ -36,7 +36,7 @@ fn doppler_of(f: &ObsFile, opts: &PpkOptions, max_gap: f64) -> (f64, usize) {
         .collect();
     let times: Vec<_> = f.epochs.iter().map(|e| e.time).collect();
     let ratio = ppk::slip::doppler_phase_ratio(&times, &meas, max_gap).unwrap();
-    let slips = ppk::slip::arc_breaks(&times, &meas, max_gap, true)
+    let slips = ppk::slip::arc_breaks(&times, &meas, None, max_gap, true)
         .iter()
         .flat_map(|e| e.values().flatten().flatten())
         .filter(|c| **c == ppk::slip::SlipCause::Doppler)

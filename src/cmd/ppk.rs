@@ -149,6 +149,13 @@ pub struct Args {
     /// with d₀·d₁/span instead of the age).
     #[arg(long)]
     no_base_interpolation: bool,
+    /// Start the rover's position afresh from its code solution at every epoch, also where
+    /// the carrier phase says it stood still (by default the position is held from one epoch
+    /// to the next there, within the sway of a hand-held pole, 5 mm/√s: the code of a whole
+    /// stand then averages into one position; the summary says how much of the track was
+    /// still).
+    #[arg(long)]
+    no_stillness: bool,
     /// Undifferenced carrier-phase sigma √(a² + (b/sin el)²): a,b in metres (RTKLIB's
     /// stats-errphase and stats-errphaseel).
     #[arg(long, value_name = "A,B", default_value = "0.003,0.003")]
@@ -304,6 +311,7 @@ pub fn job(args: Args) -> Result<pipeline::PpkJob> {
         max_fixed_sigma: args.max_fixed_sigma,
         max_age: args.max_age,
         interpolate_base: !args.no_base_interpolation,
+        use_stillness: !args.no_stillness,
         phase_sigma,
         code_phase_ratio: args.code_phase_ratio,
         systems,

@@ -12,7 +12,24 @@ fn the_low_cost_folders_run_end_to_end() {
     let t = succeeds(&ppkat(&["simulate", "--builtin", "lowcost", "-o", p(&dir)]));
     assert!(t.contains("walk →") && t.contains("drone →"), "{t}");
 
-    // The walk: the base position from the base log's RTCM 1005, GLONASS float and said so.
+    // The walk shaped on a real pair's fingerprint: what the run found and did is said — how
+    // much of it stood still, the code noise it measured, the passes that disagreed, which
+    // check refused the fixes.
+    let t = succeeds(&ppkat(&["ppk", "--config", p(&dir.join("walk/ppk.toml"))]));
+    for said in [
+        "stood still at",
+        "code noise measured (code minus carrier): rover",
+        "lay apart beyond their 99.9 % ellipsoid",
+        "codes left out for their post-fit residual",
+        "fixes refused at 1201 float epochs, by the check that refused them",
+        "float too loose (success rate)",
+    ] {
+        assert!(t.contains(said), "{said}: {t}");
+    }
+    assert_eq!(pos_rows(&dir.join("walk/ppk.pos")).len(), 1201);
+
+    // The open-sky walk: the base position from the base log's RTCM 1005, GLONASS float and
+    // said so.
     let walk = dir.join("walk-open");
     let t = succeeds(&ppkat(&["ppk", "--config", p(&walk.join("ppk.toml"))]));
     assert!(t.contains("RTCM 1005"), "{t}");

@@ -25,13 +25,14 @@
 //!   [`Fix`] names the satellite left out.
 //!
 //! What enters: the filter state (read only), the options and the epoch's pairs. What leaves:
-//! a [`Fix`] (or none) and the best ratio tried, from [`resolve`] or [`resolve_without`];
+//! a [`Fix`] (or the check that refused one, a [`Refusal`]) and the best ratio tried, from [`resolve`] or [`resolve_without`];
 //! [`hold`] constrains the state. The filter calls them; this module does not know the filter.
 
 use super::dd::DdGroup;
 use super::lambda::{decorrelate, Decorrelated, IntegerCandidates};
 use super::options::PpkOptions;
 use super::pair::{has_phase, Pair};
+use super::refusal::Refusal;
 use super::state::{AmbKey, State, StateKey};
 use crate::sv::{Constellation, Sv};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
@@ -346,13 +347,13 @@ fn fixed_solution(
 
 /// Resolve the ambiguities of this epoch on the filter state `st` by partial resolution of
 /// the most precise decorrelated ambiguities. `best_ratio` is set to the best ratio tried
-/// (None when no subset was tried).
+/// (None when no subset was tried); without a fix, the check that refused it.
 pub(super) fn resolve(
     st: &State,
     o: &PpkOptions,
     pairs: &[Pair],
     best_ratio: &mut Option<f64>,
-) -> Option<Fix> {
+) -> Result<Fix, Refusal> {
     resolve_without(st, o, pairs, best_ratio, None)
 }
 
@@ -371,18 +372,22 @@ pub(super) fn resolve_without(
     pairs: &[Pair],
     best_ratio: &mut Option<f64>,
     left_out: Option<Sv>,
-) -> Option<Fix> {
+) -> Result<Fix, Refusal> {
     *best_ratio = None;
     let cands = candidates(st, o, pairs);
     let groups = dd_groups(&cands, left_out, o.mature_lock);
     let fl = FloatDd::of(st, &groups);
     if fl.a.len() < o.min_fix_ambiguities {
-        return None;
+        return Err(Refusal::Candidates);
     }
-    let dec = decorrelate(fl.a.as_slice(), fl.q.as_slice())?;
+    // A float covariance the decomposition cannot take is as good as no float to fix.
+    let dec = decorrelate(fl.a.as_slice(), fl.q.as_slice()).ok_or(Refusal::SuccessRate)?;
     let mut k = dec.most_fixable(o.min_success_rate);
+    if k < o.min_fix_ambiguities {
+        return Err(Refusal::SuccessRate);
+    }
     while k >= o.min_fix_ambiguities {
-        let c = dec.search_last(k, 2)?;
+        let c = dec.search_last(k, 2).ok_or(Refusal::Ratio)?;
         let ratio = c.ratio().min(999.9);
         *best_ratio = Some(best_ratio.map_or(ratio, |r: f64| r.max(ratio)));
         if ratio >= o.ratio_threshold {
@@ -392,10 +397,10 @@ pub(super) fn resolve_without(
                 constraints,
                 dd_integers,
                 widelanes,
-            } = fixed_solution(st, (&fl, &groups), &dec, k, &c)?;
+            } = fixed_solution(st, (&fl, &groups), &dec, k, &c).ok_or(Refusal::SigmaLimit)?;
             let complete = determines_position(&groups, &dd_integers, o.min_fix_ambiguities)
                 && covariance.trace().sqrt() <= o.max_fixed_sigma;
-            return Some(Fix {
+            return Ok(Fix {
                 complete,
                 position,
                 covariance,
@@ -411,7 +416,7 @@ pub(super) fn resolve_without(
         }
         k -= 1;
     }
-    None
+    Err(Refusal::Ratio)
 }
 
 /// Fix-and-hold: constrain the float ambiguities of `st` to the fixed integers with

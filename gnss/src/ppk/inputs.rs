@@ -37,6 +37,11 @@ pub(super) struct PassInputs {
     pub(super) rover_breaks: Vec<slip::Slips>,
     /// Arc breaks of the base's phase, per base epoch.
     pub(super) base_breaks: Vec<slip::Slips>,
+    /// Whether the rover stood still since the epoch before (see `ppk::still`), per rover
+    /// epoch.
+    pub(super) still: Vec<bool>,
+    /// The rover's and the base's code noise measured on their data (`ppk::codenoise`).
+    pub(super) code_noise: [Option<super::codenoise::CodeNoise>; 2],
     /// Each rover satellite's view, aligned with `rover_meas`.
     pub(super) rover_views: Vec<Vec<Option<SatView>>>,
     /// Each base satellite's view, aligned with `base_meas`.
@@ -230,38 +235,43 @@ pub(super) fn prepare(
         .iter()
         .map(|s| s.letter().to_string())
         .collect();
-    if !usable.iter().any(|u| *u) {
-        return Err(Error::NoData(format!(
-            "{}: no epoch holds phase of the processed systems ({}) with an orbit: check that \
-             --systems names systems the file contains and that the navigation or orbit files \
-             cover them",
-            base.path.display(),
-            systems.join(" ")
-        )));
-    }
-    if pairing.matched.iter().all(|m| m.is_none()) {
-        return Err(Error::NoData(format!(
-            "{} and {}: no rover epoch has a base epoch within {} s holding phase of the processed systems ({}): the files do not cover a common time",
-            rover.path.display(),
-            base.path.display(),
-            opts.max_age,
-            systems.join(" ")
-        )));
-    }
+    require_pairs(
+        rover,
+        base,
+        &usable,
+        &pairing.matched,
+        opts,
+        &systems.join(" "),
+    )?;
     warnings.extend(checks::skipped_base_warning(&pairing, &systems.join(" ")));
     let base_gap = opts.max_gap.max(3.0 * opts.max_age);
-    let mut doppler = |f: &ObsFile, t: &[Epoch], m: &[Vec<SatMeas>], gap: f64, role: &str| {
-        let ratio = slip::doppler_phase_ratio(t, m, gap);
-        let (ok, w) = checks::doppler_verdict(ratio, role, &f.path.display().to_string());
-        warnings.extend(w);
-        ok
-    };
-    let rover_doppler = doppler(rover, &rover_times, &rover_meas, opts.max_gap, "rover");
-    let base_doppler = doppler(base, &base_times, &base_meas, base_gap, "base");
-    let (rover_breaks, base_breaks) = rayon::join(
-        || slip::arc_breaks(&rover_times, &rover_meas, opts.max_gap, rover_doppler),
-        || slip::arc_breaks(&base_times, &base_meas, base_gap, base_doppler),
+    let (rover_breaks, base_breaks) = arc_breaks_of(
+        (
+            rover,
+            &rover_times,
+            &rover_meas,
+            (&rover_drawn.views, &rover_drawn.starts),
+        ),
+        (base, &base_times, &base_meas, &base_drawn.views),
+        base_at,
+        (opts.max_gap, base_gap),
+        warnings,
     );
+    let code_noise = [
+        learn_code_noise(&rover_times, &mut rover_meas, &rover_breaks),
+        learn_code_noise(&base_times, &mut base_meas, &base_breaks),
+    ];
+    let still = if opts.use_stillness {
+        super::still::stood_still(
+            &rover_times,
+            &rover_meas,
+            &rover_drawn.views,
+            &rover_drawn.starts,
+            &rover_breaks,
+        )
+    } else {
+        vec![false; rover_times.len()]
+    };
     let lonely = checks::without_common(&rover_meas, &base_meas, &pairing.matched);
     let stretches = checks::lonely_stretches(&rover_times, &lonely);
     warnings.extend(checks::lonely_warnings(&stretches));
@@ -306,10 +316,119 @@ pub(super) fn prepare(
         starts: rover_drawn.starts,
         rover_breaks,
         base_breaks,
+        still,
+        code_noise,
         rover_views: rover_drawn.views,
         base_views,
         base_interp,
     })
+}
+
+/// Each epoch's satellite views.
+type Views<'a> = &'a [Vec<Option<SatView>>];
+
+/// One receiver as [`arc_breaks_of`] reads it: its file, times, measurements and `T`.
+type Receiver<'a, T> = (&'a ObsFile, &'a [Epoch], &'a [Vec<SatMeas>], T);
+
+/// Error unless some base epoch holds phase of the processed systems (`usable`) and some
+/// rover epoch pairs with one (`matched`).
+fn require_pairs(
+    rover: &ObsFile,
+    base: &ObsFile,
+    usable: &[bool],
+    matched: &[Option<usize>],
+    opts: &PpkOptions,
+    systems: &str,
+) -> Result<()> {
+    if !usable.iter().any(|u| *u) {
+        return Err(Error::NoData(format!(
+            "{}: no epoch holds phase of the processed systems ({systems}) with an orbit: check \
+             that --systems names systems the file contains and that the navigation or orbit \
+             files cover them",
+            base.path.display(),
+        )));
+    }
+    if matched.iter().all(|m| m.is_none()) {
+        return Err(Error::NoData(format!(
+            "{} and {}: no rover epoch has a base epoch within {} s holding phase of the processed systems ({systems}): the files do not cover a common time",
+            rover.path.display(),
+            base.path.display(),
+            opts.max_age,
+        )));
+    }
+    Ok(())
+}
+
+/// Each receiver's arc breaks: its Doppler in the slip test only when it follows its phase
+/// (else a warning), the test's common part fitted over the satellites' lines of sight (the
+/// rover's from its start positions, the base's from `base_at`); `gaps`: the longest gaps
+/// (rover, base) an arc bridges.
+fn arc_breaks_of(
+    (rover, rover_times, rover_meas, (rover_views, rover_starts)): Receiver<
+        '_,
+        (Views<'_>, &[Start]),
+    >,
+    (base, base_times, base_meas, base_views): Receiver<'_, Views<'_>>,
+    base_at: &Ecef,
+    gaps: (f64, f64),
+    warnings: &mut Vec<String>,
+) -> (Vec<slip::Slips>, Vec<slip::Slips>) {
+    let mut doppler = |f: &ObsFile, t: &[Epoch], m: &[Vec<SatMeas>], gap: f64, role: &str| {
+        let ratio = slip::doppler_phase_ratio(t, m, gap);
+        let (ok, w) = checks::doppler_verdict(ratio, role, &f.path.display().to_string());
+        warnings.extend(w);
+        ok
+    };
+    let rover_doppler = doppler(rover, rover_times, rover_meas, gaps.0, "rover");
+    let base_doppler = doppler(base, base_times, base_meas, gaps.1, "base");
+    let rover_los = lines_of_sight(rover_views, &|i| {
+        rover_starts
+            .get(i)
+            .and_then(|s| s.as_ref().ok())
+            .map(|s| s.0)
+    });
+    let base_los = lines_of_sight(base_views, &|_| Some(*base_at));
+    rayon::join(
+        || {
+            let los = Some(rover_los.as_slice());
+            slip::arc_breaks(rover_times, rover_meas, los, gaps.0, rover_doppler)
+        },
+        || {
+            let los = Some(base_los.as_slice());
+            slip::arc_breaks(base_times, base_meas, los, gaps.1, base_doppler)
+        },
+    )
+}
+
+/// A receiver's code noise measured on its data (`ppk::codenoise`), each measurement marked
+/// with its code variance; None when too little could be measured.
+fn learn_code_noise(
+    times: &[Epoch],
+    meas: &mut [Vec<SatMeas>],
+    breaks: &[slip::Slips],
+) -> Option<super::codenoise::CodeNoise> {
+    let interval = crate::time::median_spacing(times.iter().copied());
+    let noise = super::codenoise::measure(times, meas, breaks, interval);
+    if let Some(n) = &noise {
+        super::codenoise::mark(meas, n);
+    }
+    noise
+}
+
+/// Each satellite's line of sight (unit vector receiver → satellite, ECEF) per epoch, from the
+/// receiver's position at epoch `i` (`at`); None without an orbit or a position.
+fn lines_of_sight(
+    views: &[Vec<Option<SatView>>],
+    at: &dyn Fn(usize) -> Option<Ecef>,
+) -> Vec<Vec<Option<nalgebra::Vector3<f64>>>> {
+    views
+        .iter()
+        .enumerate()
+        .map(|(i, v)| {
+            let p = at(i);
+            v.iter().map(|s| Some(s.as_ref()?.range(&p?.0).1)).collect()
+        })
+        .collect()
 }
 
 /// Start position and receiver clock offset (s) of each epoch of a chunk from its code

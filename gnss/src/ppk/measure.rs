@@ -15,8 +15,10 @@
 //!   the rover) on the zenith wet delay state when it has that.
 //! - Covariance: SD variance 2·σ²(el) (σ² = a² + (b/sin el)², code scaled by the code/phase
 //!   ratio²) plus each receiver's C/N0 term (`PpkOptions::snr_sigma`), the code's multiplied
-//!   by its correlation over the rover interval (`code_correlation_s`), plus the base age's
-//!   (see `PpkOptions::age_error_rate`); DDs of one group share their pivot's SD variance.
+//!   by its correlation over the rover interval (`code_correlation_s`), or, when larger, the
+//!   two receivers' code variances measured on their own data (`ppk::codenoise`), plus the
+//!   base age's (see `PpkOptions::age_error_rate`); DDs of one group share their pivot's SD
+//!   variance.
 //! - GLONASS code rows carry the inter-channel code bias state times the channel number
 //!   difference of the two satellites; code rows of a slot whose two receivers track
 //!   different codes carry ±1 on the two satellites' SD code-bias states.
@@ -158,7 +160,14 @@ fn sd_variance(p: &Pair, f: usize, phase: bool, o: &PpkOptions, corr: (f64, f64)
         let white = o.code_phase_ratio.powi(2) * el
             + var_snr(p.r.cn0_drop(f), o.snr_sigma.1)
             + var_snr(p.b.cn0_drop(f), o.snr_sigma.1);
-        white * corr.1
+        // What the receivers' own data say their codes are worth (`ppk::codenoise`), when
+        // more than the model says.
+        let measured = p.r.code_var(f) + p.b.code_var(f);
+        if measured.is_finite() {
+            (white * corr.1).max(measured)
+        } else {
+            white * corr.1
+        }
     };
     v + p.age_var
 }

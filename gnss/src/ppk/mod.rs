@@ -18,7 +18,9 @@
 
 mod ar;
 mod checks;
+pub mod codenoise;
 pub mod combine;
+pub mod consistency;
 mod dd;
 pub mod doppler;
 mod filter;
@@ -31,11 +33,13 @@ pub mod obs;
 mod options;
 mod output;
 mod pair;
+pub mod refusal;
 mod segment;
 pub mod slip;
 mod smooth;
 mod snr;
 mod state;
+mod still;
 pub mod tight;
 mod update;
 
@@ -44,6 +48,8 @@ pub use options::{ArMode, BasePosition, Estimate, FilterMode, Motion, PpkOptions
 pub use output::{
     AmbiguityRates, EpochSol, Models, PassDiagnostics, PassStats, PpkResult, Spread, StaticSolution,
 };
+pub use refusal::Refusal;
+pub use still::STILL_M;
 
 use crate::error::{Error, Result};
 use crate::frame::{enu_rotation, Ecef};
@@ -190,6 +196,8 @@ fn choose_models(opts: &mut PpkOptions, longest: f64) -> Models {
         tropo,
         glonass_float: false,
         code_biases: opts.code_bias_slots.clone(),
+        still: (0, 0),
+        code_noise: [None, None],
     }
 }
 
@@ -263,12 +271,17 @@ fn run_pass(
             rover: crossed(&inputs.rover_breaks, prev_i, i),
             base: crossed(&inputs.base_breaks, prev_j, js),
         };
+        // Still over the step when still at every epoch change it crosses.
+        let still = prev_i.is_some_and(|p: usize| {
+            let (a, b) = (p.min(i), p.max(i));
+            (a + 1..=b).all(|k| inputs.still[k])
+        });
         (prev_i, prev_j) = (Some(i), Some(js));
         let resets_before = f.stats.resets();
         out.sols[i] = f.step(
             inputs.rover_epoch(i),
             inputs.base_epoch(j),
-            *start,
+            (*start, still),
             &slips,
             priors.and_then(|p| p[i].as_ref()),
         );
@@ -344,11 +357,18 @@ fn merge_passes(
             let sure = |s: &Option<EpochSol>, c: &std::collections::BTreeSet<u32>| {
                 s.as_ref().is_some_and(|s| c.contains(&s.segment))
             };
+            let scale = consistency::disagreement(&f.sols, &b.sols);
             f.sols
                 .iter()
                 .zip(&b.sols)
-                .map(|(x, y)| {
-                    combine::combine(x.as_ref(), y.as_ref(), (sure(x, &fc), sure(y, &bc)))
+                .zip(scale)
+                .map(|((x, y), k)| {
+                    let mut c =
+                        combine::combine(x.as_ref(), y.as_ref(), (sure(x, &fc), sure(y, &bc)))?;
+                    if c.quality != Quality::Fixed {
+                        c.cov *= k;
+                    }
+                    Some(c)
                 })
                 .collect()
         }
@@ -392,18 +412,29 @@ fn smoother_bytes(inputs: &PassInputs, opts: &PpkOptions) -> usize {
     inputs.rover_meas.len() * (n * n + 2 * n) * 8
 }
 
+/// What [`output_epochs`] makes of the merged solutions.
+struct OutputEpochs {
+    /// The trajectory's epochs.
+    epochs: Vec<TrajectoryEpoch>,
+    /// Rover epochs without a solution, with why.
+    unsolved: Vec<(Epoch, String)>,
+    /// Float epochs whose fix a check refused, with which.
+    refusals: Vec<(Epoch, Refusal)>,
+}
+
 /// The trajectory epochs of the merged solutions (the rover's ARP or marker, `opts.refer`,
-/// at the true reception times, with the antenna and static sigmas added) and the rover
-/// epochs without a solution with why.
+/// at the true reception times, with the antenna and static sigmas added), the rover
+/// epochs without a solution with why, and the float epochs whose fix a check refused.
 fn output_epochs(
     merged: Vec<Option<(EpochSol, u32)>>,
     inputs: &PassInputs,
     opts: &PpkOptions,
     antenna_sigma: (f64, f64),
     base_arp: &Ecef,
-) -> (Vec<TrajectoryEpoch>, Vec<(Epoch, String)>) {
+) -> OutputEpochs {
     let mut epochs = Vec::with_capacity(inputs.rover_times.len());
     let mut unsolved = Vec::new();
+    let mut refusals = Vec::new();
     for (i, s) in merged.into_iter().enumerate() {
         match s {
             Some((s, segment)) => {
@@ -415,6 +446,9 @@ fn output_epochs(
                 // The position belongs to the true reception time: the receiver's time tag
                 // minus its clock offset (as RTKLIB reports it). A moving rover at 60 m/s
                 // moves 6 cm in a millisecond of clock offset.
+                if let (Quality::Float, Some(why)) = (s.quality, s.refused) {
+                    refusals.push((s.time, why));
+                }
                 let mut time = s.time;
                 if let Ok((_, clock)) = &inputs.starts[i] {
                     time -= hifitime::Duration::from_seconds(*clock);
@@ -446,7 +480,11 @@ fn output_epochs(
             }
         }
     }
-    (epochs, unsolved)
+    OutputEpochs {
+        epochs,
+        unsolved,
+        refusals,
+    }
 }
 
 /// Run the carrier-phase engine: forward, backward or both passes of the filter over the
@@ -566,6 +604,10 @@ fn prepare_run(
             .any(|s| s.sv.sys == crate::sv::Constellation::Glonass)
     });
     warnings.extend(checks::baseline_warning(longest));
+    if opts.motion == Motion::Kinematic {
+        models.still = still::stretches(&inputs.still);
+    }
+    models.code_noise = inputs.code_noise.clone();
     // A step longer than 2.5 nominal intervals between solved epochs starts a new segment.
     let segment_gap = 2.5 * interval;
     Ok(Prepared {
@@ -646,7 +688,26 @@ fn run_prepared(p: Prepared, progress: &dyn crate::progress::Progress) -> PpkRes
         }
         FilterMode::Combined => {
             let (a, b) = rayon::join(|| run(false, &opts, None), || run(true, &opts, None));
-            (Some(a), Some(b))
+            let refused = (opts.ar == ArMode::FixAndHold)
+                .then(|| consistency::holds_refused(&a.sols, &b.sols))
+                .flatten();
+            if let Some(warning) = refused {
+                // A held wrong fix makes every float after it claim millimetres: resolve each
+                // epoch on its own instead (the combination still checks every fix).
+                warnings.push(warning);
+                let continuous = PpkOptions {
+                    ar: ArMode::Continuous,
+                    ..opts.clone()
+                };
+                progress.set_len(stage, (passes * n_rover) as u64);
+                let (a, b) = rayon::join(
+                    || run(false, &continuous, None),
+                    || run(true, &continuous, None),
+                );
+                (Some(a), Some(b))
+            } else {
+                (Some(a), Some(b))
+            }
         }
     };
     progress.finish();
@@ -658,7 +719,11 @@ fn run_prepared(p: Prepared, progress: &dyn crate::progress::Progress) -> PpkRes
     let keep_stats = |p: Option<PassOutput>| p.map(|p| p.stats);
     let (fw, bw) = (keep_stats(fw), keep_stats(bw));
     let ambiguities = ambiguity_rates(&merged, [&fw, &bw], opts.nf >= 2);
-    let (epochs, unsolved) = output_epochs(merged, &inputs, &opts, antenna_sigma, &base_arp);
+    let OutputEpochs {
+        epochs,
+        unsolved,
+        refusals,
+    } = output_epochs(merged, &inputs, &opts, antenna_sigma, &base_arp);
     let static_solution = match (opts.motion, &fw) {
         (Motion::Static, Some(fw)) => StaticSolution::of(&epochs, fw),
         _ => None,
@@ -670,6 +735,7 @@ fn run_prepared(p: Prepared, progress: &dyn crate::progress::Progress) -> PpkRes
         forward: fw,
         backward: bw,
         unsolved,
+        refusals,
         rover_epochs: n_rover,
         base_marker,
         models,

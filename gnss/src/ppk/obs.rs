@@ -108,6 +108,10 @@ pub struct SatMeas {
     /// quarters of a dB ([`NO_DROP`]: unknown; read it with [`SatMeas::cn0_drop`], set by
     /// `ppk::snr`).
     pub snr_drop: [u8; NF],
+    /// The code's variance measured on its receiver's own data for its C/N0 (m², NaN:
+    /// not measured; read it with [`SatMeas::code_var`], set by `ppk::codenoise`). Single
+    /// precision: a millimetre of σ more or less changes nothing.
+    pub code_var: [f32; NF],
 }
 
 /// [`SatMeas::snr_drop`] unknown.
@@ -151,6 +155,17 @@ impl SatMeas {
         };
     }
 
+    /// The code variance of slot `f` measured on the receiver's own data, m² (NaN: not
+    /// measured).
+    pub fn code_var(&self, f: usize) -> f64 {
+        f64::from(self.code_var[f])
+    }
+
+    /// Store a measured code variance (m²) for slot `f`.
+    pub fn set_code_var(&mut self, f: usize, v: f64) {
+        self.code_var[f] = v as f32;
+    }
+
     /// Whether the phase of slot `f` may be half a cycle off (its half-cycle ambiguity not
     /// yet resolved by the receiver).
     pub fn half_cycle(&self, f: usize) -> bool {
@@ -192,6 +207,7 @@ pub fn extract(
             lli: [0; NF],
             snr: [0; NF],
             snr_drop: [NO_DROP; NF],
+            code_var: [f32::NAN; NF],
         };
         let mut any = false;
         for (k, c) in row.iter().enumerate().take(nf) {

@@ -174,6 +174,13 @@ pub struct PpkOptions {
     /// for the rover epochs that fall in them, instead of pairing those with an aged base
     /// epoch (see `ppk::interp`). On by default; off only to show what it gains.
     pub interpolate_base: bool,
+    /// Hold the position from one epoch to the next where the carrier phase says the rover
+    /// stood still (see `ppk::still`), instead of starting it afresh from the code solution
+    /// (kinematic runs). On by default; off only to show what it gains.
+    pub use_stillness: bool,
+    /// Random walk of the position while the rover stands still, m/√s: the sway of a
+    /// hand-held pole.
+    pub still_sigma: f64,
     /// Variance of the fix-and-hold constraint, cycles².
     pub hold_variance: f64,
     /// Estimate a single-difference slant ionospheric delay per satellite (the
@@ -247,6 +254,8 @@ impl Default for PpkOptions {
             min_fix_ambiguities: 4,
             half_cycle_float: true,
             interpolate_base: true,
+            use_stillness: true,
+            still_sigma: 0.005,
             hold_variance: 0.001,
             iono: Estimate::Auto,
             iono_sigma_per_km: 0.004,

@@ -40,6 +40,8 @@ pub struct EpochSol {
     pub segment: u32,
     /// The float solution (position, covariance) of a fixed epoch, for a demotion.
     pub float: Option<(Ecef, Matrix3<f64>)>,
+    /// Of a float epoch, the check that refused its fix (None when none was tried).
+    pub refused: Option<super::refusal::Refusal>,
 }
 
 impl StaticSolution {
@@ -70,6 +72,11 @@ pub struct PassStats {
     pub slips: BTreeMap<SlipCause, usize>,
     /// Ambiguities reset because their post-fit residual was too large.
     pub outlier_resets: usize,
+    /// Satellite-epochs whose code was left out for its post-fit residual (an excursion).
+    pub code_outliers: usize,
+    /// Epochs at which the code contradicted the state's position beyond its σ for tens of
+    /// seconds and the state's covariance was widened (see `ppk::filter::selfcheck`).
+    pub widened: usize,
     /// Measurement rows removed by the innovation gate, per reason (counted at each of the
     /// two linearisations of an epoch).
     pub rejected: BTreeMap<GateReason, usize>,
@@ -168,6 +175,12 @@ pub struct Models {
     /// Per-satellite code biases were estimated on these slots (system, slot): rover and
     /// base track different codes there (P1 against C1).
     pub code_biases: Vec<(crate::sv::Constellation, usize)>,
+    /// Rover epochs at which the filter held the position from the epoch before (the rover
+    /// stood still, `PpkOptions::use_stillness`), and the stretches of them.
+    pub still: (usize, usize),
+    /// The rover's and the base's code noise measured on their own data (see
+    /// [`super::codenoise`]), where enough arcs allowed it.
+    pub code_noise: [Option<super::codenoise::CodeNoise>; 2],
 }
 
 /// How far the output epochs' ambiguities were resolved: wide lanes (with two or more
@@ -201,6 +214,9 @@ pub struct PpkResult {
     pub backward: Option<PassStats>,
     /// Rover epochs without a solution and why.
     pub unsolved: Vec<(Epoch, String)>,
+    /// Float output epochs whose fix a check refused, and which one, in time order (the
+    /// receiver's time tags).
+    pub refusals: Vec<(Epoch, super::refusal::Refusal)>,
     /// Rover epochs read.
     pub rover_epochs: usize,
     /// Base marker position used, ECEF.

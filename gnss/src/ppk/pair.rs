@@ -10,6 +10,7 @@ use super::obs::{SatMeas, NF};
 use super::state::StateKey;
 
 /// A satellite observed by both receivers this epoch.
+#[derive(Clone, Debug)]
 pub(super) struct Pair {
     /// Rover measurements.
     pub(super) r: SatMeas,

@@ -14,6 +14,7 @@ use super::obs::{SatMeas, LLI_HALF_CYCLE, NF};
 use crate::orbit::C;
 use crate::sv::Sv;
 use hifitime::Epoch;
+use nalgebra::Vector3;
 use std::collections::{BTreeMap, HashMap};
 
 /// The slips of one epoch: per satellite and frequency slot, why its phase does not continue
@@ -30,14 +31,16 @@ pub type Slips = BTreeMap<Sv, [Option<SlipCause>; NF]>;
 pub fn arc_breaks(
     times: &[Epoch],
     meas: &[Vec<SatMeas>],
+    los: Option<&[Vec<Option<Vector3<f64>>>]>,
     max_gap: f64,
     doppler: bool,
 ) -> Vec<Slips> {
     let noise = if doppler {
-        super::doppler::misfit_noise(times, meas, max_gap)
+        super::doppler::misfit_noise(times, meas, los, max_gap)
     } else {
         None
     };
+    let los_at = |i: usize| los.and_then(|l| l.get(i)).map(|v| v.as_slice());
     let mut out: Vec<Slips> = vec![Slips::new(); times.len()];
     let mut merge = |i: usize, sv: Sv, causes: [Option<SlipCause>; NF]| {
         if causes.iter().any(Option::is_some) {
@@ -51,7 +54,7 @@ pub fn arc_breaks(
     forward.doppler = doppler;
     forward.noise = noise;
     for (i, (t, m)) in times.iter().zip(meas).enumerate() {
-        for (sat, causes) in m.iter().zip(forward.check_epoch(*t, m)) {
+        for (sat, causes) in m.iter().zip(forward.check_epoch(*t, m, los_at(i))) {
             merge(i, sat.sv, causes);
         }
     }
@@ -63,7 +66,7 @@ pub fn arc_breaks(
     let mut next: HashMap<Sv, usize> = HashMap::new();
     for i in (0..times.len()).rev() {
         let m = &meas[i];
-        for (sat, causes) in m.iter().zip(backward.check_epoch(times[i], m)) {
+        for (sat, causes) in m.iter().zip(backward.check_epoch(times[i], m, los_at(i))) {
             if let Some(&j) = next.get(&sat.sv) {
                 merge(j, sat.sv, causes);
             }
@@ -169,9 +172,16 @@ impl SlipDetector {
     }
 
     /// Slips of every satellite of an epoch: [`Self::check`] per satellite, plus the
-    /// Doppler test, which needs the whole epoch to remove a receiver clock jump (common to all
-    /// satellites) before comparing each phase change with its integrated Doppler.
-    pub fn check_epoch(&mut self, t: Epoch, sats: &[SatMeas]) -> Vec<[Option<SlipCause>; NF]> {
+    /// Doppler test, which needs the whole epoch to remove what is common to its satellites
+    /// (a clock jump; with their lines of sight `los`, aligned with `sats`, the receiver's
+    /// acceleration too: [`super::doppler::remove_common`]) before comparing each phase
+    /// change with its integrated Doppler.
+    pub fn check_epoch(
+        &mut self,
+        t: Epoch,
+        sats: &[SatMeas],
+        los: Option<&[Option<Vector3<f64>>]>,
+    ) -> Vec<[Option<SlipCause>; NF]> {
         // Doppler misfits (metres) against the previous epoch, before the history moves on.
         let mut misfit: Vec<[f64; NF]> = vec![[f64::NAN; NF]; sats.len()];
         // Allowance for dynamics: the trapezoid rule errs by up to half the Doppler change
@@ -200,26 +210,24 @@ impl SlipDetector {
                 }
             }
         }
-        let mut all: Vec<f64> = misfit
+        let flat: Vec<(f64, Option<Vector3<f64>>)> = misfit
             .iter()
-            .flatten()
-            .copied()
-            .filter(|v| v.is_finite())
+            .enumerate()
+            .flat_map(|(k, m)| {
+                let e = los.and_then(|l| l.get(k).copied().flatten());
+                m.iter().map(move |v| (*v, e))
+            })
             .collect();
-        all.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
-        let common = if all.len() >= 3 {
-            all[all.len() / 2]
-        } else {
-            f64::NAN
-        };
+        let residual = super::doppler::remove_common(&flat);
         let mut out: Vec<[Option<SlipCause>; NF]> = sats.iter().map(|m| self.check(t, m)).collect();
-        if common.is_finite() {
-            for (k, m) in sats.iter().enumerate() {
-                for f in 0..NF {
-                    let cycles = (misfit[k][f] - common) / m.wavelength(f);
-                    if cycles.abs() > self.doppler_limit(m, f, dt_all) + allowance[k][f] {
-                        out[k][f] = out[k][f].or(Some(SlipCause::Doppler));
-                    }
+        for (k, m) in sats.iter().enumerate() {
+            for f in 0..NF {
+                let r = residual[k * NF + f];
+                if r.is_finite()
+                    && (r / m.wavelength(f)).abs()
+                        > self.doppler_limit(m, f, dt_all) + allowance[k][f]
+                {
+                    out[k][f] = out[k][f].or(Some(SlipCause::Doppler));
                 }
             }
         }
@@ -413,7 +421,7 @@ mod tests {
                 ]
             })
             .collect();
-        let b = arc_breaks(&times, &meas, 10.0, true);
+        let b = arc_breaks(&times, &meas, None, 10.0, true);
         let g = |prn| Sv::new(Constellation::Gps, prn);
         assert_eq!(
             b[3].get(&g(1)).map(|c| c[0]),
@@ -455,7 +463,7 @@ mod tests {
                 ]
             })
             .collect();
-        let b = arc_breaks(&times, &meas, 10.0, true);
+        let b = arc_breaks(&times, &meas, None, 10.0, true);
         let g = |prn| Sv::new(Constellation::Gps, prn);
         assert_eq!(
             b[4].get(&g(1)).map(|c| c[0]),
@@ -478,6 +486,7 @@ mod tests {
             lli: [0; NF],
             snr: [0; NF],
             snr_drop: [crate::ppk::obs::NO_DROP; NF],
+            code_var: [f32::NAN; NF],
         }
     }
 
@@ -498,7 +507,7 @@ mod tests {
             if k >= 3 {
                 sats[2].l[0] += 7.0; // a 7-cycle slip on one satellite
             }
-            let out = det.check_epoch(t, &sats);
+            let out = det.check_epoch(t, &sats, None);
             for (i, o) in out.iter().enumerate() {
                 let want = (k == 3 && i == 2).then_some(SlipCause::Doppler);
                 assert_eq!(o[0], want, "epoch {k} satellite {i}");
@@ -538,9 +547,9 @@ mod tests {
         let reversed = doppler_phase_ratio(&times, &epochs(-1.0, true), 10.0).unwrap();
         assert!((reversed.median + 1.0).abs() < 1e-9, "{reversed:?}");
         assert_eq!(doppler_phase_ratio(&times, &epochs(1.0, false), 10.0), None);
-        let with = arc_breaks(&times, &epochs(-1.0, true), 10.0, true);
+        let with = arc_breaks(&times, &epochs(-1.0, true), None, 10.0, true);
         assert!(with.iter().map(|e| e.len()).sum::<usize>() > 0);
-        let without = arc_breaks(&times, &epochs(-1.0, true), 10.0, false);
+        let without = arc_breaks(&times, &epochs(-1.0, true), None, 10.0, false);
         assert_eq!(
             without.iter().map(|e| e.len()).sum::<usize>(),
             0,

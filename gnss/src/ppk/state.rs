@@ -209,6 +209,14 @@ impl State {
         }
     }
 
+    /// Add `var` (m²) to the variance of each position coordinate (a random walk of the
+    /// position kept from the epoch before).
+    pub(super) fn add_position_variance(&mut self, var: f64) {
+        for j in 0..KINEMATIC {
+            self.p[(j, j)] += var;
+        }
+    }
+
     /// Add a per-satellite state at the end with `value`, variance `var`, uncorrelated,
     /// locked since `t` (lock count 0), with a new arc number.
     pub(super) fn add(&mut self, key: StateKey, t: Epoch, value: f64, var: f64) {

@@ -119,7 +119,7 @@ pub fn process(
         .collect();
     let times: Vec<Epoch> = obs.epochs.iter().map(|e| e.time).collect();
     let interval = h.interval.unwrap_or(30.0).max(1.0);
-    let breaks = arc_breaks(&times, &meas, (3.0 * interval).max(10.0), true);
+    let breaks = arc_breaks(&times, &meas, None, (3.0 * interval).max(10.0), true);
     let (rx_ant, mut warnings) = receiver_antenna(opts, &h.antenna);
     let d = h.antenna_delta;
     let ctx = Ctx {

@@ -3,7 +3,7 @@
 //! ambiguities went, why epochs stayed unsolved, each pass's resets, the static solution and
 //! the warnings. `pipeline` makes it and `ppk_report` draws it; it uses neither.
 
-use gnss::ppk::{AmbiguityRates, Models, PassStats};
+use gnss::ppk::{AmbiguityRates, Models, PassStats, Refusal};
 use gnss::time::format_ymdhms;
 use hifitime::Epoch;
 use std::fmt;
@@ -71,7 +71,16 @@ impl PpkReport {
             self.out.display()
         )?;
         writeln!(f, "  {}", models_line(&r.models))?;
+        if let Some(l) = still_line(&r.models, r.rover_epochs) {
+            writeln!(f, "  {l}")?;
+        }
+        if let Some(l) = code_noise_line(&r.models) {
+            writeln!(f, "  {l}")?;
+        }
         if let Some(l) = ambiguities_line(&r.ambiguities) {
+            writeln!(f, "  {l}")?;
+        }
+        if let Some(l) = refusals_line(&r.refusals) {
             writeln!(f, "  {l}")?;
         }
         let mut reasons: std::collections::BTreeMap<&str, (usize, Epoch)> = Default::default();
@@ -106,6 +115,49 @@ impl PpkReport {
         }
         Ok(())
     }
+}
+
+/// The code noise measured on each receiver's own data: σ per C/N0 class and what one
+/// epoch is worth among its correlated neighbours.
+fn code_noise_line(m: &Models) -> Option<String> {
+    let names = ["< 30", "30-35", "35-40", "40-45", ">= 45"];
+    let one = |who: &str, n: &gnss::ppk::codenoise::CodeNoise| {
+        let classes: Vec<String> = names
+            .iter()
+            .zip(&n.var)
+            .filter(|(_, v)| v.is_finite())
+            .map(|(c, v)| format!("{:.2} m at {c}", v.sqrt()))
+            .collect();
+        format!(
+            "{who} {} dB-Hz, an epoch's code worth 1/{:.0} of an independent one",
+            classes.join(", "),
+            n.inflation
+        )
+    };
+    let parts: Vec<String> = ["rover", "base"]
+        .iter()
+        .zip(&m.code_noise)
+        .filter_map(|(who, n)| Some(one(who, n.as_ref()?)))
+        .collect();
+    (!parts.is_empty()).then(|| {
+        format!(
+            "code noise measured (code minus carrier): {}; the code weighted by it where the model says less",
+            parts.join("; ")
+        )
+    })
+}
+
+/// How much of the track the rover stood still (the position held from epoch to epoch).
+fn still_line(m: &Models, epochs: usize) -> Option<String> {
+    let (still, stretches) = m.still;
+    (still > 0).then(|| {
+        format!(
+            "stood still at {still} epochs ({:.1} % of the track, {stretches} stretches): the position held from one epoch to the next there (the carrier phase's displacement within {:.0} mm/s horizontally, {:.0} mm/s vertically)",
+            100.0 * still as f64 / epochs.max(1) as f64,
+            1e3 * gnss::ppk::STILL_M.0,
+            1e3 * gnss::ppk::STILL_M.1
+        )
+    })
 }
 
 /// The longest baseline and what was estimated beside the position and the ambiguities.
@@ -176,10 +228,20 @@ fn pass_line(name: &str, s: &PassStats) -> String {
         .map(|(c, n)| format!("{c:?} {n}"))
         .collect();
     format!(
-        "{name}: ambiguity resets {} [{}], post-fit outliers {}, innovations rejected {} [{}], satellite-epochs below mask {}, without orbit {}{}{}{}",
+        "{name}: ambiguity resets {} [{}], post-fit outliers {}{}{}, innovations rejected {} [{}], satellite-epochs below mask {}, without orbit {}{}{}{}",
         s.slips.values().sum::<usize>(),
         slips.join(", "),
         s.outlier_resets,
+        if s.code_outliers > 0 {
+            format!(", codes left out for their post-fit residual {}", s.code_outliers)
+        } else {
+            String::new()
+        },
+        if s.widened > 0 {
+            format!(", covariance widened where the code contradicted the state {}", s.widened)
+        } else {
+            String::new()
+        },
         s.rejected_innovations(),
         gated.join(", "),
         s.below_mask,
@@ -214,4 +276,88 @@ fn refused_fixes(s: &PassStats) -> String {
         .map(|(n, why)| format!("{why} {n}"))
         .collect();
     format!(", fixes refused {total} [{}]", reasons.join(", "))
+}
+
+/// Why the float epochs were not fixed: each check that refused a fix, at how many epochs
+/// and over which minutes of the run (its [`LONGEST_SPANS`] longest stretches, epochs less
+/// than [`SPAN_GAP_S`] apart joined); None when no fix was refused.
+fn refusals_line(refusals: &[(Epoch, Refusal)]) -> Option<String> {
+    let t0 = refusals.first()?.0;
+    let parts: Vec<String> = Refusal::ALL
+        .iter()
+        .filter_map(|&why| {
+            let times: Vec<f64> = refusals
+                .iter()
+                .filter(|(_, r)| *r == why)
+                .map(|(t, _)| (*t - t0).to_seconds())
+                .collect();
+            (!times.is_empty()).then(|| {
+                let spans: Vec<String> = spans(&times)
+                    .iter()
+                    .map(|(a, b)| format!("{:.0}–{:.0}", a / 60.0, b / 60.0))
+                    .collect();
+                format!("{why} {} (min {})", times.len(), spans.join(", "))
+            })
+        })
+        .collect();
+    Some(format!(
+        "fixes refused at {} float epochs, by the check that refused them (minutes from the first): {}",
+        refusals.len(),
+        parts.join("; ")
+    ))
+}
+
+/// Stretches of one refusal further apart than this, seconds, are told apart.
+const SPAN_GAP_S: f64 = 30.0;
+
+/// Stretches named per refusal.
+const LONGEST_SPANS: usize = 3;
+
+/// The [`LONGEST_SPANS`] longest stretches (start, end) of ascending `times`, in time order.
+fn spans(times: &[f64]) -> Vec<(f64, f64)> {
+    let mut all: Vec<(f64, f64)> = Vec::new();
+    for &t in times {
+        match all.last_mut() {
+            Some(last) if t - last.1 <= SPAN_GAP_S => last.1 = t,
+            _ => all.push((t, t)),
+        }
+    }
+    all.sort_by(|a, b| {
+        (b.1 - b.0)
+            .total_cmp(&(a.1 - a.0))
+            .then(a.0.total_cmp(&b.0))
+    });
+    all.truncate(LONGEST_SPANS);
+    all.sort_by(|a, b| a.0.total_cmp(&b.0));
+    all
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each check is counted with its longest stretches in minutes, in time order; one
+    /// refusal's epochs further apart than the gap are separate stretches.
+    #[test]
+    fn the_refusals_are_counted_and_placed_in_time() {
+        let t0 = gnss::time::from_week_tow(2300, 0.0);
+        let at = |s: f64| t0 + hifitime::Duration::from_seconds(s);
+        let mut r: Vec<(Epoch, Refusal)> =
+            (0..180).map(|k| (at(k as f64), Refusal::Ratio)).collect();
+        r.extend((780..1140).map(|k| (at(k as f64), Refusal::Ratio)));
+        r.extend((1200..1210).map(|k| (at(k as f64), Refusal::PassesDisagree)));
+        r.extend([(at(1300.0), Refusal::Ratio), (at(1400.0), Refusal::Ratio)]);
+        let line = refusals_line(&r).unwrap();
+        assert!(
+            line.contains("at 552 float epochs")
+                && line.contains("ratio test 542 (min 0–3, 13–19, 22–22)")
+                && line.contains("passes disagree 10 (min 20–20)"),
+            "{line}"
+        );
+        assert!(refusals_line(&[]).is_none());
+        assert_eq!(
+            spans(&[0.0, 10.0, 50.0, 51.0, 52.0, 200.0]),
+            vec![(0.0, 10.0), (50.0, 52.0), (200.0, 200.0)]
+        );
+    }
 }

@@ -28,6 +28,7 @@
 
 mod outliers;
 mod resolution;
+mod selfcheck;
 
 use super::ar;
 use super::geometry::{day_of_year, tropo, wet_mapping, ReceiverEpoch};
@@ -83,6 +84,10 @@ const STUDENTIZED: f64 = 4.0;
 /// Smallest post-fit phase residual (m) taken for an undetected slip.
 const SLIP_FLOOR: f64 = 0.03;
 
+/// Post-fit code residual, in the code's white sigmas, beyond which a satellite's code is
+/// left out of the epoch (an excursion of the code: multipath of metres for seconds).
+const CODE_STUDENTIZED: f64 = 5.0;
+
 /// The filter of one pass.
 pub struct Filter<'a> {
     opts: &'a PpkOptions,
@@ -107,6 +112,9 @@ pub struct Filter<'a> {
     before_update: Option<(nalgebra::DVector<f64>, nalgebra::DMatrix<f64>)>,
     /// The base's view of the satellites of its last epoch used, with the day of year.
     base_terms: Option<(Epoch, f64, Vec<Option<BaseTerms>>)>,
+    /// The running average of the shift the code would apply to the state's position (see
+    /// `selfcheck`).
+    code_shift_avg: selfcheck::CodeShift,
 }
 
 /// The base's view of one satellite at one base epoch.
@@ -166,11 +174,13 @@ impl<'a> Filter<'a> {
             position_started: false,
             before_update: None,
             base_terms: None,
+            code_shift_avg: selfcheck::CodeShift::default(),
         }
     }
 
     /// Process one rover epoch against a base epoch. `start` is a position to linearise about
-    /// (the single-point solution); `slips` the arc breaks to apply. With `prior` (the
+    /// (the single-point solution), with whether the rover stood still since the pass's
+    /// previous epoch; `slips` the arc breaks to apply. With `prior` (the
     /// backward pass's estimate at this epoch, before its measurements), the solution is the
     /// two-filter smoother's and is resolved without holding. None when no double
     /// difference could be formed. The state before the measurements is kept for
@@ -179,7 +189,7 @@ impl<'a> Filter<'a> {
         &mut self,
         rover: ReceiverEpoch,
         base: ReceiverEpoch,
-        start: Ecef,
+        (start, still): (Ecef, bool),
         slips: &StepSlips,
         prior: Option<&Prior>,
     ) -> Option<EpochSol> {
@@ -191,14 +201,17 @@ impl<'a> Filter<'a> {
         };
         let dt = self.elapsed(t);
         let pairs = self.form_pairs(rover, base, &start);
-        self.predict(&start);
+        self.predict(&start, still, dt);
         let iono = IonoConstraint::at(&start, &self.base, self.opts);
         self.update_ambiguity_bookkeeping(t, dt, slips, iono.process_noise);
         self.add_new_states(t, &pairs, iono.initial_sigma);
         if self.record {
             self.recorded = Some(Prior::of(&self.state));
         }
-        let (used_sats, last) = self.update_excluding_slips(&pairs)?;
+        let (used_sats, last, pairs) = self.update_excluding_outliers(&pairs)?;
+        if self.opts.motion == Motion::Kinematic {
+            self.check_against_code(&last, dt);
+        }
         self.post_fit_check(last);
         self.count_locks(t, &pairs);
         let smoothed = prior.and_then(|p| smooth::fuse(&self.state, p)).zip(prior);
@@ -305,10 +318,16 @@ impl<'a> Filter<'a> {
     }
 
     /// Prediction: kinematic, the position from the start value with a wide variance (no
-    /// dynamics model); static, the position carries over once started; the other states
-    /// carry over.
-    fn predict(&mut self, start: &Ecef) {
+    /// dynamics model), or, where the rover stood still since the epoch before (`still`),
+    /// the position held with the sway's random walk over `dt` seconds; static, the position
+    /// carries over once started; the other states carry over.
+    fn predict(&mut self, start: &Ecef, still: bool, dt: f64) {
         if self.opts.motion == Motion::Static && self.position_started {
+            return;
+        }
+        if still && self.position_started && self.opts.use_stillness {
+            let q = self.opts.still_sigma.powi(2) * dt.max(1e-3);
+            self.state.add_position_variance(q);
             return;
         }
         self.state.reset_position(&start.0, POSITION_SIGMA.powi(2));
@@ -504,25 +523,51 @@ impl<'a> Filter<'a> {
         Some((used_sats, last?))
     }
 
-    /// The measurement update, redone without the ambiguity of the worst post-fit phase
-    /// residual (see [`Self::worst_phase_outlier`]: a slip no detector saw, its ambiguity is
-    /// reset now, so the epoch's solution does not carry it) up to [`EXCLUSIONS`] times. A
-    /// residual that most rows of a group share is the pivot's.
-    fn update_excluding_slips(&mut self, pairs: &[Pair]) -> Option<(usize, Linearisation)> {
-        let mut out = self.measurement_update(pairs)?;
-        for _ in 0..EXCLUSIONS {
-            let Some(bad) = self.worst_phase_outlier(&out.1) else {
-                break;
+    /// The measurement update, redone without the code of the worst post-fit code residual
+    /// (see [`Self::worst_code_outlier`]: an excursion of the code) and without the
+    /// ambiguity of the worst post-fit phase residual (see [`Self::worst_phase_outlier`]: a
+    /// slip no detector saw, its ambiguity is reset now, so the epoch's solution does not
+    /// carry it), up to [`EXCLUSIONS`] times each. A residual that most rows of a group
+    /// share is the pivot's. Returns the pairs the update used (the codes left out blank).
+    fn update_excluding_outliers<'p>(
+        &mut self,
+        pairs: &'p [Pair],
+    ) -> Option<(usize, Linearisation, std::borrow::Cow<'p, [Pair]>)> {
+        // The pairs are copied only when a code is left out (rarely).
+        let mut used = std::borrow::Cow::Borrowed(pairs);
+        let mut out = self.measurement_update(&used)?;
+        let (mut codes, mut phases) = (0, 0);
+        while codes + phases < 2 * EXCLUSIONS {
+            let code = (codes < EXCLUSIONS)
+                .then(|| self.worst_code_outlier(&out.1))
+                .flatten();
+            let phase = match code {
+                Some(_) => None,
+                None if phases < EXCLUSIONS => self.worst_phase_outlier(&out.1),
+                None => None,
             };
+            if code.is_none() && phase.is_none() {
+                break;
+            }
             // Back to the state before the update (its layout is unchanged), without `bad`.
             let (x0, p0) = self.before_update.take()?;
             self.state.x = x0;
             self.state.p = p0;
-            self.state.remove(&[StateKey::Ambiguity(bad)]);
-            self.stats.outlier_resets += 1;
-            out = self.measurement_update(pairs)?;
+            if let Some(bad) = code {
+                if let Some(p) = used.to_mut().iter_mut().find(|p| p.r.sv == bad.sv) {
+                    p.r.p[bad.slot] = f64::NAN;
+                }
+                self.stats.code_outliers += 1;
+                codes += 1;
+            }
+            if let Some(bad) = phase {
+                self.state.remove(&[StateKey::Ambiguity(bad)]);
+                self.stats.outlier_resets += 1;
+                phases += 1;
+            }
+            out = self.measurement_update(&used)?;
         }
-        Some(out)
+        Some((out.0, out.1, used))
     }
 
     /// Lock counts and last-seen epochs of the states observed this epoch; ambiguities kept

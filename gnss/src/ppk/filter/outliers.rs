@@ -1,12 +1,61 @@
-//! Post-fit checks of one epoch's update: the worst phase residual taken for a slip no
-//! detector saw (detection, identification, adaptation), and the residuals kept for the
-//! statistics, with the ambiguities to reset at the next epoch.
+//! Post-fit checks of one epoch's update: the worst code residual taken for an excursion
+//! of the code (multipath that leaves its level by metres for seconds), the worst phase
+//! residual taken for a slip no detector saw (detection, identification, adaptation), and
+//! the residuals kept for the statistics, with the ambiguities to reset at the next epoch.
 
-use super::{Filter, Linearisation, SLIP_FLOOR, STUDENTIZED};
+use super::{Filter, Linearisation, CODE_STUDENTIZED, SLIP_FLOOR, STUDENTIZED};
 use crate::ppk::measure::{self, ObsKind};
 use crate::ppk::state::AmbKey;
 
 impl Filter<'_> {
+    /// The satellite and slot of the worst post-fit code residual when it stands out of the
+    /// code's white noise by [`CODE_STUDENTIZED`] (the pivot's when most rows of its group
+    /// share it), None otherwise. The code's variance in the filter is its white noise
+    /// times its correlation over the epochs (`measure::correlation`: about 20 at 1 Hz), so
+    /// that the filter does not take correlated epochs for independent ones; an excursion of
+    /// ten metres is five of those inflated sigmas but ten of the white ones, which is what
+    /// it is tested against (less what the solution absorbed of it, which only makes the
+    /// test safer).
+    pub(super) fn worst_code_outlier(&self, last: &Linearisation) -> Option<AmbKey> {
+        let o = self.opts;
+        let dx = &self.state.x - &last.at;
+        let corr = measure::correlation(o.code_correlation_s, o).max(1.0);
+        let pivot_var = &last.rows.pivot_var;
+        let rows: Vec<(&measure::Row, f64)> = last
+            .rows
+            .rows
+            .iter()
+            .filter(|r| r.kind == ObsKind::Code && r.innovation.abs() <= o.max_innovation)
+            .map(|r| {
+                let post =
+                    r.innovation - r.h.entries().iter().map(|&(j, v)| v * dx[j]).sum::<f64>();
+                let white = (r.var + pivot_var[r.group]) / corr;
+                (r, post.abs() / white.sqrt())
+            })
+            .collect();
+        let (worst, w) = rows.iter().max_by(|a, b| a.1.total_cmp(&b.1))?;
+        if *w <= CODE_STUDENTIZED {
+            return None;
+        }
+        let group: Vec<&(&measure::Row, f64)> = rows
+            .iter()
+            .filter(|(r, _)| r.group == worst.group)
+            .collect();
+        let over = group
+            .iter()
+            .filter(|(_, w)| *w > CODE_STUDENTIZED / 2.0)
+            .count();
+        let sv = if group.len() >= 2 && 2 * over > group.len() {
+            worst.pivot
+        } else {
+            worst.sv
+        };
+        Some(AmbKey {
+            sv,
+            slot: worst.slot,
+        })
+    }
+
     /// The ambiguity of the worst post-fit phase residual (the pivot's when most rows of its
     /// group share it), None when the residuals hold none beyond chance.
     pub(super) fn worst_phase_outlier(&self, last: &Linearisation) -> Option<AmbKey> {

@@ -9,6 +9,7 @@ use crate::ppk::combine::try_mahalanobis2;
 use crate::ppk::options::{ArMode, Estimate, PpkOptions};
 use crate::ppk::output::EpochSol;
 use crate::ppk::pair::Pair;
+use crate::ppk::refusal::Refusal;
 use crate::ppk::segment::FixedIntegers;
 use crate::ppk::smooth::Prior;
 use crate::ppk::state::State;
@@ -63,9 +64,9 @@ fn resolve_leaving_one_out(
     o: &PpkOptions,
     pairs: &[Pair],
     best_ratio: &mut Option<f64>,
-) -> Option<ar::Fix> {
+) -> Result<ar::Fix, Refusal> {
     let full = ar::resolve(st, o, pairs, best_ratio);
-    if o.iono != Estimate::On || full.as_ref().is_some_and(|f| f.complete) {
+    if o.iono != Estimate::On || full.as_ref().is_ok_and(|f| f.complete) {
         return full;
     }
     let sats = ar::candidate_satellites(st, o, pairs);
@@ -74,7 +75,7 @@ fn resolve_leaving_one_out(
     }
     let passing: Vec<ar::Fix> = sats
         .into_iter()
-        .filter_map(|sv| ar::resolve_without(st, o, pairs, &mut None, Some(sv)))
+        .filter_map(|sv| ar::resolve_without(st, o, pairs, &mut None, Some(sv)).ok())
         .filter(|f| f.complete)
         .filter(|f| f.ratio >= o.ratio_threshold * LEAVE_OUT_RATIO_FACTOR)
         .collect();
@@ -89,7 +90,7 @@ fn resolve_leaving_one_out(
     passing
         .into_iter()
         .reduce(|a, b| if b.ratio > a.ratio { b } else { a })
-        .or(full)
+        .map_or(full, Ok)
 }
 
 impl Filter<'_> {
@@ -112,7 +113,7 @@ impl Filter<'_> {
                     ar::resolve_without(&s, self.opts, pairs, &mut unused, fix.left_out)
                 }
             })
-            .map(|h| h.map(|h| FixedIntegers::by_satellite(&h)))
+            .map(|h| h.ok().map(|h| FixedIntegers::by_satellite(&h)))
             .collect();
         let agree = halves
             .iter()
@@ -149,6 +150,7 @@ impl Filter<'_> {
             widelanes: 0,
             segment: 0,
             float: None,
+            refused: None,
         };
         if o.ar == ArMode::Off {
             sol.segment = self.segments.next(t, None);
@@ -162,24 +164,31 @@ impl Filter<'_> {
             None => ar::resolve(st, o, pairs, &mut best_ratio),
         };
         sol.widelanes = raw.as_ref().map_or(0, |f| f.widelanes);
-        let mut fix = raw.filter(|f| f.complete);
+        let mut fix = raw.and_then(|f| {
+            if f.complete {
+                Ok(f)
+            } else {
+                Err(Refusal::SigmaLimit)
+            }
+        });
         let mut confirmed = false;
-        if let (Some(f), Some((_, prior))) = (&fix, &smoothed) {
+        if let (Ok(f), Some((_, prior))) = (&fix, &smoothed) {
             let halves = self.halves_agree(f, prior, pairs);
             confirmed = halves.confirm;
             if !halves.agree {
                 self.stats.smoothed_fixes_rejected += 1;
-                fix = None;
+                fix = Err(Refusal::HalvesDisagree);
             }
         }
         // On long baselines a fix must also lie near the float it came from (see
         // FLOAT_CONSISTENCY_CHI2), before it is reported or held.
-        if o.iono == Estimate::On && fix.as_ref().is_some_and(|f| !near_float(&f.position, st)) {
+        if o.iono == Estimate::On && fix.as_ref().is_ok_and(|f| !near_float(&f.position, st)) {
             self.stats.far_from_float_fixes += 1;
-            fix = None;
+            fix = Err(Refusal::FarFromFloat);
         }
         let mut fixed = None;
-        if let Some(fix) = fix {
+        sol.refused = fix.as_ref().err().copied();
+        if let Ok(fix) = fix {
             sol.float = Some((sol.pos, sol.cov));
             sol.pos = Ecef(fix.position);
             sol.cov = fix.covariance;
