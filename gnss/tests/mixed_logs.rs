@@ -8,12 +8,15 @@
 //! A DJI-like RTCM 3 log carries stale GPS ephemerides of other weeks (first in the log)
 //! beside the current ones and Galileo ones: it is dated by their consensus, with no hint, a
 //! year hint or the right date; a date six weeks off is refused; the stale ones are counted
-//! and named.
+//! and named. Logs dated before (2018) and after (2039) the 1024-week cycle of today whose
+//! Galileo or BeiDou ephemerides are days old are dated by their whole weeks' cycle.
 
 use gnss::obs::read_obs;
 use gnss::raw::convert::{convert, Outputs};
 use gnss::raw::rtcm_msm::WEEK_MS;
-use gnss::raw::rtcm_write::{msm, station_1005, week_1019, week_1046, MsmSat, MsmSignal};
+use gnss::raw::rtcm_write::{
+    msm, station_1005, week_1019, week_1042, week_1046, MsmSat, MsmSignal,
+};
 use gnss::raw::ubx_write::ubx_from_obs;
 use gnss::raw::TimeHint;
 use gnss::rinex::ObsFile;
@@ -213,4 +216,91 @@ fn a_dji_like_log_is_dated_by_its_current_ephemerides() {
         e.contains("contradicts") && e.contains("2018") && e.contains("2024"),
         "{e}"
     );
+}
+
+/// What a DJI-like log carries beside its current GPS ephemerides.
+#[derive(Clone, Copy, Debug)]
+enum Whole {
+    /// Galileo ephemerides of the observations' time.
+    GalileoCurrent,
+    /// Galileo ephemerides of the week's start, days before the observations (the real
+    /// Phantom 4 RTK log of October 2018).
+    GalileoStale,
+    /// BeiDou ephemerides of the day before.
+    BeiDouStale,
+    /// None: GPS only.
+    None,
+}
+
+/// A DJI-like log of GPS week `week` at [`TOW`]: stale GPS ephemerides of weeks before,
+/// current GPS ones, and `whole`.
+fn dated_log(name: &str, week: u16, whole: Whole) -> PathBuf {
+    let mut b = Vec::new();
+    b.extend(week_1019_sat(5, week - 6, TOW / 1000 + 1800));
+    b.extend(week_1019_sat(9, week - 5, 2 * 86_400));
+    for k in 0..20 {
+        b.extend(gps_msm(TOW + 200 * k));
+        if k == 3 {
+            for prn in 14..20 {
+                b.extend(week_1019_sat(prn, week, TOW / 1000 + 1200));
+            }
+            for prn in 1..8 {
+                b.extend(match whole {
+                    Whole::GalileoCurrent => week_1046(prn, week, (TOW / 1000 - 600) as u32),
+                    Whole::GalileoStale => week_1046(prn, week, 0),
+                    Whole::BeiDouStale => week_1042(prn, week, (TOW / 1000 - 86_400) as u32),
+                    Whole::None => Vec::new(),
+                });
+            }
+        }
+    }
+    let p = tmp(name);
+    std::fs::write(&p, b).unwrap();
+    p
+}
+
+/// Logs of 2018 (before the 1024-week cycle of today, 2019–2038) and 2039 (after it) are
+/// dated right with no hint when they carry Galileo or BeiDou ephemerides, current or days
+/// old (before, the old ones were thrown away as stale and the GPS weeks dated the 2018 log
+/// 2038). A GPS-only log is dated in the latest cycle not after today — right for 2018 — and
+/// the source of its date names `--date-hint`; a 2039 GPS-only log needs the hint.
+#[test]
+fn logs_of_other_cycles_are_dated_by_their_whole_weeks() {
+    for week in [2024u16, 3100] {
+        for whole in [
+            Whole::GalileoCurrent,
+            Whole::GalileoStale,
+            Whole::BeiDouStale,
+            Whole::None,
+        ] {
+            let log = dated_log(&format!("dated_{week}_{whole:?}.rtcm3"), week, whole);
+            let input = read_obs(&log, None, None).unwrap();
+            let ms = (input.obs.epochs[0].time.to_gpst_seconds() * 1000.0).round() as i64;
+            let st = input.raw.unwrap();
+            let source = st.time_source.clone().unwrap();
+            let got = ms.div_euclid(WEEK_MS);
+            assert_eq!(ms.rem_euclid(WEEK_MS), TOW);
+            match (week, whole) {
+                // Read today (before 2039), a GPS-only 2039 log falls in today's cycle.
+                (3100, Whole::None) => assert_eq!(got, 3100 - 1024, "{source}"),
+                _ => assert_eq!(got, week as i64, "{whole:?}: {source}"),
+            }
+            if matches!(whole, Whole::None) {
+                assert!(source.contains("--date-hint"), "{source}");
+                let hinted = read_obs(&log, None, Some(TimeHint::Year(2039))).unwrap();
+                let t = hinted.obs.epochs[0].time.to_gpst_seconds();
+                let want = week as i64 * (WEEK_MS / 1000) + TOW / 1000;
+                let year_cycle = if week == 3100 {
+                    want
+                } else {
+                    want + 1024 * 604_800
+                };
+                assert_eq!(t.round() as i64, year_cycle, "{whole:?} {week}");
+            }
+            if matches!(whole, Whole::GalileoStale | Whole::BeiDouStale) {
+                assert!(source.contains("7 stale Galileo/BeiDou"), "{source}");
+                assert_eq!(st.nav.stale, 9, "{st}");
+            }
+        }
+    }
 }

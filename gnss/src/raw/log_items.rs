@@ -11,7 +11,9 @@
 //! - the time of MSM observations comes from the RAWX time, else from a `--date-hint` or the
 //!   consensus of the ephemerides ([`super::rtcm_week`]): a date hint wins over a weak
 //!   (GPS-only) consensus, with a warning when they differ; a contradiction with a strong one
-//!   is an error naming both;
+//!   is an error naming both; a GPS-only consensus takes its 1024-week cycle from a year hint,
+//!   else from the stale Galileo/BeiDou ephemerides' whole weeks, else the latest cycle not
+//!   after today (the system clock: no log is from the future);
 //! - ephemerides from RXM-SFRBX and from RTCM 1019/1020/1042/1044/1045/1046, each distinct one
 //!   once; an RTCM ephemeris whose time of clock lies more than [`STALE`] from the log's time
 //!   is stale (kept from an earlier day): counted, named and not used;
@@ -24,7 +26,7 @@ use super::nmea::{gga_fix, is_gga, GgaSkip};
 use super::rtcm::message_number;
 use super::rtcm_eph::{decode_ephemeris, EphError};
 use super::rtcm_msm::{decode_msm, leap_seconds, msm_kind, MsmDecoder, WEEK_MS};
-use super::rtcm_week::{consensus, vote_of, WeekVote};
+use super::rtcm_week::{consensus, today_week, vote_of, Cycle, WeekVote};
 use super::ubx::{self, Frame};
 use super::ubx_nav::{NavDecoder, NavOut};
 use super::ubx_obs::RawxConverter;
@@ -126,7 +128,7 @@ fn msm_start(
     }
     let tow = s.msm_tow.unwrap_or(0);
     let reference = hint.map(TimeHint::week);
-    let c = consensus(&s.votes, tow, reference);
+    let c = consensus(&s.votes, tow, reference, today_week());
     let date = match hint {
         Some(h @ TimeHint::Date(..)) => Some(h),
         _ => None,
@@ -156,12 +158,11 @@ fn msm_start(
             (t, format!("{} from --date-hint {h}", t.div_euclid(WEEK_MS)))
         }
         (None, Some(c)) => {
-            let cycle = match (c.strong, hint) {
-                (true, _) => String::new(),
-                (false, Some(h)) => format!(", in the 1024-week cycle of --year-hint {h}"),
-                (false, None) => ", in the 1024-week cycle 2019-04-07 to 2038-11-20 (give \
-                                  --year-hint or --date-hint otherwise)"
-                    .to_string(),
+            let cycle = match (c.cycle, hint) {
+                (Cycle::Reference, Some(h)) => {
+                    format!(", in the 1024-week cycle of --year-hint {h}")
+                }
+                _ => String::new(),
             };
             (at(c.week), format!("{c}{cycle}"))
         }

@@ -215,6 +215,22 @@ pub fn week_1046(prn: u8, gps_week: u16, toc_s: u32) -> Vec<u8> {
     frame(&w.buf)
 }
 
+/// A BeiDou ephemeris frame (1042) of satellite `prn` carrying only the BDT week (GPS week
+/// − 1356, 13 bits) and time of clock (GPST seconds of week, BDT = GPST − 14 s), the fields
+/// the decoder dates a log by; the orbit fields are zero.
+pub fn week_1042(prn: u8, gps_week: u16, toc_s: u32) -> Vec<u8> {
+    let mut w = Writer {
+        buf: vec![0; 64],
+        pos: 0,
+    };
+    w.put(12, 1042);
+    w.put(6, prn as i64);
+    w.put(13, (gps_week.saturating_sub(1356) % 8192) as i64);
+    w.pos = 54;
+    w.put(17, (toc_s.saturating_sub(14) / 8) as i64);
+    frame(&w.buf)
+}
+
 /// A GLONASS ephemeris frame (1020) carrying only the slot and frequency channel.
 pub fn channel_1020(slot: u8, channel: i8) -> Vec<u8> {
     let mut w = Writer {
