@@ -99,7 +99,12 @@ pub fn build(p: &Project) -> Result<Built, AdjustError> {
         Some(d) => Some(super::tight::add(p, &frame, &mut pr, d, &antenna_of)?),
         None => None,
     };
-    super::leave_out::undetermined(p, &point_names, &mut pr, &mut left_out)?;
+    let names = super::leave_out::Names {
+        project: p,
+        points: &point_names,
+        drifts: &drifts,
+    };
+    super::leave_out::undetermined(&names, &mut pr, &mut left_out)?;
     let free = free_network(p, &antenna_of);
     if free {
         inner_constraints(&mut pr, !p.distances.is_empty())?;

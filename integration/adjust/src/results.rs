@@ -495,11 +495,13 @@ fn lever_arms(p: &Project, ctx: &Context) -> Vec<Estimated> {
         .collect()
 }
 
-/// The drift of every drift group.
+/// The drift of every drift group still in the adjustment (one left out is named among the
+/// left out).
 fn drifts(b: &super::build::Built, ctx: &Context) -> Vec<Estimated> {
     b.drifts
         .iter()
         .enumerate()
+        .filter(|(i, _)| !ctx.pr.is_fixed(Key::Drift(DriftId::from(*i))))
         .map(|(i, d)| {
             let key = Key::Drift(DriftId::from(i));
             let labels: &[&str] = match d.model {

@@ -160,8 +160,14 @@ fn solve_leaving_out(
             problem,
             point_names,
             left_out,
+            drifts,
             ..
         } = built;
+        let names = super::leave_out::Names {
+            project,
+            points: point_names,
+            drifts,
+        };
         let images_out = |pr: &photo::lsq::Problem| {
             pr.keys()
                 .iter()
@@ -169,7 +175,7 @@ fn solve_leaving_out(
                 .count()
         };
         let before = images_out(problem);
-        let done = super::leave_out::singular(project, point_names, problem, key, why, left_out);
+        let done = super::leave_out::singular(&names, problem, key, why, left_out);
         // Leaving it out must not take the block apart: when it drags more than a tenth of
         // the images with it, the block itself is ill-conditioned and the solver's error is
         // the honest answer.

@@ -174,3 +174,76 @@ fn sparse_control_adjusts_what_its_observations_determine() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Offsets per strip where a strip cannot carry its own (issue 67): three images measuring one
+/// control point each form strip 97 (all left out, the strip's drift measured by nothing) and
+/// an image with two control points forms strip 98 alone (its drift not determined with it).
+/// Before, the run stopped ("the drift of strip 97 is not determined …", nothing adjusted);
+/// now both drifts are left out with their centres and named, and the rest adjusts as before.
+#[test]
+fn a_strip_whose_offset_nothing_determines_is_left_out_not_fatal() {
+    let dir = tmp("sparse-lone-strips");
+    let t = nav_block(&NavSpec::sparse_control(), &dir).unwrap();
+    let per_image: BTreeMap<&str, usize> = t
+        .images
+        .iter()
+        .zip(&t.control_per_image)
+        .map(|(im, &n)| (im.0.as_str(), n))
+        .collect();
+    let ids: Vec<&str> = t.images.iter().map(|im| im.0.as_str()).collect();
+    let run = ids
+        .windows(3)
+        .find(|w| w.iter().all(|i| per_image[i] == 1))
+        .expect("three consecutive images with one control point")
+        .to_vec();
+    let two = *ids.iter().find(|i| per_image[**i] == 2).unwrap();
+    let list = std::fs::read_to_string(dir.join("images.csv")).unwrap();
+    let mut out = String::new();
+    for (k, l) in list.lines().enumerate() {
+        let mut f: Vec<String> = l.split(',').map(String::from).collect();
+        if k > 0 && run.contains(&f[0].as_str()) {
+            f[2] = "97".into();
+        } else if k > 0 && f[0] == two {
+            f[2] = "98".into();
+        }
+        out += &(f.join(",") + "\n");
+    }
+    std::fs::write(dir.join("images_lone.csv"), out).unwrap();
+    let toml = std::fs::read_to_string(dir.join("project.toml")).unwrap();
+    let lone = toml
+        .replace("drift = \"block\"", "drift = \"strip\"")
+        .replace("latency = \"block\"\n", "")
+        .replace("images.csv", "images_lone.csv");
+    std::fs::write(dir.join("lone.toml"), lone).unwrap();
+    let r = adjust::run(
+        &dir.join("lone.toml"),
+        &dir.join("out"),
+        &Default::default(),
+    )
+    .unwrap_or_else(|e| panic!("a strip's drift stopped the run: {e}"));
+    for (strip, why) in [("97", "nothing measures it"), ("98", "not determined")] {
+        assert!(
+            r.left_out
+                .iter()
+                .any(|w| w.contains(&format!("GNSS drift of strip {strip}")) && w.contains(why)),
+            "strip {strip}: {:#?}",
+            r.left_out
+        );
+    }
+    assert!(r
+        .drifts
+        .iter()
+        .all(|d| d.name != "strip 97" && d.name != "strip 98"));
+    assert_eq!(r.drifts.len(), 10);
+    let adjusted = adjusted(&r);
+    for (im, &n) in &per_image {
+        if n >= 2 && *im != two {
+            assert!(adjusted.contains(im), "image {im} with {n} control points");
+        }
+    }
+    for a in 0..3 {
+        let ratio = r.checks.rms[a] / r.checks.theoretical_rms[a];
+        assert!(ratio < 1.3, "check RMS / theoretical, axis {a}: {ratio:.2}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
