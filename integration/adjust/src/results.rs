@@ -296,8 +296,6 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         .iter()
         .map(|&(k, w)| super::quality::removed_observation(p, b, k, w))
         .collect();
-    let groups = super::quality::groups(p, s, &rel);
-    let misweighted = super::quality::misweighted(&groups);
     Ok(Results {
         name: p.file.name.clone(),
         mode: p.file.mode,
@@ -316,7 +314,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         drifts: drifts(b, &ctx),
         latencies: latencies(b, &ctx),
         interiors: interiors(p, &ctx),
-        groups,
+        groups: super::quality::groups(p, s, &rel),
         removed: s
             .removed
             .iter()
@@ -335,9 +333,8 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
             .iter()
             .map(|(what, why)| format!("{what}: {why}"))
             .collect(),
-        warnings: misweighted
+        warnings: warnings(p, b)
             .into_iter()
-            .chain(warnings(p, b))
             .chain(not_compared)
             .chain(kept.iter().map(|k| {
                 format!(

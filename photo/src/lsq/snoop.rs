@@ -13,22 +13,8 @@ pub const KEPT_SIGMA_FACTOR: f64 = 100.0;
 /// Most suspects tested together in one round of data snooping.
 pub const BATCH: usize = 64;
 
-/// Least redundancy of a group whose variance component is always estimated.
+/// Least redundancy of a group whose variance component is estimated.
 pub const MIN_VCE_REDUNDANCY: f64 = 10.0;
-
-/// Least redundancy of a group whose variance component is estimated when its weights are
-/// plainly wrong (see [`plainly_off`]).
-pub const MIN_VCE_REDUNDANCY_WRONG: f64 = 2.0;
-
-/// Whether a group's vᵀPv / r = `f` at redundancy `r` lies outside the two-sided 99.9 %
-/// band of χ²(r)/r (Wilson–Hilferty): its σ are wrong beyond doubt, even with little
-/// redundancy (navigation-grade GNSS centres given survey σ, in a block without tie points,
-/// have a redundancy of a few units, and then the image points would take the blame).
-pub fn plainly_off(f: f64, r: f64) -> bool {
-    let z = normal_quantile(1.0 - 0.0005);
-    let q = |z: f64| (1.0 - 2.0 / (9.0 * r) + z * (2.0 / (9.0 * r)).sqrt()).powi(3);
-    f > q(z) || f < q(-z).max(0.0)
-}
 
 impl Problem {
     /// Data snooping: adjust, remove the factor with the largest |w| above `critical`, repeat.
@@ -190,22 +176,18 @@ impl Problem {
     }
 
     /// Variance component estimation (Förstner): per group σ̂² = vᵀPv / r over the group,
-    /// iterated until the factors settle; a group with a redundancy below
-    /// [`MIN_VCE_REDUNDANCY`] keeps its weights unless they are plainly wrong ([`plainly_off`],
-    /// at a redundancy of [`MIN_VCE_REDUNDANCY_WRONG`] or more). Returns each group's σ
-    /// multiplier (√ of its variance factor), indexed by [`Group`].
+    /// iterated until the factors settle; groups with a redundancy below
+    /// [`MIN_VCE_REDUNDANCY`] keep their weights. Returns each group's σ multiplier (√ of its
+    /// variance factor), indexed by [`Group`].
     pub fn variance_components(&mut self, max_rounds: usize) -> Result<Vec<f64>, SolveError> {
         for _ in 0..max_rounds {
             self.solve()?;
             let (num, red) = self.group_sums()?;
             let mut change: f64 = 0.0;
             for g in 0..self.model.group_scale.len() {
-                // A group with little redundancy keeps its weight (its estimate would be
-                // noise) unless it is plainly wrong.
-                let f = num[g] / red[g];
-                if red[g] >= MIN_VCE_REDUNDANCY
-                    || (red[g] >= MIN_VCE_REDUNDANCY_WRONG && plainly_off(f, red[g]))
-                {
+                // A group with little redundancy keeps its weight: its estimate would be noise.
+                if red[g] >= MIN_VCE_REDUNDANCY {
+                    let f = num[g] / red[g];
                     self.model.group_scale[g] *= f;
                     change = change.max((f - 1.0).abs());
                 }
