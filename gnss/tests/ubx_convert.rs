@@ -8,6 +8,7 @@ mod common;
 use gnss::raw::convert::{convert, Outputs};
 use gnss::raw::ubx::frame;
 use gnss::rinex::ObsFile;
+use gnss::sv::Constellation;
 use gnss::time::gpst;
 use std::collections::HashMap;
 use std::path::Path;
@@ -105,8 +106,9 @@ fn f9t_l1_l2_log_matches_convbin_exactly() {
     let st = convert(&dir.join("F9T-L2-5min.ubx"), None, None, obs_only(&out)).unwrap();
     assert_eq!(st.epochs, 299);
     assert_eq!(st.checksum_failures, 0);
-    // BeiDou B1C has no RINEX slot in convbin: dropped, and counted.
-    assert_eq!(st.dropped.values().sum::<u64>(), 2533);
+    // BeiDou B1C has no RINEX slot in convbin (2,533 measurements); ppkat writes it as 1P
+    // (RINEX 3.04), so nothing is dropped and convbin's observations all match.
+    assert_eq!(st.dropped.values().sum::<u64>(), 0);
     let c = compare(&dir.join("F9T-L2-5min_convbin.obs"), &out);
     assert_eq!(c.ref_epochs, 299);
     assert_eq!(c.ref_obs, 42995);
@@ -120,12 +122,37 @@ fn f9t_l1_l2_log_matches_convbin_exactly() {
         (61, "C25".to_string(), "L2I".to_string()),
     ];
     assert_eq!(c.lli_diff, beside, "{:?}", c.lli_diff);
-    assert_eq!(c.extra_obs, 0);
     let r = ObsFile::read(&dir.join("F9T-L2-5min_convbin.obs")).unwrap();
     let o = ObsFile::read(&out).unwrap();
     for sys in r.systems() {
-        assert_eq!(r.header.types_of(sys), o.header.types_of(sys), "{sys:?}");
+        let mut ours = o.header.types_of(sys).to_vec();
+        if sys == Constellation::BeiDou {
+            // B1C pilot beside convbin's types: code, phase, Doppler, C/N0.
+            let b1c: Vec<_> = ours
+                .iter()
+                .filter(|t| t.0[1..] == *b"1P")
+                .cloned()
+                .collect();
+            assert_eq!(b1c.len(), 4, "{ours:?}");
+            ours.retain(|t| t.0[1..] != *b"1P");
+        }
+        assert_eq!(r.header.types_of(sys), &ours[..], "{sys:?}");
     }
+    // The extra observations are exactly those B1C values.
+    let b1c_values: usize = o
+        .epochs
+        .iter()
+        .flat_map(|e| &e.sats)
+        .filter(|s| s.sv.sys == Constellation::BeiDou)
+        .map(|s| {
+            let types = o.header.types_of(Constellation::BeiDou);
+            (0..types.len())
+                .filter(|&k| types[k].0[1..] == *b"1P" && s.get(k).is_present())
+                .count()
+        })
+        .sum();
+    assert!(b1c_values > 2000, "{b1c_values}");
+    assert_eq!(c.extra_obs, b1c_values, "{c:?}");
 }
 
 #[test]

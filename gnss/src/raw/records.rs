@@ -414,7 +414,7 @@ mod tests {
                         Constellation::Galileo,
                         Constellation::BeiDou,
                     ][rnd() as usize % 3];
-                    let mut sig = [None; 3];
+                    let mut sig = [None; crate::raw::ubx_obs::SLOTS];
                     for g in sig.iter_mut() {
                         if rnd() % 3 > 0 {
                             *g = Some(RawSignal {

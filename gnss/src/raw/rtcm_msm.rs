@@ -16,7 +16,7 @@
 //!   half-cycle ambiguity flag is set;
 //! - a GLONASS signal has phase and Doppler only when its frequency channel is known (MSM5/7
 //!   extended information or 1020); otherwise they are dropped and counted;
-//! - each system has three slots by band (as the UBX path); a signal of another band, or a
+//! - each satellite has the UBX path's slots by band (`ubx_obs::SLOTS`); a signal of another band, or a
 //!   second signal of a band already filled (signal ids ascending), is dropped and counted.
 
 use super::bits::{bits_s, bits_u};
@@ -110,13 +110,16 @@ pub fn msm_code(sys: Constellation, id: u8) -> Option<[u8; 2]> {
     Some(*s)
 }
 
-/// The frequency slot (0..3) of a band of a system, as the UBX path fills them.
+/// The frequency slot (see [`crate::raw::ubx_obs::SLOTS`]) of a band of a system, as the
+/// UBX path fills them.
 pub fn band_slot(sys: Constellation, band: u8) -> Option<usize> {
     use Constellation::*;
     match (sys, band) {
         (BeiDou, b'2') | (Gps | Qzss | Glonass | Galileo, b'1') => Some(0),
         (Galileo | BeiDou, b'7') | (Gps | Qzss | Glonass, b'2') => Some(1),
         (Gps | Qzss | Galileo | BeiDou, b'5') => Some(2),
+        (Galileo | BeiDou, b'6') => Some(3),
+        (BeiDou, b'1') => Some(4),
         _ => None,
     }
 }
@@ -448,7 +451,10 @@ impl MsmDecoder {
             let k = match e.sats.iter().position(|x| x.sv == sv) {
                 Some(k) => k,
                 None => {
-                    e.sats.push(RawSat { sv, sig: [None; 3] });
+                    e.sats.push(RawSat {
+                        sv,
+                        sig: [None; crate::raw::ubx_obs::SLOTS],
+                    });
                     e.sats.len() - 1
                 }
             };

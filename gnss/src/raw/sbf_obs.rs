@@ -3,7 +3,7 @@
 //! loss-of-lock indicator from the lock time.
 //!
 //! What enters: decoded [`MeasEpoch`] blocks in file order. What leaves: [`RawEpoch`]s as the
-//! UBX and RTCM 3 paths make them (three band slots per satellite) and, in [`RawStats`], every
+//! UBX and RTCM 3 paths make them (the band slots `ubx_obs::SLOTS` per satellite) and, in [`RawStats`], every
 //! measurement dropped with its reason. State kept across epochs: per satellite and signal,
 //! the last lock time and a slip waiting for the next phase.
 //!
@@ -14,8 +14,8 @@
 //! - signals take the codes RTKLIB and Septentrio's own converter give them: GPS L1 C/A 1C,
 //!   L1P 1W, L2P 2W, L2C 2L, L5 5Q, L1C 1L; GLONASS 1C, 1P, 2P, 2C, L3 3Q; Galileo E1 1C, E6
 //!   6C, E5a 5Q, E5b 7Q, AltBOC 8Q; BeiDou B1I 2I, B2I 7I, B3I 6I, B1C 1P, B2a 5P, B2b 7D;
-//!   QZSS 1C, 2L, 5Q, 6L, 1L, 1Z, 1E, 5P; SBAS 1C, 5I; NavIC 5A, 9A. Each system has three
-//!   slots by band as in the UBX and RTCM 3 paths; a signal of another band is dropped and
+//!   QZSS 1C, 2L, 5Q, 6L, 1L, 1Z, 1E, 5P; SBAS 1C, 5I; NavIC 5A, 9A. Each satellite has the
+//!   slots by band of the UBX and RTCM 3 paths; a signal of another band is dropped and
 //!   counted, and of two signals of one band the lower signal number is kept (L1 C/A before
 //!   L1P, L2P before L2C, as RTKLIB keeps them first);
 //! - carrier phase = pseudorange / λ + the carrier field, in cycles, and only with a
@@ -180,7 +180,10 @@ impl SbfConverter {
             }
             let mut placed = self.satellite_signals(sv, s.svid, s.fcn, &s.sigs, stats);
             placed.sort_by_key(|p| p.sig);
-            let mut sat = RawSat { sv, sig: [None; 3] };
+            let mut sat = RawSat {
+                sv,
+                sig: [None; crate::raw::ubx_obs::SLOTS],
+            };
             for p in placed {
                 if sat.sig[p.slot].is_some() {
                     stats.drop("second signal of a band (the lower signal number kept)");

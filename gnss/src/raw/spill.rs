@@ -245,7 +245,7 @@ fn decode_epoch(r: &mut &[u8]) -> Result<RawEpoch> {
     for _ in 0..n {
         let [sys, prn, mask] = bytes(r)?;
         let sys = Constellation::from_letter(sys).ok_or_else(damaged)?;
-        let mut sig = [None; 3];
+        let mut sig = [None; crate::raw::ubx_obs::SLOTS];
         for (k, g) in sig.iter_mut().enumerate() {
             if mask >> k & 1 == 1 {
                 let code = bytes(r)?;
@@ -308,11 +308,11 @@ mod tests {
             sats: vec![
                 RawSat {
                     sv: Sv::new(Constellation::Glonass, 7),
-                    sig: [Some(sig(2.1e7 + 1e-9)), None, Some(sig(0.0))],
+                    sig: [Some(sig(2.1e7 + 1e-9)), None, Some(sig(0.0)), None, None],
                 },
                 RawSat {
                     sv: Sv::new(Constellation::BeiDou, 61),
-                    sig: [None, Some(sig(3.8e7)), None],
+                    sig: [None, Some(sig(3.8e7)), None, None, None],
                 },
             ],
             glonass: vec![(7, -4)],

@@ -10,9 +10,10 @@
 //! - signals map to RINEX codes with the tracking attribute combined (`X`) where RINEX has
 //!   one: GPS L1C/A → 1C, L2CL/L2CM → 2X, L5 → 5X; Galileo E1 → 1X, E5a → 5X, E5b → 7X;
 //!   BeiDou B1I → 2I, B2I → 7I, B2a → 5X; QZSS like GPS; SBAS L1 → 1C; GLONASS 1C/2C;
-//!   NavIC L5 → 5A. Each system has three slots (by band); a signal of another band (Galileo
-//!   E6, BeiDou B3 and B1C) is dropped and counted, and a second signal in one slot replaces
-//!   the first.
+//!   NavIC L5 → 5A. Beyond convbin (which has no slot for them and drops them), BeiDou B3I →
+//!   6I, B1C → 1P (pilot) / 1D (data) and Galileo E6 → 6B / 6C / 6A, as RINEX 3.04 names
+//!   them. Each satellite has [`SLOTS`] slots by band; a signal of another band is dropped and
+//!   counted, and a second signal in one slot replaces the first.
 //! - the pseudorange is blank unless prValid; the phase is blank unless cpValid, not −0.5 and
 //!   cpStdev ≤ 5 (14 once a signal with sigId > 1 has been seen, from the next message on);
 //!   BeiDou GEO phases get +0.5 cycle.
@@ -50,13 +51,17 @@ pub struct RawSignal {
     pub lli: u8,
 }
 
-/// One satellite in one epoch: up to three frequency slots.
+/// Frequency slots of a satellite in a raw epoch: the system's first, second and third band
+/// (0–2), then band 6 (BeiDou B3I, Galileo E6; 3) and BeiDou B1C (band 1 beside B1I; 4).
+pub const SLOTS: usize = 5;
+
+/// One satellite in one epoch: up to [`SLOTS`] frequency slots.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RawSat {
     /// The satellite.
     pub sv: Sv,
-    /// Slots by frequency index (first, second, third band of the system).
-    pub sig: [Option<RawSignal>; 3],
+    /// Slots by frequency index (see [`SLOTS`]).
+    pub sig: [Option<RawSignal>; SLOTS],
 }
 
 /// One measurement epoch.
@@ -132,10 +137,19 @@ pub fn signal_code(sys: Constellation, sig_id: u8, version: u8) -> Option<([u8; 
         (Galileo, 5 | 6) => *b"7X",
         (BeiDou, 0 | 1) => *b"2I",
         (BeiDou, 2 | 3) => *b"7I",
+        // RINEX 3.04: B3I 6I, B1C pilot 1P and data 1D; Galileo E6-B 6B, E6-C 6C, E6-A 6A.
+        (BeiDou, 4 | 10) => *b"6I",
+        (BeiDou, 5) => *b"1P",
+        (BeiDou, 6) => *b"1D",
+        (Galileo, 8) => *b"6B",
+        (Galileo, 9) => *b"6C",
+        (Galileo, 10) => *b"6A",
         (Irnss, 0) => *b"5A",
         _ => return None,
     };
     let slot = match (sys, c[0]) {
+        (BeiDou, b'1') => 4,
+        (BeiDou | Galileo, b'6') => 3,
         (BeiDou, b'2') | (Irnss, b'5') | (_, b'1') => 0,
         (Galileo | BeiDou, b'7') | (Gps | Qzss | Glonass, b'2') => 1,
         (_, b'5') => 2,
@@ -187,7 +201,10 @@ impl RawxConverter {
             let k = match e.sats.iter().position(|x| x.sv == sv) {
                 Some(k) => k,
                 None => {
-                    e.sats.push(RawSat { sv, sig: [None; 3] });
+                    e.sats.push(RawSat {
+                        sv,
+                        sig: [None; SLOTS],
+                    });
                     e.sats.len() - 1
                 }
             };
@@ -355,7 +372,12 @@ mod tests {
         assert_eq!(signal_code(Galileo, 0, 1), Some((*b"1X", 0)));
         assert_eq!(signal_code(Galileo, 6, 1), Some((*b"7X", 1)));
         assert_eq!(signal_code(BeiDou, 0, 1), Some((*b"2I", 0)));
-        assert_eq!(signal_code(BeiDou, 5, 1), None); // B1C: no slot, as in convbin
+        // X20: B3I, B1C (pilot, data) and E6 in the RINEX 3.04 slots convbin leaves out.
+        assert_eq!(signal_code(BeiDou, 4, 1), Some((*b"6I", 3)));
+        assert_eq!(signal_code(BeiDou, 5, 1), Some((*b"1P", 4)));
+        assert_eq!(signal_code(BeiDou, 6, 1), Some((*b"1D", 4)));
+        assert_eq!(signal_code(Galileo, 8, 1), Some((*b"6B", 3)));
+        assert_eq!(signal_code(BeiDou, 9, 1), None);
         assert_eq!(signal_code(Sbas, 0, 1), Some((*b"1C", 0)));
     }
 }
