@@ -44,6 +44,8 @@ pub struct GroupQuality {
     pub max_mdb: f64,
     /// Unit of the MDB: px for image points, m otherwise.
     pub mdb_unit: String,
+    /// The median σ given to its components (before the σ factor), in `mdb_unit`.
+    pub given_sigma: f64,
 }
 
 /// Reliability per observation group (groups without observations left out).
@@ -61,8 +63,10 @@ pub(super) fn groups(p: &Project, s: &Solved, rel: &[Reliability]) -> Vec<GroupQ
             uncontrolled: 0,
             max_mdb: 0.0,
             mdb_unit: if g == 0 { "px".into() } else { "m".into() },
+            given_sigma: 0.0,
         })
         .collect();
+    let mut given: Vec<Vec<f64>> = vec![Vec::new(); groups.len()];
     for r in rel {
         let g = pr.group(r.factor);
         let scale = pr.group_sigma(g) * s.stats.sigma0;
@@ -73,6 +77,7 @@ pub(super) fn groups(p: &Project, s: &Solved, rel: &[Reliability]) -> Vec<GroupQ
         };
         let q = &mut groups[g.0];
         for i in 0..r.redundancy.len() {
+            given[g.0].push(noise.sigma(i) / unit);
             let rr = r.redundancy[i];
             q.observations += 1;
             q.mean_redundancy += rr;
@@ -86,7 +91,11 @@ pub(super) fn groups(p: &Project, s: &Solved, rel: &[Reliability]) -> Vec<GroupQ
             }
         }
     }
-    for q in &mut groups {
+    for (q, given) in groups.iter_mut().zip(&mut given) {
+        if !given.is_empty() {
+            given.sort_by(f64::total_cmp);
+            q.given_sigma = given[given.len() / 2];
+        }
         if q.observations > 0 {
             q.mean_redundancy /= q.observations as f64;
         } else {
@@ -95,6 +104,40 @@ pub(super) fn groups(p: &Project, s: &Solved, rel: &[Reliability]) -> Vec<GroupQ
     }
     groups.retain(|q| q.observations > 0);
     groups
+}
+
+/// Beyond this σ factor (or below its inverse) a group's σ are plainly wrong, and said so.
+pub const MISWEIGHTED: f64 = 3.0;
+
+/// A plain warning for each group whose σ factor is beyond [`MISWEIGHTED`]: what its σ
+/// behave like, what was given, that the estimate is used, and what to do.
+pub(super) fn misweighted(groups: &[GroupQuality]) -> Vec<String> {
+    let amount = |v: f64, unit: &str| match unit {
+        "px" => format!("{v:.2} px"),
+        _ if v >= 1.0 => format!("{v:.1} m"),
+        _ if v >= 0.01 => format!("{:.1} cm", v * 100.0),
+        _ => format!("{:.1} mm", v * 1000.0),
+    };
+    groups
+        .iter()
+        .filter(|g| g.sigma_factor > MISWEIGHTED || g.sigma_factor < 1.0 / MISWEIGHTED)
+        .map(|g| {
+            let advice = match g.group.as_str() {
+                "GNSS centres" if g.sigma_factor > 1.0 => "if they are navigation-grade positions, import with --gnss-kind nav or give --gnss-sigma (or their σ in the antenna table)",
+                "image points" if g.sigma_factor > 1.0 => "check the cameras' interior orientation (self-calibration, distortion) and the measurements' σ (sigma_px)",
+                "control points" if g.sigma_factor > 1.0 => "check the control coordinates, their σ and their datum",
+                _ if g.sigma_factor < 1.0 => "the σ given are too pessimistic: give smaller ones",
+                _ => "check the σ given for them",
+            };
+            format!(
+                "the {} behave like σ ≈ {}, not the {} given (σ factor {:.1}, estimated from the residuals and used in this adjustment): {advice}",
+                g.group,
+                amount(g.given_sigma * g.sigma_factor, &g.mdb_unit),
+                amount(g.given_sigma, &g.mdb_unit),
+                g.sigma_factor
+            )
+        })
+        .collect()
 }
 
 /// What a factor removed by data snooping was, read from the factor itself.

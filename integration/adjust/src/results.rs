@@ -296,6 +296,8 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         .iter()
         .map(|&(k, w)| super::quality::removed_observation(p, b, k, w))
         .collect();
+    let groups = super::quality::groups(p, s, &rel);
+    let misweighted = super::quality::misweighted(&groups);
     Ok(Results {
         name: p.file.name.clone(),
         mode: p.file.mode,
@@ -314,7 +316,7 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
         drifts: drifts(b, &ctx),
         latencies: latencies(b, &ctx),
         interiors: interiors(p, &ctx),
-        groups: super::quality::groups(p, s, &rel),
+        groups,
         removed: s
             .removed
             .iter()
@@ -333,8 +335,9 @@ pub fn collect(p: &Project, s: &Solved) -> Result<Results, AdjustError> {
             .iter()
             .map(|(what, why)| format!("{what}: {why}"))
             .collect(),
-        warnings: warnings(p, b)
+        warnings: misweighted
             .into_iter()
+            .chain(warnings(p, b))
             .chain(not_compared)
             .chain(kept.iter().map(|k| {
                 format!(

@@ -210,6 +210,15 @@ fn solve_built(
         }
         Ok(())
     };
+    let mut components = vec![1.0; GROUPS];
+    if opts.variance_components && tight.is_none() {
+        // First σ that are wrong by far (navigation-grade centres given survey σ): data
+        // snooping would otherwise remove or weigh down the right observations of that group
+        // one by one and leave the block ill-conditioned. Not with tight coupling: float
+        // ambiguities would be taken for noise of the phase.
+        stage("adjustment: variance components, iteration");
+        components = pr.gross_variance_components(10, super::quality::MISWEIGHTED)?;
+    }
     snoop(pr, removed)?;
     if let Some(t) = tight.as_mut() {
         // Integers with the image geometry in the ambiguities' covariance, then snooping
@@ -219,7 +228,6 @@ fn solve_built(
         super::tight::resolve(pr, t, RATIO_MIN, SUCCESS_MIN)?;
         snoop(pr, removed)?;
     }
-    let mut components = vec![1.0; GROUPS];
     if opts.variance_components {
         stage("adjustment: variance components, iteration");
         components = pr.variance_components(10)?;

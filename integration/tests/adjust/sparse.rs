@@ -247,3 +247,74 @@ fn a_strip_whose_offset_nothing_determines_is_left_out_not_fatal() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Navigation-grade centres (σ 2 m, no offset, no latency) imported as survey-grade (σ 5 cm
+/// horizontal, 10 cm vertical, as `import micmac` assumes without `--gnss-kind`): the GNSS
+/// group's variance component finds them out, the adjustment uses it, the warning says what
+/// they behave like and what to do, and the check points stay within their theoretical RMS.
+#[test]
+fn nav_grade_centres_taken_for_survey_grade_are_found_out() {
+    let dir = tmp("sparse-survey-sigma");
+    let spec = NavSpec {
+        offset_enu: [0.0; 3],
+        latency_s: 0.0,
+        ..NavSpec::sparse_control()
+    };
+    nav_block(&spec, &dir).unwrap();
+    let ant = std::fs::read_to_string(dir.join("antennas.csv")).unwrap();
+    let mut out = String::new();
+    for l in ant.lines() {
+        let mut f: Vec<String> = l.split(',').map(String::from).collect();
+        if f.len() > 11 && f[0] != "id" && !f[0].starts_with('#') {
+            // c_ee c_en c_eu c_nn c_nu c_uu
+            for (k, v) in [(6, 0.0025), (9, 0.0025), (11, 0.01)] {
+                f[k] = format!("{v}");
+            }
+        }
+        out += &(f.join(",") + "\n");
+    }
+    std::fs::write(dir.join("antennas_survey.csv"), out).unwrap();
+    let toml = std::fs::read_to_string(dir.join("project.toml")).unwrap();
+    let survey = toml
+        .replace("drift = \"block\"", "drift = \"none\"")
+        .replace("latency = \"block\"\n", "")
+        .replace("drift_model = \"offset\"\n", "")
+        .replace("antennas.csv", "antennas_survey.csv");
+    std::fs::write(dir.join("survey.toml"), survey).unwrap();
+    // Before: "the normal equations are singular" (data snooping weighed the centres down
+    // one by one until the block fell apart).
+    let r = adjust::run(
+        &dir.join("survey.toml"),
+        &dir.join("out"),
+        &Default::default(),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let factor = |name: &str| {
+        r.groups
+            .iter()
+            .find(|g| g.group == name)
+            .map(|g| g.sigma_factor)
+            .unwrap()
+    };
+    // 2 m against 5 cm / 10 cm: 40× and 20×.
+    let gnss = factor("GNSS centres");
+    assert!((15.0..50.0).contains(&gnss), "GNSS σ factor {gnss}");
+    let image = factor("image points");
+    assert!((0.7..1.4).contains(&image), "image σ factor {image}");
+    assert!(
+        r.warnings
+            .iter()
+            .any(|w| w.contains("GNSS centres behave like σ ≈") && w.contains("--gnss-kind nav")),
+        "{:#?}",
+        r.warnings
+    );
+    for a in 0..3 {
+        let ratio = r.checks.rms[a] / r.checks.theoretical_rms[a];
+        assert!(ratio < 1.3, "check RMS / theoretical, axis {a}: {ratio:.2}");
+    }
+    println!(
+        "survey σ on nav-grade centres: GNSS σ factor {gnss:.1}, image {image:.2}; checks RMS {:?} theoretical {:?}",
+        r.checks.rms, r.checks.theoretical_rms
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

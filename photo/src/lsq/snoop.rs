@@ -13,8 +13,23 @@ pub const KEPT_SIGMA_FACTOR: f64 = 100.0;
 /// Most suspects tested together in one round of data snooping.
 pub const BATCH: usize = 64;
 
-/// Least redundancy of a group whose variance component is estimated.
+/// Least redundancy of a group whose variance component is always estimated.
 pub const MIN_VCE_REDUNDANCY: f64 = 10.0;
+
+/// Least redundancy of a group whose variance component [`Problem::gross_variance_components`]
+/// estimates when its σ are plainly too small (see [`plainly_too_small`]).
+pub const MIN_VCE_REDUNDANCY_WRONG: f64 = 2.0;
+
+/// Whether a group's vᵀPv / r = `f` at redundancy `r` lies above the 99.95 % quantile of
+/// χ²(r)/r (Wilson–Hilferty): its σ are too small beyond doubt, even with little redundancy
+/// (navigation-grade GNSS centres given survey σ, in a block without tie points, have a
+/// redundancy of a few units, and then the image points would take the blame). Only this
+/// direction: σ too large are safe, and a small vᵀPv on a few units of redundancy is chance.
+pub fn plainly_too_small(f: f64, r: f64) -> bool {
+    let z = normal_quantile(1.0 - 0.0005);
+    let a = 2.0 / (9.0 * r);
+    f > (1.0 - a + z * a.sqrt()).powi(3)
+}
 
 impl Problem {
     /// Data snooping: adjust, remove the factor with the largest |w| above `critical`, repeat.
@@ -180,14 +195,45 @@ impl Problem {
     /// [`MIN_VCE_REDUNDANCY`] keep their weights. Returns each group's σ multiplier (√ of its
     /// variance factor), indexed by [`Group`].
     pub fn variance_components(&mut self, max_rounds: usize) -> Result<Vec<f64>, SolveError> {
+        self.estimate_components(max_rounds, false)?;
+        Ok(self.model.group_scale.iter().map(|s| s.sqrt()).collect())
+    }
+
+    /// Variance components for σ that are wrong by far, before data snooping would weigh the
+    /// right observations of such a group down one by one: estimated as
+    /// [`Self::variance_components`] does, a group of redundancy [`MIN_VCE_REDUNDANCY_WRONG`]
+    /// or more also when its σ are plainly too small ([`plainly_too_small`]); then only a
+    /// group whose σ multiplier came out beyond `beyond` keeps it, every other one its
+    /// weight of before. Returns each group's σ multiplier.
+    pub fn gross_variance_components(
+        &mut self,
+        max_rounds: usize,
+        beyond: f64,
+    ) -> Result<Vec<f64>, SolveError> {
+        let before = self.model.group_scale.clone();
+        self.estimate_components(max_rounds, true)?;
+        for (s, b) in self.model.group_scale.iter_mut().zip(&before) {
+            if *s < b * beyond * beyond {
+                *s = *b;
+            }
+        }
+        Ok(self.model.group_scale.iter().map(|s| s.sqrt()).collect())
+    }
+
+    /// The Förstner iterations; `low`: groups of little redundancy whose σ are plainly too
+    /// small are estimated too.
+    fn estimate_components(&mut self, max_rounds: usize, low: bool) -> Result<(), SolveError> {
         for _ in 0..max_rounds {
             self.solve()?;
             let (num, red) = self.group_sums()?;
             let mut change: f64 = 0.0;
             for g in 0..self.model.group_scale.len() {
-                // A group with little redundancy keeps its weight: its estimate would be noise.
-                if red[g] >= MIN_VCE_REDUNDANCY {
-                    let f = num[g] / red[g];
+                // A group with little redundancy keeps its weight: its estimate would be
+                // noise (unless, with `low`, it is plainly too small).
+                let f = num[g] / red[g];
+                if red[g] >= MIN_VCE_REDUNDANCY
+                    || (low && red[g] >= MIN_VCE_REDUNDANCY_WRONG && plainly_too_small(f, red[g]))
+                {
                     self.model.group_scale[g] *= f;
                     change = change.max((f - 1.0).abs());
                 }
@@ -196,7 +242,7 @@ impl Problem {
                 break;
             }
         }
-        Ok(self.model.group_scale.iter().map(|s| s.sqrt()).collect())
+        Ok(())
     }
 
     /// σ multiplier of a group (√ of its variance factor).

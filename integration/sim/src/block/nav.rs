@@ -11,7 +11,7 @@
 //! measure only one or two points.
 //!
 //! The GNSS (antenna table `antennas.csv`, with velocities): the true antenna position
-//! minus v·δ (a latency δ = [`LATENCY_S`]: the camera fires δ after the time the position is
+//! minus v·δ (a latency δ, [`LATENCY_S`] by default: the camera fires δ after the time the position is
 //! given for) plus a constant offset [`OFFSET_ENU`] (E, N, U of the site; |a| = 15.3 m) plus
 //! white noise of σ 2 m per axis; velocities are the true track velocity plus 5 cm/s noise.
 //! The lever arm (0, 0, 0.5) m is known and held fixed (along the track it would be as
@@ -78,6 +78,8 @@ pub struct NavSpec {
     pub spacing_fraction: f64,
     /// The constant GNSS offset (E, N, U of the site frame), metres.
     pub offset_enu: [f64; 3],
+    /// The latency δ (s): the camera fires δ after the time of its GNSS position.
+    pub latency_s: f64,
     /// Weights of 1, 2, 3, 4 and 5 control points measured per image (each image draws its
     /// count, then that many of the control points it sees; check points in 2–4 images
     /// each, see `block::sparse`); `None`: each point measured in 1–6 images as drawn.
@@ -99,6 +101,7 @@ impl NavSpec {
             base_fraction: 0.4,
             spacing_fraction: 0.7,
             offset_enu: OFFSET_ENU,
+            latency_s: LATENCY_S,
             control_per_image: None,
         }
     }
@@ -120,6 +123,7 @@ impl NavSpec {
             base_fraction: 0.16,
             spacing_fraction: 0.31,
             offset_enu: [6.0, -12.0, 4.0],
+            latency_s: LATENCY_S,
             control_per_image: Some([202.0, 49.0, 25.0, 10.0, 4.0]),
         }
     }
@@ -186,11 +190,11 @@ pub fn nav_block(spec: &NavSpec, dir: &Path) -> Result<NavTruth, SimError> {
     write(
         dir,
         "antennas.csv",
-        &antennas_csv(&images, &origin, spec.offset_enu, &mut rng),
+        &antennas_csv(&images, &origin, spec, &mut rng),
     )?;
     write(dir, "project.toml", &project(&spec.name, true))?;
     write(dir, "project_gcp_only.toml", &project(&spec.name, false))?;
-    write(dir, "truth.toml", &truth_toml(&origin, spec.offset_enu))?;
+    write(dir, "truth.toml", &truth_toml(&origin, spec))?;
     write(dir, "truth_exposures.csv", &truth_exposures(&images))?;
     write(dir, "truth_points.csv", &truth_points(&kept))?;
     let mut per_image = vec![0; images.len()];
@@ -388,13 +392,15 @@ fn measurements_csv(cam: &Camera, images: &[NavImage], points: &[Point], meas: &
 
 /// The antenna table: true antenna − v·δ + offset + 2 m noise; velocity + 5 cm/s noise;
 /// both expressed in the ENU at the antenna.
-fn antennas_csv(images: &[NavImage], origin: &Geodetic, offset: [f64; 3], rng: &mut Rng) -> String {
+fn antennas_csv(images: &[NavImage], origin: &Geodetic, spec: &NavSpec, rng: &mut Rng) -> String {
+    let offset = spec.offset_enu;
     let lever = photo::lever::LeverArm::new(Vector3::from(LEVER_ARM));
     let mut rows = Vec::new();
     for im in images {
         let noise = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * GNSS_SIGMA;
-        let a =
-            lever.antenna(&im.2.centre, &im.2.r) - im.4 * LATENCY_S + Vector3::from(offset) + noise;
+        let a = lever.antenna(&im.2.centre, &im.2.r) - im.4 * spec.latency_s
+            + Vector3::from(offset)
+            + noise;
         let g = geodetic(origin, &a);
         let m = enu_rotation(&g) * enu_rotation(origin).transpose();
         let v = m * (im.4 + Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.05);
@@ -437,9 +443,10 @@ fn project(name: &str, gnss: bool) -> String {
     s
 }
 
-fn truth_toml(origin: &Geodetic, offset: [f64; 3]) -> String {
+fn truth_toml(origin: &Geodetic, spec: &NavSpec) -> String {
+    let (offset, latency) = (spec.offset_enu, spec.latency_s);
     format!(
-        "# nav-block / sparse-control truth. latency: the camera fires latency_s after the time of its GNSS position\n# (antenna at the exposure = GNSS position + v * latency_s). offset: GNSS minus true antenna,\n# E/N/U of the site frame (m). Frame: ENU at origin (lat, lon deg, h m).\nlatency_s = {LATENCY_S}\noffset_enu = [{}, {}, {}]\nlever_arm = [{}, {}, {}]\ngnss_sigma_m = {GNSS_SIGMA}\nvelocity_sigma_ms = 0.05\norigin = [{:.9}, {:.9}, {:.3}]\n",
+        "# nav-block / sparse-control truth. latency: the camera fires latency_s after the time of its GNSS position\n# (antenna at the exposure = GNSS position + v * latency_s). offset: GNSS minus true antenna,\n# E/N/U of the site frame (m). Frame: ENU at origin (lat, lon deg, h m).\nlatency_s = {latency}\noffset_enu = [{}, {}, {}]\nlever_arm = [{}, {}, {}]\ngnss_sigma_m = {GNSS_SIGMA}\nvelocity_sigma_ms = 0.05\norigin = [{:.9}, {:.9}, {:.3}]\n",
         offset[0],
         offset[1],
         offset[2],
