@@ -36,6 +36,7 @@ pub mod gnss_obs;
 mod ground_points;
 mod io;
 pub mod longbase;
+pub mod longbase_faults;
 pub mod lowcost;
 mod obs_text;
 pub mod rng;

@@ -137,6 +137,8 @@ struct Variant {
     systems: &'static [Constellation],
     signals: &'static str,
     option: &'static str,
+    /// With the faults of [`super::longbase_faults`].
+    faults: bool,
 }
 
 /// GPS L1/L2, the bench's own.
@@ -144,6 +146,15 @@ const GPS: Variant = Variant {
     systems: &[Constellation::Gps],
     signals: "GPS L1/L2",
     option: "G",
+    faults: false,
+};
+
+/// GPS L1/L2 with unflagged slips and a bad orbit ([`super::longbase_faults`]).
+const GPS_FAULTS: Variant = Variant {
+    systems: &[Constellation::Gps],
+    signals: "GPS L1/L2 with unflagged slips and a bad orbit",
+    option: "G",
+    faults: true,
 };
 
 /// GPS L1/L2 with Galileo E1/E5a.
@@ -151,15 +162,18 @@ const GPS_GALILEO: Variant = Variant {
     systems: &[Constellation::Gps, Constellation::Galileo],
     signals: "GPS L1/L2 and Galileo E1/E5a",
     option: "G,E",
+    faults: false,
 };
 
 /// The seed of the bench's own files (`simulate --builtin long-baseline` without `--seed`).
 pub const SEED: u64 = 49;
 
-/// Simulate the pair into `dir` (GPS) and `dir/gps-galileo` (GPS and Galileo); the report is
-/// the GPS one's.
+/// Simulate the pair into `dir` (GPS), `dir/gps-galileo` (GPS and Galileo) and `dir/faults`
+/// (GPS with unflagged slips and a bad orbit, [`super::longbase_faults`]); the report is the
+/// GPS one's.
 pub fn run(dir: &Path, seed: u64) -> Result<LongBaselineReport, SimError> {
     simulate_variant(&dir.join("gps-galileo"), seed, GPS_GALILEO)?;
+    simulate_variant(&dir.join("faults"), seed, GPS_FAULTS)?;
     simulate_variant(dir, seed, GPS)
 }
 
@@ -186,11 +200,16 @@ fn simulate_variant(dir: &Path, seed: u64, v: Variant) -> Result<LongBaselineRep
         OFF_PRN,
         OFF_ALONG_TRACK_M,
     );
-    write(
-        dir,
-        "nav.rnx",
-        &(without_gps(&fresh, OFF_PRN) + &off + &stale),
-    )?;
+    let mut nav_text = without_gps(&fresh, OFF_PRN) + &off + &stale;
+    if v.faults {
+        nav_text = super::longbase_faults::bad_orbit(
+            &nav_text,
+            (start, end),
+            seed,
+            GpsLayout::Operational31,
+        );
+    }
+    write(dir, "nav.rnx", &nav_text)?;
     let klob = nav.gps_iono.unwrap_or_default();
     let geo = |(lat, lon, h): (f64, f64, f64)| Geodetic::from_degrees(lat, lon, h);
     let (gb, gr) = (geo(BASE), geo(ROVER));
@@ -237,6 +256,11 @@ fn simulate_variant(dir: &Path, seed: u64, v: Variant) -> Result<LongBaselineRep
     let (btext, bstats) = receiver::simulate(&base, &eph, &klob, &rng.fork(1), &|_| true);
     let (rtext, rstats) = receiver::simulate(&rover, &eph, &klob, &rng.fork(2), &|_| true);
     write(dir, "base.obs", &btext)?;
+    let rtext = if v.faults {
+        super::longbase_faults::slips(&rtext).0
+    } else {
+        rtext
+    };
     write(dir, "rover.obs", &rtext)?;
     write(
         dir,
@@ -293,8 +317,9 @@ fn truth_head(base: Ecef, rover: Ecef, km: f64) -> String {
 }
 
 fn readme(r: &LongBaselineReport, v: Variant) -> String {
-    let other = match v.option {
-        "G" => "The same pair with Galileo E1/E5a beside GPS: gps-galileo/.",
+    let other = match (v.option, v.faults) {
+        (_, true) => "The same pair with GPS alone and faults its σ do not know of: at epochs 960, 1680 and 2400 (08:00, 14:00, 20:00) the rover's strongest GPS satellite slips by one cycle on L1 and on L2 with no loss-of-lock flag, and G12's 10:00 set (used 09:00–11:00) puts it 30 m along its track: no epoch may lie more than 1 m off with σ under 10 cm.",
+        ("G", _) => "The same pair with Galileo E1/E5a beside GPS: gps-galileo/; with faults: faults/.",
         _ => "The same pair with GPS alone: the folder above.",
     };
     format!(
