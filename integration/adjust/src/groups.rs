@@ -25,6 +25,10 @@ pub const GROUP_IONO: Group = Group(8);
 pub const GROUP_FIX: Group = Group(9);
 /// The inner constraints of a free network.
 pub const GROUP_DATUM: Group = Group(10);
+/// Beyond this σ factor (or below its inverse) a group's σ are plainly wrong: said so
+/// (`quality::misweighted`), and estimated before data snooping (`solve`).
+pub const MISWEIGHTED: f64 = 3.0;
+
 /// Names of the groups, by index.
 pub const GROUP_NAMES: [&str; 11] = [
     "image points",

@@ -3,7 +3,7 @@
 //! detectable blunder) and what data snooping removed, each read from its factor.
 
 use super::factors::GnssCentre;
-use super::groups::GROUP_NAMES;
+use super::groups::{GROUP_NAMES, MISWEIGHTED};
 use super::project::Project;
 use super::residuals::DELTA0;
 use super::solve::Solved;
@@ -105,9 +105,6 @@ pub(super) fn groups(p: &Project, s: &Solved, rel: &[Reliability]) -> Vec<GroupQ
     groups.retain(|q| q.observations > 0);
     groups
 }
-
-/// Beyond this σ factor (or below its inverse) a group's σ are plainly wrong, and said so.
-pub const MISWEIGHTED: f64 = 3.0;
 
 /// A plain warning for each group whose σ factor is beyond [`MISWEIGHTED`]: what its σ
 /// behave like, what was given, that the estimate is used, and what to do.

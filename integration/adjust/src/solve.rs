@@ -217,7 +217,7 @@ fn solve_built(
         // one by one and leave the block ill-conditioned. Not with tight coupling: float
         // ambiguities would be taken for noise of the phase.
         stage("adjustment: variance components, iteration");
-        components = pr.gross_variance_components(10, super::quality::MISWEIGHTED)?;
+        components = pr.gross_variance_components(10, super::groups::MISWEIGHTED)?;
     }
     snoop(pr, removed)?;
     if let Some(t) = tight.as_mut() {
