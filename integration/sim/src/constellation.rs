@@ -273,21 +273,25 @@ pub fn off_gps_records(
 /// Navigation text without the records of GPS satellite `prn` (RINEX 3: a record's first
 /// line names the satellite, its continuation lines start with four spaces).
 pub fn without_gps(text: &str, prn: u8) -> String {
-    let head = format!("G{prn:02} ");
-    let mut out = String::with_capacity(text.len());
-    let mut skipping = false;
+    split_records(text, &format!("G{prn:02} ")).0
+}
+
+/// Navigation text split into the records whose first line does not start with `head` and
+/// those that do (RINEX 3: continuation lines start with four spaces).
+pub fn split_records(text: &str, head: &str) -> (String, String) {
+    let (mut rest, mut matching) = (String::new(), String::new());
+    let mut inside = false;
     for line in text.lines() {
-        if line.starts_with(&head) {
-            skipping = true;
+        if line.starts_with(head) {
+            inside = true;
         } else if !line.starts_with("    ") {
-            skipping = false;
+            inside = false;
         }
-        if !skipping {
-            out.push_str(line);
-            out.push('\n');
-        }
+        let out = if inside { &mut matching } else { &mut rest };
+        out.push_str(line);
+        out.push('\n');
     }
-    out
+    (rest, matching)
 }
 
 /// Records of the GPS satellites `pick` (index among the GPS satellites, PRN) moved

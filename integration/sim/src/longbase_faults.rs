@@ -11,7 +11,7 @@
 //! What enters: the observation and navigation texts as the pair's simulation wrote them.
 //! What leaves: the texts with the faults, and what was done (for the README and the tests).
 
-use super::constellation::{off_gps_records, GpsLayout};
+use super::constellation::{off_gps_records, split_records, GpsLayout};
 use hifitime::Epoch;
 
 /// The epochs (index at 30 s from 00:00) at which the strongest GPS satellite slips.
@@ -129,41 +129,15 @@ fn moved(line: &str, by: &[(usize, f64)]) -> String {
 /// [`BAD_ALONG_TRACK_M`] along its track.
 pub fn bad_orbit(nav: &str, span: (Epoch, Epoch), seed: u64, gps: GpsLayout) -> String {
     let head = format!("G{BAD_PRN:02} {BAD_TOE}");
-    let bad = off_gps_records(span, seed, gps, BAD_PRN, BAD_ALONG_TRACK_M);
-    let record = |text: &str| -> Option<String> {
-        let mut out = String::new();
-        let mut inside = false;
-        for l in text.lines() {
-            if l.starts_with(&head) {
-                inside = true;
-            } else if !l.starts_with("    ") {
-                inside = false;
-            }
-            if inside {
-                out.push_str(l);
-                out.push('\n');
-            }
-        }
-        (!out.is_empty()).then_some(out)
-    };
-    let Some(bad) = record(&bad) else {
+    let (_, bad) = split_records(
+        &off_gps_records(span, seed, gps, BAD_PRN, BAD_ALONG_TRACK_M),
+        &head,
+    );
+    let (rest, good) = split_records(nav, &head);
+    if bad.is_empty() || good.is_empty() {
         return nav.to_string();
-    };
-    let mut out = String::with_capacity(nav.len());
-    let mut skipping = false;
-    for l in nav.lines() {
-        if l.starts_with(&head) {
-            skipping = true;
-            out.push_str(&bad);
-        } else if !l.starts_with("    ") {
-            skipping = false;
-        }
-        if !skipping {
-            out.push_str(l);
-            out.push('\n');
-        }
     }
-    out
+    rest + &bad
 }
 
 #[cfg(test)]
