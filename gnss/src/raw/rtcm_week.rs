@@ -190,13 +190,9 @@ fn wrapped(toc: i64, tow: i64) -> i64 {
     (toc - tow + WEEK_MS / 2).rem_euclid(WEEK_MS) - WEEK_MS / 2
 }
 
-/// The week whose 1024-cycle residue is `residue`, nearest `reference` (a GPS week); without
-/// one, in the cycle that began on 2019-04-07 (week 2048).
-pub fn in_cycle(residue: i64, reference: Option<i64>) -> i64 {
-    match reference {
-        Some(r) => residue + 1024 * ((r - residue) as f64 / 1024.0).round() as i64,
-        None => 2048 + residue,
-    }
+/// The week whose 1024-cycle residue is `residue`, nearest `reference` (a GPS week).
+pub fn in_cycle(residue: i64, reference: i64) -> i64 {
+    residue + 1024 * ((reference - residue) as f64 / 1024.0).round() as i64
 }
 
 /// The latest week with 1024-cycle residue `residue` that is not after GPS week `today`.
@@ -270,8 +266,8 @@ pub fn consensus(
     let (residue, n) = best(&weak)?;
     stale_whole.sort_unstable();
     let (week, cycle) = match (reference, stale_whole.get(stale_whole.len() / 2)) {
-        (Some(r), _) => (in_cycle(residue, Some(r)), Cycle::Reference),
-        (None, Some(&w)) => (in_cycle(residue, Some(w)), Cycle::Stale(stale_whole.len())),
+        (Some(r), _) => (in_cycle(residue, r), Cycle::Reference),
+        (None, Some(&w)) => (in_cycle(residue, w), Cycle::Stale(stale_whole.len())),
         (None, None) => (latest_in_cycle(residue, today), Cycle::Latest(today)),
     };
     Some(Consensus {
