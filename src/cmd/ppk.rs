@@ -135,9 +135,12 @@ pub struct Args {
     min_lock: usize,
     /// Largest 3D position sigma of an epoch reported fixed, metres: a fix whose position is
     /// less certain (few satellites, a long baseline) is not used and the epoch stays float:
-    /// the integers may be right and the position still decimetres off.
-    #[arg(long, value_name = "M", default_value_t = 0.08, value_parser = positive)]
-    max_fixed_sigma: f64,
+    /// the integers may be right and the position still decimetres off. Default 0.08, except
+    /// that on short baselines an epoch whose integers all continue arcs held since a
+    /// stronger geometry fixed them stays fixed, with its larger sigma; given, the limit
+    /// holds for every epoch.
+    #[arg(long, value_name = "M", value_parser = positive)]
+    max_fixed_sigma: Option<f64>,
     /// Largest time difference between a rover epoch and the base epoch it is differenced
     /// with, seconds (RTKLIB's pos2-maxage).
     #[arg(long, value_name = "S", default_value_t = 30.0, value_parser = positive)]

@@ -84,13 +84,32 @@ pub(super) struct Fix {
     /// both) the fix determines (conditioned σ below 0.02 cycle).
     pub(super) widelanes: usize,
     /// The integers determine the position (at least three satellites fixed on every slot,
-    /// `min_fix_ambiguities` DD integers in all: a wide-lane-only fix is not) and do so
-    /// precisely (3D σ at most `max_fixed_sigma`: a fix in a weak geometry is no better than
-    /// a float solution and is not reported as one).
+    /// `min_fix_ambiguities` DD integers in all: a wide-lane-only fix is not); how precisely
+    /// is [`Fix::sigma_3d`]'s to say.
     pub(super) complete: bool,
     /// The satellite whose ambiguities were kept float for this fix (see
     /// [`resolve_without`]), if any.
     pub(super) left_out: Option<Sv>,
+}
+
+impl Fix {
+    /// The 3D σ of the fixed position, metres.
+    pub(super) fn sigma_3d(&self) -> f64 {
+        self.covariance.trace().sqrt()
+    }
+
+    /// The fix determines the position within [`PpkOptions::fixed_sigma_limit`].
+    pub(super) fn precise(&self, o: &PpkOptions) -> bool {
+        self.complete && self.sigma_3d() <= o.fixed_sigma_limit()
+    }
+
+    /// The arcs of every ambiguity the fix took part in (pivots and others).
+    pub(super) fn arcs(&self) -> impl Iterator<Item = u64> + '_ {
+        self.groups
+            .iter()
+            .flat_map(|g| g.others.iter().chain([&g.pivot]))
+            .map(|c| c.arc)
+    }
 }
 
 /// Whether the DD integers a fix determines (`dd_integers`, in the rows of `groups`) fix
@@ -398,8 +417,7 @@ pub(super) fn resolve_without(
                 dd_integers,
                 widelanes,
             } = fixed_solution(st, (&fl, &groups), &dec, k, &c).ok_or(Refusal::SigmaLimit)?;
-            let complete = determines_position(&groups, &dd_integers, o.min_fix_ambiguities)
-                && covariance.trace().sqrt() <= o.max_fixed_sigma;
+            let complete = determines_position(&groups, &dd_integers, o.min_fix_ambiguities);
             return Ok(Fix {
                 complete,
                 position,

@@ -44,7 +44,9 @@ pub mod tight;
 mod update;
 
 pub use measure::GateReason;
-pub use options::{ArMode, BasePosition, Estimate, FilterMode, Motion, PpkOptions, Reference};
+pub use options::{
+    ArMode, BasePosition, Estimate, FilterMode, Motion, PpkOptions, Reference, DEFAULT_FIXED_SIGMA,
+};
 pub use output::{
     AmbiguityRates, EpochSol, Models, PassDiagnostics, PassStats, PpkResult, Spread, StaticSolution,
 };

@@ -160,8 +160,9 @@ pub struct PpkOptions {
     pub min_success_rate: f64,
     /// A fix whose 3D position sigma exceeds this (m) is reported as float: in a weak
     /// geometry (five satellites, long baseline) the integers may be right and the position
-    /// still decimetres off.
-    pub max_fixed_sigma: f64,
+    /// still decimetres off. None: [`DEFAULT_FIXED_SIGMA`], with the exception of
+    /// [`PpkOptions::weak_held_fixes_stand`].
+    pub max_fixed_sigma: Option<f64>,
     /// Fewest double-difference ambiguities for a fix.
     pub min_fix_ambiguities: usize,
     /// Keep float the ambiguity of a phase whose half-cycle ambiguity the receiver has not
@@ -250,7 +251,7 @@ impl Default for PpkOptions {
             mature_lock: 5,
             ar_elev_mask: 10f64.to_radians(),
             min_success_rate: 0.999,
-            max_fixed_sigma: 0.08,
+            max_fixed_sigma: None,
             min_fix_ambiguities: 4,
             half_cycle_float: true,
             interpolate_base: true,
@@ -269,6 +270,28 @@ impl Default for PpkOptions {
             static_sigma_per_km: (0.00004, 0.0001),
             antex: None,
         }
+    }
+}
+
+/// The largest 3D σ of a fix (m) unless the user says: BELL–EBRE's weak-geometry fixes
+/// above it lie up to 14 cm off (0.12 adds three fixed epochs beyond 10 cm there), and the
+/// low-cost walk's fresh L1 fixes above it up to 0.96 m.
+pub const DEFAULT_FIXED_SIGMA: f64 = 0.08;
+
+impl PpkOptions {
+    /// The largest 3D σ (m) of an epoch fixed afresh: the user's, else
+    /// [`DEFAULT_FIXED_SIGMA`].
+    pub fn fixed_sigma_limit(&self) -> f64 {
+        self.max_fixed_sigma.unwrap_or(DEFAULT_FIXED_SIGMA)
+    }
+
+    /// Whether a fix over [`PpkOptions::fixed_sigma_limit`] may stand when every integer
+    /// in it continues an arc held since a stronger geometry fixed it: by default on short
+    /// baselines, where the integers leave no model error behind and the larger σ of the
+    /// weak geometry (GEONET's five satellites at a 15° mask: 11 cm, 7.5 cm off) tells the
+    /// truth; never where the ionosphere is estimated or the user gave a limit.
+    pub fn weak_held_fixes_stand(&self) -> bool {
+        self.max_fixed_sigma.is_none() && self.iono != Estimate::On
     }
 }
 

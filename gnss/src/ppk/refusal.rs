@@ -20,7 +20,8 @@ pub enum Refusal {
     SuccessRate,
     /// Every subset tried failed the ratio test.
     Ratio,
-    /// The fixed subset did not determine the position, or its σ exceeds `max_fixed_sigma`.
+    /// The fixed subset did not determine the position, or its σ exceeds
+    /// [`PpkOptions::fixed_sigma_limit`](super::PpkOptions::fixed_sigma_limit).
     SigmaLimit,
     /// The data before or after the epoch alone fixed an ambiguity to another integer.
     HalvesDisagree,

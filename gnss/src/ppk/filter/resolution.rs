@@ -66,7 +66,7 @@ fn resolve_leaving_one_out(
     best_ratio: &mut Option<f64>,
 ) -> Result<ar::Fix, Refusal> {
     let full = ar::resolve(st, o, pairs, best_ratio);
-    if o.iono != Estimate::On || full.as_ref().is_ok_and(|f| f.complete) {
+    if o.iono != Estimate::On || full.as_ref().is_ok_and(|f| f.precise(o)) {
         return full;
     }
     let sats = ar::candidate_satellites(st, o, pairs);
@@ -76,7 +76,7 @@ fn resolve_leaving_one_out(
     let passing: Vec<ar::Fix> = sats
         .into_iter()
         .filter_map(|sv| ar::resolve_without(st, o, pairs, &mut None, Some(sv)).ok())
-        .filter(|f| f.complete)
+        .filter(|f| f.precise(o))
         .filter(|f| f.ratio >= o.ratio_threshold * LEAVE_OUT_RATIO_FACTOR)
         .collect();
     let named: Vec<FixedIntegers<Sv>> = passing.iter().map(FixedIntegers::by_satellite).collect();
@@ -125,6 +125,11 @@ impl Filter<'_> {
         HalvesSay { agree, confirm }
     }
 
+    /// Whether every ambiguity of `fix` continues an arc this pass has held.
+    fn all_held(&self, fix: &ar::Fix) -> bool {
+        fix.arcs().all(|a| self.stats.held_arcs.contains(&a))
+    }
+
     /// The float solution (the smoothed one when given), replaced by the fixed one when the
     /// ambiguities resolve (and then held in fix-and-hold mode; a smoothed fix only when both
     /// halves confirm it), with its ambiguity segment.
@@ -165,7 +170,7 @@ impl Filter<'_> {
         };
         sol.widelanes = raw.as_ref().map_or(0, |f| f.widelanes);
         let mut fix = raw.and_then(|f| {
-            if f.complete {
+            if f.precise(o) || (f.complete && o.weak_held_fixes_stand() && self.all_held(&f)) {
                 Ok(f)
             } else {
                 Err(Refusal::SigmaLimit)
@@ -202,11 +207,7 @@ impl Filter<'_> {
             // hours on BELL-EBRE.
             if o.ar == ArMode::FixAndHold && (smoothed.is_none() || confirmed) {
                 ar::hold(&mut self.state, &fix, o.hold_variance);
-                let held = fix
-                    .groups
-                    .iter()
-                    .flat_map(|g| g.others.iter().chain([&g.pivot]));
-                self.stats.held_arcs.extend(held.map(|c| c.arc));
+                self.stats.held_arcs.extend(fix.arcs());
             }
             fixed = Some(FixedIntegers::of(&fix));
         } else if let Some(r) = best_ratio {
