@@ -514,6 +514,11 @@ fn the_long_baseline_bench_runs_end_to_end() {
         gps.fixed_share > 0.80 && gps.rms_3d < 0.05 && gps.worst_fixed < 0.13,
         "{gps:?}"
     );
+    // Honest σ (measured 0.38 fixed, 0.44 float).
+    assert!(
+        (0.3..=3.0).contains(&gps.nees.0) && (0.3..=3.0).contains(&gps.nees.1),
+        "{gps:?}"
+    );
     let galileo = dir.join("gps-galileo");
     let t = succeeds(&ppkat(&["ppk", "--config", p(&galileo.join("ppk.toml"))]));
     assert!(t.contains("longest baseline 250."), "{t}");
@@ -527,12 +532,14 @@ fn the_long_baseline_bench_runs_end_to_end() {
 
 /// The long-baseline pair's `faults/` copy (issue 67): three unflagged (1, 1)-cycle slips of
 /// the rover's strongest satellite and G12's 10:00 set 30 m along track. No epoch may lie
-/// more than 1 m off with a 3D σ under 10 cm. Measured: 66.1 % fixed (82.6 % without the
-/// faults), worst epoch 0.45 m off, 116 fixed epochs beyond 10 cm (worst 0.28 m, all in
-/// 07:00–13:00 around the bad set), float NEES 6.1: the slips of 14:00 and 20:00 leave no
-/// mark on their hours (post-fit outliers reset them), the bad orbit does — its error drifts
-/// slowly and the ambiguity takes it up, so no epoch's own residuals betray it (not yet
-/// caught: issue 67 item 3 stays open).
+/// more than 1 m off with a 3D σ under 10 cm. No epoch's own residuals betray the bad orbit
+/// (its error drifts slowly and the ambiguity takes it up) nor the 08:00 slip, but the
+/// smoother's halves — the forward filter alone and the backward pass — contradict their σ
+/// around them for hours: the float σ are scaled by that contradiction and fixes where it
+/// passes 8 are not reported. Measured: 53.7 % fixed (82.6 % without the faults), worst
+/// epoch 0.45 m off, worst fixed 12.4 cm, 31 fixed epochs beyond 10 cm and none beyond
+/// 15 cm, NEES 0.47 fixed and 0.38 float; before the halves' check 66.1 % fixed, 116 fixed
+/// epochs beyond 10 cm (worst 0.28 m), float NEES 6.1.
 #[test]
 fn the_long_baseline_faults_never_come_with_centimetre_sigmas() {
     let dir = tmp("long-baseline-faults");
@@ -550,10 +557,15 @@ fn the_long_baseline_faults_never_come_with_centimetre_sigmas() {
     let t = succeeds(&ppkat(&["ppk", "--config", p(&faults.join("ppk.toml"))]));
     assert!(t.contains("post-fit outliers"), "{t}");
     let f = against_truth(&faults);
+    eprintln!("long baseline with faults: {f:?}");
     assert!(f.solved == 2881, "{f:?}");
     assert!(f.confident_and_wrong.is_empty(), "{f:?}");
-    // What the faults cost, against the clean pair's 82.6 %: the bad set's two hours.
-    assert!(f.fixed_share > 0.6 && f.rms_3d < 0.2, "{f:?}");
+    // What the faults cost, against the clean pair's 82.6 %: the hours around them.
+    assert!(f.fixed_share > 0.5 && f.rms_3d < 0.2, "{f:?}");
+    let fixed = f.fixed_share * f.solved as f64;
+    assert!(f.fixed_beyond_15_cm as f64 <= 0.01 * fixed, "{f:?}");
+    assert!((0.3..=3.0).contains(&f.nees.0), "NEES fixed {f:?}");
+    assert!((0.3..=3.0).contains(&f.nees.1), "NEES float {f:?}");
 }
 
 /// A long-baseline folder's `ppk.pos` against the rover of its `truth.toml`.
@@ -565,6 +577,10 @@ struct BenchFigures {
     worst_fixed: f64,
     /// Epochs more than 1 m off with a 3D σ under 10 cm (time, error, σ).
     confident_and_wrong: Vec<String>,
+    /// Fixed epochs more than 15 cm off.
+    fixed_beyond_15_cm: usize,
+    /// Mean of eᵀC⁻¹e / 3 over the fixed and over the float epochs (full ENU covariance).
+    nees: (f64, f64),
 }
 
 fn against_truth(dir: &Path) -> BenchFigures {
@@ -580,6 +596,8 @@ fn against_truth(dir: &Path) -> BenchFigures {
     let rows = pos_rows(&dir.join("ppk.pos"));
     let (mut fixed, mut sum2, mut worst) = (0, 0.0, 0.0f64);
     let mut confident_and_wrong = Vec::new();
+    let (mut beyond, mut nees) = (0, [(0.0, 0usize); 2]);
+    let truth = ::gnss::frame::Ecef::new(rover[0], rover[1], rover[2]);
     for r in &rows {
         let f = |k: usize| r[k].parse::<f64>().unwrap();
         let e = ::gnss::frame::Geodetic::from_degrees(f(2), f(3), f(4))
@@ -591,7 +609,11 @@ fn against_truth(dir: &Path) -> BenchFigures {
         if r[5] == "1" {
             fixed += 1;
             worst = worst.max(d);
+            beyond += usize::from(d > 0.15);
         }
+        let n = &mut nees[usize::from(r[5] != "1")];
+        n.0 += pos_row_nees(r, &truth);
+        n.1 += 1;
         let sigma = (f(7).powi(2) + f(8).powi(2) + f(9).powi(2)).sqrt();
         if d > 1.0 && sigma < 0.1 {
             confident_and_wrong.push(format!("{} {}: {d:.2} m, σ {sigma:.3}", r[0], r[1]));
@@ -603,5 +625,23 @@ fn against_truth(dir: &Path) -> BenchFigures {
         rms_3d: (sum2 / rows.len() as f64).sqrt(),
         worst_fixed: worst,
         confident_and_wrong,
+        fixed_beyond_15_cm: beyond,
+        nees: (
+            nees[0].0 / nees[0].1.max(1) as f64,
+            nees[1].0 / nees[1].1.max(1) as f64,
+        ),
     }
+}
+
+/// eᵀC⁻¹e / 3 of one `.pos` row (llh, with RTKLIB's signed square roots of the ENU
+/// covariance) against `truth`.
+fn pos_row_nees(r: &[String], truth: &::gnss::frame::Ecef) -> f64 {
+    let f = |k: usize| r[k].parse::<f64>().unwrap();
+    let g = ::gnss::frame::Geodetic::from_degrees(f(2), f(3), f(4));
+    let e = g.to_ecef().enu_from(truth).0;
+    let v = |k: usize| f(k).signum() * f(k) * f(k);
+    // sdn sde sdu sdne sdeu sdun, in E, N, U order
+    let c = nalgebra::Matrix3::new(v(8), v(10), v(11), v(10), v(7), v(12), v(11), v(12), v(9));
+    let i = c.try_inverse().expect("a covariance");
+    (e.transpose() * i * e)[0] / 3.0
 }

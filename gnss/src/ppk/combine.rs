@@ -43,7 +43,7 @@ fn mean_of(a: &EpochSol, b: &EpochSol) -> (nalgebra::Vector3<f64>, Matrix3<f64>)
 /// else itself. Combined with the other pass, a refused fix must not lend its millimetre
 /// covariance to the float it is refused for (the low-cost walk: a wrong backward fix 1.6 m
 /// off, refused, still made the combined float claim 1–2 cm).
-fn as_float(s: &EpochSol) -> EpochSol {
+pub(super) fn as_float(s: &EpochSol) -> EpochSol {
     match (s.quality, s.float) {
         (Quality::Fixed, Some((pos, cov))) => EpochSol {
             pos,

@@ -347,12 +347,24 @@ fn merge_passes(
     smoothed: bool,
 ) -> Vec<Option<(EpochSol, u32)>> {
     let merged: Vec<Option<EpochSol>> = match (fw, bw) {
-        (Some(f), Some(b)) if smoothed => f
-            .sols
-            .iter()
-            .zip(&b.sols)
-            .map(|(a, b)| a.as_ref().map(|a| combine::checked(a, b.as_ref())))
-            .collect(),
+        (Some(f), Some(b)) if smoothed => {
+            let scale = consistency::halves_disagreement(&f.sols, &b.sols);
+            f.sols
+                .iter()
+                .zip(&b.sols)
+                .zip(scale)
+                .map(|((a, b), k)| {
+                    let mut c = combine::checked(a.as_ref()?, b.as_ref());
+                    if c.quality == Quality::Fixed && k > consistency::HALVES_REFUTE {
+                        c = combine::as_float(&c);
+                    }
+                    if c.quality != Quality::Fixed {
+                        c.cov *= k;
+                    }
+                    Some(c)
+                })
+                .collect()
+        }
         (Some(f), Some(b)) => {
             let fc = combine::confirmed_segments(&f.sols, &b.sols);
             let bc = combine::confirmed_segments(&b.sols, &f.sols);

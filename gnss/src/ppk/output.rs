@@ -42,6 +42,10 @@ pub struct EpochSol {
     pub float: Option<(Ecef, Matrix3<f64>)>,
     /// Of a float epoch, the check that refused its fix (None when none was tried).
     pub refused: Option<super::refusal::Refusal>,
+    /// Of a smoothed epoch, the forward filter's own solution (position, covariance) before
+    /// the backward pass's estimate was fused in: with the backward pass's solution of the
+    /// epoch, the two halves whose disagreement checks the smoothed σ.
+    pub alone: Option<(Ecef, Matrix3<f64>)>,
 }
 
 impl StaticSolution {

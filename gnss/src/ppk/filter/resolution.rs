@@ -156,6 +156,9 @@ impl Filter<'_> {
             segment: 0,
             float: None,
             refused: None,
+            alone: smoothed
+                .is_some()
+                .then(|| (Ecef(self.state.position()), self.state.position_cov())),
         };
         if o.ar == ArMode::Off {
             sol.segment = self.segments.next(t, None);
