@@ -5,7 +5,59 @@
 //! What enters: the passes' outputs ([`PassOutput`]) and the run's inputs and options. What
 //! leaves: the merged solutions, [`OutputEpochs`], [`AmbiguityRates`] and [`PassDiagnostics`].
 
-use super::*;
+use super::combine;
+use super::consistency;
+use super::inputs::PassInputs;
+use super::options::{Motion, PpkOptions, Reference};
+use super::output::{AmbiguityRates, EpochSol, PassDiagnostics, PassStats};
+use super::refusal::Refusal;
+use super::{output, segment, smooth};
+use crate::frame::{enu_rotation, Ecef};
+use crate::rinex::ObsHeader;
+use crate::solution::Quality;
+use crate::trajectory::TrajectoryEpoch;
+use hifitime::Epoch;
+use nalgebra::Vector3;
+
+/// What a pass hands back: its solution per epoch (None when unsolved), its counters and,
+/// when it recorded them, its states before each epoch's measurements.
+pub(super) struct PassOutput {
+    pub(super) sols: Vec<Option<EpochSol>>,
+    pub(super) stats: PassStats,
+    pub(super) priors: Vec<Option<smooth::Prior>>,
+    /// Rover epochs (index) at which ambiguities were reset, with how many, in pass order.
+    pub(super) resets: Vec<(usize, u32)>,
+}
+
+/// ENU antenna offset (header H/E/N) as an ECEF vector at `at`.
+pub(super) fn arp_offset(h: &ObsHeader, at: &Ecef) -> Vector3<f64> {
+    let d = h.antenna_delta;
+    let r = enu_rotation(&at.to_geodetic());
+    r.transpose() * Vector3::new(d.east, d.north, d.up)
+}
+
+/// The covariance (ECEF) of a static run's time-correlated errors at `at` (see
+/// [`PpkOptions::static_sigma`]); zero for kinematic runs.
+fn static_cov(at: &Ecef, base: &Ecef, o: &PpkOptions) -> nalgebra::Matrix3<f64> {
+    if o.motion != Motion::Static {
+        return nalgebra::Matrix3::zeros();
+    }
+    let km = (at.0 - base.0).norm() / 1000.0;
+    let (h, v) = (o.static_sigma, o.static_sigma_per_km);
+    systematic(at, (h.0 + v.0 * km, h.1 + v.1 * km))
+}
+
+/// A covariance (ECEF) of `sigma` horizontal and vertical in the local frame at `at`.
+fn systematic(at: &Ecef, sigma: (f64, f64)) -> nalgebra::Matrix3<f64> {
+    let r = enu_rotation(&at.to_geodetic());
+    let d = nalgebra::Matrix3::from_diagonal(&Vector3::new(
+        sigma.0 * sigma.0,
+        sigma.0 * sigma.0,
+        sigma.1 * sigma.1,
+    ));
+    r.transpose() * d * r
+}
+
 /// How the output epochs' ambiguities were resolved (see [`AmbiguityRates`]).
 pub(super) fn ambiguity_rates(
     merged: &[Option<(EpochSol, u32)>],

@@ -55,45 +55,15 @@ pub use refusal::Refusal;
 pub use still::STILL_M;
 
 use crate::error::{Error, Result};
-use crate::frame::{enu_rotation, Ecef};
+use crate::frame::Ecef;
 use crate::model::antex::AntennaPcv;
 use crate::orbit::Orbits;
-use crate::rinex::{ObsEpoch, ObsFile, ObsHeader};
-use crate::solution::Quality;
-use crate::trajectory::{SegmentSource, Trajectory, TrajectoryEpoch};
-use hifitime::Epoch;
+use crate::rinex::{ObsEpoch, ObsFile};
+use crate::trajectory::{SegmentSource, Trajectory};
 use inputs::PassInputs;
-use merge::{ambiguity_rates, diagnostics, merge_passes, output_epochs, OutputEpochs};
-use nalgebra::Vector3;
-
-/// ENU antenna offset (header H/E/N) as an ECEF vector at `at`.
-fn arp_offset(h: &ObsHeader, at: &Ecef) -> Vector3<f64> {
-    let d = h.antenna_delta;
-    let r = enu_rotation(&at.to_geodetic());
-    r.transpose() * Vector3::new(d.east, d.north, d.up)
-}
-
-/// The covariance (ECEF) of a static run's time-correlated errors at `at` (see
-/// [`PpkOptions::static_sigma`]); zero for kinematic runs.
-fn static_cov(at: &Ecef, base: &Ecef, o: &PpkOptions) -> nalgebra::Matrix3<f64> {
-    if o.motion != Motion::Static {
-        return nalgebra::Matrix3::zeros();
-    }
-    let km = (at.0 - base.0).norm() / 1000.0;
-    let (h, v) = (o.static_sigma, o.static_sigma_per_km);
-    systematic(at, (h.0 + v.0 * km, h.1 + v.1 * km))
-}
-
-/// A covariance (ECEF) of `sigma` horizontal and vertical in the local frame at `at`.
-fn systematic(at: &Ecef, sigma: (f64, f64)) -> nalgebra::Matrix3<f64> {
-    let r = enu_rotation(&at.to_geodetic());
-    let d = nalgebra::Matrix3::from_diagonal(&Vector3::new(
-        sigma.0 * sigma.0,
-        sigma.0 * sigma.0,
-        sigma.1 * sigma.1,
-    ));
-    r.transpose() * d * r
-}
+use merge::{
+    ambiguity_rates, arp_offset, diagnostics, merge_passes, output_epochs, OutputEpochs, PassOutput,
+};
 
 /// Median spacing of epochs, seconds.
 fn interval(epochs: &[ObsEpoch]) -> f64 {
@@ -228,16 +198,6 @@ fn crossed(table: &[slip::Slips], prev: Option<usize>, now: usize) -> slip::Slip
         Some(p) if p > now => breaks_in(table, now + 1..p + 1),
         _ => slip::Slips::new(),
     }
-}
-
-/// What a pass hands back: its solution per epoch (None when unsolved), its counters and,
-/// when it recorded them, its states before each epoch's measurements.
-struct PassOutput {
-    sols: Vec<Option<EpochSol>>,
-    stats: PassStats,
-    priors: Vec<Option<smooth::Prior>>,
-    /// Rover epochs (index) at which ambiguities were reset, with how many, in pass order.
-    resets: Vec<(usize, u32)>,
 }
 
 /// One pass of the filter over every rover epoch (forward or backward in time). With
