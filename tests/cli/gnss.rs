@@ -600,11 +600,8 @@ fn against_truth(dir: &Path) -> BenchFigures {
     let truth = ::gnss::frame::Ecef::new(rover[0], rover[1], rover[2]);
     for r in &rows {
         let f = |k: usize| r[k].parse::<f64>().unwrap();
-        let e = ::gnss::frame::Geodetic::from_degrees(f(2), f(3), f(4))
-            .to_ecef()
-            .0;
-        let d =
-            ((e.x - rover[0]).powi(2) + (e.y - rover[1]).powi(2) + (e.z - rover[2]).powi(2)).sqrt();
+        let pos = ::gnss::frame::Geodetic::from_degrees(f(2), f(3), f(4)).to_ecef();
+        let d = (pos.0 - truth.0).norm();
         sum2 += d * d;
         if r[5] == "1" {
             fixed += 1;
@@ -612,7 +609,7 @@ fn against_truth(dir: &Path) -> BenchFigures {
             beyond += usize::from(d > 0.15);
         }
         let n = &mut nees[usize::from(r[5] != "1")];
-        n.0 += pos_row_nees(r, &truth);
+        n.0 += pos_row_nees(r, &pos, &truth);
         n.1 += 1;
         let sigma = (f(7).powi(2) + f(8).powi(2) + f(9).powi(2)).sqrt();
         if d > 1.0 && sigma < 0.1 {
@@ -633,12 +630,11 @@ fn against_truth(dir: &Path) -> BenchFigures {
     }
 }
 
-/// eᵀC⁻¹e / 3 of one `.pos` row (llh, with RTKLIB's signed square roots of the ENU
-/// covariance) against `truth`.
-fn pos_row_nees(r: &[String], truth: &::gnss::frame::Ecef) -> f64 {
+/// eᵀC⁻¹e / 3 of one `.pos` row at `pos` (its llh as ECEF; the row holds RTKLIB's signed
+/// square roots of the ENU covariance) against `truth`.
+fn pos_row_nees(r: &[String], pos: &::gnss::frame::Ecef, truth: &::gnss::frame::Ecef) -> f64 {
     let f = |k: usize| r[k].parse::<f64>().unwrap();
-    let g = ::gnss::frame::Geodetic::from_degrees(f(2), f(3), f(4));
-    let e = g.to_ecef().enu_from(truth).0;
+    let e = pos.enu_from(truth).0;
     let v = |k: usize| f(k).signum() * f(k) * f(k);
     // sdn sde sdu sdne sdeu sdun, in E, N, U order
     let c = nalgebra::Matrix3::new(v(8), v(10), v(11), v(10), v(7), v(12), v(11), v(12), v(9));

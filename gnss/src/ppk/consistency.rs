@@ -187,20 +187,13 @@ pub fn halves_disagreement(s: &[Option<EpochSol>], b: &[Option<EpochSol>]) -> Ve
             })
         })
         .collect();
-    let times = epoch_times(s, b);
-    let mut steps: Vec<f64> = times
-        .windows(2)
-        .map(|w| w[1] - w[0])
-        .filter(|d| *d > 0.0)
-        .collect();
-    let interval = if steps.is_empty() {
-        0.0
-    } else {
-        let mid = steps.len() / 2;
-        *steps.select_nth_unstable_by(mid, f64::total_cmp).1
-    };
+    let solved = s
+        .iter()
+        .zip(b)
+        .filter_map(|(x, y)| x.as_ref().or(y.as_ref()));
+    let interval = crate::time::median_spacing(solved.map(|e| e.time));
     let window = WINDOW_S.max(SMOOTHED_WINDOW_EPOCHS * interval);
-    disagreement_scale(&halves, b, &times, window)
+    disagreement_scale(&halves, b, &epoch_times(s, b), window)
 }
 
 /// The factor of [`halves_disagreement`] beyond which a smoothed fix is not reported: the

@@ -81,7 +81,9 @@ pub(super) fn ambiguity_rates(
 /// The output solution of each epoch with its ambiguity segment (see
 /// [`segment::output_segments`]): the one pass; with both, the forward pass's when it carries
 /// the smoother's solutions (`smoothed`; a fix that the backward pass's float solution puts
-/// beyond 4σ is demoted to the smoothed float), else the two combined.
+/// beyond 4σ, or where the halves' disagreement passes [`consistency::HALVES_REFUTE`], is
+/// demoted to the smoothed float, and float covariances are scaled by that disagreement),
+/// else the two combined.
 pub(super) fn merge_passes(
     fw: Option<&PassOutput>,
     bw: Option<&PassOutput>,
