@@ -285,6 +285,7 @@ fn the_walk_is_fixed_right_with_honest_sigmas() {
 #[test]
 fn the_measured_walk_is_honest_on_five_seeds() {
     use Constellation::*;
+    let mut sum = 0.0;
     for seed in 1..=5 {
         let dir = testkit::scratch_path(&format!("lowcost_field_{seed}"));
         let _ = std::fs::remove_dir_all(&dir);
@@ -307,8 +308,12 @@ fn the_measured_walk_is_honest_on_five_seeds() {
                 f.nees_fixed
             );
         }
-        assert!(f.rms < 2.5, "seed {seed}: 3D RMS {}", f.rms);
+        // Mended slips keep the arcs long enough for the float to settle: 3D RMS 0.48–1.16 m
+        // on seeds 1–5 (0.70–2.15 m with every unflagged jump and loss of lock cut).
+        assert!(f.rms < 1.5, "seed {seed}: 3D RMS {}", f.rms);
+        sum += f.rms;
     }
+    assert!(sum / 5.0 < 0.9, "mean 3D RMS {}", sum / 5.0);
 }
 
 /// The walk's base log loses 1–39 s at a time (786 epochs over 1,201 s): base epochs

@@ -19,6 +19,7 @@ fn the_low_cost_folders_run_end_to_end() {
     for said in [
         "stood still at",
         "code noise measured (code minus carrier): rover",
+        "phases mended from the satellites' time-differenced fit",
         "lay apart beyond their 99.9 % ellipsoid",
         "codes left out for their post-fit residual",
         "fixes refused at 1201 float epochs, by the check that refused them",

@@ -10,7 +10,7 @@
 use super::geometry::{ReceiverEpoch, SatView};
 use super::obs::{extract, SatMeas, SignalPlan};
 use super::options::PpkOptions;
-use super::{checks, slip};
+use super::{checks, repair, slip};
 use crate::error::{Error, Result};
 use crate::frame::Ecef;
 use crate::orbit::Orbits;
@@ -49,6 +49,8 @@ pub(super) struct PassInputs {
     /// For each base epoch (the real ones, then those interpolated into the log's gaps), the
     /// real epoch whose slips it carries, and its effective age (see `ppk::interp`).
     pub(super) base_interp: super::interp::Interpolated,
+    /// What mending did to the rover's and the base's phases.
+    pub(super) mended: [repair::Mended; 2],
 }
 
 impl PassInputs {
@@ -221,12 +223,12 @@ pub(super) fn prepare(
     );
     let (mut rover_meas, mut base_meas) = (rover_drawn.meas, base_drawn.meas);
     let starts = &rover_drawn.starts;
-    rayon::join(
-        || {
-            let at = |i: usize| starts.get(i).and_then(|s| s.as_ref().ok()).map(|s| s.0);
-            super::snr::mark_drops(&mut rover_meas, &rover_drawn.views, &at)
-        },
-        || super::snr::mark_drops(&mut base_meas, &base_drawn.views, &|_| Some(*base_at)),
+    let rover_at = |i: usize| starts.get(i).and_then(|s| s.as_ref().ok()).map(|s| s.0);
+    let mended = mark_and_mend(
+        (&rover_times, &mut rover_meas, &rover_drawn.views, &rover_at),
+        (&base_times, &mut base_meas, &base_drawn.views, &|_| {
+            Some(*base_at)
+        }),
     );
     let usable: Vec<bool> = base_meas.iter().map(|m| !m.is_empty()).collect();
     let pairing = checks::pair_base_epochs(&rover_times, &base_times, &usable, opts.max_age);
@@ -321,7 +323,53 @@ pub(super) fn prepare(
         rover_views: rover_drawn.views,
         base_views,
         base_interp,
+        mended,
     })
+}
+
+/// Longest gap (s) across which a phase back after a loss of lock is joined to its arc.
+const MAX_BRIDGE: f64 = 10.0;
+
+/// One receiver's times, measurements, satellite views and approximate position by epoch,
+/// for [`mark_and_mend`].
+type Mendable<'a> = (
+    &'a [Epoch],
+    &'a mut [Vec<SatMeas>],
+    Views<'a>,
+    &'a (dyn Fn(usize) -> Option<Ecef> + Sync),
+);
+
+/// Each receiver's C/N0 drops marked (`ppk::snr`), then its phases mended
+/// ([`repair::mend`]); the rover and the base at once.
+fn mark_and_mend(rover: Mendable<'_>, base: Mendable<'_>) -> [repair::Mended; 2] {
+    let one = |(times, meas, views, at): Mendable<'_>| {
+        super::snr::mark_drops(meas, views, at);
+        repair::mend(times, meas, &ranges_of(views, at), MAX_BRIDGE)
+    };
+    let (r, b) = rayon::join(|| one(rover), || one(base));
+    [r, b]
+}
+
+/// Each measurement's range less its satellite's clock, with its line of sight, from the
+/// receiver's position at epoch `i` (`at`); None without an orbit or a position.
+fn ranges_of(
+    views: &[Vec<Option<SatView>>],
+    at: &dyn Fn(usize) -> Option<Ecef>,
+) -> Vec<Vec<repair::Range>> {
+    views
+        .iter()
+        .enumerate()
+        .map(|(i, v)| {
+            let p = at(i);
+            v.iter()
+                .map(|s| {
+                    let s = s.as_ref()?;
+                    let (r, e) = s.range(&p?.0);
+                    Some((r - crate::orbit::C * s.clock, e))
+                })
+                .collect()
+        })
+        .collect()
 }
 
 /// Each epoch's satellite views.

@@ -35,6 +35,7 @@ mod options;
 mod output;
 mod pair;
 pub mod refusal;
+pub mod repair;
 mod segment;
 pub mod slip;
 mod smooth;
@@ -172,6 +173,7 @@ fn choose_models(opts: &mut PpkOptions, longest: f64) -> Models {
         code_biases: opts.code_bias_slots.clone(),
         still: (0, 0),
         code_noise: [None, None],
+        mended: Default::default(),
     }
 }
 
@@ -414,6 +416,7 @@ fn prepare_run(
         models.still = still::stretches(&inputs.still);
     }
     models.code_noise = inputs.code_noise.clone();
+    models.mended = inputs.mended;
     // A step longer than 2.5 nominal intervals between solved epochs starts a new segment.
     let segment_gap = 2.5 * interval;
     Ok(Prepared {

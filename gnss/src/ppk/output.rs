@@ -185,6 +185,8 @@ pub struct Models {
     /// The rover's and the base's code noise measured on their own data (see
     /// [`super::codenoise`]), where enough arcs allowed it.
     pub code_noise: [Option<super::codenoise::CodeNoise>; 2],
+    /// What [`super::repair::mend`] did to the rover's and the base's phases.
+    pub mended: [super::repair::Mended; 2],
 }
 
 /// How far the output epochs' ambiguities were resolved: wide lanes (with two or more

@@ -77,6 +77,9 @@ impl PpkReport {
         if let Some(l) = code_noise_line(&r.models) {
             writeln!(f, "  {l}")?;
         }
+        if let Some(l) = mended_line(&r.models) {
+            writeln!(f, "  {l}")?;
+        }
         if let Some(l) = ambiguities_line(&r.ambiguities) {
             writeln!(f, "  {l}")?;
         }
@@ -142,6 +145,27 @@ fn code_noise_line(m: &Models) -> Option<String> {
     (!parts.is_empty()).then(|| {
         format!(
             "code noise measured (code minus carrier): {}; the code weighted by it where the model says less",
+            parts.join("; ")
+        )
+    })
+}
+
+/// What mending did to the phases (slips repaired instead of cutting the arc), per receiver.
+fn mended_line(m: &Models) -> Option<String> {
+    let parts: Vec<String> = ["rover", "base"]
+        .iter()
+        .zip(&m.mended)
+        .filter(|(_, d)| **d != gnss::ppk::repair::Mended::default())
+        .map(|(who, d)| {
+            format!(
+                "{who} {} jumps mended, {} arcs joined across a loss of lock or gap, {} jumps cut (not a multiple of half a cycle), {} on weak signals left to the slip detectors",
+                d.jumps, d.bridged, d.cut, d.left
+            )
+        })
+        .collect();
+    (!parts.is_empty()).then(|| {
+        format!(
+            "phases mended from the satellites' time-differenced fit (a slip of whole or half cycles repaired, its arc kept): {}",
             parts.join("; ")
         )
     })
