@@ -11,6 +11,9 @@
 //! rotations), `exposure` (attitude, exports), `adjust` (camera sections, project schema)
 //! and `common` (atomic outputs); `integration`'s demo and the tests consume its files. Deterministic for a seed ([`rng`]).
 //!
+//! IMU data: [`imu`] puts a data sheet's noise and biases on the ideal increments
+//! `ins::inverse` computes along a motion, and returns the true biases.
+//!
 //! Also here: simulated adjustment projects with truth ([`block`], [`closerange`]), which
 //! write `ppkat adjust` inputs instead of GNSS files.
 //!
@@ -34,6 +37,7 @@ pub mod flight;
 mod glonass_nav;
 pub mod gnss_obs;
 mod ground_points;
+pub mod imu;
 mod io;
 pub mod longbase;
 pub mod longbase_faults;

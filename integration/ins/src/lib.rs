@@ -1,0 +1,26 @@
+#![deny(missing_docs)]
+//! GNSS/INS (issue 68): an IMU's angle and velocity increments carried forward into position,
+//! velocity and attitude, and — in the steps that follow — combined with ppkat's own GNSS.
+//!
+//! - [`earth`]: normal gravity and the Earth's rotation, the models the mechanisation and
+//!   the simulator share.
+//! - [`attitude`]: roll, pitch and heading of the body (x forward, y right, z down) against
+//!   the local north-east-down frame, and that frame in ECEF.
+//! - [`imu`]: one IMU output interval ([`imu::ImuSample`]: Δθ and Δv in the body frame).
+//! - [`spec`]: what an IMU's data sheet says (random walks, bias instability) as presets per
+//!   grade or a file of one's own.
+//! - [`inverse`]: what an ideal IMU measures along a known motion (simulator and tests).
+//! - [`mech`]: strapdown mechanisation in ECEF ([`mech::NavState`], [`mech::propagate`]).
+//!
+//! Units inside: metres, seconds, radians; GPST epochs. Degrees and data-sheet units only at
+//! the edges, named in every field that holds them.
+
+pub mod attitude;
+pub mod earth;
+mod error;
+pub mod imu;
+pub mod inverse;
+pub mod mech;
+pub mod spec;
+
+pub use error::{Error, Result};
