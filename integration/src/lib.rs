@@ -44,6 +44,7 @@ pub use exposure;
 pub use formats::{import, rtklib_conf};
 pub use georef::{crs, geoid_grid, height, vector};
 pub use gnss;
+pub use ins;
 pub use photo;
 pub use report::{ppk_summary, survey};
 pub use sim as simulate;

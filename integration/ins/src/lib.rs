@@ -11,6 +11,12 @@
 //!   grade or a file of one's own.
 //! - [`inverse`]: what an ideal IMU measures along a known motion (simulator and tests).
 //! - [`mech`]: strapdown mechanisation in ECEF ([`mech::NavState`], [`mech::propagate`]).
+//! - [`errstate`]: the 15 error states (position, velocity, attitude, gyro and accelerometer
+//!   biases) and their transition over an interval.
+//! - [`filter`]: the error-state Kalman filter forward, with GNSS position updates through
+//!   the lever arm and checkpoints for the smoother.
+//! - [`smoother`]: Rauch–Tung–Striebel over the checkpoints.
+//! - [`loose`]: loosely coupled runs: IMU forward with GNSS positions, then smoothed.
 //!
 //! Units inside: metres, seconds, radians; GPST epochs. Degrees and data-sheet units only at
 //! the edges, named in every field that holds them.
@@ -18,9 +24,13 @@
 pub mod attitude;
 pub mod earth;
 mod error;
+pub mod errstate;
+pub mod filter;
 pub mod imu;
 pub mod inverse;
+pub mod loose;
 pub mod mech;
+pub mod smoother;
 pub mod spec;
 
 pub use error::{Error, Result};

@@ -1,0 +1,77 @@
+//! Loosely coupled GNSS/INS: the IMU carried forward by the filter, each GNSS antenna
+//! position an update through the lever arm, a checkpoint at every update and every
+//! `every` samples, then the smoother backward over the checkpoints.
+//!
+//! What enters: IMU samples in time order, GNSS fixes in time order (each applied after the
+//! IMU sample that ends within half an interval of its time; the others are counted), the
+//! initial estimate and covariance, the IMU's figures and the lever arm. What leaves:
+//! forward and smoothed estimates with covariances at every checkpoint, and each update's
+//! normalised innovation.
+
+use crate::errstate::Mat;
+use crate::filter::{Checkpoint, Estimate, Forward, PositionFix};
+use crate::imu::ImuSample;
+use crate::smoother::{smooth, Smoothed};
+use crate::spec::ImuSpec;
+use hifitime::Epoch;
+use nalgebra::Vector3;
+
+/// What a loosely coupled run takes besides the data.
+#[derive(Clone, Debug)]
+pub struct LooseOptions {
+    /// IMU → antenna lever arm in the body frame (x forward, y right, z down), m.
+    pub lever_arm: Vector3<f64>,
+    /// A checkpoint (an output) every this many IMU samples, besides every update.
+    pub every: usize,
+}
+
+/// A run's results.
+#[derive(Clone, Debug, Default)]
+pub struct LooseRun {
+    /// Forward filter at every checkpoint: time, estimate, covariance.
+    pub forward: Vec<(Epoch, Estimate, Mat)>,
+    /// Smoothed at every checkpoint.
+    pub smoothed: Vec<(Epoch, Smoothed)>,
+    /// Normalised innovation squared of each update (χ²(3) when the σ hold).
+    pub nis: Vec<f64>,
+    /// GNSS fixes not at an IMU sample's time, or outside the IMU data: not used.
+    pub unused_fixes: usize,
+}
+
+/// Run the filter forward over `samples` with `fixes`, then smooth.
+pub fn run(
+    samples: &[ImuSample],
+    fixes: &[(Epoch, PositionFix)],
+    start: (Estimate, Mat),
+    spec: &ImuSpec,
+    o: &LooseOptions,
+) -> LooseRun {
+    let mut f = Forward::new(start.0, start.1, spec);
+    let mut out = LooseRun::default();
+    let mut cps: Vec<(Epoch, Checkpoint)> = Vec::new();
+    let mut next = 0;
+    for (k, s) in samples.iter().enumerate() {
+        f.predict(s);
+        let half = 0.5 * s.dt;
+        while next < fixes.len() && (fixes[next].0 - s.time).to_seconds() < -half {
+            out.unused_fixes += 1;
+            next += 1;
+        }
+        let mut updated = false;
+        if next < fixes.len() && (fixes[next].0 - s.time).to_seconds().abs() <= half {
+            out.nis
+                .push(f.update_position(&fixes[next].1, &o.lever_arm));
+            next += 1;
+            updated = true;
+        }
+        if updated || (k + 1) % o.every.max(1) == 0 {
+            let cp = f.checkpoint();
+            out.forward.push((s.time, cp.post, cp.post_cov));
+            cps.push((s.time, cp));
+        }
+    }
+    out.unused_fixes += fixes.len() - next;
+    let only: Vec<Checkpoint> = cps.iter().map(|(_, c)| c.clone()).collect();
+    out.smoothed = cps.iter().map(|(t, _)| *t).zip(smooth(&only)).collect();
+    out
+}
