@@ -296,7 +296,17 @@ pub fn read_pos(path: &Path) -> Result<Vec<PosRecord>> {
         } else {
             Geodetic::from_degrees(a, b, c).to_ecef()
         };
-        let q = f[5].parse::<u8>().map_err(|_| bad("bad quality flag"))?;
+        // Q and ns are integers; tools that write every column as a float ("1.0000000", as
+        // the GNSS_IMU data's converter does) are read too when the value is whole.
+        let whole = |x: &str| {
+            x.parse::<u64>().ok().or_else(|| {
+                let v = x.parse::<f64>().ok()?;
+                (v.fract() == 0.0 && (0.0..1e6).contains(&v)).then_some(v as u64)
+            })
+        };
+        let q = whole(f[5])
+            .and_then(|q| u8::try_from(q).ok())
+            .ok_or_else(|| bad("bad quality flag"))?;
         let sd: Vec<f64> = (7..13).map(|k| num(k).unwrap_or(0.0)).collect();
         let cov = if is_xyz {
             Matrix3::new(
@@ -322,7 +332,7 @@ pub fn read_pos(path: &Path) -> Result<Vec<PosRecord>> {
             time,
             pos,
             quality: Quality::from_q(q),
-            nsat: f.get(6).and_then(|x| x.parse().ok()).unwrap_or(0),
+            nsat: f.get(6).and_then(|x| whole(x)).map_or(0, |n| n as usize),
             cov,
             age: num(13).unwrap_or(0.0),
             ratio: num(14).unwrap_or(0.0),
@@ -452,5 +462,28 @@ mod tests {
         assert!((g.lat.to_degrees() - 35.1344).abs() > 1.0, "{g:?}");
         assert_eq!(c_atof(" 12.5e1xyz"), 125.0);
         assert_eq!(c_atof("(ECEF,"), 0.0);
+    }
+
+    /// A `.pos` whose Q and ns are written as floats (the GNSS_IMU data's converter) reads;
+    /// a fractional Q does not.
+    #[test]
+    fn whole_floats_are_read_as_q_and_ns() {
+        let line = "2025/07/08 19:34:18.499 40.0966268 -105.1474483 1601.4740000 1.0000000 21.0000000 0.0098995 0.0098995 0.0100000 0.0000000 0.0000000 0.0000000 0.0000000 0.0000000";
+        let p = testkit::scratch_file(
+            "float_q.pos",
+            &format!("{}\n{line}\n", column_header(PosFormat::Llh)),
+        );
+        let r = read_pos(&p).unwrap();
+        assert_eq!((r[0].quality, r[0].nsat), (Quality::Fixed, 21));
+        let bad = testkit::scratch_file(
+            "float_q2.pos",
+            &format!(
+                "{}\n{}\n",
+                column_header(PosFormat::Llh),
+                line.replace(" 1.0000000 ", " 1.5000000 ")
+            ),
+        );
+        let e = read_pos(&bad).unwrap_err().to_string();
+        assert!(e.contains("quality"), "{e}");
     }
 }

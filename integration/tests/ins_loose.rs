@@ -88,12 +88,19 @@ fn figures(m: &Circling, start: Epoch, est: &[(Epoch, Estimate, Mat)]) -> Figure
     }
 }
 
-fn run_flight(grade: Grade, seed: u64) -> (Figures, Figures) {
+/// The flight with a `grade` IMU whose white noise is `shaken` times its data sheet's (the
+/// filter is told the data sheet).
+fn run_flight(grade: Grade, seed: u64, shaken: f64) -> (Figures, Figures) {
     let m = flight();
     let start = Epoch::from_gregorian_utc_at_midnight(2026, 6, 1);
     let spec = ImuSpec::preset(grade);
     let n = (SPAN_S * RATE) as usize;
-    let (imu, _) = corrupt(&ideal_imu(&m, start, RATE, n), &spec, seed);
+    let truth = ImuSpec {
+        arw: spec.arw * shaken,
+        vrw: spec.vrw * shaken,
+        ..spec.clone()
+    };
+    let (imu, _) = corrupt(&ideal_imu(&m, start, RATE, n), &truth, seed);
     let lever = Vector3::new(0.3, 0.1, -1.2);
     let mut rng = Rng::new(seed).fork(77);
     let fixes: Vec<(Epoch, PositionFix)> = (1..SPAN_S as usize)
@@ -158,6 +165,7 @@ fn run_flight(grade: Grade, seed: u64) -> (Figures, Figures) {
     let o = LooseOptions {
         lever_arm: lever,
         every: 20,
+        no_side_slip: None,
     };
     let r = run(&imu, &fixes, (est, p0), &spec, &o);
     assert_eq!(r.unused_fixes, 0);
@@ -175,7 +183,7 @@ fn run_flight(grade: Grade, seed: u64) -> (Figures, Figures) {
 #[test]
 fn a_tactical_imu_with_gnss_gives_the_attitude_and_bridges_an_outage() {
     for seed in [1, 2] {
-        let (fwd, sm) = run_flight(Grade::Tactical, seed);
+        let (fwd, sm) = run_flight(Grade::Tactical, seed, 1.0);
         for (name, f) in [("forward", &fwd), ("smoothed", &sm)] {
             eprintln!(
                 "tactical seed {seed} {name}: roll/pitch RMS {:.4}°, heading RMS {:.4}°, outage worst horizontal {:.3} m, NEES position {:.2} attitude {:.2}",
@@ -200,7 +208,7 @@ fn a_tactical_imu_with_gnss_gives_the_attitude_and_bridges_an_outage() {
 /// and turns both ways would separate them).
 #[test]
 fn a_mems_imu_with_gnss_keeps_honest_sigmas() {
-    let (fwd, sm) = run_flight(Grade::Mems, 3);
+    let (fwd, sm) = run_flight(Grade::Mems, 3, 1.0);
     for (name, f) in [("forward", &fwd), ("smoothed", &sm)] {
         eprintln!(
             "MEMS {name}: roll/pitch RMS {:.4}°, heading RMS {:.4}°, outage worst horizontal {:.3} m, NEES position {:.2} attitude {:.2}",
@@ -211,4 +219,23 @@ fn a_mems_imu_with_gnss_keeps_honest_sigmas() {
     assert!((0.3..=3.0).contains(&fwd.nees_att), "{}", fwd.nees_att);
     assert!(sm.nees_att <= 4.0, "{}", sm.nees_att);
     assert!(sm.outage_worst_h <= 0.2, "{}", sm.outage_worst_h);
+}
+
+/// A tactical IMU shaken to 8 times its data sheet's random walks (a vibrating mount): the
+/// filter, told the data sheet, raises the noise from its innovations (to its limit, 10) and
+/// keeps its σ honest. Measured: NEES of position 0.89 / 0.90 and attitude 2.26 / 2.54
+/// (forward / smoothed); held at the data sheet, 9.6 and 7.6 forward.
+const SHAKE: f64 = 8.0;
+
+#[test]
+fn the_noise_follows_the_innovations_when_the_imu_is_shaken() {
+    let (fwd, sm) = run_flight(Grade::Tactical, 4, SHAKE);
+    for (name, f) in [("forward", &fwd), ("smoothed", &sm)] {
+        eprintln!(
+            "shaken tactical {name}: roll/pitch RMS {:.4}°, heading RMS {:.4}°, outage worst horizontal {:.3} m, NEES position {:.2} attitude {:.2}",
+            f.roll_pitch_rms_deg, f.heading_rms_deg, f.outage_worst_h, f.nees_pos, f.nees_att
+        );
+        assert!((0.3..=3.0).contains(&f.nees_pos), "{name} {}", f.nees_pos);
+        assert!((0.3..=3.0).contains(&f.nees_att), "{name} {}", f.nees_att);
+    }
 }

@@ -78,9 +78,25 @@ pub struct PositionFix {
     pub cov: Matrix3<f64>,
 }
 
+/// How many updates the innovations' variance factor averages over (exponentially).
+const NIS_MEMORY: f64 = 20.0;
+/// Largest factor on the IMU's white noise the innovations may ask for.
+const MAX_NOISE_SCALE: f64 = 10.0;
+
 /// The forward filter.
+///
+/// The IMU's noise is what its data sheet says until the innovations say otherwise: a car's
+/// engine or a drone's rotors shake a MEMS chip far beyond its random walks (the real car
+/// drive's innovations were 20 times their variance). The filter keeps an exponential mean
+/// of the normalised innovations (over about [`NIS_MEMORY`] updates) and scales the random
+/// walks up by 5 % at each update while that mean is above 1.5, back down while it is below
+/// 0.7, never below the data sheet nor above [`MAX_NOISE_SCALE`] times it: its σ follow the
+/// data, not only the model.
 pub struct Forward<'a> {
     spec: &'a ImuSpec,
+    scaled: ImuSpec,
+    noise_scale: f64,
+    mean_nis: f64,
     est: Estimate,
     p: Mat,
     phi: Mat,
@@ -92,6 +108,9 @@ impl<'a> Forward<'a> {
     pub fn new(est: Estimate, p0: Mat, spec: &'a ImuSpec) -> Self {
         Forward {
             spec,
+            scaled: spec.clone(),
+            noise_scale: 1.0,
+            mean_nis: 1.0,
             est,
             p: p0,
             phi: Mat::identity(),
@@ -126,35 +145,93 @@ impl<'a> Forward<'a> {
             gravity: crate::earth::normal_gravity(&geo),
             dt: s.dt,
         };
-        let (phi, q) = transition(&iv, self.spec);
+        let (phi, q) = transition(&iv, &self.scaled);
         self.est.nav = propagate(&self.est.nav, &corrected);
         self.p = phi * self.p * phi.transpose() + q;
         self.phi = phi * self.phi;
     }
 
-    /// Update with the GNSS antenna at `lever` (body frame, m) from the IMU; returns the
-    /// normalised innovation squared (χ²(3) when the σ are right).
-    pub fn update_position(&mut self, fix: &PositionFix, lever: &Vector3<f64>) -> f64 {
+    /// Update with the GNSS antenna at `lever` (body frame, m) from the IMU, measured
+    /// `offset` seconds after the state's time (at most half an IMU interval: the state is
+    /// carried there along its velocity); returns the normalised innovation squared (χ²(3)
+    /// when the σ are right).
+    pub fn update_position(&mut self, fix: &PositionFix, lever: &Vector3<f64>, offset: f64) -> f64 {
         self.prior.get_or_insert((self.est, self.p));
         let c = *self.est.nav.attitude.matrix();
         let arm = c * lever;
-        let predicted = self.est.nav.position.0 + arm;
+        let predicted = self.est.nav.position.0 + offset * self.est.nav.velocity + arm;
         let z = fix.position.0 - predicted;
         let mut h = SMatrix::<f64, 3, N>::zeros();
         h.fixed_view_mut::<3, 3>(0, idx::POS)
             .copy_from(&Matrix3::identity());
         h.fixed_view_mut::<3, 3>(0, idx::ATT)
             .copy_from(&(-skew(&arm)));
-        let s = h * self.p * h.transpose() + fix.cov;
+        let nis = self.update3(&h, &z, &fix.cov);
+        self.adapt(nis / 3.0);
+        nis
+    }
+
+    /// A three-row update: the state corrected, the covariance in Joseph's form; the
+    /// normalised innovation squared.
+    fn update3(&mut self, h: &SMatrix<f64, 3, N>, z: &Vector3<f64>, r: &Matrix3<f64>) -> f64 {
+        let s = h * self.p * h.transpose() + r;
         let Some(si) = s.try_inverse() else {
             return f64::NAN;
         };
         let k = self.p * h.transpose() * si;
-        let dx = k * z;
         let ikh = Mat::identity() - k * h;
-        self.p = ikh * self.p * ikh.transpose() + k * fix.cov * k.transpose();
-        self.est = self.est.corrected(&dx);
+        self.p = ikh * self.p * ikh.transpose() + k * r * k.transpose();
+        self.est = self.est.corrected(&(k * z));
         (z.transpose() * si * z)[(0, 0)]
+    }
+
+    /// A land vehicle's non-holonomic constraint: its velocity across and perpendicular to
+    /// its nose (body y and z) is zero within `sigma` (m/s): it neither slides nor jumps.
+    /// The body frame is taken as the vehicle's (the IMU near its rear axle, aligned).
+    pub fn update_no_side_slip(&mut self, sigma: f64) {
+        self.prior.get_or_insert((self.est, self.p));
+        let ct = self.est.nav.attitude.matrix().transpose();
+        let v = self.est.nav.velocity;
+        let vb = ct * v;
+        let z = nalgebra::Vector2::new(-vb.y, -vb.z);
+        let mut h = SMatrix::<f64, 2, N>::zeros();
+        let dv = ct;
+        let da = ct * skew(&v);
+        for r in 0..2 {
+            for c in 0..3 {
+                h[(r, idx::VEL + c)] = dv[(r + 1, c)];
+                h[(r, idx::ATT + c)] = da[(r + 1, c)];
+            }
+        }
+        let rm = nalgebra::Matrix2::identity() * sigma * sigma;
+        let s = h * self.p * h.transpose() + rm;
+        let Some(si) = s.try_inverse() else {
+            return;
+        };
+        let k = self.p * h.transpose() * si;
+        let ikh = Mat::identity() - k * h;
+        self.p = ikh * self.p * ikh.transpose() + k * rm * k.transpose();
+        self.est = self.est.corrected(&(k * z));
+    }
+
+    /// The factor on the IMU's random walks the innovations asked for so far.
+    pub fn noise_scale(&self) -> f64 {
+        self.noise_scale
+    }
+
+    /// Follow the innovations' variance factor `r` (see the type's text).
+    fn adapt(&mut self, r: f64) {
+        if !r.is_finite() {
+            return;
+        }
+        self.mean_nis += (r.min(100.0) - self.mean_nis) / NIS_MEMORY;
+        if self.mean_nis > 1.5 {
+            self.noise_scale = (self.noise_scale * 1.1).min(MAX_NOISE_SCALE);
+        } else if self.mean_nis < 0.7 {
+            self.noise_scale = (self.noise_scale / 1.01).max(1.0);
+        }
+        self.scaled.arw = self.spec.arw * self.noise_scale;
+        self.scaled.vrw = self.spec.vrw * self.noise_scale;
     }
 
     /// Keep a checkpoint here (for the smoother) and start the next transition.

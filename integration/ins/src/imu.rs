@@ -29,3 +29,12 @@ impl ImuSample {
         }
     }
 }
+
+/// Samples in the IMU's own axes turned into the body frame by the mounting rotation `c`
+/// (IMU axes → body axes).
+pub fn to_body(samples: &mut [ImuSample], c: &nalgebra::Matrix3<f64>) {
+    for s in samples {
+        s.dtheta = c * s.dtheta;
+        s.dv = c * s.dv;
+    }
+}

@@ -14,13 +14,17 @@
 //! - [`errstate`]: the 15 error states (position, velocity, attitude, gyro and accelerometer
 //!   biases) and their transition over an interval.
 //! - [`filter`]: the error-state Kalman filter forward, with GNSS position updates through
-//!   the lever arm and checkpoints for the smoother.
+//!   the lever arm, a land vehicle's no-side-slip constraint, the IMU's noise raised from
+//!   the innovations, and checkpoints for the smoother.
 //! - [`smoother`]: Rauch–Tung–Striebel over the checkpoints.
 //! - [`loose`]: loosely coupled runs: IMU forward with GNSS positions, then smoothed.
+//! - [`align`]: roll, pitch and gyro biases from a still stretch; heading from the course.
+//! - [`rtklib_imu`]: the RTKLIB-style raw IMU CSV and its time-tag file.
 //!
 //! Units inside: metres, seconds, radians; GPST epochs. Degrees and data-sheet units only at
 //! the edges, named in every field that holds them.
 
+pub mod align;
 pub mod attitude;
 pub mod earth;
 mod error;
@@ -30,6 +34,7 @@ pub mod imu;
 pub mod inverse;
 pub mod loose;
 pub mod mech;
+pub mod rtklib_imu;
 pub mod smoother;
 pub mod spec;
 

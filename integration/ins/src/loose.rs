@@ -23,6 +23,9 @@ pub struct LooseOptions {
     pub lever_arm: Vector3<f64>,
     /// A checkpoint (an output) every this many IMU samples, besides every update.
     pub every: usize,
+    /// A land vehicle: no side slip nor jump within this σ (m/s), applied at every
+    /// checkpoint while the speed is above 1 m/s ([`Forward::update_no_side_slip`]).
+    pub no_side_slip: Option<f64>,
 }
 
 /// A run's results.
@@ -36,6 +39,8 @@ pub struct LooseRun {
     pub nis: Vec<f64>,
     /// GNSS fixes not at an IMU sample's time, or outside the IMU data: not used.
     pub unused_fixes: usize,
+    /// The factor on the IMU's random walks the innovations asked for, at the end.
+    pub noise_scale: f64,
 }
 
 /// Run the filter forward over `samples` with `fixes`, then smooth.
@@ -59,18 +64,25 @@ pub fn run(
         }
         let mut updated = false;
         if next < fixes.len() && (fixes[next].0 - s.time).to_seconds().abs() <= half {
+            let offset = (fixes[next].0 - s.time).to_seconds();
             out.nis
-                .push(f.update_position(&fixes[next].1, &o.lever_arm));
+                .push(f.update_position(&fixes[next].1, &o.lever_arm, offset));
             next += 1;
             updated = true;
         }
         if updated || (k + 1) % o.every.max(1) == 0 {
+            if let Some(sigma) = o.no_side_slip {
+                if f.estimate().nav.velocity.norm() > 1.0 {
+                    f.update_no_side_slip(sigma);
+                }
+            }
             let cp = f.checkpoint();
             out.forward.push((s.time, cp.post, cp.post_cov));
             cps.push((s.time, cp));
         }
     }
     out.unused_fixes += fixes.len() - next;
+    out.noise_scale = f.noise_scale();
     let only: Vec<Checkpoint> = cps.iter().map(|(_, c)| c.clone()).collect();
     out.smoothed = cps.iter().map(|(t, _)| *t).zip(smooth(&only)).collect();
     out
