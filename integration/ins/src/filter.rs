@@ -79,9 +79,9 @@ pub struct PositionFix {
 }
 
 /// How many updates the innovations' variance factor averages over (exponentially).
-const NIS_MEMORY: f64 = 20.0;
+pub const NIS_MEMORY: f64 = 20.0;
 /// Largest factor on the IMU's white noise the innovations may ask for.
-const MAX_NOISE_SCALE: f64 = 10.0;
+pub const MAX_NOISE_SCALE: f64 = 10.0;
 
 /// The forward filter.
 ///
