@@ -14,8 +14,8 @@ use integration::ins::filter::{Estimate, PositionFix};
 use integration::ins::imu::{to_body, ImuSample};
 use integration::ins::loose::{run, LooseOptions};
 use integration::ins::mech::NavState;
-use integration::ins::rtklib_imu;
 use integration::ins::spec::{Grade, ImuSpec};
+use integration::ins::{gnss_pos, rtklib_imu};
 use nalgebra::{Matrix3, Vector3};
 use std::path::Path;
 
@@ -49,6 +49,22 @@ fn the_imu_log_is_timed_as_its_own_tools_time_it() {
     assert_eq!(log.skipped.len(), 2, "{:?}", log.skipped);
     assert!(log.skipped[0].starts_with("line 1:") && log.skipped[1].starts_with("line 20457:"));
     assert!(log.gaps.is_empty(), "{:?}", log.gaps);
+}
+
+/// The car's receiver writes its velocities late against its positions: the lag at which
+/// they match the positions' own differences is 0.14 s (the `.pos` comes from the receiver's
+/// NAV-PVT; the data's own filter shifts its IMU by 0.125 s).
+#[test]
+fn the_car_receivers_velocities_are_late() {
+    let Some(dir) = testkit::shared_data(&format!("{SET}/drive_0708")) else {
+        return;
+    };
+    let epochs = gnss_pos::read_pos(&dir.join("gnss_1934_sf.pos")).unwrap();
+    assert_eq!(epochs.len(), 2197);
+    assert!(epochs.iter().all(|e| e.velocity.is_some()));
+    let lag = gnss_pos::velocity_latency(&epochs).unwrap();
+    eprintln!("velocity latency {lag:.3} s");
+    assert!((0.11..=0.17).contains(&lag), "{lag}");
 }
 
 /// Seconds from the first GNSS epoch in the outages: 40–55 s, then every 45 s to 505.

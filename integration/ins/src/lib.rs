@@ -20,6 +20,7 @@
 //! - [`loose`]: loosely coupled runs: IMU forward with GNSS positions, then smoothed.
 //! - [`align`]: roll, pitch and gyro biases from a still stretch; heading from the course.
 //! - [`rtklib_imu`]: the RTKLIB-style raw IMU CSV and its time-tag file.
+//! - [`gnss_pos`]: GNSS positions and velocities from a `.pos`, and the velocities' latency.
 //!
 //! Units inside: metres, seconds, radians; GPST epochs. Degrees and data-sheet units only at
 //! the edges, named in every field that holds them.
@@ -30,6 +31,7 @@ pub mod earth;
 mod error;
 pub mod errstate;
 pub mod filter;
+pub mod gnss_pos;
 pub mod imu;
 pub mod inverse;
 pub mod loose;
