@@ -40,8 +40,7 @@ pub fn read_pos(path: &Path) -> Result<Vec<GnssEpoch>> {
     })?;
     let header = text
         .lines()
-        .filter(|l| l.starts_with('%') && l.contains("GPST"))
-        .last();
+        .rfind(|l| l.starts_with('%') && l.contains("GPST"));
     let column =
         |name: &str| header.and_then(|h| h.split_whitespace().position(|t| t.starts_with(name)));
     let cols = (column("vn("), column("ve("), column("vu("));
