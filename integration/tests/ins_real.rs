@@ -5,18 +5,15 @@
 //! data's own converted walk.
 
 use hifitime::Epoch;
-use integration::gnss::frame::{enu_rotation, Ecef};
+use integration::gnss::frame::enu_rotation;
 use integration::gnss::solution::{read_pos, PosRecord};
-use integration::ins::align::{course, level};
 use integration::ins::attitude::Euler;
 use integration::ins::errstate::{idx, Mat};
-use integration::ins::filter::{Estimate, PositionFix};
-use integration::ins::imu::{to_body, ImuSample};
-use integration::ins::loose::{run, LooseOptions};
-use integration::ins::mech::NavState;
+use integration::ins::filter::Estimate;
+use integration::ins::job::{run_job, InsJob};
 use integration::ins::spec::{Grade, ImuSpec};
 use integration::ins::{gnss_pos, rtklib_imu};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 use std::path::Path;
 
 const SET: &str = "ins/rtklibexplorer-gnss-imu-2025";
@@ -75,14 +72,6 @@ fn in_outage(s: f64) -> bool {
     })
 }
 
-/// Horizontal speed (m/s) and course (rad) at record `i`, from the records two either side.
-fn motion(pos: &[PosRecord], i: usize) -> Option<(f64, f64)> {
-    let (a, b) = (pos.get(i.checked_sub(2)?)?, pos.get(i + 2)?);
-    let dt = (b.time - a.time).to_seconds();
-    let enu = enu_rotation(&a.pos.to_geodetic()) * (b.pos.0 - a.pos.0) / dt;
-    Some((enu.xy().norm(), course(enu.y, enu.x)))
-}
-
 struct Outages {
     rms: f64,
     worst: f64,
@@ -127,22 +116,29 @@ fn outages(pos: &[PosRecord], est: &[(Epoch, Estimate, Mat)], lever: &Vector3<f6
     }
 }
 
-fn imu(dir: &Path) -> Vec<ImuSample> {
-    let log = rtklib_imu::read(&dir.join("imu_1934.csv"), &dir.join("imu_1934.csv.tag")).unwrap();
-    let mut s = log.samples;
-    // The source's drive_config.py: IMU axes to body roll, pitch, yaw 180°, −6.79°, 185.35°
-    // as Groves' Euler angles of the body axes in the IMU's (C = Euler(…)ᵀ takes IMU
-    // vectors to the body), and the IMU's time tags 0.125 s late (its logging delay).
-    let mount = Euler {
-        roll: 180f64.to_radians(),
-        pitch: (-6.79f64).to_radians(),
-        heading: 185.35f64.to_radians(),
-    };
-    to_body(&mut s, &mount.to_matrix().transpose());
-    for x in &mut s {
-        x.time -= hifitime::Duration::from_seconds(0.125);
+/// The car as the source's drive_config.py mounts it: IMU axes to body roll, pitch, yaw
+/// 180°, −6.79°, 185.35° (Groves' Euler angles of the body axes in the IMU's), the IMU's
+/// time tags 0.125 s late, the antenna 5 cm left of the IMU; the MEMS preset, no side slip
+/// within 0.3 m/s, the outages withheld.
+fn car_job(dir: &Path) -> InsJob {
+    InsJob {
+        imu_csv: dir.join("imu_1934.csv"),
+        imu_tag: dir.join("imu_1934.csv.tag"),
+        gnss: dir.join("gnss_1934_sf.pos"),
+        spec: ImuSpec::preset(Grade::Mems),
+        mount: Euler {
+            roll: 180f64.to_radians(),
+            pitch: (-6.79f64).to_radians(),
+            heading: 185.35f64.to_radians(),
+        },
+        imu_time_offset: -0.125,
+        lever_arm: Vector3::new(0.0, -0.05, 0.0),
+        no_side_slip: Some(0.3),
+        withhold: (0..=10)
+            .map(|k| (40.0 + 45.0 * k as f64, 55.0 + 45.0 * k as f64))
+            .collect(),
+        every: 2,
     }
-    s
 }
 
 /// The car: the MEMS preset, the IMU levelled while the car stands, heading from its course
@@ -160,88 +156,13 @@ fn the_car_drive_bridges_fifteen_second_outages() {
     let Some(dir) = testkit::shared_data(&format!("{SET}/drive_0708")) else {
         return;
     };
-    let samples = imu(&dir);
+    let job = car_job(&dir);
+    let done = run_job(&job).unwrap();
+    let r = done.run;
     let pos = read_pos(&dir.join("gnss_1934_sf.pos")).unwrap();
-    let spec = ImuSpec::preset(Grade::Mems);
-    let lever = Vector3::new(0.0, -0.05, 0.0);
-    // Alignment: levelled on the IMU before the car moves, heading from its course once it
-    // drives faster than 3 m/s.
-    let moving = (0..pos.len())
-        .find(|&i| motion(&pos, i).is_some_and(|(v, _)| v > 1.0))
-        .expect("the car drives");
-    let still_until = (0..pos.len())
-        .find(|&i| motion(&pos, i).is_some_and(|(v, _)| v > 0.3))
-        .unwrap();
-    let still: Vec<ImuSample> = samples
-        .iter()
-        .filter(|s| s.time < pos[still_until].time)
-        .copied()
-        .collect();
-    let lv = level(&still).expect("still before driving");
-    let (speed, heading) = motion(&pos, moving).unwrap();
-    let start = samples
-        .iter()
-        .position(|s| s.time >= pos[moving].time)
-        .unwrap();
-    let geo = pos[moving].pos.to_geodetic();
-    let att = Euler {
-        roll: lv.roll,
-        pitch: lv.pitch,
-        heading,
-    };
-    let v_ned = Vector3::new(speed * heading.cos(), speed * heading.sin(), 0.0);
-    let c = integration::ins::attitude::ned_to_ecef(&geo) * att.to_matrix();
-    let nav = NavState::from_local(
-        samples[start].time,
-        Ecef(pos[moving].pos.0 - c * lever),
-        v_ned,
-        &att,
-    );
-    let est = Estimate {
-        nav,
-        gyro_bias: lv.gyro_bias,
-        accel_bias: Vector3::zeros(),
-    };
-    let mut p0 = Mat::zeros();
-    for (i, s) in [
-        (idx::POS, 0.1),
-        (idx::VEL, 0.5),
-        (idx::ATT, 3f64.to_radians()),
-        (idx::BG, 2e-4),
-        (idx::BA, spec.accel_turn_on),
-    ] {
-        for j in 0..3 {
-            p0[(i + j, i + j)] = s * s;
-        }
-    }
-    p0[(idx::ATT + 2, idx::ATT + 2)] = 10f64.to_radians().powi(2);
+    let lever = job.lever_arm;
     let first = pos[0].time;
-    let fixes: Vec<(Epoch, PositionFix)> = pos
-        .iter()
-        .filter(|p| p.time > samples[start].time && !in_outage((p.time - first).to_seconds()))
-        .map(|p| {
-            let sd = if p.quality as u8 == 1 {
-                Vector3::new(0.02, 0.02, 0.04)
-            } else {
-                Vector3::new(0.3, 0.3, 0.6)
-            };
-            let rot = enu_rotation(&p.pos.to_geodetic()).transpose();
-            let cov = rot * Matrix3::from_diagonal(&sd.component_mul(&sd)) * rot.transpose();
-            (
-                p.time,
-                PositionFix {
-                    position: p.pos,
-                    cov,
-                },
-            )
-        })
-        .collect();
-    let o = LooseOptions {
-        lever_arm: lever,
-        every: 2,
-        no_side_slip: Some(0.3),
-    };
-    let r = run(&samples[start + 1..], &fixes, (est, p0), &spec, &o);
+    let lv = done.levelled;
     let sm: Vec<(Epoch, Estimate, Mat)> =
         r.smoothed.iter().map(|(t, s)| (*t, s.est, s.cov)).collect();
     let f = outages(&pos, &r.forward, &lever);
@@ -249,9 +170,9 @@ fn the_car_drive_bridges_fifteen_second_outages() {
     let nis = r.nis.iter().sum::<f64>() / r.nis.len() as f64 / 3.0;
     eprintln!(
         "car drive: levelled roll {:.2}° pitch {:.2}°, start at {:.1} s; {} fixes used ({} unused), NIS/3 {:.2}, noise scale {:.1}; outages ({} RTK epochs): forward RMS {:.3} m worst {:.3} m NEES {:.2}; smoothed RMS {:.3} m worst {:.3} m NEES {:.2}",
-        lv.roll.to_degrees(),
-        lv.pitch.to_degrees(),
-        (pos[moving].time - first).to_seconds(),
+        lv.0.to_degrees(),
+        lv.1.to_degrees(),
+        (lv.2 - first).to_seconds(),
         r.nis.len(),
         r.unused_fixes,
         nis,

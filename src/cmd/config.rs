@@ -11,7 +11,7 @@ use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 
 /// The commands that take option files.
-const COMMANDS: [&str; 2] = ["ppk", "exposures"];
+const COMMANDS: [&str; 3] = ["ppk", "exposures", "ins"];
 
 /// Flags a file may not set.
 const NOT_IN_FILES: [&str; 4] = ["config", "rtklib-conf", "help", "version"];

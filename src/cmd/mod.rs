@@ -12,6 +12,7 @@ pub mod demo;
 pub mod exposures;
 pub mod import;
 pub mod info;
+pub mod ins;
 pub mod leverarm;
 pub mod ppk;
 pub mod ppp;

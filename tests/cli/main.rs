@@ -16,6 +16,7 @@ mod help;
 mod import;
 mod info;
 mod inputs;
+mod ins;
 mod kill;
 mod lowcost;
 mod outputs;

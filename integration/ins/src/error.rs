@@ -6,13 +6,16 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// A file could not be read.
-    #[error("{path}: {source}")]
+    #[error("{path}: cannot read: {cause}; check the path")]
     Io {
         /// The file.
         path: PathBuf,
         /// Why.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
+    /// An output could not be written.
+    #[error(transparent)]
+    Write(#[from] common::atomic::Error),
     /// A file's content is not what it should be.
     #[error("{path}: {message}")]
     Input {

@@ -34,9 +34,9 @@ pub fn read_pos(path: &Path) -> Result<Vec<GnssEpoch>> {
         path: path.to_path_buf(),
         message: e.to_string(),
     })?;
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+    let text = std::fs::read_to_string(path).map_err(|cause| Error::Io {
         path: path.to_path_buf(),
-        source,
+        cause,
     })?;
     let header = text
         .lines()

@@ -20,6 +20,7 @@
 //! - [`loose`]: loosely coupled runs: IMU forward with GNSS positions, then smoothed.
 //! - [`align`]: roll, pitch and gyro biases from a still stretch; heading from the course.
 //! - [`rtklib_imu`]: the RTKLIB-style raw IMU CSV and its time-tag file.
+//! - [`job`]: a whole loosely coupled run from files, as `ppkat ins` makes it.
 //! - [`gnss_pos`]: GNSS positions and velocities from a `.pos`, and the velocities' latency.
 //!
 //! Units inside: metres, seconds, radians; GPST epochs. Degrees and data-sheet units only at
@@ -34,8 +35,10 @@ pub mod filter;
 pub mod gnss_pos;
 pub mod imu;
 pub mod inverse;
+pub mod job;
 pub mod loose;
 pub mod mech;
+pub mod output;
 pub mod rtklib_imu;
 pub mod smoother;
 pub mod spec;

@@ -68,9 +68,9 @@ fn rows(text: &str, skipped: &mut Vec<String>) -> Vec<Row> {
 
 /// The tag file's start (GPST) and last tick (ms).
 fn tag(path: &Path) -> Result<(Epoch, u64)> {
-    let b = std::fs::read(path).map_err(|source| Error::Io {
+    let b = std::fs::read(path).map_err(|cause| Error::Io {
         path: path.to_path_buf(),
-        source,
+        cause,
     })?;
     let bad = |m: &str| Error::Input {
         path: path.to_path_buf(),
@@ -94,9 +94,9 @@ fn tag(path: &Path) -> Result<(Epoch, u64)> {
 
 /// Read a CSV and its tag file.
 pub fn read(csv: &Path, tag_path: &Path) -> Result<ImuLog> {
-    let text = std::fs::read_to_string(csv).map_err(|source| Error::Io {
+    let text = std::fs::read_to_string(csv).map_err(|cause| Error::Io {
         path: csv.to_path_buf(),
-        source,
+        cause,
     })?;
     let (start, last_tag) = tag(tag_path)?;
     let mut log = ImuLog::default();

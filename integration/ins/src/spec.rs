@@ -120,9 +120,9 @@ impl ImuSpec {
     /// The figures of a TOML file (see the module's text); every key required, none unknown,
     /// every value finite and not negative, the correlation time positive.
     pub fn from_file(path: &Path) -> Result<ImuSpec> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        let text = std::fs::read_to_string(path).map_err(|cause| Error::Io {
             path: path.to_path_buf(),
-            source,
+            cause,
         })?;
         let bad = |message: String| Error::Input {
             path: path.to_path_buf(),

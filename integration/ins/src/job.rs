@@ -1,0 +1,211 @@
+//! A whole loosely coupled run from files, as `ppkat ins` makes it: the IMU log (RTKLIB-style
+//! CSV and time tags) turned into the body frame by its mounting and shifted by its logging
+//! delay, the GNSS `.pos`, the alignment (levelled while still before the first motion,
+//! heading from the course once the antenna moves faster than [`ALIGN_SPEED`]), the forward
+//! filter and the smoother, and the smoothed trajectory written as CSV.
+//!
+//! GNSS epochs may be withheld in windows (seconds from the first GNSS epoch), to see how
+//! the IMU bridges outages against the fixes left out.
+
+use crate::align::{course, level};
+use crate::attitude::{ned_to_ecef, Euler};
+use crate::errstate::{idx, Mat};
+use crate::filter::{Estimate, PositionFix};
+use crate::gnss_pos::{read_pos, GnssEpoch};
+use crate::imu::{to_body, ImuSample};
+use crate::loose::{run, LooseOptions, LooseRun};
+use crate::mech::NavState;
+use crate::spec::ImuSpec;
+use crate::{rtklib_imu, Error, Result};
+use common::frame::{enu_rotation, Ecef};
+use gnss::solution::Quality;
+use hifitime::{Duration, Epoch};
+use nalgebra::{Matrix3, Vector3};
+use std::path::PathBuf;
+
+/// Horizontal speed (m/s) past which the course gives the heading.
+pub const ALIGN_SPEED: f64 = 1.0;
+/// Horizontal speed (m/s) below which the body is taken as still for levelling.
+const STILL_SPEED: f64 = 0.3;
+
+/// What a run reads and how.
+#[derive(Clone, Debug)]
+pub struct InsJob {
+    /// IMU CSV (g, °/s, ms ticks).
+    pub imu_csv: PathBuf,
+    /// Its RTKLIB time-tag file.
+    pub imu_tag: PathBuf,
+    /// GNSS antenna positions (`.pos`).
+    pub gnss: PathBuf,
+    /// The IMU's figures.
+    pub spec: ImuSpec,
+    /// The body's axes in the IMU's, as roll, pitch, yaw (the IMU → body rotation is this
+    /// matrix's transpose; the data's own configuration files give it so).
+    pub mount: Euler,
+    /// Seconds added to the IMU's times (its logging delay, negative when it logs late).
+    pub imu_time_offset: f64,
+    /// IMU → antenna in the body frame, m.
+    pub lever_arm: Vector3<f64>,
+    /// A land vehicle's no-side-slip σ, m/s.
+    pub no_side_slip: Option<f64>,
+    /// GNSS epochs withheld: windows in seconds from the first GNSS epoch.
+    pub withhold: Vec<(f64, f64)>,
+    /// An output every this many IMU samples (besides each GNSS epoch).
+    pub every: usize,
+}
+
+/// What a run did.
+#[derive(Clone, Debug)]
+pub struct InsRun {
+    /// The filter's results.
+    pub run: LooseRun,
+    /// The GNSS epochs read.
+    pub gnss: Vec<GnssEpoch>,
+    /// Roll and pitch levelled (rad), and the alignment's time.
+    pub levelled: (f64, f64, Epoch),
+    /// IMU rows skipped and gaps, named.
+    pub imu_notes: Vec<String>,
+}
+
+/// Seconds from the first GNSS epoch within a withheld window.
+pub fn withheld(job: &InsJob, first: Epoch, t: Epoch) -> bool {
+    let s = (t - first).to_seconds();
+    job.withhold.iter().any(|(a, b)| (*a..=*b).contains(&s))
+}
+
+/// Horizontal speed and course at epoch `i` from the epochs two either side.
+fn motion(g: &[GnssEpoch], i: usize) -> Option<(f64, f64)> {
+    let (a, b) = (g.get(i.checked_sub(2)?)?, g.get(i + 2)?);
+    let dt = (b.time - a.time).to_seconds();
+    let enu = enu_rotation(&a.position.to_geodetic()) * (b.position.0 - a.position.0) / dt;
+    Some((enu.xy().norm(), course(enu.y, enu.x)))
+}
+
+/// The IMU samples in the body frame, on GPST.
+fn body_samples(job: &InsJob) -> Result<(Vec<ImuSample>, Vec<String>)> {
+    let log = rtklib_imu::read(&job.imu_csv, &job.imu_tag)?;
+    let mut s = log.samples;
+    to_body(&mut s, &job.mount.to_matrix().transpose());
+    for x in &mut s {
+        x.time += Duration::from_seconds(job.imu_time_offset);
+    }
+    let notes = log
+        .skipped
+        .into_iter()
+        .chain(log.gaps.into_iter().map(|g| format!("gap at {g}")))
+        .collect();
+    Ok((s, notes))
+}
+
+/// Run the job: the filter's results (the caller writes them).
+pub fn run_job(job: &InsJob) -> Result<InsRun> {
+    let (samples, imu_notes) = body_samples(job)?;
+    let gnss = read_pos(&job.gnss)?;
+    let refuse = |m: &str| Error::Input {
+        path: job.gnss.clone(),
+        message: m.to_string(),
+    };
+    let moving = (0..gnss.len())
+        .find(|&i| motion(&gnss, i).is_some_and(|(v, _)| v > ALIGN_SPEED))
+        .ok_or_else(|| refuse("the antenna never moves faster than 1 m/s: the heading cannot be aligned from its course"))?;
+    let still_until = (0..gnss.len())
+        .find(|&i| motion(&gnss, i).is_some_and(|(v, _)| v > STILL_SPEED))
+        .unwrap_or(moving);
+    let still: Vec<ImuSample> = samples
+        .iter()
+        .filter(|s| s.time < gnss[still_until].time)
+        .copied()
+        .collect();
+    let lv = level(&still).ok_or_else(|| refuse("no IMU data while the antenna stands still before it moves: roll and pitch cannot be levelled"))?;
+    let (speed, heading) = motion(&gnss, moving).expect("found moving");
+    let start = samples
+        .iter()
+        .position(|s| s.time >= gnss[moving].time)
+        .ok_or_else(|| refuse("the IMU log ends before the antenna moves"))?;
+    let start_estimate = initial(
+        job,
+        &gnss[moving],
+        &samples[start],
+        (lv.roll, lv.pitch, heading),
+        speed,
+        lv.gyro_bias,
+    );
+    let first = gnss[0].time;
+    let fixes: Vec<(Epoch, PositionFix)> = gnss
+        .iter()
+        .filter(|g| g.time > samples[start].time && !withheld(job, first, g.time))
+        .map(|g| (g.time, fix_of(g)))
+        .collect();
+    let o = LooseOptions {
+        lever_arm: job.lever_arm,
+        every: job.every,
+        no_side_slip: job.no_side_slip,
+    };
+    let run = run(&samples[start + 1..], &fixes, start_estimate, &job.spec, &o);
+    Ok(InsRun {
+        run,
+        gnss,
+        levelled: (lv.roll, lv.pitch, samples[start].time),
+        imu_notes,
+    })
+}
+
+/// The start: levelled roll and pitch, the course's heading, the antenna's position less
+/// the lever arm; σ of 3° (10° in heading), 0.5 m/s, the gyro biases measured while still.
+fn initial(
+    job: &InsJob,
+    g: &GnssEpoch,
+    at: &ImuSample,
+    (roll, pitch, heading): (f64, f64, f64),
+    speed: f64,
+    gyro_bias: Vector3<f64>,
+) -> (Estimate, Mat) {
+    let att = Euler {
+        roll,
+        pitch,
+        heading,
+    };
+    let c = ned_to_ecef(&g.position.to_geodetic()) * att.to_matrix();
+    let v_ned = Vector3::new(speed * heading.cos(), speed * heading.sin(), 0.0);
+    let nav = NavState::from_local(at.time, Ecef(g.position.0 - c * job.lever_arm), v_ned, &att);
+    let mut p0 = Mat::zeros();
+    for (i, s) in [
+        (idx::POS, 0.1),
+        (idx::VEL, 0.5),
+        (idx::ATT, 3f64.to_radians()),
+        (idx::BG, 2e-4),
+        (idx::BA, job.spec.accel_turn_on.max(job.spec.accel_bias)),
+    ] {
+        for j in 0..3 {
+            p0[(i + j, i + j)] = s * s;
+        }
+    }
+    p0[(idx::ATT + 2, idx::ATT + 2)] = 10f64.to_radians().powi(2);
+    let est = Estimate {
+        nav,
+        gyro_bias,
+        accel_bias: Vector3::zeros(),
+    };
+    (est, p0)
+}
+
+/// A GNSS epoch as an update: 2 cm / 4 cm when fixed, 0.3 m / 0.6 m otherwise (a receiver's
+/// own σ are often nominal), or the file's σ when they are larger.
+fn fix_of(g: &GnssEpoch) -> PositionFix {
+    let sd = if g.quality == Quality::Fixed {
+        Vector3::new(0.02, 0.02, 0.04)
+    } else {
+        Vector3::new(0.3, 0.3, 0.6)
+    };
+    let rot = enu_rotation(&g.position.to_geodetic()).transpose();
+    let floor = rot * Matrix3::from_diagonal(&sd.component_mul(&sd)) * rot.transpose();
+    let cov = if g.cov.trace() > floor.trace() {
+        g.cov
+    } else {
+        floor
+    };
+    PositionFix {
+        position: g.position,
+        cov,
+    }
+}

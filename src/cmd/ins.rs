@@ -1,0 +1,191 @@
+//! `ppkat ins`: an IMU log and a GNSS trajectory into a smoothed position, velocity and
+//! attitude trajectory (loosely coupled).
+
+use super::triple;
+use anyhow::{bail, Context, Result};
+use clap::ValueEnum;
+use integration::ins::attitude::Euler;
+use integration::ins::job::{run_job, InsJob};
+use integration::ins::output::write_csv;
+use integration::ins::spec::{Grade, ImuSpec};
+use nalgebra::Vector3;
+use std::path::PathBuf;
+
+/// GNSS/INS, loosely coupled: an IMU log and a GNSS trajectory (.pos) into a smoothed
+/// trajectory with attitude.
+///
+/// The IMU log is turned into the body frame (x forward, y right, z down) by --mount and
+/// shifted by --imu-time-offset; the IMU is levelled while the antenna stands still before it
+/// first moves, and its heading is taken from the course once the antenna moves faster than
+/// 1 m/s (nothing is written before). An error-state Kalman filter runs forward with each
+/// GNSS position as an update through the lever arm (fixed epochs at 2 cm / 4 cm, others at
+/// 0.3 m / 0.6 m, or the file's σ when larger), the IMU's random walks raised when the
+/// innovations say the data sheet is too optimistic; a Rauch–Tung–Striebel smoother then runs
+/// back over it. Writes CSV: GPS week and second, latitude, longitude, ellipsoidal height of
+/// the IMU, velocity north/east/up, roll/pitch/heading (degrees) and their 1-σ columns (the
+/// columns ../shared/tools/insstat.py reads). Exits with code 3 when IMU rows were skipped
+/// (each named on stderr).
+#[derive(clap::Args)]
+pub struct Args {
+    /// IMU log: CSV rows "ax,ay,az,gx,gy,gz,tick" (g, °/s, ms since power-up), the form
+    /// --imu-format rtklib-csv names.
+    #[arg(long, value_name = "IMU.csv")]
+    imu: PathBuf,
+    /// The IMU log's RTKLIB time-tag file (default: the log's name with .tag appended).
+    #[arg(long, value_name = "IMU.csv.tag")]
+    imu_tag: Option<PathBuf>,
+    /// Format of the IMU log. rtklib-csv: the RTKLIB-style raw CSV with a time-tag file
+    /// (rtklibexplorer's GNSS_IMU); the only one read so far.
+    #[arg(long, value_enum, default_value_t = ImuFormat::RtklibCsv)]
+    imu_format: ImuFormat,
+    /// GNSS antenna trajectory (.pos of ppkat or RTKLIB, llh or xyz).
+    #[arg(long, value_name = "FILE.pos")]
+    gnss: PathBuf,
+    /// IMU grade whose data-sheet figures to use: navigation, tactical or mems.
+    #[arg(long, value_name = "GRADE", default_value = "mems", value_parser = grade)]
+    grade: Grade,
+    /// Your IMU's figures instead of a grade's: a TOML file with name, arw_deg_per_sqrt_h,
+    /// vrw_mps_per_sqrt_h, gyro_bias_instability_deg_per_h, accel_bias_instability_mg,
+    /// bias_correlation_s, gyro_turn_on_deg_per_h, accel_turn_on_mg.
+    #[arg(long, value_name = "IMU.toml")]
+    imu_spec: Option<PathBuf>,
+    /// Mounting: the body's axes in the IMU's as roll,pitch,yaw in degrees (Groves' Euler
+    /// angles, as rtklibexplorer's configuration files give them); 0,0,0 when the IMU's axes
+    /// are the body's.
+    #[arg(
+        long,
+        value_name = "R,P,Y",
+        default_value = "0,0,0",
+        allow_hyphen_values = true
+    )]
+    mount: String,
+    /// Seconds added to the IMU's times (its logging delay: negative when it logs late).
+    #[arg(long, value_name = "S", default_value_t = 0.0, allow_hyphen_values = true, value_parser = super::finite_number)]
+    imu_time_offset: f64,
+    /// IMU → antenna in the body frame (forward, right, down), metres.
+    #[arg(
+        long,
+        value_name = "X,Y,Z",
+        default_value = "0,0,0",
+        allow_hyphen_values = true
+    )]
+    lever_arm: String,
+    /// A land vehicle: its velocity across and perpendicular to its nose is zero within
+    /// this σ (m/s), applied while it moves faster than 1 m/s.
+    #[arg(long, value_name = "M/S", value_parser = super::finite_number)]
+    no_side_slip: Option<f64>,
+    /// Withhold the GNSS epochs from A to B seconds after the first one (repeatable), to see
+    /// how the IMU bridges an outage against the fixes left out.
+    #[arg(long, value_name = "A,B", allow_hyphen_values = true)]
+    withhold: Vec<String>,
+    /// Write a row every this many IMU samples (besides each GNSS epoch).
+    #[arg(long, value_name = "N", default_value_t = 10)]
+    every: usize,
+    /// Output CSV (replaced if it exists).
+    #[arg(short = 'o', long = "out", value_name = "OUT.csv")]
+    out: PathBuf,
+    /// Options from a TOML file: each key a flag of this command without its dashes
+    /// (`mount = "180,-6.79,185.35"`, `no-side-slip = 0.3`, `withhold = ["40,55"]`);
+    /// relative paths are read from the file's folder; flags on the command line win over
+    /// the file.
+    #[arg(long, value_name = "FILE.toml")]
+    config: Option<PathBuf>,
+}
+
+/// IMU log formats.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum ImuFormat {
+    /// RTKLIB-style raw CSV (g, °/s, ms ticks) with a time-tag file.
+    RtklibCsv,
+}
+
+fn grade(s: &str) -> std::result::Result<Grade, String> {
+    Grade::parse(s).ok_or_else(|| format!("'{s}': give navigation, tactical or mems"))
+}
+
+/// Run it: the smoothed trajectory written, a summary printed.
+pub fn run(args: Args) -> Result<()> {
+    let job = job(&args)?;
+    let done = run_job(&job).context("ins failed")?;
+    let rows: Vec<_> = done
+        .run
+        .smoothed
+        .iter()
+        .map(|(t, s)| (*t, s.est, s.cov))
+        .collect();
+    if rows.is_empty() {
+        bail!("ins produced nothing: no IMU data after the alignment");
+    }
+    let comments = vec![
+        format!(
+            "ppkat ins: {} smoothed, loosely coupled on {}",
+            args.imu.display(),
+            args.gnss.display()
+        ),
+        format!("IMU figures: {}", job.spec.name),
+    ];
+    write_csv(&args.out, &comments, &rows)?;
+    let r = &done.run;
+    println!(
+        "ins: {} rows → {}; aligned at {} (levelled roll {:.2}°, pitch {:.2}°; heading from the course); {} GNSS epochs used, {} withheld or outside the IMU data; IMU noise raised ×{:.1} by the innovations",
+        rows.len(),
+        args.out.display(),
+        done.levelled.2,
+        done.levelled.0.to_degrees(),
+        done.levelled.1.to_degrees(),
+        r.nis.len(),
+        r.unused_fixes + done.gnss.iter().filter(|g| integration::ins::job::withheld(&job, done.gnss[0].time, g.time)).count(),
+        r.noise_scale
+    );
+    let skipped: Vec<String> = done
+        .imu_notes
+        .iter()
+        .map(|n| format!("{}: {n}", args.imu.display()))
+        .collect();
+    super::complete(skipped)
+}
+
+/// The library's job for the arguments.
+fn job(args: &Args) -> Result<InsJob> {
+    let ImuFormat::RtklibCsv = args.imu_format;
+    let spec = match &args.imu_spec {
+        Some(p) => ImuSpec::from_file(p)?,
+        None => ImuSpec::preset(args.grade),
+    };
+    let m = triple("--mount", &args.mount)?;
+    let l = triple("--lever-arm", &args.lever_arm)?;
+    let withhold = args
+        .withhold
+        .iter()
+        .map(|w| {
+            let (a, b) = super::pair("--withhold", w)?;
+            if b < a {
+                bail!("--withhold {w}: give A,B with A before B");
+            }
+            Ok((a, b))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    if args.every == 0 {
+        bail!("--every 0: give 1 or more");
+    }
+    Ok(InsJob {
+        imu_csv: args.imu.clone(),
+        imu_tag: args.imu_tag.clone().unwrap_or_else(|| {
+            let mut s = args.imu.clone().into_os_string();
+            s.push(".tag");
+            s.into()
+        }),
+        gnss: args.gnss.clone(),
+        spec,
+        mount: Euler {
+            roll: m[0].to_radians(),
+            pitch: m[1].to_radians(),
+            heading: m[2].to_radians(),
+        },
+        imu_time_offset: args.imu_time_offset,
+        lever_arm: Vector3::new(l[0], l[1], l[2]),
+        no_side_slip: args.no_side_slip,
+        withhold,
+        every: args.every,
+    })
+}

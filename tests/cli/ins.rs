@@ -1,0 +1,108 @@
+//! `ppkat ins` end to end on the real car drive: from a `--config` file, a smoothed CSV with
+//! the columns insstat.py reads, positions that bridge a withheld stretch of RTK fixes, and
+//! usage errors told apart from failures.
+
+use super::*;
+
+/// Latitude, longitude (degrees) and height of a `.pos` row at `hh:mm:ss.sss`.
+fn pos_row(pos: &str, clock: &str) -> (f64, f64) {
+    let line = pos.lines().find(|l| l.contains(clock)).expect("row");
+    let f: Vec<f64> = line
+        .split_whitespace()
+        .skip(2)
+        .map(|x| x.parse().unwrap())
+        .collect();
+    (f[0], f[1])
+}
+
+#[test]
+fn ins_runs_the_car_drive_from_a_config_file() {
+    let Some(dir) = shared("ins/rtklibexplorer-gnss-imu-2025/drive_0708") else {
+        return;
+    };
+    let out = tmp("ins_car");
+    std::fs::create_dir_all(&out).unwrap();
+    let config = out.join("ins.toml");
+    let csv = out.join("car.csv");
+    std::fs::write(
+        &config,
+        format!(
+            "imu = \"{}\"\ngnss = \"{}\"\ngrade = \"mems\"\nmount = \"180,-6.79,185.35\"\nimu-time-offset = -0.125\nlever-arm = \"0,-0.05,0\"\nno-side-slip = 0.3\nwithhold = [\"40,55\"]\nout = \"{}\"\n",
+            p(&dir.join("imu_1934.csv")),
+            p(&dir.join("gnss_1934_sf.pos")),
+            p(&csv)
+        ),
+    )
+    .unwrap();
+    let t = succeeds(&ppkat(&["ins", "--config", p(&config)]));
+    assert!(
+        t.contains("levelled roll") && t.contains("IMU noise raised"),
+        "{t}"
+    );
+    let written = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = written.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    for col in [
+        "gpst_week",
+        "gpst_tow",
+        "lat_deg",
+        "lon_deg",
+        "h_m",
+        "vn_mps",
+        "ve_mps",
+        "vu_mps",
+        "roll_deg",
+        "pitch_deg",
+        "heading_deg",
+        "sd_n_m",
+        "sd_heading_deg",
+    ] {
+        assert!(header.contains(&col), "{col} missing: {header:?}");
+    }
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert!(rows.len() > 5000, "{} rows", rows.len());
+    assert!(rows
+        .iter()
+        .all(|r| r.len() == header.len() && r[11..].iter().all(|s| *s > 0.0)));
+    // In the withheld stretch (40–55 s after 19:34:18.499 GPST), 19:35:05.999 is bridged by
+    // the IMU: the row nearest it lies within a metre of the RTK fix (the IMU is 5 cm from
+    // the antenna).
+    let pos = std::fs::read_to_string(dir.join("gnss_1934_sf.pos")).unwrap();
+    let (lat, lon) = pos_row(&pos, "19:35:05.999");
+    let tow = 243305.999; // 2025-07-08 19:35:05.999 GPST, week 2374
+    let near = rows
+        .iter()
+        .min_by(|a, b| (a[1] - tow).abs().total_cmp(&(b[1] - tow).abs()))
+        .unwrap();
+    assert!((near[1] - tow).abs() < 0.02, "{}", near[1]);
+    let dn = (near[2] - lat).to_radians() * 6.371e6;
+    let de = (near[3] - lon).to_radians() * 6.371e6 * lat.to_radians().cos();
+    assert!(dn.hypot(de) < 1.0, "{dn} {de}");
+    // Usage errors exit 2; a missing file fails (1) naming it.
+    let bad = ppkat(&[
+        "ins",
+        "--imu",
+        "x.csv",
+        "--gnss",
+        "y.pos",
+        "--grade",
+        "consumer",
+        "-o",
+        p(&csv),
+    ]);
+    assert_eq!(bad.status.code(), Some(2), "{}", text(&bad));
+    fails_with(
+        &ppkat(&[
+            "ins",
+            "--imu",
+            p(&out.join("none.csv")),
+            "--gnss",
+            p(&dir.join("gnss_1934_sf.pos")),
+            "-o",
+            p(&out.join("n.csv")),
+        ]),
+        &["none.csv", "cannot read"],
+    );
+}
