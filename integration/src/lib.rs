@@ -31,6 +31,7 @@
 
 pub mod batch;
 pub mod bench;
+pub mod bench_ins;
 pub mod bench_match;
 pub mod demo;
 pub mod hard_sky;

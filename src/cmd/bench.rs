@@ -17,7 +17,8 @@ use std::path::PathBuf;
 /// `ppkat bench adjust` simulates a block of photos and prints its joint adjustment's wall
 /// time and peak memory. `ppkat bench match --photos N` renders a textured block of N photos
 /// with exact truth and prints each tie-point stage's wall time and peak memory, the tracks
-/// and how many are right.
+/// and how many are right. `ppkat bench ins` simulates a long flight with a tactical IMU and
+/// times the GNSS/INS filter and smoother on it.
 #[derive(clap::Args)]
 pub struct Args {
     #[command(subcommand)]
@@ -30,6 +31,41 @@ enum BenchCmd {
     Ppk(Box<PpkArgs>),
     Adjust(AdjustArgs),
     Match(MatchArgs),
+    Ins(InsArgs),
+}
+
+/// Simulate a long flight with a tactical IMU and time the GNSS/INS filter on it.
+///
+/// A tactical-grade IMU circling at 60 m/s with GNSS positions at 1 Hz (simulated, not
+/// timed); the loosely coupled forward filter and the Rauch–Tung–Striebel smoother run over
+/// it with outputs at 10 Hz. Prints the samples, updates and outputs, the wall time of the
+/// filter and smoother, samples per second, the peak resident memory (Linux) and the
+/// smoothed positions' horizontal RMS against the truth.
+#[derive(clap::Args)]
+struct InsArgs {
+    /// Length of the flight, minutes.
+    #[arg(long, value_name = "MIN", default_value_t = 60.0, value_parser = minutes)]
+    minutes: f64,
+    /// IMU rate, Hz.
+    #[arg(long, value_name = "HZ", default_value_t = 200.0, value_parser = rate)]
+    rate: f64,
+}
+
+/// `--minutes`: more than 0, at most 600.
+fn minutes(s: &str) -> std::result::Result<f64, String> {
+    let x = super::finite_number(s)?;
+    (x > 0.0 && x <= 600.0)
+        .then_some(x)
+        .ok_or_else(|| format!("'{s}': give minutes in (0, 600]"))
+}
+
+/// `--rate`: 1 to 2000 Hz.
+fn rate(s: &str) -> std::result::Result<f64, String> {
+    let x = super::finite_number(s)?;
+    (1.0..=2000.0)
+        .contains(&x)
+        .then_some(x)
+        .ok_or_else(|| format!("'{s}': give a rate of 1 to 2000 Hz"))
 }
 
 /// Render a textured block of about N photos and time `ppkat match` on it, stage by stage.
@@ -138,6 +174,7 @@ pub fn run(args: Args, threads: Option<usize>) -> Result<()> {
                 .map_err(|e| anyhow::anyhow!("bench match: {e}"))?;
             print!("{r}");
         }
+        BenchCmd::Ins(a) => print!("{}", integration::bench_ins::run_bench(a.minutes, a.rate)),
     }
     Ok(())
 }

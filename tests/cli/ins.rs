@@ -106,3 +106,28 @@ fn ins_runs_the_car_drive_from_a_config_file() {
         &["none.csv", "cannot read"],
     );
 }
+
+/// `ppkat bench ins` runs a short flight and prints what it measured (speed itself lives in
+/// the bench, not in a test): the smoothed positions within centimetres of the truth.
+#[test]
+fn bench_ins_times_the_filter_on_a_simulated_flight() {
+    let t = succeeds(&ppkat(&[
+        "bench",
+        "ins",
+        "--minutes",
+        "0.5",
+        "--rate",
+        "100",
+    ]));
+    assert!(t.contains("3000 IMU samples at 100 Hz"), "{t}");
+    assert!(t.contains("30 GNSS updates"), "{t}");
+    let rms: f64 = t
+        .split("smoothed horizontal RMS ")
+        .nth(1)
+        .and_then(|x| x.split(' ').next())
+        .and_then(|x| x.parse().ok())
+        .expect("RMS printed");
+    assert!(rms < 0.02, "{rms}");
+    let bad = ppkat(&["bench", "ins", "--minutes", "0"]);
+    assert_eq!(bad.status.code(), Some(2), "{}", text(&bad));
+}
