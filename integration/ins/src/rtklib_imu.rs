@@ -149,3 +149,80 @@ pub fn read(csv: &Path, tag_path: &Path) -> Result<ImuLog> {
     }
     Ok(log)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An RTKLIB time-tag file: header, start (s since 1970 GPST + fraction), the last tick.
+    fn tag_bytes(last_tick: u32) -> Vec<u8> {
+        let mut b = b"TIMETAG RTKLIB demo5".to_vec();
+        b.resize(60, 0);
+        b.extend(1000u32.to_le_bytes());
+        b.extend(1_750_000_000u32.to_le_bytes());
+        b.extend(0.25f64.to_le_bytes());
+        for (tick, off) in [(0u32, 0u32), (last_tick, 999)] {
+            b.extend(tick.to_le_bytes());
+            b.extend(off.to_le_bytes());
+        }
+        b
+    }
+
+    fn write(name: &str, csv: &str, last_tick: u32) -> (std::path::PathBuf, std::path::PathBuf) {
+        let c = testkit::scratch_file(name, csv);
+        let t = testkit::scratch_file(&format!("{name}.tag"), tag_bytes(last_tick));
+        (c, t)
+    }
+
+    /// A cut first line, a repeated tick, a tick that goes back and a 0.5 s gap are named by
+    /// line; the rest is read, on the tags' clock.
+    #[test]
+    fn bad_rows_and_gaps_are_named_by_line() {
+        let mut csv = String::from("0.01,1.0,0.02,0.1,0.2,0.3\n");
+        let mut tick = 1000;
+        for k in 0..20 {
+            if k == 10 {
+                tick += 500;
+            }
+            csv += &format!("0.01,0.02,1.0,0.1,0.2,0.3,{tick}\n");
+            if k == 5 {
+                csv += &format!("0.01,0.02,1.0,0.1,0.2,0.3,{tick}\n");
+                csv += &format!("0.01,0.02,1.0,0.1,0.2,0.3,{}\n", tick - 10);
+            }
+            tick += 10;
+        }
+        let span = tick - 10 - 1000;
+        let (c, t) = write("imu_bad.csv", &csv, span);
+        let log = read(&c, &t).unwrap();
+        assert_eq!(log.samples.len(), 19);
+        assert_eq!(log.skipped.len(), 3, "{:?}", log.skipped);
+        assert!(log.skipped[0].starts_with("line 1:"));
+        assert!(log.skipped[1].starts_with("line 8:") && log.skipped[2].starts_with("line 9:"));
+        assert_eq!(log.gaps.len(), 1, "{:?}", log.gaps);
+        assert!(log.gaps[0].contains("0.510 s"), "{:?}", log.gaps);
+        let s = &log.samples[0];
+        assert!(
+            (s.dv.z - G0 * 0.01).abs() < 1e-9
+                && (s.dtheta.x - 0.1f64.to_radians() * 0.01).abs() < 1e-12
+        );
+    }
+
+    /// Accelerations in m/s² where g is expected, and ticks that do not span the tags, are
+    /// errors that say what to do.
+    #[test]
+    fn wrong_units_and_foreign_tags_are_refused() {
+        let csv: String = (0..10)
+            .map(|k| format!("0.1,0.2,9.8,0.1,0.2,0.3,{}\n", 1000 + 10 * k))
+            .collect();
+        let (c, t) = write("imu_ms2.csv", &csv, 90);
+        let e = read(&c, &t).unwrap_err().to_string();
+        assert!(e.contains("imu_ms2.csv") && e.contains("not in g"), "{e}");
+        let csv = csv.replace(",9.8,", ",1.0,");
+        let (c, t) = write("imu_tags.csv", &csv, 200);
+        let e = read(&c, &t).unwrap_err().to_string();
+        assert!(e.contains("do not belong together"), "{e}");
+        let (c, _) = write("imu_notag.csv", &csv, 90);
+        let e = read(&c, &c).unwrap_err().to_string();
+        assert!(e.contains("not an RTKLIB time-tag file"), "{e}");
+    }
+}
