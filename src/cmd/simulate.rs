@@ -23,6 +23,12 @@ use std::path::{Path, PathBuf};
 /// images.csv, project.toml (coupling = "loose": the PPK antenna positions) and
 /// project_tight.toml (coupling = "tight": the double-difference carrier phase itself).
 ///
+/// ins is a flight for the GNSS/INS: 30 s standing, 20 s accelerating east, a straight strip
+/// at 60 m/s to ten minutes; a tactical IMU at 200 Hz (imu.csv + imu.csv.tag, the RTKLIB-style
+/// log), GNSS antenna positions at 1 Hz (gnss.pos), the IMU's truth at 10 Hz (truth_ins.csv,
+/// the columns insstat.py reads) and ins.toml (`ppkat ins --config`, the GNSS withheld from
+/// 299 to 329 s).
+///
 /// long-baseline is a 250 km pair of static geodetic receivers (GPS L1/L2, 30 s, 24 h) with
 /// the ionosphere and troposphere differing between the ends beyond the broadcast models and
 /// code biases of two receiver types, and a navigation file that also holds stale sets of an
@@ -70,7 +76,7 @@ pub struct Args {
     #[arg(long, value_name = "FILE.toml", conflicts_with = "builtin")]
     scenario: Option<PathBuf>,
     /// Built-in scenario: demo, block20, long or hard-sky (flights), lowcost or long-baseline
-    /// (GNSS benches), or classic-block, close-range, block1000, nav-block, sparse-control or
+    /// (GNSS benches), ins (an IMU and GNSS flight for `ppkat ins`), or classic-block, close-range, block1000, nav-block, sparse-control or
     /// textured-block (adjustment projects).
     #[arg(long, value_name = "NAME")]
     builtin: Option<String>,
@@ -117,7 +123,7 @@ pub fn run(args: Args) -> Result<()> {
     let plain_flight = !project
         && !matches!(
             args.builtin.as_deref(),
-            Some("lowcost" | "long-baseline" | "hard-sky")
+            Some("lowcost" | "long-baseline" | "hard-sky" | "ins")
         );
     if args.sp3 && !plain_flight {
         bail!("--sp3 applies to flights (a scenario, or --builtin demo, block20 or long)");
@@ -137,6 +143,16 @@ pub fn run(args: Args) -> Result<()> {
         print!(
             "{}",
             simulate::lowcost::run(&args.out, args.seed.unwrap_or(simulate::lowcost::SEED))?
+        );
+        return Ok(());
+    }
+    if args.builtin.as_deref() == Some("ins") {
+        if args.raw.is_some() {
+            bail!("--raw does not apply to ins: its folder holds an IMU log and a GNSS .pos");
+        }
+        print!(
+            "{}",
+            simulate::ins_flight::run(&args.out, args.seed.unwrap_or(simulate::ins_flight::SEED))?
         );
         return Ok(());
     }
