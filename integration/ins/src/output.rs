@@ -9,39 +9,28 @@
 
 use crate::errstate::{idx, Mat};
 use crate::filter::Estimate;
+use crate::mech::NavState;
 use common::frame::enu_rotation;
 use hifitime::Epoch;
 use nalgebra::Matrix3;
 use std::io::Write;
 use std::path::Path;
 
+/// The header of [`state_columns`].
+pub const STATE_HEADER: &str =
+    "gpst_week,gpst_tow,lat_deg,lon_deg,h_m,vn_mps,ve_mps,vu_mps,roll_deg,pitch_deg,heading_deg";
 /// The CSV header line.
 pub const HEADER: &str = "gpst_week,gpst_tow,lat_deg,lon_deg,h_m,vn_mps,ve_mps,vu_mps,roll_deg,pitch_deg,heading_deg,sd_n_m,sd_e_m,sd_u_m,sd_vn_mps,sd_ve_mps,sd_vu_mps,sd_roll_deg,sd_pitch_deg,sd_heading_deg";
 
-/// One row of the CSV for an estimate and its covariance.
-pub fn row(t: Epoch, e: &Estimate, cov: &Mat) -> String {
+/// The columns of a navigation state: week, second of week, latitude, longitude, height,
+/// velocity north/east/up, roll/pitch/heading (what a truth file holds too).
+pub fn state_columns(t: Epoch, nav: &NavState) -> String {
     let (week, tow) = gnss::time::week_tow(t);
-    let g = e.nav.geodetic();
-    let r = enu_rotation(&g);
-    let v = r * e.nav.velocity;
-    let att = e.nav.euler();
-    let block = |i: usize| {
-        let c: Matrix3<f64> = cov.fixed_view::<3, 3>(i, i).into_owned();
-        r * c * r.transpose()
-    };
-    let (p, vc, a) = (block(idx::POS), block(idx::VEL), block(idx::ATT));
-    let sd = |m: &Matrix3<f64>, k: usize| m[(k, k)].max(0.0).sqrt();
-    // Level axes of the heading: forward (roll) and right (pitch), in east-north.
-    let (sh, ch) = att.heading.sin_cos();
-    let axis = |x: [f64; 2]| {
-        let (ee, nn, en) = (a[(0, 0)], a[(1, 1)], a[(0, 1)]);
-        (x[0] * x[0] * ee + x[1] * x[1] * nn + 2.0 * x[0] * x[1] * en)
-            .max(0.0)
-            .sqrt()
-            .to_degrees()
-    };
+    let g = nav.geodetic();
+    let v = enu_rotation(&g) * nav.velocity;
+    let att = nav.euler();
     format!(
-        "{week},{tow:.4},{:.9},{:.9},{:.4},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5}",
+        "{week},{tow:.4},{:.9},{:.9},{:.4},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5}",
         g.lat.to_degrees(),
         g.lon.to_degrees(),
         g.h,
@@ -51,6 +40,31 @@ pub fn row(t: Epoch, e: &Estimate, cov: &Mat) -> String {
         att.roll.to_degrees(),
         att.pitch.to_degrees(),
         att.heading.to_degrees(),
+    )
+}
+
+/// One row of the CSV for an estimate and its covariance.
+pub fn row(t: Epoch, e: &Estimate, cov: &Mat) -> String {
+    let r = enu_rotation(&e.nav.geodetic());
+    let heading = e.nav.euler().heading;
+    let block = |i: usize| {
+        let c: Matrix3<f64> = cov.fixed_view::<3, 3>(i, i).into_owned();
+        r * c * r.transpose()
+    };
+    let (p, vc, a) = (block(idx::POS), block(idx::VEL), block(idx::ATT));
+    let sd = |m: &Matrix3<f64>, k: usize| m[(k, k)].max(0.0).sqrt();
+    // Level axes of the heading: forward (roll) and right (pitch), in east-north.
+    let (sh, ch) = heading.sin_cos();
+    let axis = |x: [f64; 2]| {
+        let (ee, nn, en) = (a[(0, 0)], a[(1, 1)], a[(0, 1)]);
+        (x[0] * x[0] * ee + x[1] * x[1] * nn + 2.0 * x[0] * x[1] * en)
+            .max(0.0)
+            .sqrt()
+            .to_degrees()
+    };
+    format!(
+        "{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5}",
+        state_columns(t, &e.nav),
         sd(&p, 1),
         sd(&p, 0),
         sd(&p, 2),

@@ -16,8 +16,10 @@ use gnss::solution::{write_pos, PosFormat, PosRecord, Quality};
 use hifitime::{Duration, Epoch, TimeScale};
 use ins::attitude::{ned_to_ecef, Euler};
 use ins::inverse::{ideal_imu, Kinematics, Motion};
+use ins::mech::NavState;
+use ins::output::{state_columns, STATE_HEADER};
 use ins::spec::{Grade, ImuSpec, G0};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, Rotation3, Vector3};
 use std::fmt::Write as _;
 use std::io::Write;
 use std::path::Path;
@@ -201,27 +203,17 @@ fn write_gnss(out: &Path, m: &Strip, start: Epoch, seed: u64) -> Result<usize, S
 
 /// The IMU's truth at 10 Hz in insstat.py's columns.
 fn write_truth(out: &Path, m: &Strip, start: Epoch) -> Result<(), SimError> {
-    let mut text = String::from("gpst_week,gpst_tow,lat_deg,lon_deg,h_m,vn_mps,ve_mps,vu_mps,roll_deg,pitch_deg,heading_deg\n");
+    let mut text = format!("{STATE_HEADER}\n");
     for k in 0..=(SPAN * 10.0) as usize {
-        let t = k as f64 * 0.1;
-        let km = m.at(t);
-        let g = km.position.to_geodetic();
-        let v = enu_rotation(&g) * km.velocity;
-        let e = Euler::from_matrix(&(ned_to_ecef(&g).transpose() * km.attitude));
-        let (week, tow) = gnss::time::week_tow(start + Duration::from_seconds(t));
-        let _ = writeln!(
-            text,
-            "{week},{tow:.4},{:.9},{:.9},{:.4},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5}",
-            g.lat.to_degrees(),
-            g.lon.to_degrees(),
-            g.h,
-            v.y,
-            v.x,
-            v.z,
-            e.roll.to_degrees(),
-            e.pitch.to_degrees(),
-            e.heading.to_degrees()
-        );
+        let t = start + Duration::from_seconds(k as f64 * 0.1);
+        let km = m.at(k as f64 * 0.1);
+        let nav = NavState {
+            time: t,
+            position: km.position,
+            velocity: km.velocity,
+            attitude: Rotation3::from_matrix_unchecked(km.attitude),
+        };
+        let _ = writeln!(text, "{}", state_columns(t, &nav));
     }
     common::atomic::write_atomic(&out.join("truth_ins.csv"), |w: &mut dyn Write| {
         w.write_all(text.as_bytes())
