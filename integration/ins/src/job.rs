@@ -93,6 +93,7 @@ fn body_samples(job: &InsJob) -> Result<(Vec<ImuSample>, Vec<String>)> {
         .skipped
         .into_iter()
         .chain(log.gaps.into_iter().map(|g| format!("gap at {g}")))
+        .chain(log.saturated)
         .collect();
     Ok((s, notes))
 }

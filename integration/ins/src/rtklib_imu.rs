@@ -22,6 +22,8 @@ use std::path::Path;
 
 /// Largest stretch of the IMU's ticks against the tags (0.1 %).
 const MAX_STRETCH: f64 = 1e-3;
+/// Consecutive rows at an axis' largest magnitude that make a saturation.
+pub const SATURATED_RUN: usize = 3;
 
 /// An IMU log read: samples in the IMU's axes, and what was left out.
 #[derive(Clone, Debug, Default)]
@@ -32,6 +34,9 @@ pub struct ImuLog {
     pub skipped: Vec<String>,
     /// Gaps longer than three nominal intervals, each `line N: … s`.
     pub gaps: Vec<String>,
+    /// Runs of [`SATURATED_RUN`] rows or more at an axis' largest magnitude (its full scale:
+    /// the sensor clipped), each `lines A–B: …`; kept, but wrong.
+    pub saturated: Vec<String>,
     /// The IMU ticks' stretch to the logger's clock (1 + ppm·10⁻⁶).
     pub stretch: f64,
 }
@@ -62,6 +67,45 @@ fn rows(text: &str, skipped: &mut Vec<String>) -> Vec<Row> {
                 n + 1
             )),
         }
+    }
+    out
+}
+
+/// Runs of rows where an axis sits at its largest magnitude (see [`ImuLog::saturated`]).
+fn saturated(rs: &[Row]) -> Vec<String> {
+    const AXES: [&str; 6] = ["ax", "ay", "az", "gx", "gy", "gz"];
+    let mut out = Vec::new();
+    for (j, name) in AXES.iter().enumerate() {
+        let full = rs.iter().map(|r| r.1[j].abs()).fold(0.0f64, f64::max);
+        let least = rs
+            .iter()
+            .map(|r| r.1[j].abs())
+            .fold(f64::INFINITY, f64::min);
+        // An axis that never changes (a file written by hand, a dead sensor) clips nothing.
+        if full == 0.0 || least == full {
+            continue;
+        }
+        let mut run: Option<(usize, usize)> = None;
+        let mut flush = |run: &mut Option<(usize, usize)>| {
+            if let Some((a, b)) = run.take() {
+                if b - a + 1 >= SATURATED_RUN {
+                    out.push(format!(
+                        "lines {}–{}: {name} at ±{full}, its largest value, {} rows running: the sensor clipped (kept, but wrong)",
+                        rs[a].0,
+                        rs[b].0,
+                        b - a + 1
+                    ));
+                }
+            }
+        };
+        for (k, r) in rs.iter().enumerate() {
+            if r.1[j].abs() == full {
+                run = Some(run.map_or((k, k), |(a, _)| (a, k)));
+            } else {
+                flush(&mut run);
+            }
+        }
+        flush(&mut run);
     }
     out
 }
@@ -119,6 +163,7 @@ pub fn read(csv: &Path, tag_path: &Path) -> Result<ImuLog> {
             "the accelerations' median magnitude is {median:.3}: not in g (m/s² would read 9.8); convert the file to g"
         )));
     }
+    log.saturated = saturated(&rs);
     let (t0, t1) = (rs[0].2, rs[rs.len() - 1].2);
     log.stretch = last_tag as f64 / (t1 - t0) as f64;
     if (log.stretch - 1.0).abs() > MAX_STRETCH {
@@ -204,6 +249,32 @@ mod tests {
         assert!(
             (s.dv.z - G0 * 0.01).abs() < 1e-9
                 && (s.dtheta.x - 0.1f64.to_radians() * 0.01).abs() < 1e-12
+        );
+    }
+
+    /// Four rows at an axis' largest value are a saturation, named by line; two are not.
+    #[test]
+    fn clipped_samples_are_named() {
+        let csv: String = (0..20)
+            .map(|k| {
+                let ax = if (5..9).contains(&k) {
+                    4.0
+                } else if k == 15 || k == 16 {
+                    -2.0
+                } else {
+                    0.1
+                };
+                let gz = if k == 12 || k == 13 { 250.0 } else { 0.3 };
+                format!("{ax},0.02,1.0,0.1,0.2,{gz},{}\n", 1000 + 10 * k)
+            })
+            .collect();
+        let (c, t) = write("imu_clip.csv", &csv, 190);
+        let log = read(&c, &t).unwrap();
+        assert_eq!(log.saturated.len(), 1, "{:?}", log.saturated);
+        assert!(
+            log.saturated[0].starts_with("lines 6–9: ax at ±4"),
+            "{:?}",
+            log.saturated
         );
     }
 
