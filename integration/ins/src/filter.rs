@@ -10,7 +10,7 @@ use crate::imu::ImuSample;
 use crate::mech::{propagate, NavState};
 use crate::spec::ImuSpec;
 use common::frame::Ecef;
-use nalgebra::{Matrix3, Rotation3, SMatrix, Vector3};
+use nalgebra::{Matrix3, Rotation3, SMatrix, SVector, Vector3};
 
 /// The nominal state: navigation and the sensor biases estimated so far.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -65,8 +65,6 @@ pub struct Checkpoint {
     pub post_cov: Mat,
     /// Transition of the error state from the previous checkpoint's posterior to this prior.
     pub phi: Mat,
-    /// Whether a measurement updated the state here.
-    pub updated: bool,
 }
 
 /// One GNSS antenna position, ECEF, with its covariance (m²).
@@ -89,9 +87,9 @@ pub const MAX_NOISE_SCALE: f64 = 10.0;
 /// engine or a drone's rotors shake a MEMS chip far beyond its random walks (the real car
 /// drive's innovations were 20 times their variance). The filter keeps an exponential mean
 /// of the normalised innovations (over about [`NIS_MEMORY`] updates) and scales the random
-/// walks up by 5 % at each update while that mean is above 1.5, back down while it is below
-/// 0.7, never below the data sheet nor above [`MAX_NOISE_SCALE`] times it: its σ follow the
-/// data, not only the model.
+/// walks up by 10 % at each update while that mean is above 1.5, back down by 1 % while it
+/// is below 0.7, never below the data sheet nor above [`MAX_NOISE_SCALE`] times it: its σ
+/// follow the data, not only the model.
 pub struct Forward<'a> {
     spec: &'a ImuSpec,
     scaled: ImuSpec,
@@ -166,14 +164,20 @@ impl<'a> Forward<'a> {
             .copy_from(&Matrix3::identity());
         h.fixed_view_mut::<3, 3>(0, idx::ATT)
             .copy_from(&(-skew(&arm)));
-        let nis = self.update3(&h, &z, &fix.cov);
+        let nis = self.update(&h, &z, &fix.cov);
         self.adapt(nis / 3.0);
         nis
     }
 
-    /// A three-row update: the state corrected, the covariance in Joseph's form; the
-    /// normalised innovation squared.
-    fn update3(&mut self, h: &SMatrix<f64, 3, N>, z: &Vector3<f64>, r: &Matrix3<f64>) -> f64 {
+    /// An update of `R` rows: the state corrected, the covariance in Joseph's form; the
+    /// normalised innovation squared (NaN, and nothing changed, when the innovation's
+    /// covariance cannot be inverted).
+    fn update<const R: usize>(
+        &mut self,
+        h: &SMatrix<f64, R, N>,
+        z: &SVector<f64, R>,
+        r: &SMatrix<f64, R, R>,
+    ) -> f64 {
         let s = h * self.p * h.transpose() + r;
         let Some(si) = s.try_inverse() else {
             return f64::NAN;
@@ -203,15 +207,7 @@ impl<'a> Forward<'a> {
                 h[(r, idx::ATT + c)] = da[(r + 1, c)];
             }
         }
-        let rm = nalgebra::Matrix2::identity() * sigma * sigma;
-        let s = h * self.p * h.transpose() + rm;
-        let Some(si) = s.try_inverse() else {
-            return;
-        };
-        let k = self.p * h.transpose() * si;
-        let ikh = Mat::identity() - k * h;
-        self.p = ikh * self.p * ikh.transpose() + k * rm * k.transpose();
-        self.est = self.est.corrected(&(k * z));
+        self.update(&h, &z, &(nalgebra::Matrix2::identity() * sigma * sigma));
     }
 
     /// The factor on the IMU's random walks the innovations asked for so far.
@@ -238,7 +234,6 @@ impl<'a> Forward<'a> {
     pub fn checkpoint(&mut self) -> Checkpoint {
         let (prior, prior_cov) = self.prior.take().unwrap_or((self.est, self.p));
         let cp = Checkpoint {
-            updated: prior != self.est,
             prior,
             prior_cov,
             post: self.est,

@@ -112,12 +112,8 @@ pub fn run_job(job: &InsJob) -> Result<InsRun> {
     let still_until = (0..gnss.len())
         .find(|&i| motion(&gnss, i).is_some_and(|(v, _)| v > STILL_SPEED))
         .unwrap_or(moving);
-    let still: Vec<ImuSample> = samples
-        .iter()
-        .filter(|s| s.time < gnss[still_until].time)
-        .copied()
-        .collect();
-    let lv = level(&still).ok_or_else(|| refuse("no IMU data while the antenna stands still before it moves: roll and pitch cannot be levelled"))?;
+    let still = samples.partition_point(|s| s.time < gnss[still_until].time);
+    let lv = level(&samples[..still]).ok_or_else(|| refuse("no IMU data while the antenna stands still before it moves: roll and pitch cannot be levelled"))?;
     let (speed, heading) = motion(&gnss, moving).expect("found moving");
     let start = samples
         .iter()

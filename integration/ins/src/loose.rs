@@ -53,7 +53,7 @@ pub fn run(
 ) -> LooseRun {
     let mut f = Forward::new(start.0, start.1, spec);
     let mut out = LooseRun::default();
-    let mut cps: Vec<(Epoch, Checkpoint)> = Vec::new();
+    let (mut times, mut cps): (Vec<Epoch>, Vec<Checkpoint>) = (Vec::new(), Vec::new());
     let mut next = 0;
     for (k, s) in samples.iter().enumerate() {
         f.predict(s);
@@ -78,12 +78,12 @@ pub fn run(
             }
             let cp = f.checkpoint();
             out.forward.push((s.time, cp.post, cp.post_cov));
-            cps.push((s.time, cp));
+            times.push(s.time);
+            cps.push(cp);
         }
     }
     out.unused_fixes += fixes.len() - next;
     out.noise_scale = f.noise_scale();
-    let only: Vec<Checkpoint> = cps.iter().map(|(_, c)| c.clone()).collect();
-    out.smoothed = cps.iter().map(|(t, _)| *t).zip(smooth(&only)).collect();
+    out.smoothed = times.into_iter().zip(smooth(&cps)).collect();
     out
 }
