@@ -7,12 +7,13 @@ use crate::bench::peak_rss_kib;
 use gnss::frame::{enu_rotation, Geodetic};
 use hifitime::{Duration, Epoch};
 use ins::filter::{Estimate, PositionFix};
+use ins::inverse::Circling;
 use ins::inverse::{ideal_imu, Motion};
 use ins::loose::{run, LooseOptions};
 use ins::mech::NavState;
 use ins::spec::{Grade, ImuSpec};
 use nalgebra::{Matrix3, Rotation3, Vector3};
-use sim::imu::{corrupt, Circling};
+use sim::imu::corrupt;
 use std::time::Instant;
 
 /// What the bench measured.

@@ -8,11 +8,12 @@ use integration::gnss::frame::{enu_rotation, Ecef, Geodetic};
 use integration::ins::attitude::Euler;
 use integration::ins::errstate::{idx, Mat};
 use integration::ins::filter::{Estimate, PositionFix};
+use integration::ins::inverse::Circling;
 use integration::ins::inverse::{ideal_imu, Motion};
 use integration::ins::loose::{run, LooseOptions};
 use integration::ins::mech::NavState;
 use integration::ins::spec::{Grade, ImuSpec};
-use integration::simulate::imu::{corrupt, Circling};
+use integration::simulate::imu::corrupt;
 use integration::simulate::rng::Rng;
 use nalgebra::{Matrix3, Rotation3, Vector3};
 

@@ -5,12 +5,15 @@
 //! frame; each interval's increments are their integrals by Simpson's rule on
 //! [`SUBSTEPS`] sub-intervals.
 //!
+//! [`Circling`] is a motion for the simulator and the tests.
+//!
 //! What enters: a [`Motion`] (position, velocity, acceleration and attitude at any time), a
 //! start, a rate and a count. What leaves: [`ImuSample`]s without any error.
 
+use crate::attitude::{ned_to_ecef, Euler};
 use crate::earth::{earth_rate, gravity_ecef};
 use crate::imu::ImuSample;
-use common::frame::Ecef;
+use common::frame::{enu_rotation, Ecef, Geodetic};
 use hifitime::{Duration, Epoch};
 use nalgebra::{Matrix3, Vector3};
 
@@ -88,4 +91,44 @@ pub fn ideal_imu(m: &dyn Motion, start: Epoch, rate_hz: f64, n: usize) -> Vec<Im
             }
         })
         .collect()
+}
+
+/// An aircraft circling left at constant speed and climb rate from `origin` (where it is at
+/// the start, flying east), banked as a coordinated turn asks: the motion an IMU's heading is
+/// best seen on (the turn's acceleration never stops).
+#[derive(Clone, Copy, Debug)]
+pub struct Circling {
+    /// Where the circle starts.
+    pub origin: Geodetic,
+    /// Radius, m.
+    pub radius: f64,
+    /// Speed along the circle, m/s.
+    pub speed: f64,
+    /// Climb rate, m/s.
+    pub climb: f64,
+}
+
+impl Motion for Circling {
+    fn at(&self, t: f64) -> Kinematics {
+        let (r, v) = (self.radius, self.speed);
+        let w = v / r;
+        let (s, c) = (w * t).sin_cos();
+        // East, north, up.
+        let p = Vector3::new(r * s, r * (1.0 - c), self.climb * t);
+        let vel = Vector3::new(v * c, v * s, self.climb);
+        let acc = Vector3::new(-v * w * s, v * w * c, 0.0);
+        let to_ecef = enu_rotation(&self.origin).transpose();
+        let position = Ecef(self.origin.to_ecef().0 + to_ecef * p);
+        let e = Euler {
+            roll: -(v * w / 9.81).atan(),
+            pitch: (self.climb / v).atan(),
+            heading: vel.x.atan2(vel.y),
+        };
+        Kinematics {
+            position,
+            velocity: to_ecef * vel,
+            acceleration: to_ecef * acc,
+            attitude: ned_to_ecef(&position.to_geodetic()) * e.to_matrix(),
+        }
+    }
 }

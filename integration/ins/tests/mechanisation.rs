@@ -6,7 +6,7 @@ use common::frame::{enu_rotation, Ecef, Geodetic};
 use hifitime::Epoch;
 use ins::attitude::{ned_to_ecef, Euler};
 use ins::imu::ImuSample;
-use ins::inverse::{ideal_imu, Kinematics, Motion};
+use ins::inverse::{ideal_imu, Circling, Kinematics, Motion};
 use ins::mech::{propagate, NavState};
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
@@ -44,31 +44,12 @@ impl Motion for Still {
 
 /// An aircraft circling left at 60 m/s on a 1.5 km radius, climbing 2 m/s, banked as a
 /// coordinated turn asks.
-struct Circle;
-
-impl Motion for Circle {
-    fn at(&self, t: f64) -> Kinematics {
-        let (r, v, climb) = (1500.0, 60.0, 2.0);
-        let w = v / r;
-        let (s, c) = (w * t).sin_cos();
-        // East, north, up.
-        let p = Vector3::new(r * s, r * (1.0 - c), climb * t);
-        let vel = Vector3::new(v * c, v * s, climb);
-        let acc = Vector3::new(-v * w * s, v * w * c, 0.0);
-        let o = origin();
-        let to_ecef = enu_rotation(&o).transpose();
-        let position = Ecef(o.to_ecef().0 + to_ecef * p);
-        let e = Euler {
-            roll: -(v * w / 9.81).atan(),
-            pitch: (climb / v).atan(),
-            heading: vel.x.atan2(vel.y),
-        };
-        Kinematics {
-            position,
-            velocity: to_ecef * vel,
-            acceleration: to_ecef * acc,
-            attitude: ned_to_ecef(&position.to_geodetic()) * e.to_matrix(),
-        }
+fn circle() -> Circling {
+    Circling {
+        origin: origin(),
+        radius: 1500.0,
+        speed: 60.0,
+        climb: 2.0,
     }
 }
 
@@ -117,8 +98,8 @@ fn a_perfect_imu_standing_still_stays_put() {
 /// at 200 Hz, and Simpson's rule on the data; without the ½·Δθ×Δv term it is 1.8 m).
 #[test]
 fn a_perfect_imu_circling_follows_the_truth() {
-    let samples = ideal_imu(&Circle, start(), 200.0, 60_000);
-    let (dp, dv, da, _) = run(&Circle, &samples);
+    let samples = ideal_imu(&circle(), start(), 200.0, 60_000);
+    let (dp, dv, da, _) = run(&circle(), &samples);
     eprintln!("circle 300 s: position {dp:.2e} m, velocity {dv:.2e} m/s, attitude {da:.2e} rad");
     assert!(dp < 1e-3 && dv < 1e-5 && da < 1e-7, "{dp} {dv} {da}");
 }

@@ -2,56 +2,13 @@
 //! sample white noise (angle and velocity random walk: σ = ARW·√dt on Δθ, VRW·√dt on Δv), and
 //! per axis a bias that is a turn-on constant plus a first-order Gauss–Markov process with
 //! the bias instability as its σ and the spec's correlation time. The true biases are
-//! returned beside the data, for the filters' tests. [`Circling`] is a motion to make them
-//! along.
+//! returned beside the data, for the filters' tests (`ins::inverse::Circling` is a motion
+//! to make them along).
 
 use crate::rng::Rng;
-use common::frame::{enu_rotation, Ecef, Geodetic};
-use ins::attitude::{ned_to_ecef, Euler};
 use ins::imu::ImuSample;
-use ins::inverse::{Kinematics, Motion};
 use ins::spec::ImuSpec;
 use nalgebra::Vector3;
-
-/// An aircraft circling left at constant speed and climb rate from `origin` (where it is at
-/// the start, flying east), banked as a coordinated turn asks: the motion an IMU's heading is
-/// best seen on (the turn's acceleration never stops).
-#[derive(Clone, Copy, Debug)]
-pub struct Circling {
-    /// Where the circle starts.
-    pub origin: Geodetic,
-    /// Radius, m.
-    pub radius: f64,
-    /// Speed along the circle, m/s.
-    pub speed: f64,
-    /// Climb rate, m/s.
-    pub climb: f64,
-}
-
-impl Motion for Circling {
-    fn at(&self, t: f64) -> Kinematics {
-        let (r, v) = (self.radius, self.speed);
-        let w = v / r;
-        let (s, c) = (w * t).sin_cos();
-        // East, north, up.
-        let p = Vector3::new(r * s, r * (1.0 - c), self.climb * t);
-        let vel = Vector3::new(v * c, v * s, self.climb);
-        let acc = Vector3::new(-v * w * s, v * w * c, 0.0);
-        let to_ecef = enu_rotation(&self.origin).transpose();
-        let position = Ecef(self.origin.to_ecef().0 + to_ecef * p);
-        let e = Euler {
-            roll: -(v * w / 9.81).atan(),
-            pitch: (self.climb / v).atan(),
-            heading: vel.x.atan2(vel.y),
-        };
-        Kinematics {
-            position,
-            velocity: to_ecef * vel,
-            acceleration: to_ecef * acc,
-            attitude: ned_to_ecef(&position.to_geodetic()) * e.to_matrix(),
-        }
-    }
-}
 
 /// The true sensor biases during one sample.
 #[derive(Clone, Copy, Debug, PartialEq)]
