@@ -99,7 +99,7 @@ pub enum ImuFormat {
     RtklibCsv,
 }
 
-fn grade(s: &str) -> std::result::Result<Grade, String> {
+pub(crate) fn grade(s: &str) -> std::result::Result<Grade, String> {
     Grade::parse(s).ok_or_else(|| format!("'{s}': give navigation, tactical or mems"))
 }
 

@@ -1,6 +1,7 @@
 //! `ppkat simulate`: a survey flight or an adjustment project with exact truth.
 
 use anyhow::{bail, Context, Result};
+use integration::ins::spec::Grade;
 use integration::simulate::{self, block, Scenario};
 use std::path::{Path, PathBuf};
 
@@ -23,11 +24,12 @@ use std::path::{Path, PathBuf};
 /// images.csv, project.toml (coupling = "loose": the PPK antenna positions) and
 /// project_tight.toml (coupling = "tight": the double-difference carrier phase itself).
 ///
-/// ins is a flight for the GNSS/INS: 30 s standing, 20 s accelerating east, a straight strip
-/// at 60 m/s to ten minutes; a tactical IMU at 200 Hz (imu.csv + imu.csv.tag, the RTKLIB-style
-/// log), GNSS antenna positions at 1 Hz (gnss.pos), the IMU's truth at 10 Hz (truth_ins.csv,
-/// the columns insstat.py reads) and ins.toml (`ppkat ins --config`, the GNSS withheld from
-/// 299 to 329 s).
+/// ins is a survey flight for the GNSS/INS: 30 s standing, 20 s speeding up east to 60 m/s,
+/// then four strips joined by three 180° turns at 3 °/s (banked 17.8°) to ten minutes; an
+/// IMU of --imu-grade (tactical unless told) at 200 Hz (imu.csv + imu.csv.tag, the
+/// RTKLIB-style log), GNSS antenna positions at 1 Hz (gnss.pos), the IMU's truth at 10 Hz
+/// (truth_ins.csv, the columns insstat.py reads) and ins.toml (`ppkat ins --config`, the GNSS
+/// withheld from 299 to 329 s, in the second strip).
 ///
 /// long-baseline is a 250 km pair of static geodetic receivers (GPS L1/L2, 30 s, 24 h) with
 /// the ionosphere and troposphere differing between the ends beyond the broadcast models and
@@ -97,6 +99,10 @@ pub struct Args {
     /// trying `--sp3` without `--nav` (flights only).
     #[arg(long)]
     sp3: bool,
+    /// The IMU of --builtin ins: navigation, tactical or mems (the presets `ppkat ins
+    /// --grade` knows; its ins.toml names the same grade).
+    #[arg(long, value_name = "GRADE", value_parser = super::ins::grade)]
+    imu_grade: Option<Grade>,
 }
 
 /// A raw log format the simulator writes.
@@ -119,6 +125,9 @@ pub fn run(args: Args) -> Result<()> {
         .is_some_and(|b| block::BUILTINS.contains(&b));
     if project && args.raw.is_some() {
         bail!("--raw applies to flights (a scenario, or --builtin demo, block20 or long), not to adjustment projects");
+    }
+    if args.imu_grade.is_some() && args.builtin.as_deref() != Some("ins") {
+        bail!("--imu-grade applies to --builtin ins only");
     }
     let plain_flight = !project
         && !matches!(
@@ -150,9 +159,14 @@ pub fn run(args: Args) -> Result<()> {
         if args.raw.is_some() {
             bail!("--raw does not apply to ins: its folder holds an IMU log and a GNSS .pos");
         }
+        let grade = args.imu_grade.unwrap_or(Grade::Tactical);
         print!(
             "{}",
-            simulate::ins_flight::run(&args.out, args.seed.unwrap_or(simulate::ins_flight::SEED))?
+            simulate::ins_flight::run(
+                &args.out,
+                args.seed.unwrap_or(simulate::ins_flight::SEED),
+                grade,
+            )?
         );
         return Ok(());
     }

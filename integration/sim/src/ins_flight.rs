@@ -1,21 +1,22 @@
 //! `simulate --builtin ins`: a flight for the GNSS/INS with exact truth. An aircraft stands
-//! still 30 s (where the IMU is levelled), accelerates east at 3 m/s² for 20 s and flies a
-//! straight strip at 60 m/s for the rest of ten minutes; a tactical IMU at 200 Hz
+//! still 30 s (where the IMU is levelled), speeds up east to 60 m/s in 20 s and flies four
+//! strips joined by three 180° procedure turns ([`crate::ins_motion::Survey`]; the turns
+//! start at 170, 350 and 530 s) for ten minutes; an IMU of the chosen grade at 200 Hz
 //! ([`crate::imu`] errors) and GNSS antenna positions at 1 Hz (2 cm / 4 cm noise).
 //!
 //! Writes: `imu.csv` + `imu.csv.tag` (the RTKLIB-style raw log: g, °/s, ms ticks; the IMU's
 //! axes are the body's), `gnss.pos`, `truth_ins.csv` (the IMU's truth at 10 Hz in the
 //! columns `../shared/tools/insstat.py` reads) and `ins.toml` (the `ppkat ins --config` that
-//! processes it, withholding the GNSS from 300 to 330 s).
+//! processes it, withholding the GNSS from 299 to 329 s, in the second strip).
 
 use crate::imu::corrupt;
+use crate::ins_motion::Survey;
 use crate::rng::Rng;
 use crate::SimError;
 use common::frame::{enu_rotation, Ecef, Geodetic};
 use gnss::solution::{write_pos, PosFormat, PosRecord, Quality};
 use hifitime::{Duration, Epoch, TimeScale};
-use ins::attitude::{ned_to_ecef, Euler};
-use ins::inverse::{ideal_imu, Kinematics, Motion};
+use ins::inverse::{ideal_imu, Motion};
 use ins::mech::NavState;
 use ins::output::{state_columns, STATE_HEADER};
 use ins::spec::{Grade, ImuSpec, G0};
@@ -34,43 +35,14 @@ const SPAN: f64 = 600.0;
 pub const OUTAGE: (f64, f64) = (299.0, 329.0);
 /// IMU → antenna, body frame (forward, right, down), m.
 pub const LEVER: [f64; 3] = [0.2, 0.1, -1.5];
-
-/// Still, then a straight acceleration east, then a straight strip (see the module's text).
-struct Strip {
-    origin: Geodetic,
-}
-
-impl Motion for Strip {
-    fn at(&self, t: f64) -> Kinematics {
-        let (t0, t1, a) = (30.0, 50.0, 3.0);
-        let (s, v, acc) = if t < t0 {
-            (0.0, 0.0, 0.0)
-        } else if t < t1 {
-            let u = t - t0;
-            (0.5 * a * u * u, a * u, a)
-        } else {
-            let vmax = a * (t1 - t0);
-            (0.5 * a * (t1 - t0).powi(2) + vmax * (t - t1), vmax, 0.0)
-        };
-        let to_ecef = enu_rotation(&self.origin).transpose();
-        let position = Ecef(self.origin.to_ecef().0 + to_ecef * Vector3::new(s, 0.0, 0.0));
-        let e = Euler {
-            roll: 0.0,
-            pitch: 0.0,
-            heading: std::f64::consts::FRAC_PI_2,
-        };
-        Kinematics {
-            position,
-            velocity: to_ecef * Vector3::new(v, 0.0, 0.0),
-            acceleration: to_ecef * Vector3::new(acc, 0.0, 0.0),
-            attitude: ned_to_ecef(&position.to_geodetic()) * e.to_matrix(),
-        }
-    }
-}
+/// When the procedure turns start, s (each lasts [`Survey::turn_length`]: 65 s).
+const TURNS: [f64; 3] = [170.0, 350.0, 530.0];
 
 /// What was written.
 #[derive(Clone, Debug)]
 pub struct InsFlight {
+    /// The IMU's grade, as its preset names it.
+    pub grade: String,
     /// IMU samples.
     pub samples: usize,
     /// GNSS epochs.
@@ -83,8 +55,9 @@ impl std::fmt::Display for InsFlight {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         writeln!(
             f,
-            "ins flight: {} IMU samples (tactical, 200 Hz), {} GNSS epochs (1 Hz) → {}",
+            "ins flight: {} IMU samples ({}, 200 Hz), {} GNSS epochs (1 Hz) → {}",
             self.samples,
+            self.grade,
             self.gnss,
             self.out.display()
         )?;
@@ -97,16 +70,14 @@ impl std::fmt::Display for InsFlight {
 }
 
 /// Simulate into `out` with `seed`.
-pub fn run(out: &Path, seed: u64) -> Result<InsFlight, SimError> {
+pub fn run(out: &Path, seed: u64, grade: Grade) -> Result<InsFlight, SimError> {
     std::fs::create_dir_all(out).map_err(|e| SimError::File {
         path: out.display().to_string(),
         what: format!("cannot create the folder: {e}"),
     })?;
-    let m = Strip {
-        origin: Geodetic::from_degrees(47.3, 8.5, 800.0),
-    };
+    let m = Survey::new(Geodetic::from_degrees(47.3, 8.5, 800.0), SPAN, &TURNS);
     let start = Epoch::from_gregorian(2026, 6, 1, 10, 0, 0, 0, TimeScale::GPST);
-    let spec = ImuSpec::preset(Grade::Tactical);
+    let spec = ImuSpec::preset(grade);
     let n = (SPAN * RATE) as usize;
     let (imu, _) = corrupt(&ideal_imu(&m, start, RATE, n), &spec, seed);
     write_imu(out, start, &imu)?;
@@ -114,17 +85,29 @@ pub fn run(out: &Path, seed: u64) -> Result<InsFlight, SimError> {
     write_truth(out, &m, start)?;
     let lever = LEVER.map(|x| x.to_string()).join(",");
     let config = format!(
-        "# ppkat ins --config ins.toml: the simulated strip (see simulate --builtin ins)\nimu = \"imu.csv\"\ngnss = \"gnss.pos\"\ngrade = \"tactical\"\nlever-arm = \"{lever}\"\nwithhold = [\"{},{}\"]\nevery = 20\nout = \"ins.csv\"\n",
-        OUTAGE.0, OUTAGE.1
+        "# ppkat ins --config ins.toml: the simulated survey flight (see simulate --builtin ins)\nimu = \"imu.csv\"\ngnss = \"gnss.pos\"\ngrade = \"{}\"\nlever-arm = \"{lever}\"\nwithhold = [\"{},{}\"]\nevery = 20\nout = \"ins.csv\"\n",
+        grade_name(grade),
+        OUTAGE.0,
+        OUTAGE.1
     );
     common::atomic::write_atomic(&out.join("ins.toml"), |w: &mut dyn Write| {
         w.write_all(config.as_bytes())
     })?;
     Ok(InsFlight {
+        grade: spec.name,
         samples: imu.len(),
         gnss,
         out: out.to_path_buf(),
     })
+}
+
+/// The name `ppkat ins` reads for `grade`.
+fn grade_name(grade: Grade) -> &'static str {
+    match grade {
+        Grade::Navigation => "navigation",
+        Grade::Tactical => "tactical",
+        Grade::Mems => "mems",
+    }
 }
 
 /// The IMU log: a first row at the start, then one per sample (mean rates over it), and its
@@ -167,7 +150,7 @@ fn write_imu(out: &Path, start: Epoch, imu: &[ins::imu::ImuSample]) -> Result<()
 }
 
 /// GNSS antenna positions at 1 Hz with 2 cm / 4 cm noise, fixed.
-fn write_gnss(out: &Path, m: &Strip, start: Epoch, seed: u64) -> Result<usize, SimError> {
+fn write_gnss(out: &Path, m: &Survey, start: Epoch, seed: u64) -> Result<usize, SimError> {
     let mut rng = Rng::new(seed).fork(91);
     let lever = Vector3::from(LEVER);
     let recs: Vec<PosRecord> = (0..=SPAN as usize)
@@ -202,7 +185,7 @@ fn write_gnss(out: &Path, m: &Strip, start: Epoch, seed: u64) -> Result<usize, S
 }
 
 /// The IMU's truth at 10 Hz in insstat.py's columns.
-fn write_truth(out: &Path, m: &Strip, start: Epoch) -> Result<(), SimError> {
+fn write_truth(out: &Path, m: &Survey, start: Epoch) -> Result<(), SimError> {
     let mut text = format!("{STATE_HEADER}\n");
     for k in 0..=(SPAN * 10.0) as usize {
         let t = start + Duration::from_seconds(k as f64 * 0.1);

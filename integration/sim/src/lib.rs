@@ -39,6 +39,7 @@ pub mod gnss_obs;
 mod ground_points;
 pub mod imu;
 pub mod ins_flight;
+pub mod ins_motion;
 mod io;
 pub mod longbase;
 pub mod longbase_faults;
