@@ -471,13 +471,13 @@ mod tests {
         let line = "2025/07/08 19:34:18.499 40.0966268 -105.1474483 1601.4740000 1.0000000 21.0000000 0.0098995 0.0098995 0.0100000 0.0000000 0.0000000 0.0000000 0.0000000 0.0000000";
         let p = testkit::scratch_file(
             "float_q.pos",
-            &format!("{}\n{line}\n", column_header(PosFormat::Llh)),
+            format!("{}\n{line}\n", column_header(PosFormat::Llh)),
         );
         let r = read_pos(&p).unwrap();
         assert_eq!((r[0].quality, r[0].nsat), (Quality::Fixed, 21));
         let bad = testkit::scratch_file(
             "float_q2.pos",
-            &format!(
+            format!(
                 "{}\n{}\n",
                 column_header(PosFormat::Llh),
                 line.replace(" 1.0000000 ", " 1.5000000 ")

@@ -123,6 +123,7 @@ fn outages(pos: &[PosRecord], est: &[(Epoch, Estimate, Mat)], lever: &Vector3<f6
 fn car_job(dir: &Path) -> InsJob {
     InsJob {
         imu_csv: dir.join("imu_1934.csv"),
+        imu_format: ins::job::ImuFormat::RtklibCsv,
         imu_tag: dir.join("imu_1934.csv.tag"),
         gnss: dir.join("gnss_1934_sf.pos"),
         spec: ImuSpec::preset(Grade::Mems),

@@ -5,7 +5,7 @@ use super::triple;
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use integration::ins::attitude::Euler;
-use integration::ins::job::{run_job, InsJob};
+use integration::ins::job::{run_job, ImuFormat as JobFormat, InsJob};
 use integration::ins::output::write_csv;
 use integration::ins::spec::{Grade, ImuSpec};
 use nalgebra::Vector3;
@@ -27,15 +27,20 @@ use std::path::PathBuf;
 /// (each named on stderr).
 #[derive(clap::Args)]
 pub struct Args {
-    /// IMU log: CSV rows "ax,ay,az,gx,gy,gz,tick" (g, °/s, ms since power-up), the form
-    /// --imu-format rtklib-csv names.
+    /// IMU log, in the form --imu-format names, the IMU's own axes (--mount turns them).
     #[arg(long, value_name = "IMU.csv")]
     imu: PathBuf,
     /// The IMU log's RTKLIB time-tag file (default: the log's name with .tag appended).
     #[arg(long, value_name = "IMU.csv.tag")]
     imu_tag: Option<PathBuf>,
-    /// Format of the IMU log. rtklib-csv: the RTKLIB-style raw CSV with a time-tag file
-    /// (rtklibexplorer's GNSS_IMU); the only one read so far.
+    /// Format of the IMU log: rtklib-csv (rows "ax,ay,az,gx,gy,gz,tick": g, °/s, ms since
+    /// power-up, with a time-tag file; rtklibexplorer's GNSS_IMU), csv (a header naming each
+    /// column with its unit, GPST: gpst_week + gpst_tow, or gpst_s, or gpst_tow alone; gx_radps
+    /// or gx_dps rates, or dthx_rad / dthx_deg increments; ax_mps2 or ax_g, or dvx_mps
+    /// increments; likewise y and z; each row covers the interval since the row before) or
+    /// kf-gins (KF-GINS' text: "tow dθx dθy dθz dvx dvy dvz" in s, rad, m/s). Seconds of week
+    /// take the GNSS trajectory's week, said in the summary. A file whose force is not near g
+    /// in its stated unit, or whose rates look like °/s written as rad/s, is refused.
     #[arg(long, value_enum, default_value_t = ImuFormat::RtklibCsv)]
     imu_format: ImuFormat,
     /// GNSS antenna trajectory (.pos of ppkat or RTKLIB, llh or xyz).
@@ -97,6 +102,10 @@ pub struct Args {
 pub enum ImuFormat {
     /// RTKLIB-style raw CSV (g, °/s, ms ticks) with a time-tag file.
     RtklibCsv,
+    /// A CSV with a header stating each column's quantity and unit.
+    Csv,
+    /// KF-GINS' text increments (tow, Δθ rad, Δv m/s).
+    KfGins,
 }
 
 pub(crate) fn grade(s: &str) -> std::result::Result<Grade, String> {
@@ -137,6 +146,9 @@ pub fn run(args: Args) -> Result<()> {
         r.unused_fixes + done.gnss.iter().filter(|g| integration::ins::job::withheld(&job, done.gnss[0].time, g.time)).count(),
         r.noise_scale
     );
+    for a in &done.assumed {
+        println!("  assumed: {a}");
+    }
     let skipped: Vec<String> = done
         .imu_notes
         .iter()
@@ -147,11 +159,13 @@ pub fn run(args: Args) -> Result<()> {
 
 /// The library's job for the arguments.
 fn job(args: &Args) -> Result<InsJob> {
-    let ImuFormat::RtklibCsv = args.imu_format;
     let spec = match &args.imu_spec {
         Some(p) => ImuSpec::from_file(p)?,
         None => ImuSpec::preset(args.grade),
     };
+    if args.imu_tag.is_some() && !matches!(args.imu_format, ImuFormat::RtklibCsv) {
+        bail!("--imu-tag belongs to --imu-format rtklib-csv; the other formats carry their times");
+    }
     let m = triple("--mount", &args.mount)?;
     let l = triple("--lever-arm", &args.lever_arm)?;
     let withhold = args
@@ -170,6 +184,11 @@ fn job(args: &Args) -> Result<InsJob> {
     }
     Ok(InsJob {
         imu_csv: args.imu.clone(),
+        imu_format: match args.imu_format {
+            ImuFormat::RtklibCsv => JobFormat::RtklibCsv,
+            ImuFormat::Csv => JobFormat::Csv,
+            ImuFormat::KfGins => JobFormat::KfGins,
+        },
         imu_tag: args.imu_tag.clone().unwrap_or_else(|| {
             let mut s = args.imu.clone().into_os_string();
             s.push(".tag");

@@ -211,3 +211,89 @@ fn the_simulated_ins_flight_is_bridged_with_honest_sigmas() {
         "NEES {np} {nat}"
     );
 }
+
+/// The simulated flight's IMU rewritten as a plain CSV (header with units, GPS week and
+/// second) and as KF-GINS increments (seconds of week, rad, m/s): `ppkat ins` reads each to
+/// the same trajectory as the RTKLIB-style log, and says which week it assumed.
+#[test]
+fn plain_csv_and_kf_gins_logs_give_the_same_trajectory() {
+    let dir = tmp("ins_formats");
+    let _ = std::fs::remove_dir_all(&dir);
+    succeeds(&ppkat(&["simulate", "--builtin", "ins", "-o", p(&dir)]));
+    let raw = std::fs::read_to_string(dir.join("imu.csv")).unwrap();
+    // The log starts at 2026-06-01 10:00:00 GPST (week 2421, second 122400) at tick 1000.
+    let (mut plain, mut kf) = (
+        String::from("gpst_week,gpst_tow,ax_g,ay_g,az_g,gx_dps,gy_dps,gz_dps\n"),
+        String::new(),
+    );
+    let mut last = None;
+    for line in raw.lines() {
+        let f: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+        let tow = 122_400.0 + (f[6] - 1000.0) / 1000.0;
+        plain += &format!("2421,{tow:.3},{}\n", line.rsplit_once(',').unwrap().0);
+        if let Some(t0) = last {
+            let dt: f64 = tow - t0;
+            let inc = |x: f64, k: f64| format!("{:.15e}", x * k * dt);
+            let g = 9.80665;
+            let r = std::f64::consts::PI / 180.0;
+            kf += &format!(
+                "{tow:.3} {} {} {} {} {} {}\n",
+                inc(f[3], r),
+                inc(f[4], r),
+                inc(f[5], r),
+                inc(f[0], g),
+                inc(f[1], g),
+                inc(f[2], g)
+            );
+        } else {
+            kf += &format!("{tow:.3} 0 0 0 0 0 0\n");
+        }
+        last = Some(tow);
+    }
+    std::fs::write(dir.join("imu_plain.csv"), plain).unwrap();
+    std::fs::write(dir.join("imu_kf.txt"), kf).unwrap();
+    let cfg = dir.join("ins.toml");
+    succeeds(&ppkat(&["ins", "--config", p(&cfg)]));
+    let t = succeeds(&ppkat(&[
+        "ins",
+        "--config",
+        p(&cfg),
+        "--imu",
+        p(&dir.join("imu_plain.csv")),
+        "--imu-format",
+        "csv",
+        "-o",
+        p(&dir.join("plain.csv")),
+    ]));
+    assert!(!t.contains("assumed"), "{t}");
+    let t = succeeds(&ppkat(&[
+        "ins",
+        "--config",
+        p(&cfg),
+        "--imu",
+        p(&dir.join("imu_kf.txt")),
+        "--imu-format",
+        "kf-gins",
+        "-o",
+        p(&dir.join("kf.csv")),
+    ]));
+    assert!(
+        t.contains("assumed: GPS week 2421 assumed for KF-GINS'"),
+        "{t}"
+    );
+    let base = csv_rows(&dir.join("ins.csv"));
+    for (name, tol_m) in [("plain.csv", 1e-6), ("kf.csv", 1e-4)] {
+        let other = csv_rows(&dir.join(name));
+        assert_eq!(other.len(), base.len(), "{name}");
+        let worst = base
+            .iter()
+            .zip(&other)
+            .map(|(a, b)| {
+                assert_eq!(a["gpst_tow"], b["gpst_tow"]);
+                ((a["lat_deg"] - b["lat_deg"]).abs() + (a["lon_deg"] - b["lon_deg"]).abs()) * 1.1e5
+                    + (a["heading_deg"] - b["heading_deg"]).abs()
+            })
+            .fold(0.0f64, f64::max);
+        assert!(worst < tol_m, "{name}: {worst}");
+    }
+}

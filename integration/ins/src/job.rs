@@ -1,5 +1,5 @@
 //! A whole loosely coupled run from files, as `ppkat ins` makes it: the IMU log (RTKLIB-style
-//! CSV and time tags) turned into the body frame by its mounting and shifted by its logging
+//! CSV and time tags, a plain CSV with a header, or KF-GINS' increments) turned into the body frame by its mounting and shifted by its logging
 //! delay, the GNSS `.pos`, the alignment (levelled while still before the first motion,
 //! heading from the course once the antenna moves faster than [`ALIGN_SPEED`]), the forward
 //! filter and the smoother, and the smoothed trajectory written as CSV.
@@ -16,7 +16,7 @@ use crate::imu::{to_body, ImuSample};
 use crate::loose::{run, LooseOptions, LooseRun};
 use crate::mech::NavState;
 use crate::spec::ImuSpec;
-use crate::{rtklib_imu, Error, Result};
+use crate::{plain_imu, rtklib_imu, Error, Result};
 use common::frame::{enu_rotation, Ecef};
 use gnss::solution::Quality;
 use hifitime::{Duration, Epoch};
@@ -28,12 +28,25 @@ pub const ALIGN_SPEED: f64 = 1.0;
 /// Horizontal speed (m/s) below which the body is taken as still for levelling.
 const STILL_SPEED: f64 = 0.3;
 
+/// How an IMU log is written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImuFormat {
+    /// The RTKLIB-style raw CSV (g, °/s, ms ticks) with its time-tag file ([`rtklib_imu`]).
+    RtklibCsv,
+    /// A CSV whose header states its quantities and units ([`crate::plain_imu`]).
+    Csv,
+    /// KF-GINS' text increments ([`crate::plain_imu`]).
+    KfGins,
+}
+
 /// What a run reads and how.
 #[derive(Clone, Debug)]
 pub struct InsJob {
-    /// IMU CSV (g, °/s, ms ticks).
+    /// IMU log.
     pub imu_csv: PathBuf,
-    /// Its RTKLIB time-tag file.
+    /// Its format.
+    pub imu_format: ImuFormat,
+    /// Its RTKLIB time-tag file (read for [`ImuFormat::RtklibCsv`] only).
     pub imu_tag: PathBuf,
     /// GNSS antenna positions (`.pos`).
     pub gnss: PathBuf,
@@ -65,6 +78,8 @@ pub struct InsRun {
     pub levelled: (f64, f64, Epoch),
     /// IMU rows skipped and gaps, named.
     pub imu_notes: Vec<String>,
+    /// What was assumed in reading the IMU log (a week for seconds of week).
+    pub assumed: Vec<String>,
 }
 
 /// Seconds from the first GNSS epoch within a withheld window.
@@ -81,9 +96,14 @@ fn motion(g: &[GnssEpoch], i: usize) -> Option<(f64, f64)> {
     Some((enu.xy().norm(), course(enu.y, enu.x)))
 }
 
-/// The IMU samples in the body frame, on GPST.
-fn body_samples(job: &InsJob) -> Result<(Vec<ImuSample>, Vec<String>)> {
-    let log = rtklib_imu::read(&job.imu_csv, &job.imu_tag)?;
+/// The IMU samples in the body frame, on GPST (seconds of week in the week nearest `near`),
+/// what was skipped and what was assumed.
+fn body_samples(job: &InsJob, near: Epoch) -> Result<(Vec<ImuSample>, Vec<String>, Vec<String>)> {
+    let (log, assumed) = match job.imu_format {
+        ImuFormat::RtklibCsv => (rtklib_imu::read(&job.imu_csv, &job.imu_tag)?, Vec::new()),
+        ImuFormat::Csv => plain_imu::read_csv(&job.imu_csv, near)?,
+        ImuFormat::KfGins => plain_imu::read_kf_gins(&job.imu_csv, near)?,
+    };
     let mut s = log.samples;
     to_body(&mut s, &job.mount.to_matrix().transpose());
     for x in &mut s {
@@ -95,13 +115,17 @@ fn body_samples(job: &InsJob) -> Result<(Vec<ImuSample>, Vec<String>)> {
         .chain(log.gaps.into_iter().map(|g| format!("gap at {g}")))
         .chain(log.saturated)
         .collect();
-    Ok((s, notes))
+    Ok((s, notes, assumed))
 }
 
 /// Run the job: the filter's results (the caller writes them).
 pub fn run_job(job: &InsJob) -> Result<InsRun> {
-    let (samples, imu_notes) = body_samples(job)?;
     let gnss = read_pos(&job.gnss)?;
+    let first = gnss.first().map(|g| g.time).ok_or_else(|| Error::Input {
+        path: job.gnss.clone(),
+        message: "no positions".into(),
+    })?;
+    let (samples, imu_notes, assumed) = body_samples(job, first)?;
     let refuse = |m: &str| Error::Input {
         path: job.gnss.clone(),
         message: m.to_string(),
@@ -127,7 +151,6 @@ pub fn run_job(job: &InsJob) -> Result<InsRun> {
         speed,
         lv.gyro_bias,
     );
-    let first = gnss[0].time;
     let fixes: Vec<(Epoch, PositionFix)> = gnss
         .iter()
         .filter(|g| g.time > samples[start].time && !withheld(job, first, g.time))
@@ -144,6 +167,7 @@ pub fn run_job(job: &InsJob) -> Result<InsRun> {
         gnss,
         levelled: (lv.roll, lv.pitch, samples[start].time),
         imu_notes,
+        assumed,
     })
 }
 

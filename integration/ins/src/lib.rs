@@ -39,6 +39,7 @@ pub mod job;
 pub mod loose;
 pub mod mech;
 pub mod output;
+pub mod plain_imu;
 pub mod rtklib_imu;
 pub mod smoother;
 pub mod spec;

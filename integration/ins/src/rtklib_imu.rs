@@ -71,8 +71,9 @@ fn rows(text: &str, skipped: &mut Vec<String>) -> Vec<Row> {
     out
 }
 
-/// Runs of rows where an axis sits at its largest magnitude (see [`ImuLog::saturated`]).
-fn saturated(rs: &[Row]) -> Vec<String> {
+/// Runs of rows where an axis sits at its largest magnitude (see [`ImuLog::saturated`]):
+/// each row its line and `ax, ay, az, gx, gy, gz` in any units.
+pub(crate) fn saturated(rs: &[(usize, [f64; 6])]) -> Vec<String> {
     const AXES: [&str; 6] = ["ax", "ay", "az", "gx", "gy", "gz"];
     let mut out = Vec::new();
     for (j, name) in AXES.iter().enumerate() {
@@ -163,7 +164,8 @@ pub fn read(csv: &Path, tag_path: &Path) -> Result<ImuLog> {
             "the accelerations' median magnitude is {median:.3}: not in g (m/s² would read 9.8); convert the file to g"
         )));
     }
-    log.saturated = saturated(&rs);
+    let lines: Vec<(usize, [f64; 6])> = rs.iter().map(|r| (r.0, r.1)).collect();
+    log.saturated = saturated(&lines);
     let (t0, t1) = (rs[0].2, rs[rs.len() - 1].2);
     log.stretch = last_tag as f64 / (t1 - t0) as f64;
     if (log.stretch - 1.0).abs() > MAX_STRETCH {

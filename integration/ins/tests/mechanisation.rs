@@ -2,7 +2,7 @@
 //! (`ins::inverse`) mechanised from the true start must stay on the truth, and a known
 //! sensor bias must grow the textbook error with the right sign.
 
-use common::frame::{enu_rotation, Ecef, Geodetic};
+use common::frame::{enu_rotation, Geodetic};
 use hifitime::Epoch;
 use ins::attitude::{ned_to_ecef, Euler};
 use ins::imu::ImuSample;
