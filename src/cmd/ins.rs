@@ -6,7 +6,7 @@ use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use integration::ins::attitude::Euler;
 use integration::ins::job::{run_job, ImuFormat as JobFormat, InsJob};
-use integration::ins::output::write_csv;
+use integration::ins::output::{write_csv, write_pos};
 use integration::ins::spec::{Grade, ImuSpec};
 use nalgebra::Vector3;
 use std::path::PathBuf;
@@ -86,9 +86,15 @@ pub struct Args {
     /// Write a row every this many IMU samples (besides each GNSS epoch).
     #[arg(long, value_name = "N", default_value_t = 10)]
     every: usize,
-    /// Output CSV (replaced if it exists).
+    /// Output: CSV (the columns above), or an RTKLIB .pos when the name ends in .pos (the
+    /// IMU's latitude, longitude, ellipsoidal height and σ; Q that of the last GNSS epoch used
+    /// when it is at most 2 s old, 5 while the IMU bridges longer). Replaced if it exists.
     #[arg(short = 'o', long = "out", value_name = "OUT.csv")]
     out: PathBuf,
+    /// Write the forward filter's trajectory instead of the smoothed one (what a real-time
+    /// system would have had; to compare).
+    #[arg(long)]
+    forward: bool,
     /// Options from a TOML file: each key a flag of this command without its dashes
     /// (`mount = "180,-6.79,185.35"`, `no-side-slip = 0.3`, `withhold = ["40,55"]`);
     /// relative paths are read from the file's folder; flags on the command line win over
@@ -116,24 +122,46 @@ pub(crate) fn grade(s: &str) -> std::result::Result<Grade, String> {
 pub fn run(args: Args) -> Result<()> {
     let job = job(&args)?;
     let done = run_job(&job).context("ins failed")?;
-    let rows: Vec<_> = done
-        .run
-        .smoothed
-        .iter()
-        .map(|(t, s)| (*t, s.est, s.cov))
-        .collect();
+    let rows: Vec<_> = if args.forward {
+        done.run.forward.clone()
+    } else {
+        done.run
+            .smoothed
+            .iter()
+            .map(|(t, s)| (*t, s.est, s.cov))
+            .collect()
+    };
     if rows.is_empty() {
         bail!("ins produced nothing: no IMU data after the alignment");
     }
     let comments = vec![
         format!(
-            "ppkat ins: {} smoothed, loosely coupled on {}",
+            "ppkat ins: {} {}, loosely coupled on {}",
             args.imu.display(),
+            if args.forward {
+                "forward only"
+            } else {
+                "smoothed"
+            },
             args.gnss.display()
         ),
         format!("IMU figures: {}", job.spec.name),
     ];
-    write_csv(&args.out, &comments, &rows)?;
+    if args
+        .out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("pos"))
+    {
+        let first = done.gnss[0].time;
+        let used: Vec<_> = done
+            .gnss
+            .iter()
+            .filter(|g| !integration::ins::job::withheld(&job, first, g.time))
+            .collect();
+        write_pos(&args.out, &comments, &rows, &used)?;
+    } else {
+        write_csv(&args.out, &comments, &rows)?;
+    }
     let r = &done.run;
     println!(
         "ins: {} rows → {}; aligned at {} (levelled roll {:.2}°, pitch {:.2}°; heading from the course); {} GNSS epochs used, {} withheld or outside the IMU data; IMU noise raised ×{:.1} by the innovations",

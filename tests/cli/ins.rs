@@ -201,6 +201,25 @@ fn the_simulated_ins_flight_is_bridged_with_honest_sigmas() {
     assert!(n > 5000, "{n} rows compared");
     assert!(worst > 0.0 && worst <= 0.10, "outage worst {worst}");
     let rms = sq.map(|s| (s / n as f64).sqrt());
+    // The same as an RTKLIB .pos: fixed (Q 1) where the GNSS arrives, 5 after 2 s of outage
+    // (the outage's 31 s at 10 Hz, less the first 2 s).
+    succeeds(&ppkat(&[
+        "ins",
+        "--config",
+        p(&dir.join("ins.toml")),
+        "-o",
+        p(&dir.join("ins.pos")),
+    ]));
+    let pos = std::fs::read_to_string(dir.join("ins.pos")).unwrap();
+    let q: Vec<&str> = pos
+        .lines()
+        .filter(|l| !l.starts_with('%'))
+        .map(|l| l.split_whitespace().nth(5).unwrap())
+        .collect();
+    assert_eq!(q.len(), sol.len());
+    let single = q.iter().filter(|x| **x == "5").count();
+    assert!((280..=300).contains(&single), "{single} rows bridged");
+    assert_eq!(q.iter().filter(|x| **x == "1").count() + single, q.len());
     assert!(
         rms[0] <= 0.005 && rms[1] <= 0.005 && rms[2] <= 0.01,
         "roll, pitch, heading RMS {rms:?} °"

@@ -16,6 +16,9 @@ pub enum Error {
     /// An output could not be written.
     #[error(transparent)]
     Write(#[from] common::atomic::Error),
+    /// A GNSS-format output could not be written.
+    #[error(transparent)]
+    Gnss(#[from] gnss::Error),
     /// A file's content is not what it should be.
     #[error("{path}: {message}")]
     Input {

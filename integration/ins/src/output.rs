@@ -1,4 +1,4 @@
-//! The trajectory as CSV, with the columns `../shared/tools/insstat.py` reads: GPS week and
+//! The trajectory as CSV (or as an RTKLIB `.pos`, [`write_pos`]), with the columns `../shared/tools/insstat.py` reads: GPS week and
 //! second of week, latitude, longitude (degrees), ellipsoidal height (m), velocity north,
 //! east, up (m/s), roll, pitch, heading (degrees, heading clockwise from north) and their
 //! 1-σ columns (`sd_n_m … sd_heading_deg`). The position is the IMU's. Written atomically.
@@ -9,8 +9,10 @@
 
 use crate::errstate::{idx, Mat};
 use crate::filter::Estimate;
+use crate::gnss_pos::GnssEpoch;
 use crate::mech::NavState;
 use common::frame::enu_rotation;
+use gnss::solution::{PosFormat, PosRecord, Quality};
 use hifitime::Epoch;
 use nalgebra::Matrix3;
 use std::io::Write;
@@ -93,5 +95,43 @@ pub fn write_csv(
         }
         Ok(())
     })?;
+    Ok(())
+}
+
+/// Longest time (s) a GNSS epoch's quality is carried to the rows after it in a `.pos`.
+pub const QUALITY_HOLD: f64 = 2.0;
+
+/// Write the rows to `path` as an RTKLIB `.pos` (latitude, longitude, ellipsoidal height of
+/// the IMU, σ and correlations from the position covariance), atomically. `Q` is that of the
+/// last GNSS epoch used (`used`, in time order) when it is at most [`QUALITY_HOLD`] s old,
+/// and 5 (as single) while the IMU bridges longer; `ns` is 0 (a `.pos` of GNSS epochs holds
+/// the satellites).
+pub fn write_pos(
+    path: &Path,
+    comments: &[String],
+    rows: &[(Epoch, Estimate, Mat)],
+    used: &[&GnssEpoch],
+) -> crate::Result<()> {
+    let records: Vec<PosRecord> = rows
+        .iter()
+        .map(|(t, e, c)| {
+            let k = used.partition_point(|g| g.time <= *t);
+            let quality = k
+                .checked_sub(1)
+                .map(|i| used[i])
+                .filter(|g| (*t - g.time).to_seconds() <= QUALITY_HOLD)
+                .map_or(Quality::Single, |g| g.quality);
+            PosRecord {
+                time: *t,
+                pos: e.nav.position,
+                quality,
+                nsat: 0,
+                cov: c.fixed_view::<3, 3>(idx::POS, idx::POS).into_owned(),
+                age: 0.0,
+                ratio: 0.0,
+            }
+        })
+        .collect();
+    gnss::solution::write_pos(path, comments, &records, PosFormat::Llh)?;
     Ok(())
 }
