@@ -71,6 +71,7 @@ fn truth_trajectory(dir: &Path, step: usize) -> (Trajectory, AttitudeTable) {
             .iter()
             .map(|r| [r[10].to_radians(), r[9].to_radians(), r[8].to_radians()])
             .collect(),
+        sigmas: None,
     };
     (Trajectory::with_derived_segments(pts, None), att)
 }
@@ -332,6 +333,7 @@ fn photos_are_matched_and_geotagged_copies_written() {
             segment: 0,
             rotation: Matrix3::identity(),
             attitude: AttitudeSource::Heading,
+            rotation_sigma: None,
             flags: vec![],
         });
     }

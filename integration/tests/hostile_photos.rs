@@ -39,6 +39,7 @@ fn station(k: usize) -> CameraStation {
         segment: 0,
         rotation: Matrix3::identity(),
         attitude: AttitudeSource::Heading,
+        rotation_sigma: None,
         flags: vec![],
     }
 }

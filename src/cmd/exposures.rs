@@ -56,6 +56,15 @@ pub struct Args {
     /// roll).
     #[arg(long, value_name = "FILE")]
     attitude: Option<PathBuf>,
+    /// Camera attitude from a GNSS/INS trajectory written by `ppkat ins -o FILE.csv`: roll,
+    /// pitch and heading of the IMU's body (x forward, y right, z down; the camera mounted
+    /// looking down with image x forward, as --attitude-convention ypr), interpolated at each
+    /// exposure with their σ, which the antenna table (--format antenna) carries as
+    /// sd_omega,sd_phi,sd_kappa for `ppkat adjust`'s [attitude] observations, where the
+    /// boresight between the IMU and the camera is estimated. Write the trajectory densely
+    /// enough for the motion (ppkat ins --every).
+    #[arg(long, value_name = "INS.csv", conflicts_with = "attitude")]
+    ins: Option<PathBuf>,
     /// Meaning of the three angles of the --attitude file.
     #[arg(long, value_enum, default_value = "ypr")]
     attitude_convention: ConventionArg,
@@ -203,9 +212,10 @@ pub fn job(args: Args) -> Result<pipeline::ExposureJob> {
         ConventionArg::Opk => AngleConvention::OmegaPhiKappa,
         ConventionArg::Pok => AngleConvention::PhiOmegaKappa,
     };
-    let attitude = match args.attitude {
-        Some(p) => Some(AttitudeTable::read_csv(&p, convention)?),
-        None => None,
+    let attitude = match (args.attitude, args.ins) {
+        (Some(p), _) => Some(AttitudeTable::read_csv(&p, convention)?),
+        (None, Some(p)) => Some(AttitudeTable::read_ins_csv(&p)?),
+        (None, None) => None,
     };
     let projection = Projection::parse(&args.projection).with_context(|| {
         format!(

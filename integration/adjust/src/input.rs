@@ -134,6 +134,10 @@ pub struct Antenna {
     pub quality: u8,
     /// Camera → local ENU at the antenna, when the table carries an attitude.
     pub rotation: Option<Matrix3<f64>>,
+    /// σ of that attitude about the camera's x, y, z axes (radians), when the table carries
+    /// `sd_omega,sd_phi,sd_kappa` (degrees): it wins over the `[attitude]` section's
+    /// `sigma_deg`.
+    pub rotation_sigma: Option<Vector3<f64>>,
     /// Antenna velocity in the local ENU at the antenna (m/s), when the table carries one
     /// (`ve,vn,vu`) or the trajectory gives it: what a GNSS latency is linearised with.
     pub vel_enu: Option<Vector3<f64>>,

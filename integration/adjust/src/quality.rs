@@ -3,7 +3,7 @@
 //! detectable blunder) and what data snooping removed, each read from its factor.
 
 use super::factors::GnssCentre;
-use super::groups::{GROUP_NAMES, MISWEIGHTED};
+use super::groups::{GROUP_ATTITUDE, GROUP_NAMES, MISWEIGHTED};
 use super::project::Project;
 use super::residuals::DELTA0;
 use super::solve::Solved;
@@ -40,9 +40,9 @@ pub struct GroupQuality {
     /// Components with a redundancy below 0.1: a blunder there is (nearly) undetectable.
     pub uncontrolled: usize,
     /// Largest minimal detectable blunder among the controlled components (redundancy ≥ 0.1),
-    /// pixels for image points, metres otherwise.
+    /// pixels for image points, degrees for attitudes, metres otherwise.
     pub max_mdb: f64,
-    /// Unit of the MDB: px for image points, m otherwise.
+    /// Unit of the MDB: px for image points, ° for attitudes, m otherwise.
     pub mdb_unit: String,
     /// The median σ given to its components (before the σ factor), in `mdb_unit`.
     pub given_sigma: f64,
@@ -62,7 +62,11 @@ pub(super) fn groups(p: &Project, s: &Solved, rel: &[Reliability]) -> Vec<GroupQ
             min_redundancy: f64::INFINITY,
             uncontrolled: 0,
             max_mdb: 0.0,
-            mdb_unit: if g == 0 { "px".into() } else { "m".into() },
+            mdb_unit: match g {
+                0 => "px".into(),
+                _ if g == GROUP_ATTITUDE.0 => "°".into(),
+                _ => "m".into(),
+            },
             given_sigma: 0.0,
         })
         .collect();
@@ -73,6 +77,7 @@ pub(super) fn groups(p: &Project, s: &Solved, rel: &[Reliability]) -> Vec<GroupQ
         let noise = pr.noise(r.factor);
         let unit = match pr.factor_as::<ImagePoint>(r.factor) {
             Some(f) => p.cameras[p.images[f.image().index()].camera].camera.pixel,
+            None if g == GROUP_ATTITUDE => 1f64.to_radians(),
             None => 1.0,
         };
         let q = &mut groups[g.0];
@@ -111,6 +116,7 @@ pub(super) fn groups(p: &Project, s: &Solved, rel: &[Reliability]) -> Vec<GroupQ
 pub(super) fn misweighted(groups: &[GroupQuality]) -> Vec<String> {
     let amount = |v: f64, unit: &str| match unit {
         "px" => format!("{v:.2} px"),
+        "°" => format!("{v:.4}°"),
         _ if v >= 1.0 => format!("{v:.1} m"),
         _ if v >= 0.01 => format!("{:.1} cm", v * 100.0),
         _ => format!("{:.1} mm", v * 1000.0),

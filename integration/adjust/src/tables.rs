@@ -507,6 +507,7 @@ pub(super) fn read_antennas(path: &Path, scale: f64) -> Result<Vec<Antenna>, Adj
         _ => None,
     };
     let vel = velocity_columns(&t, path)?;
+    let sd = attitude_sigma_columns(&t, path, opk.is_some())?;
     let mut out = Vec::new();
     for (line, row) in &t.rows {
         let v: Vec<f64> = need[1..]
@@ -552,6 +553,27 @@ pub(super) fn read_antennas(path: &Path, scale: f64) -> Result<Vec<Antenna>, Adj
                 None => 1,
             },
             rotation,
+            rotation_sigma: match sd {
+                Some(c) => {
+                    let mut s = Vector3::zeros();
+                    for (k, &ci) in c.iter().enumerate() {
+                        let v = t.num(*line, row, ci)?;
+                        if v <= 0.0 {
+                            return Err(AdjustError::Input {
+                                path: path.display().to_string(),
+                                line: *line,
+                                what: format!(
+                                    "{v} in column {}: a σ must be positive (degrees)",
+                                    t.cols[ci]
+                                ),
+                            });
+                        }
+                        s[k] = v.to_radians();
+                    }
+                    Some(s)
+                }
+                None => None,
+            },
             vel_enu: match vel {
                 Some(c) => Some(Vector3::new(
                     t.num(*line, row, c[0])?,
@@ -575,6 +597,32 @@ fn velocity_columns(t: &Table, path: &Path) -> Result<Option<[usize; 3]>, Adjust
             "the velocity needs all three columns `ve,vn,vu` (m/s, ENU at the antenna): add the missing ones or remove the others",
         )),
     }
+}
+
+/// The attitude σ columns `sd_omega,sd_phi,sd_kappa` (degrees) of an antenna table: all
+/// three or none, and only beside `omega,phi,kappa`.
+fn attitude_sigma_columns(
+    t: &Table,
+    path: &Path,
+    has_attitude: bool,
+) -> Result<Option<[usize; 3]>, AdjustError> {
+    let cols = match (t.col("sd_omega"), t.col("sd_phi"), t.col("sd_kappa")) {
+        (Some(a), Some(b), Some(c)) => [a, b, c],
+        (None, None, None) => return Ok(None),
+        _ => {
+            return Err(perr(
+                path,
+                "the attitude σ needs all three columns `sd_omega,sd_phi,sd_kappa` (degrees): add the missing ones or remove the others",
+            ))
+        }
+    };
+    if !has_attitude {
+        return Err(perr(
+            path,
+            "`sd_omega,sd_phi,sd_kappa` are the σ of an attitude, but the table has no `omega,phi,kappa` columns: add them or remove the σ",
+        ));
+    }
+    Ok(Some(cols))
 }
 
 /// Read the `.pos` trajectory a project names (segments derived from its Q changes and gaps).
@@ -618,6 +666,7 @@ pub(super) fn antennas_from_trajectory(
                     segment: ip.segment,
                     quality: ip.quality as u8,
                     rotation: None,
+                    rotation_sigma: None,
                     vel_enu: Some(r * ip.vel),
                 });
             }
@@ -635,3 +684,6 @@ pub(super) fn antennas_from_trajectory(
     }
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests;

@@ -70,6 +70,9 @@ pub struct AttitudeTable {
     pub times: Vec<Epoch>,
     /// The three angles of each sample, radians.
     pub angles: Vec<[f64; 3]>,
+    /// σ of each sample about the camera's x, y, z axes (radians), when the source gives them
+    /// (a GNSS/INS trajectory: its roll, pitch and heading σ).
+    pub sigmas: Option<Vec<[f64; 3]>>,
 }
 
 /// `a` moved by whole turns to within half a turn of `reference` (both finite).
@@ -136,11 +139,86 @@ impl AttitudeTable {
             conv,
             times,
             angles,
+            sigmas: None,
         })
     }
 
-    /// R at `t` (angles interpolated linearly, wrap-aware); `None` outside the table.
-    pub fn at(&self, t: Epoch) -> Option<Matrix3<f64>> {
+    /// The attitude of a `ppkat ins` trajectory CSV: `gpst_week, gpst_tow, roll_deg,
+    /// pitch_deg, heading_deg` and their `sd_roll_deg, sd_pitch_deg, sd_heading_deg` (the
+    /// body's, x forward, y right, z down, camera mounted looking down with image x forward:
+    /// σ about the camera's x, y, z are those of roll, pitch and heading).
+    pub fn read_ins_csv(path: &Path) -> Result<AttitudeTable> {
+        let text = std::fs::read_to_string(path).map_err(Error::io(path))?;
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
+        let (_, header) = lines
+            .next()
+            .ok_or_else(|| Error::input(path, "empty: no header line"))?;
+        let names: Vec<&str> = header.split(',').map(str::trim).collect();
+        const COLS: [&str; 8] = [
+            "gpst_week",
+            "gpst_tow",
+            "heading_deg",
+            "pitch_deg",
+            "roll_deg",
+            "sd_roll_deg",
+            "sd_pitch_deg",
+            "sd_heading_deg",
+        ];
+        let mut at = [0usize; 8];
+        for (k, c) in COLS.iter().enumerate() {
+            at[k] = names.iter().position(|n| n == c).ok_or_else(|| {
+                Error::input(
+                    path,
+                    format!("no {c} column: not a ppkat ins trajectory (write it with ppkat ins -o FILE.csv)"),
+                )
+            })?;
+        }
+        let (mut times, mut angles, mut sigmas) = (Vec::new(), Vec::new(), Vec::new());
+        for (i, line) in lines {
+            let f: Vec<&str> = line.split(',').map(str::trim).collect();
+            let mut v = [0.0; 8];
+            for (k, &c) in at.iter().enumerate() {
+                v[k] = f
+                    .get(c)
+                    .and_then(|x| x.parse::<f64>().ok())
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| {
+                        Error::parse(path, i + 1, format!("{}: not a number", COLS[k]))
+                    })?;
+            }
+            let time = checked_week_tow(v[0], v[1])
+                .map_err(|e| Error::parse(path, i + 1, format!("time: {e}")))?;
+            if times.last().is_some_and(|l| time <= *l) {
+                return Err(Error::parse(
+                    path,
+                    i + 1,
+                    "time does not follow the row before",
+                ));
+            }
+            if v[5..].iter().any(|s| *s <= 0.0) {
+                return Err(Error::parse(path, i + 1, "a σ column is not positive"));
+            }
+            times.push(time);
+            angles.push([v[2].to_radians(), v[3].to_radians(), v[4].to_radians()]);
+            sigmas.push([v[5].to_radians(), v[6].to_radians(), v[7].to_radians()]);
+        }
+        if times.len() < 2 {
+            return Err(Error::input(path, "fewer than two attitude samples"));
+        }
+        Ok(AttitudeTable {
+            conv: AngleConvention::YawPitchRoll,
+            times,
+            angles,
+            sigmas: Some(sigmas),
+        })
+    }
+
+    /// The interval of `t` (index of its later sample) and the fraction into it; `None`
+    /// outside the table.
+    fn bracket(&self, t: Epoch) -> Option<(usize, f64)> {
         let (t0, t1) = (*self.times.first()?, *self.times.last()?);
         if t < t0 || t > t1 {
             return None;
@@ -149,9 +227,25 @@ impl AttitudeTable {
             .times
             .partition_point(|x| *x <= t)
             .clamp(1, self.times.len() - 1);
-        let (a, b) = (&self.angles[j - 1], &self.angles[j]);
         let f = (t - self.times[j - 1]).to_seconds()
             / (self.times[j] - self.times[j - 1]).to_seconds().max(1e-9);
+        Some((j, f))
+    }
+
+    /// σ at `t` about the camera's x, y, z (radians, interpolated linearly), when the table
+    /// has them; `None` outside it.
+    pub fn sigma_at(&self, t: Epoch) -> Option<[f64; 3]> {
+        let s = self.sigmas.as_ref()?;
+        let (j, f) = self.bracket(t)?;
+        Some(std::array::from_fn(|k| {
+            s[j - 1][k] + (s[j][k] - s[j - 1][k]) * f
+        }))
+    }
+
+    /// R at `t` (angles interpolated linearly, wrap-aware); `None` outside the table.
+    pub fn at(&self, t: Epoch) -> Option<Matrix3<f64>> {
+        let (j, f) = self.bracket(t)?;
+        let (a, b) = (&self.angles[j - 1], &self.angles[j]);
         let mut x = [0.0; 3];
         for k in 0..3 {
             let bk = unwrap_to(b[k], a[k]);
@@ -183,5 +277,38 @@ mod tests {
         );
         assert!((unwrap_to(3.1, -3.1) - (3.1 - 2.0 * std::f64::consts::PI)).abs() < 1e-12);
         assert!((unwrap_to(0.5 + 40.0 * std::f64::consts::PI, 0.4) - 0.5).abs() < 1e-9);
+    }
+
+    /// A `ppkat ins` CSV: heading, pitch, roll as yaw-pitch-roll with their σ about the
+    /// camera's x (roll), y (pitch), z (heading), interpolated; a file without a σ column is
+    /// refused naming it.
+    #[test]
+    fn an_ins_trajectory_gives_attitude_and_sigma() {
+        let head = "gpst_week,gpst_tow,lat_deg,lon_deg,h_m,vn_mps,ve_mps,vu_mps,roll_deg,pitch_deg,heading_deg,sd_n_m,sd_e_m,sd_u_m,sd_vn_mps,sd_ve_mps,sd_vu_mps,sd_roll_deg,sd_pitch_deg,sd_heading_deg";
+        let row = |tow: f64, h: f64, sd: f64| {
+            format!(
+                "2421,{tow},47,8,800,0,60,0,1,2,{h},0.01,0.01,0.02,0.01,0.01,0.01,{sd},{sd},{}",
+                2.0 * sd
+            )
+        };
+        let text = format!(
+            "# ppkat ins\n{head}\n{}\n{}\n",
+            row(100.0, 90.0, 0.01),
+            row(101.0, 92.0, 0.03)
+        );
+        let p = testkit::scratch_file("ins_attitude.csv", &text);
+        let t = AttitudeTable::read_ins_csv(&p).unwrap();
+        let at = gnss::time::from_week_tow(2421, 100.5);
+        let r = t.at(at).unwrap();
+        let expect = from_yaw_pitch_roll(91f64.to_radians(), 2f64.to_radians(), 1f64.to_radians());
+        assert!((r - expect).norm() < 1e-12);
+        let s = t.sigma_at(at).unwrap().map(f64::to_degrees);
+        assert!(
+            (s[0] - 0.02).abs() < 1e-12 && (s[2] - 0.04).abs() < 1e-12,
+            "{s:?}"
+        );
+        let bad = testkit::scratch_file("ins_attitude_bad.csv", text.replace("sd_pitch_deg", "x"));
+        let e = AttitudeTable::read_ins_csv(&bad).unwrap_err().to_string();
+        assert!(e.contains("no sd_pitch_deg column"), "{e}");
     }
 }

@@ -409,22 +409,28 @@ pub struct AntennaRow<'a> {
     pub segment: u32,
     /// ω, φ, κ (degrees) of R camera → ENU, when known.
     pub opk_deg: Option<[f64; 3]>,
+    /// σ of the attitude about the camera's x, y, z (degrees), when its source gives them.
+    pub opk_sigma_deg: Option<[f64; 3]>,
     /// Antenna velocity in the ENU frame at `pos` (m/s), when known (for a GNSS latency).
     pub vel_enu: Option<[f64; 3]>,
 }
 
 /// The antenna table as text: a comment line, the header, the rows. The attitude columns
-/// are written when every row has an attitude, the velocity columns (`ve,vn,vu`, m/s in the
+/// are written when every row has an attitude (and their σ, `sd_omega,sd_phi,sd_kappa`
+/// in degrees, when every row has them too), the velocity columns (`ve,vn,vu`, m/s in the
 /// ENU at the antenna) when every row has a velocity.
 pub fn antenna_table(comment: &str, rows: &[AntennaRow]) -> String {
     use std::fmt::Write as _;
     let with_opk = !rows.is_empty() && rows.iter().all(|r| r.opk_deg.is_some());
     let with_vel = !rows.is_empty() && rows.iter().all(|r| r.vel_enu.is_some());
+    let with_sd = with_opk && rows.iter().all(|r| r.opk_sigma_deg.is_some());
     let mut s = format!(
-        "# {comment}; GPST; WGS84 lat/lon (deg), ellipsoidal h (m); covariance ENU (m^2); segment = trajectory ambiguity segment{}{}\nid,week,tow,lat,lon,h,c_ee,c_en,c_eu,c_nn,c_nu,c_uu,quality,segment{}{}\n",
+        "# {comment}; GPST; WGS84 lat/lon (deg), ellipsoidal h (m); covariance ENU (m^2); segment = trajectory ambiguity segment{}{}{}\nid,week,tow,lat,lon,h,c_ee,c_en,c_eu,c_nn,c_nu,c_uu,quality,segment{}{}{}\n",
         if with_opk { "; omega/phi/kappa (deg) of R camera->ENU" } else { "" },
+        if with_sd { "; sd_omega/sd_phi/sd_kappa their sigma about the camera's x/y/z (deg)" } else { "" },
         if with_vel { "; ve/vn/vu antenna velocity ENU (m/s)" } else { "" },
         if with_opk { ",omega,phi,kappa" } else { "" },
+        if with_sd { ",sd_omega,sd_phi,sd_kappa" } else { "" },
         if with_vel { ",ve,vn,vu" } else { "" }
     );
     for r in rows {
@@ -449,6 +455,9 @@ pub fn antenna_table(comment: &str, rows: &[AntennaRow]) -> String {
         if let (true, Some(o)) = (with_opk, r.opk_deg) {
             let _ = write!(s, ",{:.5},{:.5},{:.5}", o[0], o[1], o[2]);
         }
+        if let (true, Some(o)) = (with_sd, r.opk_sigma_deg) {
+            let _ = write!(s, ",{:.6},{:.6},{:.6}", o[0], o[1], o[2]);
+        }
         if let (true, Some(v)) = (with_vel, r.vel_enu) {
             let _ = write!(s, ",{:.4},{:.4},{:.4}", v[0], v[1], v[2]);
         }
@@ -472,6 +481,7 @@ fn write_antenna(path: &Path, st: &[CameraStation]) -> Result<()> {
                 quality: s.quality as u8,
                 segment: s.segment,
                 opk_deg: Some(omega_phi_kappa(&s.rotation).map(f64::to_degrees)),
+                opk_sigma_deg: s.rotation_sigma.map(|x| x.map(f64::to_degrees)),
                 vel_enu: Some((r * s.velocity).into()),
             }
         })

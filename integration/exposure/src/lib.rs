@@ -165,6 +165,7 @@ pub fn compute(
             segment: ip.segment,
             rotation,
             attitude: source,
+            rotation_sigma: opts.attitude.as_ref().and_then(|a| a.sigma_at(t)),
             flags,
         });
     }

@@ -41,6 +41,9 @@ pub struct CameraStation {
     pub rotation: Matrix3<f64>,
     /// Where the rotation came from.
     pub attitude: AttitudeSource,
+    /// σ of the rotation about the camera's x, y, z (radians), when its source gives them
+    /// (`exposures --ins`).
+    pub rotation_sigma: Option<[f64; 3]>,
     /// What a user should look at (float neighbours, heading attitude, no lever arm).
     pub flags: Vec<String>,
 }

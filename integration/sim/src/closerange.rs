@@ -237,6 +237,7 @@ fn write_antennas(
                 quality: 1,
                 segment: 0,
                 opk_deg: None,
+                opk_sigma_deg: None,
                 vel_enu: None,
             }
         })

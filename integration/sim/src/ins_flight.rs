@@ -41,6 +41,10 @@ const TURNS: [f64; 3] = [170.0, 350.0, 530.0];
 /// What was written.
 #[derive(Clone, Debug)]
 pub struct InsFlight {
+    /// Image observations of the block photographed on the way.
+    pub image_obs: usize,
+    /// Its photographs.
+    pub images: usize,
     /// The IMU's grade, as its preset names it.
     pub grade: String,
     /// IMU samples.
@@ -65,6 +69,13 @@ impl std::fmt::Display for InsFlight {
             f,
             "  process: ppkat ins --config {0}/ins.toml; check: insstat.py {0}/ins.csv {0}/truth_ins.csv",
             self.out.display()
+        )?;
+        writeln!(
+            f,
+            "  block: 3 strips, {2} photographs, {1} image observations; ppkat exposures --trajectory {0}/gnss.pos --times {0}/exposure_times.csv --ins {0}/ins.csv --format antenna -o {0}/antennas.csv, then ppkat adjust --project {0}/project.toml (or project_gnss_only.toml); truth: {0}/truth_block.toml",
+            self.out.display(),
+            self.image_obs,
+            self.images
         )
     }
 }
@@ -75,7 +86,8 @@ pub fn run(out: &Path, seed: u64, grade: Grade) -> Result<InsFlight, SimError> {
         path: out.display().to_string(),
         what: format!("cannot create the folder: {e}"),
     })?;
-    let m = Survey::new(Geodetic::from_degrees(47.3, 8.5, 800.0), SPAN, &TURNS);
+    let origin = Geodetic::from_degrees(47.3, 8.5, 800.0);
+    let m = Survey::new(origin, SPAN, &TURNS);
     let start = Epoch::from_gregorian(2026, 6, 1, 10, 0, 0, 0, TimeScale::GPST);
     let spec = ImuSpec::preset(grade);
     let n = (SPAN * RATE) as usize;
@@ -83,6 +95,7 @@ pub fn run(out: &Path, seed: u64, grade: Grade) -> Result<InsFlight, SimError> {
     write_imu(out, start, &imu)?;
     let gnss = write_gnss(out, &m, start, seed)?;
     write_truth(out, &m, start)?;
+    let (images, image_obs) = crate::ins_block::write_block(out, &m, &origin, start, &LEVER, seed)?;
     let lever = LEVER.map(|x| x.to_string()).join(",");
     let config = format!(
         "# ppkat ins --config ins.toml: the simulated survey flight (see simulate --builtin ins)\nimu = \"imu.csv\"\ngnss = \"gnss.pos\"\ngrade = \"{}\"\nlever-arm = \"{lever}\"\nwithhold = [\"{},{}\"]\nevery = 20\nout = \"ins.csv\"\n",
@@ -94,6 +107,8 @@ pub fn run(out: &Path, seed: u64, grade: Grade) -> Result<InsFlight, SimError> {
         w.write_all(config.as_bytes())
     })?;
     Ok(InsFlight {
+        image_obs,
+        images,
         grade: spec.name,
         samples: imu.len(),
         gnss,

@@ -38,6 +38,7 @@ mod glonass_nav;
 pub mod gnss_obs;
 mod ground_points;
 pub mod imu;
+pub mod ins_block;
 pub mod ins_flight;
 pub mod ins_motion;
 mod io;

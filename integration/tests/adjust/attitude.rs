@@ -25,9 +25,11 @@ fn at_antenna(r: &Matrix3<f64>, origin: &Geodetic, at: &Geodetic) -> Matrix3<f64
     enu_rotation(at) * enu_rotation(origin).transpose() * r
 }
 
-#[test]
-fn boresight_is_recovered_from_attitude_observations() {
-    let dir = tmp("attitude");
+/// The classic block adjusted with the antenna table's attitude: the true one times the
+/// boresight (0.1, −0.2, 0.3)° plus 0.01° of noise per axis, its σ 0.01° from the table's
+/// `sd_omega,sd_phi,sd_kappa` columns (`sd_columns`) or from `[attitude] sigma_deg`.
+fn adjust_with_attitude(name: &str, sd_columns: bool) -> Results {
+    let dir = tmp(name);
     let mut spec = BlockSpec::classic();
     spec.project_options = gnss_options("linear");
     let truth = block::aerial(&spec, &dir).unwrap();
@@ -40,6 +42,7 @@ fn boresight_is_recovered_from_attitude_observations() {
         k.set(k.get().wrapping_mul(1_103_515_245).wrapping_add(12_345));
         ((k.get() >> 8) as f64 / (1u32 << 24) as f64 - 0.5) * 3.46
     };
+    let sd = if sd_columns { ",0.01,0.01,0.01" } else { "" };
     edit(&dir, "antennas.csv", |t| {
         let mut out = String::new();
         for l in t.lines() {
@@ -47,6 +50,9 @@ fn boresight_is_recovered_from_attitude_observations() {
                 out += l;
             } else if l.starts_with("id,") {
                 out += &format!("{l},omega,phi,kappa");
+                if sd_columns {
+                    out += ",sd_omega,sd_phi,sd_kappa";
+                }
             } else {
                 let f: Vec<&str> = l.split(',').collect();
                 let im = truth.images.iter().find(|i| i.0 == f[0]).unwrap();
@@ -55,14 +61,19 @@ fn boresight_is_recovered_from_attitude_observations() {
                 let e = Vector3::new(next(), next(), next()) * noise;
                 let r_obs =
                     at_antenna(&im.2.r, &truth.origin, &at) * exp_so3(&b).transpose() * exp_so3(&e);
-                out += &format!("{l},{}", opk_columns(&r_obs));
+                out += &format!("{l},{}{sd}", opk_columns(&r_obs));
             }
             out += "\n";
         }
         out
     });
+    let sigma = if sd_columns {
+        ""
+    } else {
+        "sigma_deg = [0.01, 0.01, 0.01]\n"
+    };
     edit(&dir, "project.toml", |t| {
-        format!("{t}\n[attitude]\nsigma_deg = [0.01, 0.01, 0.01]\n")
+        format!("{t}\n[attitude]\n{sigma}")
     });
     let r = adjust::run(
         &dir.join("project.toml"),
@@ -70,6 +81,13 @@ fn boresight_is_recovered_from_attitude_observations() {
         &Default::default(),
     )
     .unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    r
+}
+
+#[test]
+fn boresight_is_recovered_from_attitude_observations() {
+    let r = adjust_with_attitude("attitude", false);
     let bs = &r.boresights[0];
     println!(
         "boresight {:?} ± {:?} (truth 0.1 -0.2 0.3 deg); σ0 {:.3}; groups {:?}",
@@ -95,7 +113,26 @@ fn boresight_is_recovered_from_attitude_observations() {
         .iter()
         .any(|g| g.group == "attitude" && g.observations == 87));
     assert!((0.8..1.2).contains(&r.sigma0), "σ0 {}", r.sigma0);
-    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The per-exposure σ of the antenna table (`sd_omega,sd_phi,sd_kappa`, no `sigma_deg`): the
+/// same boresight within its σ, and with the same σ as `sigma_deg` gives the same result.
+#[test]
+fn antenna_table_attitude_sigma_is_used() {
+    let r = adjust_with_attitude("attitude-sd", true);
+    let bs = &r.boresights[0];
+    for (a, t) in [0.1, -0.2, 0.3].iter().enumerate() {
+        let e = bs.values[a] - t;
+        assert!(e.abs() < 3.0 * bs.sigmas[a] + 1e-4, "axis {a}: {e}");
+    }
+    let reference = adjust_with_attitude("attitude-sd-ref", false);
+    let rb = &reference.boresights[0];
+    println!("σ {:?} vs {:?} from sigma_deg", bs.sigmas, rb.sigmas);
+    for a in 0..3 {
+        for (x, y) in [(bs.sigmas[a], rb.sigmas[a]), (bs.values[a], rb.values[a])] {
+            assert!((x - y).abs() <= 1e-9 * y.abs(), "axis {a}: {x} vs {y}");
+        }
+    }
 }
 
 /// A camera mounted the other way round (image x against the flight): the start rotation from

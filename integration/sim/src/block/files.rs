@@ -124,6 +124,7 @@ pub(super) fn write_antennas(
             quality: 1,
             segment,
             opk_deg: None,
+            opk_sigma_deg: None,
             vel_enu: None,
         });
     }

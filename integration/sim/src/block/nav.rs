@@ -416,6 +416,7 @@ fn antennas_csv(images: &[NavImage], origin: &Geodetic, spec: &NavSpec, rng: &mu
             quality: 5,
             segment: 0,
             opk_deg: None,
+            opk_sigma_deg: None,
             vel_enu: Some([v.x, v.y, v.z]),
         })
         .collect();
