@@ -9,7 +9,7 @@ use hifitime::{Duration, Epoch};
 use ins::filter::{Estimate, PositionFix};
 use ins::inverse::Circling;
 use ins::inverse::{ideal_imu, Motion};
-use ins::loose::{run, LooseOptions};
+use ins::loose::LooseOptions;
 use ins::mech::NavState;
 use ins::spec::{Grade, ImuSpec};
 use nalgebra::{Matrix3, Rotation3, Vector3};
@@ -48,7 +48,7 @@ impl std::fmt::Display for InsBench {
         )?;
         writeln!(
             f,
-            "  forward + smoother {:.2} s ({:.0} samples/s); peak memory {}; smoothed horizontal RMS {:.3} m",
+            "  forward + smoother as ppkat ins runs them (a first pass over the first 5 min for the start, the whole, again where the outages' ends ask) {:.2} s ({:.0} samples/s); peak memory {}; smoothed horizontal RMS {:.3} m",
             self.seconds,
             self.samples as f64 / self.seconds.max(1e-9),
             self.peak_kib
@@ -70,7 +70,9 @@ pub fn run_bench(minutes: f64, rate_hz: f64) -> InsBench {
     let spec = ImuSpec::preset(Grade::Tactical);
     let n = (minutes * 60.0 * rate_hz) as usize;
     let (imu, _) = corrupt(&ideal_imu(&m, start, rate_hz, n), &spec, 1);
+    // A 30 s GNSS outage every ten minutes, for the check at the outages' ends.
     let fixes: Vec<(Epoch, PositionFix)> = (1..=(minutes * 60.0) as usize)
+        .filter(|s| !(300..330).contains(&(s % 600)))
         .map(|s| {
             let k = m.at(s as f64);
             let rot = enu_rotation(&k.position.to_geodetic()).transpose();
@@ -106,7 +108,7 @@ pub fn run_bench(minutes: f64, rate_hz: f64) -> InsBench {
         no_side_slip: None,
     };
     let t = Instant::now();
-    let r = run(&imu, &fixes, (est, p0), &spec, &o);
+    let (r, _) = ins::job::checked_run(&imu, &fixes, (est, p0), &spec, &o);
     let seconds = t.elapsed().as_secs_f64();
     let (mut ss, mut nn) = (0.0, 0usize);
     for (time, s) in &r.smoothed {

@@ -145,12 +145,13 @@ fn car_job(dir: &Path) -> InsJob {
 /// The car: the MEMS preset, the IMU levelled while the car stands, heading from its course
 /// once it passes 1 m/s (39.5 s after the first epoch: the first outage starts half a
 /// second later), RTK positions at 4 Hz (2 cm / 4 cm fixed, 0.3 m / 0.6 m float; the file's
-/// σ are nominal), no side slip within 0.3 m/s, the IMU's noise following the innovations.
-/// Measured over the 663 withheld RTK fixes: forward 1.35 m RMS, 3.97 m worst (the data's
-/// own filter forward without velocity matching: 3.09 / 12.8 m; with it 0.30 / 0.69 m);
-/// smoothed 0.25 m RMS, 0.56 m worst — the goal, 0.15 / 0.40 m, is not reached, and
-/// the σ are too small in the outages (NEES 5.1 forward, 11.7 smoothed, where [0.3, 3] is
-/// asked). Without the side-slip constraint the filter diverges after the first outage (its
+/// σ are nominal), no side slip within 0.3 m/s, the IMU's noise following the innovations
+/// and, rerun, raised until the outages' ends agree with their σ (the data sheet's random
+/// walks ×2.5). Measured over the 663 withheld RTK fixes: forward 1.92 m RMS, 7.28 m worst
+/// (the data's own filter forward without velocity matching: 3.09 / 12.8 m; with it 0.30 /
+/// 0.69 m); smoothed 0.246 m RMS, 0.632 m worst — the goal, 0.15 / 0.40 m, is not
+/// reached; NEES 2.14 forward, 2.65 smoothed (before the outages checked their σ: 1.32 /
+/// 4.33 m forward, 0.253 / 0.565 m smoothed, NEES 5.1 and 12.0). Without the side-slip constraint the filter diverges after the first outage (its
 /// heading, 10° uncertain at the start, is not known well enough when the outage begins).
 #[test]
 fn the_car_drive_bridges_fifteen_second_outages() {
@@ -187,21 +188,28 @@ fn the_car_drive_bridges_fifteen_second_outages() {
         s.nees
     );
     assert_eq!(
-        r.unused_fixes, 20,
-        "the fixes before the start are the unused ones"
+        r.unused_fixes, 0,
+        "every fix after the start is used, whatever the IMU's intervals"
     );
+    let (scale, gaps) = done.bridge_scale;
+    assert!(gaps == 11 && scale > 1.5, "{gaps} gaps, noise ×{scale}");
     assert!(f.n > 600, "{} withheld fixes compared", f.n);
     assert!(
-        f.rms < 1.6 && f.worst < 5.0,
+        f.rms < 2.2 && f.worst < 8.0,
         "forward {} {}",
         f.rms,
         f.worst
     );
     assert!(
-        s.rms < 0.3 && s.worst < 0.65,
+        s.rms < 0.28 && s.worst < 0.7,
         "smoothed {} {}",
         s.rms,
         s.worst
     );
-    assert!(f.nees < 8.0 && s.nees < 15.0, "NEES {} {}", f.nees, s.nees);
+    assert!(
+        (0.3..=3.0).contains(&f.nees) && (0.3..=3.0).contains(&s.nees),
+        "NEES {} {}",
+        f.nees,
+        s.nees
+    );
 }

@@ -89,6 +89,8 @@ pub struct Args {
     /// Output: CSV (the columns above), or an RTKLIB .pos when the name ends in .pos (the
     /// IMU's latitude, longitude, ellipsoidal height and σ; Q that of the last GNSS epoch used
     /// when it is at most 2 s old, 5 while the IMU bridges longer). Replaced if it exists.
+    /// Beside it OUT.html: the alignment, the GNSS outages bridged and how far the σ grew,
+    /// attitude and its σ, position σ and the estimated sensor biases over time.
     #[arg(short = 'o', long = "out", value_name = "OUT.csv")]
     out: PathBuf,
     /// Write the forward filter's trajectory instead of the smoothed one (what a real-time
@@ -147,24 +149,24 @@ pub fn run(args: Args) -> Result<()> {
         ),
         format!("IMU figures: {}", job.spec.name),
     ];
+    let first = done.gnss[0].time;
+    let used: Vec<_> = done
+        .gnss
+        .iter()
+        .filter(|g| !integration::ins::job::withheld(&job, first, g.time))
+        .collect();
     if args
         .out
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("pos"))
     {
-        let first = done.gnss[0].time;
-        let used: Vec<_> = done
-            .gnss
-            .iter()
-            .filter(|g| !integration::ins::job::withheld(&job, first, g.time))
-            .collect();
         write_pos(&args.out, &comments, &rows, &used)?;
     } else {
         write_csv(&args.out, &comments, &rows)?;
     }
     let r = &done.run;
-    println!(
-        "ins: {} rows → {}; aligned at {} (levelled roll {:.2}°, pitch {:.2}°; heading from the course); {} GNSS epochs used, {} withheld or outside the IMU data; IMU noise raised ×{:.1} by the innovations",
+    let summary = format!(
+        "ins: {} rows → {}; aligned at {} (levelled roll {:.2}°, pitch {:.2}°; heading from the course); {} GNSS epochs used, {} withheld or outside the IMU data; IMU noise raised ×{:.1} by the innovations; {} GNSS gaps over 2 s checked at their ends: the data sheet's noise ×{:.1}",
         rows.len(),
         args.out.display(),
         done.levelled.2,
@@ -172,8 +174,24 @@ pub fn run(args: Args) -> Result<()> {
         done.levelled.1.to_degrees(),
         r.nis.len(),
         r.unused_fixes + done.gnss.iter().filter(|g| integration::ins::job::withheld(&job, done.gnss[0].time, g.time)).count(),
-        r.noise_scale
+        r.noise_scale,
+        done.bridge_scale.1,
+        done.bridge_scale.0
     );
+    let mut page = args.out.clone().into_os_string();
+    page.push(".html");
+    let page = PathBuf::from(page);
+    let (roll, pitch, at) = done.levelled;
+    integration::ins::report::write_page(
+        &page,
+        &rows,
+        &integration::ins::report::PageInputs {
+            summary: &summary,
+            used: &used,
+            alignment: (at, roll, pitch, done.heading),
+        },
+    )?;
+    println!("{summary}; report → {}", page.display());
     for a in &done.assumed {
         println!("  assumed: {a}");
     }

@@ -213,6 +213,18 @@ fn the_simulated_ins_flight_is_bridged_with_honest_sigmas() {
     assert!(n > 5000, "{n} rows compared");
     assert!(worst > 0.0 && worst <= 0.10, "outage worst {worst}");
     let rms = sq.map(|s| (s / n as f64).sqrt());
+    // The page beside it: six pictures, and the outage as the one bridge (the GNSS of 298 s,
+    // then of 330 s: 32 s) with the horizontal σ it grew to.
+    let page = std::fs::read_to_string(dir.join("ins.csv.html")).unwrap();
+    assert_eq!(page.matches("<svg").count(), 6);
+    let bridges: Vec<&str> = page.split("<tr><td>").skip(1).collect();
+    assert_eq!(bridges.len(), 1, "{bridges:?}");
+    let cells: Vec<&str> = bridges[0].split("</td><td>").collect();
+    let (len, sd): (f64, f64) = (
+        cells[2].parse().unwrap(),
+        cells[3].split('<').next().unwrap().parse().unwrap(),
+    );
+    assert!(len == 32.0 && (0.01..0.1).contains(&sd), "{cells:?}");
     // The same as an RTKLIB .pos: fixed (Q 1) where the GNSS arrives, 5 after 2 s of outage
     // (the outage's 31 s at 10 Hz, less the first 2 s).
     succeeds(&ppkat(&[

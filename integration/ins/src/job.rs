@@ -76,6 +76,11 @@ pub struct InsRun {
     pub gnss: Vec<GnssEpoch>,
     /// Roll and pitch levelled (rad), and the alignment's time.
     pub levelled: (f64, f64, Epoch),
+    /// The heading taken from the course at the alignment, rad.
+    pub heading: f64,
+    /// The factor on the IMU's noise the GNSS gaps' ends asked for (1: the data sheet held),
+    /// and the gaps checked.
+    pub bridge_scale: (f64, usize),
     /// IMU rows skipped and gaps, named.
     pub imu_notes: Vec<String>,
     /// What was assumed in reading the IMU log (a week for seconds of week).
@@ -161,14 +166,71 @@ pub fn run_job(job: &InsJob) -> Result<InsRun> {
         every: job.every,
         no_side_slip: job.no_side_slip,
     };
-    let run = run(&samples[start + 1..], &fixes, start_estimate, &job.spec, &o);
+    let (run, bridge_scale) =
+        checked_run(&samples[start + 1..], &fixes, start_estimate, &job.spec, &o);
     Ok(InsRun {
         run,
+        bridge_scale,
         gnss,
         levelled: (lv.roll, lv.pitch, samples[start].time),
+        heading,
         imu_notes,
         assumed,
     })
+}
+
+/// Mean NIS/3 at the bridges' ends beyond which the IMU's noise is raised (the predicted σ
+/// √2 times too small or more).
+const BRIDGE_LIMIT: f64 = 2.0;
+/// Seconds of data the first pass smooths for the start of the second.
+const FIRST_PASS: f64 = 300.0;
+/// Reruns at most, each with the noise raised by what the bridges still ask.
+const BRIDGE_RERUNS: usize = 5;
+
+/// The filter and smoother run twice and checked at the ends of the GNSS gaps.
+///
+/// The second run starts from the first one's (over the first [`FIRST_PASS`] s) smoothed
+/// attitude and sensor biases at the start (its σ kept): a heading taken from the course can be tens of degrees off (a walker's
+/// hand, an aircraft's crab), where the error-state model, linear in small angles, bends the
+/// first run's bridges; started near the truth, the second run's are straight.
+///
+/// Then the gaps' ends: where the IMU's predictions across them met the returning GNSS
+/// further off than their σ said (mean NIS/3 beyond [`BRIDGE_LIMIT`]), the data sheet's noise
+/// was too kind for this IMU or this motion, and the run is repeated with the angle and
+/// velocity random walks raised by √(NIS/3) (the position σ a gap adds grow with them), so
+/// that the bridged σ hold. Returns the run and the factor used with the number of
+/// gaps checked.
+pub fn checked_run(
+    samples: &[ImuSample],
+    fixes: &[(Epoch, PositionFix)],
+    start: (Estimate, Mat),
+    spec: &ImuSpec,
+    o: &LooseOptions,
+) -> (LooseRun, (f64, usize)) {
+    let head = samples.partition_point(|s| (s.time - start.0.nav.time).to_seconds() < FIRST_PASS);
+    let first = run(&samples[..head], fixes, start, spec, o);
+    let start = match (first.forward.first(), first.smoothed.first()) {
+        (Some(f), Some(s)) => {
+            let mut d = s.1.est.minus(&f.1);
+            d.fixed_rows_mut::<6>(idx::POS).fill(0.0);
+            (start.0.corrected(&d), start.1)
+        }
+        _ => start,
+    };
+    drop(first);
+    let mut k = 1.0;
+    let mut r = run(samples, fixes, start, spec, o);
+    for _ in 0..BRIDGE_RERUNS {
+        let n = r.bridge_nis.len();
+        let ratio = r.bridge_nis.iter().sum::<f64>() / (3.0 * n.max(1) as f64);
+        if n == 0 || ratio <= BRIDGE_LIMIT {
+            break;
+        }
+        k *= ratio.sqrt();
+        r = run(samples, fixes, start, &spec.scaled(k), o);
+    }
+    let n = r.bridge_nis.len();
+    (r, (k, n))
 }
 
 /// The start: levelled roll and pitch, the course's heading, the antenna's position less
@@ -201,7 +263,12 @@ fn initial(
             p0[(i + j, i + j)] = s * s;
         }
     }
-    p0[(idx::ATT + 2, idx::ATT + 2)] = 10f64.to_radians().powi(2);
+    let heading_sd: f64 = if job.no_side_slip.is_some() {
+        10.0
+    } else {
+        30.0
+    };
+    p0[(idx::ATT + 2, idx::ATT + 2)] = heading_sd.to_radians().powi(2);
     let est = Estimate {
         nav,
         gyro_bias,

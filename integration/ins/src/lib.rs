@@ -40,6 +40,7 @@ pub mod loose;
 pub mod mech;
 pub mod output;
 pub mod plain_imu;
+pub mod report;
 pub mod rtklib_imu;
 pub mod smoother;
 pub mod spec;

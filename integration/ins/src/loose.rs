@@ -16,6 +16,9 @@ use crate::spec::ImuSpec;
 use hifitime::Epoch;
 use nalgebra::Vector3;
 
+/// A GNSS gap (s) longer than this is a bridge whose end checks the prediction's σ.
+pub const BRIDGE: f64 = 2.0;
+
 /// What a loosely coupled run takes besides the data.
 #[derive(Clone, Debug)]
 pub struct LooseOptions {
@@ -37,10 +40,14 @@ pub struct LooseRun {
     pub smoothed: Vec<(Epoch, Smoothed)>,
     /// Normalised innovation squared of each update (χ²(3) when the σ hold).
     pub nis: Vec<f64>,
-    /// GNSS fixes not at an IMU sample's time, or outside the IMU data: not used.
+    /// GNSS fixes outside the IMU data (before its first sample or after its last): not used.
     pub unused_fixes: usize,
     /// The factor on the IMU's random walks the innovations asked for, at the end.
     pub noise_scale: f64,
+    /// Normalised innovation squared of the first update after each GNSS gap longer than
+    /// [`BRIDGE`]: how well the IMU's prediction across the gap met the GNSS (χ²(3) when
+    /// the σ hold).
+    pub bridge_nis: Vec<f64>,
 }
 
 /// Run the filter forward over `samples` with `fixes`, then smooth.
@@ -55,18 +62,26 @@ pub fn run(
     let mut out = LooseRun::default();
     let (mut times, mut cps): (Vec<Epoch>, Vec<Checkpoint>) = (Vec::new(), Vec::new());
     let mut next = 0;
+    let mut last_update: Option<Epoch> = None;
     for (k, s) in samples.iter().enumerate() {
         f.predict(s);
-        let half = 0.5 * s.dt;
-        while next < fixes.len() && (fixes[next].0 - s.time).to_seconds() < -half {
+        // The sample takes the fixes from half its interval before it to half the next one
+        // after it: contiguous windows, however the IMU's intervals jitter or gap.
+        let before = 0.5 * s.dt;
+        let after = 0.5 * samples.get(k + 1).map_or(s.dt, |n| n.dt);
+        while next < fixes.len() && (fixes[next].0 - s.time).to_seconds() < -before {
             out.unused_fixes += 1;
             next += 1;
         }
         let mut updated = false;
-        if next < fixes.len() && (fixes[next].0 - s.time).to_seconds().abs() <= half {
+        if next < fixes.len() && (fixes[next].0 - s.time).to_seconds() <= after {
             let offset = (fixes[next].0 - s.time).to_seconds();
-            out.nis
-                .push(f.update_position(&fixes[next].1, &o.lever_arm, offset));
+            let nis = f.update_position(&fixes[next].1, &o.lever_arm, offset);
+            out.nis.push(nis);
+            if last_update.is_some_and(|l| (fixes[next].0 - l).to_seconds() > BRIDGE) {
+                out.bridge_nis.push(nis);
+            }
+            last_update = Some(fixes[next].0);
             next += 1;
             updated = true;
         }

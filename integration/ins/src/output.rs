@@ -45,8 +45,9 @@ pub fn state_columns(t: Epoch, nav: &NavState) -> String {
     )
 }
 
-/// One row of the CSV for an estimate and its covariance.
-pub fn row(t: Epoch, e: &Estimate, cov: &Mat) -> String {
+/// The 1-σ of an estimate: north, east, up (m), velocity north, east, up (m/s), roll, pitch,
+/// heading (degrees), as the CSV's `sd_…` columns hold them.
+pub fn sigmas(e: &Estimate, cov: &Mat) -> [f64; 9] {
     let r = enu_rotation(&e.nav.geodetic());
     let heading = e.nav.euler().heading;
     let block = |i: usize| {
@@ -64,9 +65,7 @@ pub fn row(t: Epoch, e: &Estimate, cov: &Mat) -> String {
             .sqrt()
             .to_degrees()
     };
-    format!(
-        "{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5}",
-        state_columns(t, &e.nav),
+    [
         sd(&p, 1),
         sd(&p, 0),
         sd(&p, 2),
@@ -76,6 +75,24 @@ pub fn row(t: Epoch, e: &Estimate, cov: &Mat) -> String {
         axis([sh, ch]),
         axis([ch, -sh]),
         a[(2, 2)].max(0.0).sqrt().to_degrees(),
+    ]
+}
+
+/// One row of the CSV for an estimate and its covariance.
+pub fn row(t: Epoch, e: &Estimate, cov: &Mat) -> String {
+    let s = sigmas(e, cov);
+    format!(
+        "{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5}",
+        state_columns(t, &e.nav),
+        s[0],
+        s[1],
+        s[2],
+        s[3],
+        s[4],
+        s[5],
+        s[6],
+        s[7],
+        s[8],
     )
 }
 

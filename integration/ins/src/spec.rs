@@ -67,6 +67,20 @@ pub struct ImuSpec {
     pub accel_turn_on: f64,
 }
 
+impl ImuSpec {
+    /// The figures with the angle and velocity random walks multiplied by `k` (the biases'
+    /// figures kept: raising them too let the biases wander and bridged the car's outages
+    /// worse), named so.
+    pub fn scaled(&self, k: f64) -> ImuSpec {
+        ImuSpec {
+            name: format!("{} (noise ×{k:.1})", self.name),
+            arw: self.arw * k,
+            vrw: self.vrw * k,
+            ..self.clone()
+        }
+    }
+}
+
 /// The file's form: every key with its unit in its name, all required.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
