@@ -108,7 +108,13 @@ pub fn run_bench(minutes: f64, rate_hz: f64) -> InsBench {
         no_side_slip: None,
     };
     let t = Instant::now();
-    let (r, _) = ins::job::checked_run(&imu, &fixes, (est, p0), &spec, &o);
+    let (r, _) = ins::job::checked_run(
+        &imu,
+        (&fixes, &ins::tight::Phases::default()),
+        (est, p0),
+        &spec,
+        &o,
+    );
     let seconds = t.elapsed().as_secs_f64();
     let (mut ss, mut nn) = (0.0, 0usize);
     for (time, s) in &r.smoothed {

@@ -139,6 +139,7 @@ fn car_job(dir: &Path) -> InsJob {
             .map(|k| (40.0 + 45.0 * k as f64, 55.0 + 45.0 * k as f64))
             .collect(),
         every: 2,
+        phases: None,
     }
 }
 
@@ -243,6 +244,7 @@ fn the_walk_bridges_ten_second_windows() {
         no_side_slip: None,
         withhold: vec![(20.0, 30.0), (50.0, 60.0), (75.0, 85.0)],
         every: 1,
+        phases: None,
     };
     let done = run_job(&job).unwrap();
     let pos = read_pos(&dir.join("gnss_1730_sf.pos")).unwrap();

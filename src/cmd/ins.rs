@@ -4,8 +4,9 @@
 use super::triple;
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
+use integration::gnss::frame::Ecef;
 use integration::ins::attitude::Euler;
-use integration::ins::job::{run_job, ImuFormat as JobFormat, InsJob};
+use integration::ins::job::{run_job, ImuFormat as JobFormat, InsJob, PhaseFiles};
 use integration::ins::output::{write_csv, write_pos};
 use integration::ins::spec::{Grade, ImuSpec};
 use nalgebra::Vector3;
@@ -93,6 +94,30 @@ pub struct Args {
     /// attitude and its σ, position σ and the estimated sensor biases over time.
     #[arg(short = 'o', long = "out", value_name = "OUT.csv")]
     out: PathBuf,
+    /// Tight coupling: the rover's observations (RINEX or a raw log). With --base, the
+    /// double-differenced carrier phases update the filter wherever the positions are
+    /// withheld (--withhold), so that a sky of two or three satellites still holds the IMU;
+    /// their integers are learnt where the positions hold the filter (the σ of a double
+    /// difference's range under 2 cm, within 0.15 cycle of an integer) and kept while the
+    /// phases' arcs continue.
+    #[arg(long, value_name = "FILE", requires = "base")]
+    rover: Option<PathBuf>,
+    /// Tight coupling: the base's observations.
+    #[arg(long, value_name = "FILE", requires = "rover")]
+    base: Option<PathBuf>,
+    /// Tight coupling: navigation files (broadcast orbits; repeatable); default: the rover
+    /// log's own.
+    #[arg(long, value_name = "FILE")]
+    nav: Vec<PathBuf>,
+    /// Tight coupling: the base's antenna reference point, ECEF metres (default: its
+    /// header's).
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    base_pos: Option<String>,
+    /// Tight coupling: in the withheld windows, use the phases of only the N highest
+    /// satellites (a narrow sky: a street, a cliff, trees), to see how the IMU and a few
+    /// phases bridge where no position could be computed.
+    #[arg(long, value_name = "N", requires = "rover")]
+    withheld_satellites: Option<usize>,
     /// Write the forward filter's trajectory instead of the smoothed one (what a real-time
     /// system would have had; to compare).
     #[arg(long)]
@@ -178,6 +203,15 @@ pub fn run(args: Args) -> Result<()> {
         done.bridge_scale.1,
         done.bridge_scale.0
     );
+    let summary = if args.rover.is_some() {
+        let nis = r.phase_nis.iter().sum::<f64>() / r.phase_nis.len().max(1) as f64;
+        format!(
+            "{summary}; tight: {} phase integers learnt, {} double-differenced phases used where the positions are withheld (NIS per phase {nis:.2})",
+            r.integers, r.phase_rows
+        )
+    } else {
+        summary
+    };
     let mut page = args.out.clone().into_os_string();
     page.push(".html");
     let page = PathBuf::from(page);
@@ -252,5 +286,18 @@ fn job(args: &Args) -> Result<InsJob> {
         no_side_slip: args.no_side_slip,
         withhold,
         every: args.every,
+        phases: match (&args.rover, &args.base) {
+            (Some(rover), Some(base)) => Some(PhaseFiles {
+                rover: rover.clone(),
+                base: base.clone(),
+                nav: args.nav.clone(),
+                base_position: match &args.base_pos {
+                    Some(b) => Some(Ecef(Vector3::from(triple("--base-pos", b)?))),
+                    None => None,
+                },
+                keep: args.withheld_satellites,
+            }),
+            _ => None,
+        },
     })
 }

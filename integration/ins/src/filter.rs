@@ -169,6 +169,32 @@ impl<'a> Forward<'a> {
         nis
     }
 
+    /// An update of any number of rows (`h`: rows × 15, innovations `z`, their covariance
+    /// `r`), for the double-differenced phases; the normalised innovation squared, None (and
+    /// nothing changed) when the innovation's covariance cannot be inverted.
+    pub fn update_rows(
+        &mut self,
+        h: &nalgebra::DMatrix<f64>,
+        z: &nalgebra::DVector<f64>,
+        r: &nalgebra::DMatrix<f64>,
+    ) -> Option<f64> {
+        let p = nalgebra::DMatrix::from_column_slice(N, N, self.p.as_slice());
+        let s = h * &p * h.transpose() + r;
+        let si = s.try_inverse()?;
+        self.prior.get_or_insert((self.est, self.p));
+        let k = &p * h.transpose() * &si;
+        let ikh = nalgebra::DMatrix::identity(N, N) - &k * h;
+        let pn = &ikh * &p * ikh.transpose() + &k * r * k.transpose();
+        self.p = Mat::from_column_slice(pn.as_slice());
+        let dx = &k * z;
+        self.est = self
+            .est
+            .corrected(&crate::errstate::Vec15::from_column_slice(dx.as_slice()));
+        let nis = (z.transpose() * &si * z)[(0, 0)];
+        self.adapt(nis / z.len() as f64);
+        Some(nis)
+    }
+
     /// An update of `R` rows: the state corrected, the covariance in Joseph's form; the
     /// normalised innovation squared (NaN, and nothing changed, when the innovation's
     /// covariance cannot be inverted).

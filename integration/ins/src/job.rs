@@ -13,9 +13,10 @@ use crate::errstate::{idx, Mat};
 use crate::filter::{Estimate, PositionFix};
 use crate::gnss_pos::{read_pos, GnssEpoch};
 use crate::imu::{to_body, ImuSample};
-use crate::loose::{run, LooseOptions, LooseRun};
+use crate::loose::{run_with_phases, LooseOptions, LooseRun};
 use crate::mech::NavState;
 use crate::spec::ImuSpec;
+use crate::tight::{thin, PhaseEpoch, Phases};
 use crate::{plain_imu, rtklib_imu, Error, Result};
 use common::frame::{enu_rotation, Ecef};
 use gnss::solution::Quality;
@@ -65,6 +66,25 @@ pub struct InsJob {
     pub withhold: Vec<(f64, f64)>,
     /// An output every this many IMU samples (besides each GNSS epoch).
     pub every: usize,
+    /// Tight coupling: the receivers' observations whose double-differenced phases update
+    /// the filter where the positions are withheld.
+    pub phases: Option<PhaseFiles>,
+}
+
+/// The files of a tightly coupled run.
+#[derive(Clone, Debug)]
+pub struct PhaseFiles {
+    /// Rover observations (RINEX or a raw log).
+    pub rover: PathBuf,
+    /// Base observations.
+    pub base: PathBuf,
+    /// Navigation files (broadcast orbits); the rover's own when empty.
+    pub nav: Vec<PathBuf>,
+    /// The base's antenna reference point; its header's when None.
+    pub base_position: Option<Ecef>,
+    /// In the withheld windows, the phases of only this many satellites (the highest): a
+    /// sky too narrow for a position.
+    pub keep: Option<usize>,
 }
 
 /// What a run did.
@@ -166,8 +186,17 @@ pub fn run_job(job: &InsJob) -> Result<InsRun> {
         every: job.every,
         no_side_slip: job.no_side_slip,
     };
-    let (run, bridge_scale) =
-        checked_run(&samples[start + 1..], &fixes, start_estimate, &job.spec, &o);
+    let phases = match &job.phases {
+        Some(p) => phase_epochs(job, p, &gnss)?,
+        None => Phases::default(),
+    };
+    let (run, bridge_scale) = checked_run(
+        &samples[start + 1..],
+        (&fixes, &phases),
+        start_estimate,
+        &job.spec,
+        &o,
+    );
     Ok(InsRun {
         run,
         bridge_scale,
@@ -202,13 +231,13 @@ const BRIDGE_RERUNS: usize = 5;
 /// gaps checked.
 pub fn checked_run(
     samples: &[ImuSample],
-    fixes: &[(Epoch, PositionFix)],
+    (fixes, phases): (&[(Epoch, PositionFix)], &Phases),
     start: (Estimate, Mat),
     spec: &ImuSpec,
     o: &LooseOptions,
 ) -> (LooseRun, (f64, usize)) {
     let head = samples.partition_point(|s| (s.time - start.0.nav.time).to_seconds() < FIRST_PASS);
-    let first = run(&samples[..head], fixes, start, spec, o);
+    let first = run_with_phases(&samples[..head], fixes, phases, start, spec, o);
     let start = match (first.forward.first(), first.smoothed.first()) {
         (Some(f), Some(s)) => {
             let mut d = s.1.est.minus(&f.1);
@@ -219,7 +248,7 @@ pub fn checked_run(
     };
     drop(first);
     let mut k = 1.0;
-    let mut r = run(samples, fixes, start, spec, o);
+    let mut r = run_with_phases(samples, fixes, phases, start, spec, o);
     for _ in 0..BRIDGE_RERUNS {
         let n = r.bridge_nis.len();
         let ratio = r.bridge_nis.iter().sum::<f64>() / (3.0 * n.max(1) as f64);
@@ -227,7 +256,7 @@ pub fn checked_run(
             break;
         }
         k *= ratio.sqrt();
-        r = run(samples, fixes, start, &spec.scaled(k), o);
+        r = run_with_phases(samples, fixes, phases, start, &spec.scaled(k), o);
     }
     let n = r.bridge_nis.len();
     (r, (k, n))
@@ -296,4 +325,69 @@ fn fix_of(g: &GnssEpoch) -> PositionFix {
         position: g.position,
         cov,
     }
+}
+
+/// The double differences of every rover epoch: updates in the withheld windows (thinned to
+/// `keep` satellites), teachers elsewhere.
+fn phase_epochs(job: &InsJob, p: &PhaseFiles, gnss: &[GnssEpoch]) -> Result<Phases> {
+    let g = |path: &PathBuf| {
+        let path = path.clone();
+        move |e: gnss::Error| Error::Input {
+            path: path.clone(),
+            message: e.to_string(),
+        }
+    };
+    let rover = gnss::obs::read_obs(&p.rover, None, None).map_err(g(&p.rover))?;
+    let base = gnss::obs::read_obs(&p.base, None, None).map_err(g(&p.base))?;
+    let mut navs = Vec::new();
+    for n in &p.nav {
+        navs.push(gnss::rinex::nav::NavFile::read(n).map_err(g(n))?);
+    }
+    navs.extend(rover.nav.clone());
+    if navs.is_empty() {
+        return Err(Error::Input {
+            path: p.rover.clone(),
+            message: "no navigation data for the phases: give nav files".into(),
+        });
+    }
+    let orbits = gnss::orbit::Orbits::broadcast(gnss::orbit::Ephemerides::from_nav(&navs));
+    let base_pos = match p.base_position {
+        Some(b) => gnss::ppk::BasePosition::Given(b),
+        None => gnss::ppk::BasePosition::Header,
+    };
+    let instants: Vec<Epoch> = rover.obs.epochs.iter().map(|e| e.time).collect();
+    let set = gnss::ppk::tight::double_differences(
+        &rover.obs,
+        &base.obs,
+        base_pos,
+        &orbits,
+        &gnss::ppk::PpkOptions::default(),
+        &instants,
+        0.0,
+    )
+    .map_err(g(&p.rover))?;
+    let first = gnss.first().map_or(instants[0], |e| e.time);
+    let baseline_km = gnss
+        .first()
+        .map_or(0.0, |e| (e.position.0 - set.base.0).norm() / 1e3);
+    let epochs = set
+        .epochs
+        .into_iter()
+        .map(|e| {
+            let update = withheld(job, first, e.rover_time);
+            let rows = match (update, p.keep) {
+                (true, Some(k)) => thin(e.rows, k),
+                _ => e.rows,
+            };
+            PhaseEpoch {
+                time: e.rover_time,
+                rows,
+                update,
+            }
+        })
+        .collect();
+    Ok(Phases {
+        epochs,
+        baseline_km,
+    })
 }

@@ -44,5 +44,6 @@ pub mod report;
 pub mod rtklib_imu;
 pub mod smoother;
 pub mod spec;
+pub mod tight;
 
 pub use error::{Error, Result};

@@ -13,6 +13,7 @@ use crate::filter::{Checkpoint, Estimate, Forward, PositionFix};
 use crate::imu::ImuSample;
 use crate::smoother::{smooth, Smoothed};
 use crate::spec::ImuSpec;
+use crate::tight::{self, Integers, Phases};
 use hifitime::Epoch;
 use nalgebra::Vector3;
 
@@ -44,6 +45,12 @@ pub struct LooseRun {
     pub unused_fixes: usize,
     /// The factor on the IMU's random walks the innovations asked for, at the end.
     pub noise_scale: f64,
+    /// Double-differenced phases that updated the filter (rows), and their NIS per row.
+    pub phase_rows: usize,
+    /// NIS per row of each phase update (1 when the σ hold).
+    pub phase_nis: Vec<f64>,
+    /// Integers learnt.
+    pub integers: usize,
     /// Normalised innovation squared of the first update after each GNSS gap longer than
     /// [`BRIDGE`]: how well the IMU's prediction across the gap met the GNSS (χ²(3) when
     /// the σ hold).
@@ -58,11 +65,25 @@ pub fn run(
     spec: &ImuSpec,
     o: &LooseOptions,
 ) -> LooseRun {
+    run_with_phases(samples, fixes, &Phases::default(), start, spec, o)
+}
+
+/// [`run`] with double-differenced phases besides the positions ([`crate::tight`]): they
+/// teach integers where the positions hold the filter and update it where they are missing.
+pub fn run_with_phases(
+    samples: &[ImuSample],
+    fixes: &[(Epoch, PositionFix)],
+    phases: &Phases,
+    start: (Estimate, Mat),
+    spec: &ImuSpec,
+    o: &LooseOptions,
+) -> LooseRun {
     let mut f = Forward::new(start.0, start.1, spec);
     let mut out = LooseRun::default();
     let (mut times, mut cps): (Vec<Epoch>, Vec<Checkpoint>) = (Vec::new(), Vec::new());
     let mut next = 0;
     let mut last_update: Option<Epoch> = None;
+    let (mut next_phase, mut known) = (0, Integers::default());
     for (k, s) in samples.iter().enumerate() {
         f.predict(s);
         // The sample takes the fixes from half its interval before it to half the next one
@@ -84,6 +105,25 @@ pub fn run(
             last_update = Some(fixes[next].0);
             next += 1;
             updated = true;
+        }
+        while let Some(e) = phases.epochs.get(next_phase) {
+            let dt = (e.time - s.time).to_seconds();
+            if dt > after {
+                break;
+            }
+            next_phase += 1;
+            if dt < -before {
+                continue;
+            }
+            if !e.update {
+                out.integers += tight::learn(&f, e, &o.lever_arm, &mut known);
+            } else if let Some((rows, nis)) =
+                tight::update(&mut f, e, &o.lever_arm, dt, &known, phases.baseline_km)
+            {
+                out.phase_rows += rows;
+                out.phase_nis.push(nis / rows as f64);
+                updated = true;
+            }
         }
         if updated || (k + 1) % o.every.max(1) == 0 {
             if let Some(sigma) = o.no_side_slip {

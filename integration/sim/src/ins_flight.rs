@@ -95,13 +95,17 @@ pub fn run(out: &Path, seed: u64, grade: Grade) -> Result<InsFlight, SimError> {
     write_imu(out, start, &imu)?;
     let gnss = write_gnss(out, &m, start, seed)?;
     write_truth(out, &m, start)?;
+    let base = write_gnss_obs(out, &m, &origin, start, seed)?;
     let (images, image_obs) = crate::ins_block::write_block(out, &m, &origin, start, &LEVER, seed)?;
     let lever = LEVER.map(|x| x.to_string()).join(",");
     let config = format!(
-        "# ppkat ins --config ins.toml: the simulated survey flight (see simulate --builtin ins)\nimu = \"imu.csv\"\ngnss = \"gnss.pos\"\ngrade = \"{}\"\nlever-arm = \"{lever}\"\nwithhold = [\"{},{}\"]\nevery = 20\nout = \"ins.csv\"\n",
+        "# ppkat ins --config ins.toml: the simulated survey flight (see simulate --builtin ins)\nimu = \"imu.csv\"\ngnss = \"gnss.pos\"\ngrade = \"{}\"\nlever-arm = \"{lever}\"\nwithhold = [\"{},{}\"]\nevery = 20\nout = \"ins.csv\"\n# Tight coupling: the double-differenced phases of these files where the positions are withheld\n# rover = \"rover.obs\"\n# base = \"base.obs\"\n# nav = \"nav.rnx\"\n# base-pos = \"{:.4},{:.4},{:.4}\"\n# withheld-satellites = 3\n",
         grade_name(grade),
         OUTAGE.0,
-        OUTAGE.1
+        OUTAGE.1,
+        base.x,
+        base.y,
+        base.z
     );
     common::atomic::write_atomic(&out.join("ins.toml"), |w: &mut dyn Write| {
         w.write_all(config.as_bytes())
@@ -217,4 +221,63 @@ fn write_truth(out: &Path, m: &Survey, start: Epoch) -> Result<(), SimError> {
         w.write_all(text.as_bytes())
     })?;
     Ok(())
+}
+
+/// Where the base stands: on the ground below the flight's start, 300 m west and 200 m south.
+const BASE_ENU: [f64; 3] = [-300.0, -200.0, -500.0];
+
+/// `rover.obs` (the antenna along the flight, 1 Hz), `base.obs` (1 Hz) and `nav.rnx`, as the
+/// demo's receivers and errors (no cycle slips, no losses of lock): the phases a tightly
+/// coupled run reads. Returns the base's position.
+fn write_gnss_obs(
+    out: &Path,
+    m: &Survey,
+    origin: &Geodetic,
+    start: Epoch,
+    seed: u64,
+) -> Result<Vector3<f64>, SimError> {
+    let mut s = crate::builtin("demo").expect("the demo scenario");
+    s.seed = seed;
+    let end = start + Duration::from_seconds(SPAN);
+    let (_, eph, klob) = crate::broadcast_orbits(out, start, end, &s)?;
+    let rover_pos = |t: Epoch| crate::ins_block::antenna_at(m, (t - start).to_seconds(), &LEVER);
+    let base = common::frame::Enu(Vector3::from(BASE_ENU)).to_ecef(&origin.to_ecef());
+    let base_pos = move |_t: Epoch| base;
+    let root = Rng::new(seed);
+    for (name, pos, clock, fork) in [
+        (
+            "ROVER",
+            &rover_pos as &dyn Fn(Epoch) -> Ecef,
+            (2.0e-4, 3.0e-9),
+            5,
+        ),
+        (
+            "BASE",
+            &base_pos as &dyn Fn(Epoch) -> Ecef,
+            (-1.0e-4, -2.0e-9),
+            6,
+        ),
+    ] {
+        let r = crate::gnss_obs::Receiver {
+            name,
+            pos,
+            clock,
+            start,
+            end,
+            interval: 1.0,
+            events: &[],
+            faults: false,
+            lose_lock: &[],
+            glonass_phase_icb: 0.0,
+            glonass_code_icb: 0.0,
+        };
+        let (text, _) = crate::gnss_obs::simulate(&r, &eph, &klob, &s.errors, &root.fork(fork));
+        let file = if name == "ROVER" {
+            "rover.obs"
+        } else {
+            "base.obs"
+        };
+        crate::io::write(out, file, &text)?;
+    }
+    Ok(base.0)
 }

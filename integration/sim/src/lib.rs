@@ -359,7 +359,7 @@ fn sp3_sample(eph: &Ephemerides, sv: gnss::sv::Sv, t: Epoch) -> (nalgebra::Vecto
 /// The navigation file of the scenario's synthetic constellations for `[start, end]` (GPST),
 /// written to `dir/nav.rnx` and read back with our own reader: its path, the ephemerides and
 /// the GPS Klobuchar parameters the simulation uses.
-fn broadcast_orbits(
+pub(crate) fn broadcast_orbits(
     dir: &Path,
     start: Epoch,
     end: Epoch,
