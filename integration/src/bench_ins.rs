@@ -106,6 +106,7 @@ pub fn run_bench(minutes: f64, rate_hz: f64) -> InsBench {
         lever_arm: Vector3::zeros(),
         every: (rate_hz / 10.0).round().max(1.0) as usize,
         no_side_slip: None,
+        still: Vec::new(),
     };
     let t = Instant::now();
     let (r, _) = ins::job::checked_run(

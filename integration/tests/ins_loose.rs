@@ -167,6 +167,7 @@ fn run_flight(grade: Grade, seed: u64, shaken: f64) -> (Figures, Figures) {
         lever_arm: lever,
         every: 20,
         no_side_slip: None,
+        still: Vec::new(),
     };
     let r = run(&imu, &fixes, (est, p0), &spec, &o);
     assert_eq!(r.unused_fixes, 0);

@@ -146,12 +146,12 @@ fn car_job(dir: &Path) -> InsJob {
 /// The car: the MEMS preset, the IMU levelled while the car stands, heading from its course
 /// once it passes 1 m/s (39.5 s after the first epoch: the first outage starts half a
 /// second later), RTK positions at 4 Hz (2 cm / 4 cm fixed, 0.3 m / 0.6 m float; the file's
-/// σ are nominal), no side slip within 0.3 m/s, the IMU's noise following the innovations
-/// and, rerun, raised until the outages' ends agree with their σ (the data sheet's random
-/// walks ×2.5). Measured over the 663 withheld RTK fixes: forward 1.92 m RMS, 7.28 m worst
-/// (the data's own filter forward without velocity matching: 3.09 / 12.8 m; with it 0.30 /
-/// 0.69 m); smoothed 0.246 m RMS, 0.632 m worst — the goal, 0.15 / 0.40 m, is not
-/// reached; NEES 2.14 forward, 2.65 smoothed (before the outages checked their σ: 1.32 /
+/// σ are nominal), no side slip within 0.3 m/s, zero velocity and angular rate at its stops,
+/// the IMU's noise following the innovations and, rerun, raised until the outages' ends
+/// agree with their σ. Measured over the 663 withheld RTK fixes: forward 1.85 m RMS, 7.57 m
+/// worst (the data's own filter forward without velocity matching: 3.09 / 12.8 m; with it
+/// 0.30 / 0.69 m); smoothed 0.224 m RMS, 0.573 m worst — the goal, 0.15 / 0.40 m, is
+/// not reached; NEES 2.94 forward, 2.49 smoothed (before the outages checked their σ: 1.32 /
 /// 4.33 m forward, 0.253 / 0.565 m smoothed, NEES 5.1 and 12.0). Without the side-slip constraint the filter diverges after the first outage (its
 /// heading, 10° uncertain at the start, is not known well enough when the outage begins).
 #[test]
@@ -218,11 +218,11 @@ fn the_car_drive_bridges_fifteen_second_outages() {
 /// The walk end to end, as the source's walk_config.py mounts it (IMU axes 180°, 0°, −90°,
 /// its times as tagged, the antenna 5 cm left of the IMU, no side-slip constraint: a walker
 /// steps sideways), three 10 s windows of the receiver's fixed RTK withheld (20–30, 50–60,
-/// 75–85 s after the first epoch). Measured: smoothed 0.128 m RMS, 0.244 m worst, NEES 7.4
-/// (the σ still too small, mostly in the first window, 4 s after the alignment); forward
-/// 1.44 m RMS, 4.29 m worst, NEES 3.9 (NEES per horizontal axis); the data sheet's random walks ×1.4 from the windows'
-/// ends. Before every fix was used and the run restarted from its smoothed start: smoothed
-/// 0.26 / 0.51 m, forward 4.9 / 12.3 m, NEES 97 and 34.
+/// 75–85 s after the first epoch). Measured: smoothed 0.128 m RMS, 0.242 m worst, NEES 8.5
+/// per horizontal axis (the σ still too small, mostly in the first window, 4 s after the
+/// alignment); forward 1.31 m RMS, 4.00 m worst, NEES 3.9; the data sheet's random walks
+/// ×1.3 from the windows' ends. Before every fix was used and the run restarted from its
+/// smoothed start: smoothed 0.26 / 0.51 m, forward 4.9 / 12.3 m, NEES 97 and 34.
 #[test]
 fn the_walk_bridges_ten_second_windows() {
     let Some(dir) = testkit::shared_data(&format!("{SET}/walk_0827")) else {

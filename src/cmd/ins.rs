@@ -12,20 +12,25 @@ use integration::ins::spec::{Grade, ImuSpec};
 use nalgebra::Vector3;
 use std::path::PathBuf;
 
-/// GNSS/INS, loosely coupled: an IMU log and a GNSS trajectory (.pos) into a smoothed
-/// trajectory with attitude.
+/// GNSS/INS: an IMU log and a GNSS trajectory (.pos), and optionally the receivers'
+/// carrier phases, into a smoothed trajectory with attitude.
 ///
 /// The IMU log is turned into the body frame (x forward, y right, z down) by --mount and
 /// shifted by --imu-time-offset; the IMU is levelled while the antenna stands still before it
 /// first moves, and its heading is taken from the course once the antenna moves faster than
 /// 1 m/s (nothing is written before). An error-state Kalman filter runs forward with each
 /// GNSS position as an update through the lever arm (fixed epochs at 2 cm / 4 cm, others at
-/// 0.3 m / 0.6 m, or the file's σ when larger), the IMU's random walks raised when the
-/// innovations say the data sheet is too optimistic; a Rauch–Tung–Striebel smoother then runs
-/// back over it. Writes CSV: GPS week and second, latitude, longitude, ellipsoidal height of
-/// the IMU, velocity north/east/up, roll/pitch/heading (degrees) and their 1-σ columns (the
-/// columns ../shared/tools/insstat.py reads). Exits with code 3 when IMU rows were skipped
-/// (each named on stderr).
+/// 0.3 m / 0.6 m, or the file's σ when larger), zero velocity and angular rate wherever the
+/// GNSS says the antenna stands still (under 5 cm/s for a second or more), the IMU's random
+/// walks raised when the innovations say the data sheet is too optimistic; a
+/// Rauch–Tung–Striebel smoother then runs back over it. The run starts again from its own
+/// smoothed start, and again with the random walks raised when the GNSS, returning after a
+/// gap, meets the bridged positions further off than their σ said (the summary gives the
+/// factor). With --rover and --base the double-differenced phases hold the IMU where no
+/// position is used (tight coupling). Writes CSV (or .pos): GPS week and second, latitude,
+/// longitude, ellipsoidal height of the IMU, velocity north/east/up, roll/pitch/heading
+/// (degrees) and their 1-σ columns (the columns ../shared/tools/insstat.py reads), and a page
+/// beside it. Exits with code 3 when IMU rows were skipped (each named on stderr).
 #[derive(clap::Args)]
 pub struct Args {
     /// IMU log, in the form --imu-format names, the IMU's own axes (--mount turns them).
@@ -95,11 +100,14 @@ pub struct Args {
     #[arg(short = 'o', long = "out", value_name = "OUT.csv")]
     out: PathBuf,
     /// Tight coupling: the rover's observations (RINEX or a raw log). With --base, the
-    /// double-differenced carrier phases update the filter wherever the positions are
-    /// withheld (--withhold), so that a sky of two or three satellites still holds the IMU;
-    /// their integers are learnt where the positions hold the filter (the σ of a double
-    /// difference's range under 2 cm, within 0.15 cycle of an integer) and kept while the
-    /// phases' arcs continue.
+    /// double-differenced carrier phases update the filter wherever no position is used
+    /// (withheld by --withhold, missing from the .pos, or between its epochs), so that a sky
+    /// of two or three satellites still holds the IMU; their integers are learnt where the
+    /// positions hold the filter (the σ of a double difference's range, its own noise
+    /// included, under 2 cm; three epochs in a row within 0.15 cycle of the same integer),
+    /// checked there again (dropped beyond 3σ) and kept while the phases' arcs continue.
+    /// Epochs with fewer than three double differences before --withheld-satellites thins
+    /// them are not used.
     #[arg(long, value_name = "FILE", requires = "base")]
     rover: Option<PathBuf>,
     /// Tight coupling: the base's observations.
@@ -107,17 +115,22 @@ pub struct Args {
     base: Option<PathBuf>,
     /// Tight coupling: navigation files (broadcast orbits; repeatable); default: the rover
     /// log's own.
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", requires = "rover")]
     nav: Vec<PathBuf>,
     /// Tight coupling: the base's antenna reference point, ECEF metres (default: its
     /// header's).
-    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    #[arg(
+        long,
+        value_name = "X,Y,Z",
+        allow_hyphen_values = true,
+        requires = "rover"
+    )]
     base_pos: Option<String>,
     /// Tight coupling: in the withheld windows, use the phases of only the N highest
     /// satellites (a narrow sky: a street, a cliff, trees), to see how the IMU and a few
     /// phases bridge where no position could be computed.
-    #[arg(long, value_name = "N", requires = "rover")]
-    withheld_satellites: Option<usize>,
+    #[arg(long, value_name = "N", requires = "rover", value_parser = clap::value_parser!(u64).range(2..))]
+    withheld_satellites: Option<u64>,
     /// Write the forward filter's trajectory instead of the smoothed one (what a real-time
     /// system would have had; to compare).
     #[arg(long)]
@@ -163,7 +176,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let comments = vec![
         format!(
-            "ppkat ins: {} {}, loosely coupled on {}",
+            "ppkat ins: {} {}, coupled on {}",
             args.imu.display(),
             if args.forward {
                 "forward only"
@@ -206,8 +219,8 @@ pub fn run(args: Args) -> Result<()> {
     let summary = if args.rover.is_some() {
         let nis = r.phase_nis.iter().sum::<f64>() / r.phase_nis.len().max(1) as f64;
         format!(
-            "{summary}; tight: {} phase integers learnt, {} double-differenced phases used where the positions are withheld (NIS per phase {nis:.2})",
-            r.integers, r.phase_rows
+            "{summary}; tight: {} phase integers learnt ({} dropped again), {} double-differenced phases used where no position was (NIS per phase {nis:.2})",
+            r.integers, r.integers_dropped, r.phase_rows
         )
     } else {
         summary
@@ -295,7 +308,7 @@ fn job(args: &Args) -> Result<InsJob> {
                     Some(b) => Some(Ecef(Vector3::from(triple("--base-pos", b)?))),
                     None => None,
                 },
-                keep: args.withheld_satellites,
+                keep: args.withheld_satellites.map(|n| n as usize),
             }),
             _ => None,
         },

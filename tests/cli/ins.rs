@@ -507,7 +507,12 @@ fn tight_coupling_bridges_a_narrow_sky_better_than_loose() {
         .find(|l| l.contains("tight:"))
         .expect("a tight summary");
     let nums = crate::adjust::numbers(line.split("tight:").nth(1).unwrap());
-    assert!(nums[0] >= 10.0 && nums[1] == 120.0, "{line}");
+    // Integers learnt, dropped again, phases used where no position was (the outage's 30
+    // epochs, two double differences on L1 and L2).
+    assert!(
+        nums[0] >= 10.0 && nums[1] <= 2.0 && nums[2] >= 120.0,
+        "{line}"
+    );
     let (_, forward) = tight(&["--forward"], "tight_fwd.csv");
     let loose_fwd = dir.join("loose_fwd.csv");
     succeeds(&ppkat(&[

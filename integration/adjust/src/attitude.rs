@@ -32,6 +32,11 @@ pub struct AttitudeObs {
     observed: Matrix3<f64>,
 }
 
+/// With `strip_offsets`, the share of an attitude observation's variance common to its
+/// strip (the offset's prior; the rest stays the image's own): an INS's smoothed attitude
+/// error changes little over a strip's minute.
+pub const STRIP_SHARE: f64 = 0.9;
+
 /// The kind name of the per-strip attitude offsets (`Key::Custom(STRIP_OFFSET, n)`, rad).
 pub const STRIP_OFFSET: &str = "attitude offset of strip";
 
@@ -148,7 +153,15 @@ pub(super) fn factors(
     } else {
         Vec::new()
     };
+    // With the strip offsets, each observation's variance is split between them (the part
+    // common along a strip) and the image's own.
+    let own = if sec.strip_offsets {
+        (1.0 - STRIP_SHARE).sqrt()
+    } else {
+        1.0
+    };
     for (i, rot, sigma) in obs {
+        let sigma = sigma * own;
         let mut keys = vec![Key::Pose(ImageId::from(i))];
         if sec.boresight {
             keys.push(boresight_block(
@@ -194,7 +207,7 @@ fn boresight_block(
 }
 
 /// One attitude offset per strip observed, held at zero by a prior of the median σ of its
-/// observations per axis (an INS's attitude error drifts over minutes: along a strip it is
+/// observations per axis times √[`STRIP_SHARE`] (an INS's attitude error drifts over minutes: along a strip it is
 /// nearly one offset, which one boresight for the whole flight must not take as known).
 fn strip_offsets(
     p: &Project,
@@ -216,7 +229,7 @@ fn strip_offsets(
                 .map(|o| o.2[axis])
                 .collect();
             v.sort_by(f64::total_cmp);
-            *s = v[v.len() / 2];
+            *s = v[v.len() / 2] * STRIP_SHARE.sqrt();
         }
         let k = Key::Custom(STRIP_OFFSET, n as u32);
         pr.add_block(k, Value::Vector(DVector::zeros(3)))

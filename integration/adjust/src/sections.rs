@@ -20,7 +20,8 @@ pub struct AttitudeSection {
     #[serde(default)]
     pub boresight_sigma_deg: Option<[f64; 3]>,
     /// One attitude offset per strip (the images list's strip column), held at zero by a prior
-    /// of the median σ of the strip's observations: for an INS, whose attitude error drifts
+    /// of the median σ of the strip's observations, 90 % of each observation's variance
+    /// moved to it (the rest stays the image's own): for an INS, whose attitude error drifts
     /// over minutes and is nearly constant along a strip, so that the boresight's σ count the
     /// strips, not the images. Default false (errors independent from image to image).
     #[serde(default)]

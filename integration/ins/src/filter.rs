@@ -236,6 +236,37 @@ impl<'a> Forward<'a> {
         self.update(&h, &z, &(nalgebra::Matrix2::identity() * sigma * sigma));
     }
 
+    /// Standing still: the velocity is zero within `sigma_v` (m/s), and the mean measured
+    /// angular rate `omega` over the last `dt` seconds is the Earth's rate in the body frame
+    /// plus the gyro bias, within the angle random walk over `dt` (a zero-velocity and a
+    /// zero-angular-rate update: the gyro biases, and with them the heading's drift, seen
+    /// at every stop).
+    pub fn update_still(&mut self, omega: &Vector3<f64>, dt: f64, sigma_v: f64) {
+        if dt <= 0.0 {
+            return;
+        }
+        self.prior.get_or_insert((self.est, self.p));
+        let ct = self.est.nav.attitude.matrix().transpose();
+        let earth = ct * crate::earth::earth_rate();
+        let mut z = SVector::<f64, 6>::zeros();
+        z.fixed_rows_mut::<3>(0)
+            .copy_from(&(-self.est.nav.velocity));
+        z.fixed_rows_mut::<3>(3)
+            .copy_from(&(omega - earth - self.est.gyro_bias));
+        let mut h = SMatrix::<f64, 6, N>::zeros();
+        h.fixed_view_mut::<3, 3>(0, idx::VEL)
+            .copy_from(&Matrix3::identity());
+        h.fixed_view_mut::<3, 3>(3, idx::BG)
+            .copy_from(&Matrix3::identity());
+        let mut r = SMatrix::<f64, 6, 6>::zeros();
+        let sw = self.scaled.arw * self.scaled.arw / dt;
+        for k in 0..3 {
+            r[(k, k)] = sigma_v * sigma_v;
+            r[(k + 3, k + 3)] = sw;
+        }
+        self.update(&h, &z, &r);
+    }
+
     /// The factor on the IMU's random walks the innovations asked for so far.
     pub fn noise_scale(&self) -> f64 {
         self.noise_scale

@@ -185,6 +185,7 @@ pub fn run_job(job: &InsJob) -> Result<InsRun> {
         lever_arm: job.lever_arm,
         every: job.every,
         no_side_slip: job.no_side_slip,
+        still: still_spans(job, &gnss),
     };
     let phases = match &job.phases {
         Some(p) => phase_epochs(job, p, &gnss)?,
@@ -208,9 +209,41 @@ pub fn run_job(job: &InsJob) -> Result<InsRun> {
     })
 }
 
+/// Horizontal and vertical speed (m/s) below which a GNSS epoch stands still.
+const STILL_SPEED_ZUPT: f64 = 0.05;
+/// Shortest stand (s) taken as still.
+const STILL_SPAN: f64 = 1.0;
+
+/// The spans (at least [`STILL_SPAN`] long) where consecutive GNSS epochs used, not
+/// withheld, move slower than [`STILL_SPEED_ZUPT`] — by the file's velocities, else by the
+/// positions two epochs either side.
+fn still_spans(job: &InsJob, g: &[GnssEpoch]) -> Vec<(Epoch, Epoch)> {
+    let first = g.first().map(|e| e.time);
+    let slow = |i: usize| match g[i].velocity {
+        Some(v) => v.norm() < STILL_SPEED_ZUPT,
+        None => motion(g, i).is_some_and(|(v, _)| v < STILL_SPEED_ZUPT),
+    };
+    let mut out = Vec::new();
+    let mut run: Option<(Epoch, Epoch)> = None;
+    for (i, e) in g.iter().enumerate() {
+        let used = first.is_some_and(|f| !withheld(job, f, e.time));
+        if used && slow(i) {
+            run = Some(run.map_or((e.time, e.time), |(a, _)| (a, e.time)));
+        } else if let Some((a, b)) = run.take() {
+            if (b - a).to_seconds() >= STILL_SPAN {
+                out.push((a, b));
+            }
+        }
+    }
+    if let Some((a, b)) = run.filter(|(a, b)| (*b - *a).to_seconds() >= STILL_SPAN) {
+        out.push((a, b));
+    }
+    out
+}
+
 /// Mean NIS/3 at the bridges' ends beyond which the IMU's noise is raised (the predicted σ
-/// √2 times too small or more).
-const BRIDGE_LIMIT: f64 = 2.0;
+/// 1.2 times too small or more: with few gaps a mean of χ² draws, erring on the safe side).
+const BRIDGE_LIMIT: f64 = 1.5;
 /// Seconds of data the first pass smooths for the start of the second.
 const FIRST_PASS: f64 = 300.0;
 /// Reruns at most, each with the noise raised by what the bridges still ask.
@@ -263,7 +296,8 @@ pub fn checked_run(
 }
 
 /// The start: levelled roll and pitch, the course's heading, the antenna's position less
-/// the lever arm; σ of 3° (10° in heading), 0.5 m/s, the gyro biases measured while still.
+/// the lever arm; σ of 3° (in heading 10° for a land vehicle, 30° otherwise), 0.5 m/s, the
+/// gyro biases measured while still.
 fn initial(
     job: &InsJob,
     g: &GnssEpoch,
@@ -374,15 +408,13 @@ fn phase_epochs(job: &InsJob, p: &PhaseFiles, gnss: &[GnssEpoch]) -> Result<Phas
         .epochs
         .into_iter()
         .map(|e| {
-            let update = withheld(job, first, e.rover_time);
-            let rows = match (update, p.keep) {
+            let rows = match (withheld(job, first, e.rover_time), p.keep) {
                 (true, Some(k)) => thin(e.rows, k),
                 _ => e.rows,
             };
             PhaseEpoch {
                 time: e.rover_time,
                 rows,
-                update,
             }
         })
         .collect();

@@ -17,6 +17,8 @@ use crate::tight::{self, Integers, Phases};
 use hifitime::Epoch;
 use nalgebra::Vector3;
 
+/// σ of the zero velocity while still, m/s.
+pub const STILL_SIGMA: f64 = 0.01;
 /// A GNSS gap (s) longer than this is a bridge whose end checks the prediction's σ.
 pub const BRIDGE: f64 = 2.0;
 
@@ -30,6 +32,9 @@ pub struct LooseOptions {
     /// A land vehicle: no side slip nor jump within this σ (m/s), applied at every
     /// checkpoint while the speed is above 1 m/s ([`Forward::update_no_side_slip`]).
     pub no_side_slip: Option<f64>,
+    /// Spans where the body stands still (from the GNSS velocities used): zero velocity and
+    /// angular rate at every checkpoint there ([`Forward::update_still`]).
+    pub still: Vec<(Epoch, Epoch)>,
 }
 
 /// A run's results.
@@ -51,6 +56,10 @@ pub struct LooseRun {
     pub phase_nis: Vec<f64>,
     /// Integers learnt.
     pub integers: usize,
+    /// Integers dropped again (a residual beyond [`tight::DROP_SIGMAS`]).
+    pub integers_dropped: usize,
+    /// Zero-velocity and zero-rate updates made while still.
+    pub still_updates: usize,
     /// Normalised innovation squared of the first update after each GNSS gap longer than
     /// [`BRIDGE`]: how well the IMU's prediction across the gap met the GNSS (χ²(3) when
     /// the σ hold).
@@ -84,8 +93,11 @@ pub fn run_with_phases(
     let mut next = 0;
     let mut last_update: Option<Epoch> = None;
     let (mut next_phase, mut known) = (0, Integers::default());
+    let (mut turned, mut since) = (Vector3::zeros(), 0.0);
     for (k, s) in samples.iter().enumerate() {
         f.predict(s);
+        turned += s.dtheta;
+        since += s.dt;
         // The sample takes the fixes from half its interval before it to half the next one
         // after it: contiguous windows, however the IMU's intervals jitter or gap.
         let before = 0.5 * s.dt;
@@ -106,6 +118,7 @@ pub fn run_with_phases(
             next += 1;
             updated = true;
         }
+        let fixed = updated;
         while let Some(e) = phases.epochs.get(next_phase) {
             let dt = (e.time - s.time).to_seconds();
             if dt > after {
@@ -115,8 +128,9 @@ pub fn run_with_phases(
             if dt < -before {
                 continue;
             }
-            if !e.update {
-                out.integers += tight::learn(&f, e, &o.lever_arm, &mut known);
+            if fixed {
+                let at = (&o.lever_arm, dt);
+                out.integers += tight::learn(&f, e, at, phases.baseline_km, &mut known);
             } else if let Some((rows, nis)) =
                 tight::update(&mut f, e, &o.lever_arm, dt, &known, phases.baseline_km)
             {
@@ -131,6 +145,11 @@ pub fn run_with_phases(
                     f.update_no_side_slip(sigma);
                 }
             }
+            if o.still.iter().any(|(a, b)| (*a..=*b).contains(&s.time)) {
+                f.update_still(&(turned / since), since, STILL_SIGMA);
+                out.still_updates += 1;
+            }
+            (turned, since) = (Vector3::zeros(), 0.0);
             let cp = f.checkpoint();
             out.forward.push((s.time, cp.post, cp.post_cov));
             times.push(s.time);
@@ -138,6 +157,7 @@ pub fn run_with_phases(
         }
     }
     out.unused_fixes += fixes.len() - next;
+    out.integers_dropped = known.dropped;
     out.noise_scale = f.noise_scale();
     out.smoothed = times.into_iter().zip(smooth(&cps)).collect();
     out

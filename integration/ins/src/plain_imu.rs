@@ -57,6 +57,7 @@ struct Layout {
 /// The layout a CSV header states.
 fn layout(header: &str) -> std::result::Result<Layout, String> {
     let names: Vec<String> = header
+        .trim_start_matches('\u{feff}')
         .split(',')
         .map(|s| s.trim().to_ascii_lowercase())
         .collect();
@@ -172,9 +173,9 @@ fn samples(rs: &[Row], l: &Layout, path: &Path) -> Result<ImuLog> {
         .collect();
     dts.sort_by(f64::total_cmp);
     let nominal = dts[dts.len() / 2];
-    if !(1e-4..=1.0).contains(&nominal) {
+    if !(1e-4..=0.1).contains(&nominal) {
         return Err(bad(format!(
-            "rows {nominal} s apart ({:.3} Hz): not an IMU's rate (1 Hz to 10 kHz); are the times in seconds?",
+            "rows {nominal} s apart ({:.3} Hz): not an IMU's rate (10 Hz to 10 kHz); are the times in seconds?",
             1.0 / nominal
         )));
     }

@@ -132,7 +132,7 @@ pub fn html(rows: &[(Epoch, Estimate, Mat)], p: &PageInputs) -> String {
     let (t, roll, pitch, heading) = p.alignment;
     let _ = writeln!(
         s,
-        "<h2>Alignment</h2><p>At {t}: levelled while still (roll {:.2}°, pitch {:.2}°), heading {:.1}° from the course once moving; σ 3° (10° in heading) at the start, converging as the motion shows them.</p>",
+        "<h2>Alignment</h2><p>At {t}: levelled while still (roll {:.2}°, pitch {:.2}°), heading {:.1}° from the course once moving; σ 3° in roll and pitch, 10° in heading for a land vehicle (30° otherwise: a hand or a crab angle turns the body from its course) at the start, converging as the motion shows them.</p>",
         roll.to_degrees(),
         pitch.to_degrees(),
         heading.to_degrees()

@@ -2,13 +2,15 @@
 //! pivot; `gnss::ppk::tight`) as updates of the filter where the GNSS positions are missing,
 //! so that two or three satellites, too few for any position, still hold the IMU.
 //!
-//! An ambiguity is learnt while the positions hold the filter: at a GNSS epoch whose position
-//! was used, each double difference whose range the filter knows within [`LEARN_SIGMA`] (its
-//! σ along the double difference's direction) gives λ·N = phase − range(antenna), taken when
-//! it lies within [`LEARN_FRACTION`] of an integer. The key of an ambiguity holds its four
-//! phases' arcs, so an integer learnt once serves while they continue — across the gap, and
-//! after it. Where the positions are missing (withheld, or none), the phases whose integers
-//! are known update the filter: z = phase − λ·N − range(antenna), H = ∇range (position) and
+//! An ambiguity is learnt while the positions hold the filter: at a sample where a GNSS
+//! position was just used, each double difference whose range the filter knows within
+//! [`LEARN_SIGMA`] (the σ along its direction and its own noise) gives λ·N = phase −
+//! range(antenna), a candidate when within [`LEARN_FRACTION`] of an integer, taken when
+//! [`LEARN_EPOCHS`] epochs in a row agree; a known integer is checked there again and dropped
+//! when off by more than [`DROP_SIGMAS`]. The key of an ambiguity holds its four phases'
+//! arcs, so an integer serves while they continue — across a gap, and after it. Where no
+//! position is used (withheld, missing, or between the positions' epochs), the phases whose
+//! integers are known update the filter: z = phase − λ·N − range(antenna), H = ∇range (position) and
 //! −∇rangeᵀ·[C·lever]× (attitude); the rows sharing a pivot share its single difference's
 //! variance, and each row carries a differential ionosphere and troposphere of 5 mm plus
 //! 1 mm per km of baseline.
@@ -23,21 +25,24 @@ use hifitime::Epoch;
 use nalgebra::{DMatrix, DVector, Vector3};
 use std::collections::HashMap;
 
-/// Largest σ (m) of a double difference's range for its integer to be learnt.
+/// Largest σ (m) of a double difference's range (its own noise included) for its integer
+/// to be learnt.
 pub const LEARN_SIGMA: f64 = 0.02;
 /// Largest distance (cycles) of λ·N/λ from an integer for it to be learnt.
 pub const LEARN_FRACTION: f64 = 0.15;
+/// Consecutive epochs that must round to the same integer before it is taken.
+pub const LEARN_EPOCHS: u32 = 3;
+/// A known integer whose residual exceeds this many σ where the positions hold the filter
+/// is dropped (learnt again if it comes back).
+pub const DROP_SIGMAS: f64 = 3.0;
 
-/// One rover epoch's double differences, and whether they may update the filter (the
-/// positions are missing there) or only teach integers.
+/// One rover epoch's double differences.
 #[derive(Clone, Debug)]
 pub struct PhaseEpoch {
     /// True (GPST) time of the rover observations.
     pub time: Epoch,
     /// The rows.
     pub rows: Vec<DdRow>,
-    /// The phases update the filter here.
-    pub update: bool,
 }
 
 /// The phases of a run: epochs in time order and the baseline length (km) for the
@@ -50,35 +55,69 @@ pub struct Phases {
     pub baseline_km: f64,
 }
 
-/// The integers learnt, per ambiguity key (cycles).
+/// The integers learnt per ambiguity key (cycles), the candidates (integer, epochs agreeing)
+/// and how many known integers were dropped.
 #[derive(Clone, Debug, Default)]
-pub struct Integers(pub HashMap<DdAmbiguity, f64>);
+pub struct Integers {
+    known: HashMap<DdAmbiguity, f64>,
+    candidates: HashMap<DdAmbiguity, (f64, u32)>,
+    /// Integers dropped for a residual beyond [`DROP_SIGMAS`].
+    pub dropped: usize,
+}
 
 /// The rows of one update: index into the epoch's rows, ∇range of the antenna, the
 /// innovation (m).
 type Used = (usize, Vector3<f64>, f64);
 
-/// Learn the integers of `e`'s rows from the filter's antenna (`lever` from the IMU, body).
-pub fn learn(f: &Forward, e: &PhaseEpoch, lever: &Vector3<f64>, known: &mut Integers) -> usize {
+/// The variance (m²) of a row's own noise: its single differences and the atmosphere.
+fn row_var(r: &DdRow, baseline_km: f64) -> f64 {
+    r.sd_var_phase + r.pivot_var_phase + (0.005 + 0.001 * baseline_km).powi(2)
+}
+
+/// At an epoch where a position holds the filter (`dt` seconds after the state's time):
+/// check the known integers of `e`'s rows against it (dropping those off by more than
+/// [`DROP_SIGMAS`]) and learn new ones, each taken when [`LEARN_EPOCHS`] epochs in a row
+/// round to it. Returns the integers taken.
+pub fn learn(
+    f: &Forward,
+    e: &PhaseEpoch,
+    (lever, dt): (&Vector3<f64>, f64),
+    baseline_km: f64,
+    ints: &mut Integers,
+) -> usize {
     let est = f.estimate();
     let arm = est.nav.attitude.matrix() * lever;
-    let ant = est.nav.position.0 + arm;
+    let ant = est.nav.position.0 + dt * est.nav.velocity + arm;
     let p = f.covariance();
     let mut learnt = 0;
     for r in &e.rows {
         let Some(key) = r.ambiguity else { continue };
-        if known.0.contains_key(&key) || !r.phase.is_finite() {
+        if !r.phase.is_finite() {
             continue;
         }
         let (range, g) = r.range(&ant);
         let h = jacobian_row(&g, &arm);
-        let var = (h.transpose() * p * h)[(0, 0)];
-        if var.sqrt() > LEARN_SIGMA {
+        let var = (h.transpose() * p * h)[(0, 0)] + row_var(r, baseline_km);
+        if let Some(n) = ints.known.get(&key) {
+            if (r.phase - r.wavelength * n - range).abs() > DROP_SIGMAS * var.sqrt() {
+                ints.known.remove(&key);
+                ints.dropped += 1;
+            }
             continue;
         }
         let n = (r.phase - range) / r.wavelength;
-        if (n - n.round()).abs() <= LEARN_FRACTION {
-            known.0.insert(key, n.round());
+        if var.sqrt() > LEARN_SIGMA || (n - n.round()).abs() > LEARN_FRACTION {
+            ints.candidates.remove(&key);
+            continue;
+        }
+        let c = ints.candidates.entry(key).or_insert((n.round(), 0));
+        if c.0 != n.round() {
+            *c = (n.round(), 0);
+        }
+        c.1 += 1;
+        if c.1 >= LEARN_EPOCHS {
+            ints.known.insert(key, n.round());
+            ints.candidates.remove(&key);
             learnt += 1;
         }
     }
@@ -115,7 +154,7 @@ pub fn update(
         .iter()
         .enumerate()
         .filter_map(|(i, r)| {
-            let n = *known.0.get(&r.ambiguity?)?;
+            let n = *known.known.get(&r.ambiguity?)?;
             let (range, g) = r.range(&ant);
             r.phase
                 .is_finite()
@@ -129,18 +168,17 @@ pub fn update(
     let mut h = DMatrix::zeros(m, N);
     let mut z = DVector::zeros(m);
     let mut r = DMatrix::zeros(m, m);
-    let atmosphere = (0.005 + 0.001 * baseline_km).powi(2);
     for (a, (i, g, dz)) in used.iter().enumerate() {
         h.row_mut(a).copy_from(&jacobian_row(g, &arm).transpose());
         z[a] = *dz;
         let ra = &e.rows[*i];
         for (b, (j, _, _)) in used.iter().enumerate() {
             let rb = &e.rows[*j];
-            if ra.pivot == rb.pivot && ra.slot == rb.slot {
+            if a != b && ra.pivot == rb.pivot && ra.slot == rb.slot {
                 r[(a, b)] += ra.pivot_var_phase;
             }
         }
-        r[(a, a)] += ra.sd_var_phase + atmosphere;
+        r[(a, a)] += row_var(ra, baseline_km);
     }
     f.update_rows(&h, &z, &r).map(|nis| (m, nis))
 }
