@@ -242,6 +242,15 @@ pub fn run(args: Args) -> Result<()> {
     for a in &done.assumed {
         println!("  assumed: {a}");
     }
+    if args.rover.is_some() {
+        let (missing, warnings) = &done.phase_notes;
+        if *missing > 0 {
+            println!("  tight: {missing} rover epochs without double differences (no base epoch, or fewer than three)");
+        }
+        for w in warnings {
+            println!("  tight: {w}");
+        }
+    }
     let skipped: Vec<String> = done
         .imu_notes
         .iter()

@@ -389,6 +389,26 @@ fn exposures_with_ins_attitude_give_the_boresight_and_better_check_points() {
     assert!(t.contains("84 camera stations written"), "{t}");
     let table = std::fs::read_to_string(&antennas).unwrap();
     assert!(table.contains(",sd_omega,sd_phi,sd_kappa"), "{table}");
+    // A photograph before the INS's alignment has no attitude with σ: refused, named.
+    let times = std::fs::read_to_string(dir.join("exposure_times.csv")).unwrap();
+    let early = dir.join("times_early.csv");
+    std::fs::write(&early, times.replacen('\n', "\nEARLY,2421,122410.0\n", 1)).unwrap();
+    skips(
+        &ppkat(&[
+            "exposures",
+            "--trajectory",
+            p(&dir.join("gnss.pos")),
+            "--times",
+            p(&early),
+            "--ins",
+            p(&dir.join("ins.csv")),
+            "--format",
+            "antenna",
+            "-o",
+            p(&dir.join("antennas_early.csv")),
+        ]),
+        &["EARLY", "outside the INS trajectory"],
+    );
     let with = succeeds(&ppkat(&[
         "adjust",
         "--project",

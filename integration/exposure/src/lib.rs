@@ -122,6 +122,18 @@ pub fn compute(
                 continue;
             }
         };
+        // An INS attitude comes with its σ: a photograph outside it (before the INS's
+        // alignment, after its end) would take a heading-only attitude the adjustment cannot
+        // weigh: refused, named.
+        let ins = opts.attitude.as_ref().filter(|a| a.sigmas.is_some());
+        if ins.is_some_and(|a| a.at(t).is_none()) {
+            res.refused.push(Refused {
+                id: e.id,
+                time: t,
+                why: "outside the INS trajectory (before its alignment or after its end): no attitude with σ".into(),
+            });
+            continue;
+        }
         let mut flags = Vec::new();
         if ip.quality != Quality::Fixed {
             flags.push(format!("next to a {:?} epoch", ip.quality));

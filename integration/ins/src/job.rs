@@ -105,6 +105,9 @@ pub struct InsRun {
     pub imu_notes: Vec<String>,
     /// What was assumed in reading the IMU log (a week for seconds of week).
     pub assumed: Vec<String>,
+    /// Tight coupling: rover epochs without double differences, and the input checks'
+    /// warnings.
+    pub phase_notes: (usize, Vec<String>),
 }
 
 /// Seconds from the first GNSS epoch within a withheld window.
@@ -206,6 +209,7 @@ pub fn run_job(job: &InsJob) -> Result<InsRun> {
         heading,
         imu_notes,
         assumed,
+        phase_notes: (phases.missing, phases.warnings.clone()),
     })
 }
 
@@ -421,5 +425,7 @@ fn phase_epochs(job: &InsJob, p: &PhaseFiles, gnss: &[GnssEpoch]) -> Result<Phas
     Ok(Phases {
         epochs,
         baseline_km,
+        missing: set.missing.len(),
+        warnings: set.warnings,
     })
 }

@@ -53,6 +53,11 @@ pub struct Phases {
     pub epochs: Vec<PhaseEpoch>,
     /// Rover–base distance, km.
     pub baseline_km: f64,
+    /// Rover epochs without double differences (no base epoch, too few satellites), and
+    /// what the input checks said.
+    pub missing: usize,
+    /// The input checks' warnings.
+    pub warnings: Vec<String>,
 }
 
 /// The integers learnt per ambiguity key (cycles), the candidates (integer, epochs agreeing)
