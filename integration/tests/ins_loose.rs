@@ -14,8 +14,9 @@ use integration::ins::loose::{run, LooseOptions};
 use integration::ins::mech::NavState;
 use integration::ins::spec::{Grade, ImuSpec};
 use integration::simulate::imu::corrupt;
+use integration::simulate::ins_flight::noisy_antenna;
 use integration::simulate::rng::Rng;
-use nalgebra::{Matrix3, Rotation3, Vector3};
+use nalgebra::{Rotation3, Vector3};
 
 const RATE: f64 = 200.0;
 const SPAN_S: f64 = 600.0;
@@ -108,22 +109,11 @@ fn run_flight(grade: Grade, seed: u64, shaken: f64) -> (Figures, Figures) {
         .map(|s| s as f64)
         .filter(|s| !(OUTAGE.0..=OUTAGE.1).contains(s))
         .map(|s| {
-            let k = m.at(s);
-            let antenna = k.position.0 + k.attitude * lever;
-            let rot = enu_rotation(&k.position.to_geodetic()).transpose();
-            let sd = Vector3::new(0.02, 0.02, 0.04);
-            let noise = rot
-                * Vector3::new(
-                    sd.x * rng.normal(),
-                    sd.y * rng.normal(),
-                    sd.z * rng.normal(),
-                );
-            let cov = rot * Matrix3::from_diagonal(&sd.component_mul(&sd)) * rot.transpose();
-            let fix = PositionFix {
-                position: Ecef(antenna + noise),
-                cov,
-            };
-            (start + Duration::from_seconds(s), fix)
+            let (position, cov) = noisy_antenna(&m.at(s), &lever, &mut rng);
+            (
+                start + Duration::from_seconds(s),
+                PositionFix { position, cov },
+            )
         })
         .collect();
     // Start: the truth off by 0.5 m, 0.1 m/s, 0.2° in roll and pitch, 2° in heading.

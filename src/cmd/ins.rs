@@ -4,7 +4,6 @@
 use super::triple;
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
-use integration::gnss::frame::Ecef;
 use integration::ins::attitude::Euler;
 use integration::ins::job::{run_job, ImuFormat as JobFormat, InsJob, PhaseFiles};
 use integration::ins::output::{write_csv, write_pos};
@@ -313,10 +312,7 @@ fn job(args: &Args) -> Result<InsJob> {
                 rover: rover.clone(),
                 base: base.clone(),
                 nav: args.nav.clone(),
-                base_position: match &args.base_pos {
-                    Some(b) => Some(Ecef(Vector3::from(triple("--base-pos", b)?))),
-                    None => None,
-                },
+                base_position: super::ppk::base_position(args.base_pos.as_deref(), None)?,
                 keep: args.withheld_satellites.map(|n| n as usize),
             }),
             _ => None,

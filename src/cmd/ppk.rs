@@ -382,7 +382,7 @@ fn positive(s: &str) -> Result<f64, String> {
 }
 
 /// `--base-pos X,Y,Z` (ECEF metres) or `--base-llh LAT,LON,H`, else the header's position.
-fn base_position(pos: Option<&str>, llh: Option<&str>) -> Result<BasePosition> {
+pub(crate) fn base_position(pos: Option<&str>, llh: Option<&str>) -> Result<BasePosition> {
     Ok(match (pos, llh) {
         (Some(p), _) => {
             let [x, y, z] = triple("--base-pos", p)?;

@@ -80,8 +80,8 @@ pub struct PhaseFiles {
     pub base: PathBuf,
     /// Navigation files (broadcast orbits); the rover's own when empty.
     pub nav: Vec<PathBuf>,
-    /// The base's antenna reference point; its header's when None.
-    pub base_position: Option<Ecef>,
+    /// The base's marker: given, or its header's.
+    pub base_position: gnss::ppk::BasePosition,
     /// In the withheld windows, the phases of only this many satellites (the highest): a
     /// sky too narrow for a position.
     pub keep: Option<usize>,
@@ -389,15 +389,11 @@ fn phase_epochs(job: &InsJob, p: &PhaseFiles, gnss: &[GnssEpoch]) -> Result<Phas
         });
     }
     let orbits = gnss::orbit::Orbits::broadcast(gnss::orbit::Ephemerides::from_nav(&navs));
-    let base_pos = match p.base_position {
-        Some(b) => gnss::ppk::BasePosition::Given(b),
-        None => gnss::ppk::BasePosition::Header,
-    };
     let instants: Vec<Epoch> = rover.obs.epochs.iter().map(|e| e.time).collect();
     let set = gnss::ppk::tight::double_differences(
         &rover.obs,
         &base.obs,
-        base_pos,
+        p.base_position,
         &orbits,
         &gnss::ppk::PpkOptions::default(),
         &instants,

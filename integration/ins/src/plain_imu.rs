@@ -22,7 +22,7 @@
 
 use crate::error::{Error, Result};
 use crate::imu::ImuSample;
-use crate::rtklib_imu::{saturated, ImuLog};
+use crate::rtklib_imu::{gap, median, saturated, ImuLog};
 use crate::spec::G0;
 use hifitime::{Duration, Epoch};
 use nalgebra::Vector3;
@@ -171,8 +171,7 @@ fn samples(rs: &[Row], l: &Layout, path: &Path) -> Result<ImuLog> {
         .windows(2)
         .map(|w| (w[1].1 - w[0].1).to_seconds())
         .collect();
-    dts.sort_by(f64::total_cmp);
-    let nominal = dts[dts.len() / 2];
+    let nominal = median(&mut dts);
     if !(1e-4..=0.1).contains(&nominal) {
         return Err(bad(format!(
             "rows {nominal} s apart ({:.3} Hz): not an IMU's rate (10 Hz to 10 kHz); are the times in seconds?",
@@ -186,9 +185,7 @@ fn samples(rs: &[Row], l: &Layout, path: &Path) -> Result<ImuLog> {
     let (mut force, mut rate) = (Vec::new(), Vec::new());
     for w in rs.windows(2) {
         let dt = (w[1].1 - w[0].1).to_seconds();
-        if dt > 3.0 * nominal {
-            log.gaps.push(format!("line {}: {dt:.3} s", w[1].0));
-        }
+        log.gaps.extend(gap(w[1].0, dt, nominal));
         let v = w[1].2;
         let per = |inc: bool| if inc { 1.0 } else { dt };
         let dv = Vector3::new(v[0], v[1], v[2]) * l.accel_unit.0 * per(l.accel_unit.1);
@@ -202,8 +199,7 @@ fn samples(rs: &[Row], l: &Layout, path: &Path) -> Result<ImuLog> {
             dv,
         });
     }
-    force.sort_by(f64::total_cmp);
-    let f = force[force.len() / 2];
+    let f = median(&mut force);
     if !(0.5 * G0..=2.0 * G0).contains(&f) {
         let hint = if (0.5..=2.0).contains(&f) {
             "it looks like g: name the columns ax_g ay_g az_g"

@@ -9,14 +9,12 @@
 use crate::errstate::Mat;
 use crate::filter::Estimate;
 use crate::gnss_pos::GnssEpoch;
+use crate::loose::BRIDGE;
 use crate::output::sigmas;
 use hifitime::Epoch;
 use plotters::prelude::*;
 use report::plot::{axes, html_escape, range, svg, TimeAxis};
 use std::fmt::Write as _;
-
-/// A GNSS gap longer than this (s) is an outage the IMU bridged.
-pub const OUTAGE: f64 = 2.0;
 
 /// What the page shows besides the rows.
 pub struct PageInputs<'a> {
@@ -56,7 +54,7 @@ fn values(axis: &TimeAxis, rows: &[(Epoch, Estimate, Mat)]) -> Vec<Values> {
         .collect()
 }
 
-/// The GNSS gaps longer than [`OUTAGE`] within the rows' span: start, end.
+/// The GNSS gaps longer than [`BRIDGE`] (the filter's bridges) within the rows' span: start, end.
 fn outages(used: &[&GnssEpoch], first: Epoch, last: Epoch) -> Vec<(Epoch, Epoch)> {
     let mut out = Vec::new();
     let mut prev = first;
@@ -64,7 +62,7 @@ fn outages(used: &[&GnssEpoch], first: Epoch, last: Epoch) -> Vec<(Epoch, Epoch)
         if g < first {
             continue;
         }
-        if (g - prev).to_seconds() > OUTAGE {
+        if (g - prev).to_seconds() > BRIDGE {
             out.push((prev, g.min(last)));
         }
         prev = g;
@@ -142,7 +140,7 @@ pub fn html(rows: &[(Epoch, Estimate, Mat)], p: &PageInputs) -> String {
     let gaps = outages(p.used, first.0, last.0);
     s += "<h2>GNSS outages bridged by the IMU</h2>";
     if gaps.is_empty() {
-        s += &format!("<p>None longer than {OUTAGE} s.</p>\n");
+        s += &format!("<p>None longer than {BRIDGE} s.</p>\n");
     } else {
         s += "<table><tr><th>from</th><th>to</th><th>s</th><th>largest horizontal σ, m</th></tr>\n";
         for (a, b) in &gaps {

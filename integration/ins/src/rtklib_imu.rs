@@ -22,6 +22,21 @@ use std::path::Path;
 
 /// Largest stretch of the IMU's ticks against the tags (0.1 %).
 const MAX_STRETCH: f64 = 1e-3;
+/// An interval longer than this many nominal ones (the median) is a gap.
+const GAP_FACTOR: f64 = 3.0;
+
+/// The median of `v` (sorted in place; not empty).
+pub(crate) fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// The gap before the row on `line`, `dt` seconds after the row before, when longer than
+/// [`GAP_FACTOR`] `nominal` intervals: `line N: … s`.
+pub(crate) fn gap(line: usize, dt: f64, nominal: f64) -> Option<String> {
+    (dt > GAP_FACTOR * nominal).then(|| format!("line {line}: {dt:.3} s"))
+}
+
 /// Consecutive rows at an axis' largest magnitude that make a saturation.
 pub const SATURATED_RUN: usize = 3;
 
@@ -32,7 +47,7 @@ pub struct ImuLog {
     pub samples: Vec<ImuSample>,
     /// Rows left out, each `line N: why`.
     pub skipped: Vec<String>,
-    /// Gaps longer than three nominal intervals, each `line N: … s`.
+    /// Gaps longer than three nominal intervals ([`gap`]), each `line N: … s`.
     pub gaps: Vec<String>,
     /// Runs of [`SATURATED_RUN`] rows or more at an axis' largest magnitude (its full scale:
     /// the sensor clipped), each `lines A–B: …`; kept, but wrong.
@@ -157,11 +172,10 @@ pub fn read(csv: &Path, tag_path: &Path) -> Result<ImuLog> {
         .iter()
         .map(|r| Vector3::new(r.1[0], r.1[1], r.1[2]).norm())
         .collect();
-    mags.sort_by(f64::total_cmp);
-    let median = mags[mags.len() / 2];
-    if !(0.5..=2.0).contains(&median) {
+    let in_g = median(&mut mags);
+    if !(0.5..=2.0).contains(&in_g) {
         return Err(bad(format!(
-            "the accelerations' median magnitude is {median:.3}: not in g (m/s² would read 9.8); convert the file to g"
+            "the accelerations' median magnitude is {in_g:.3}: not in g (m/s² would read 9.8); convert the file to g"
         )));
     }
     let lines: Vec<(usize, [f64; 6])> = rs.iter().map(|r| (r.0, r.1)).collect();
@@ -178,13 +192,10 @@ pub fn read(csv: &Path, tag_path: &Path) -> Result<ImuLog> {
     }
     let time = |tick: u64| start + Duration::from_seconds((tick - t0) as f64 / 1e3 * log.stretch);
     let mut intervals: Vec<f64> = rs.windows(2).map(|w| (w[1].2 - w[0].2) as f64).collect();
-    intervals.sort_by(f64::total_cmp);
-    let nominal = intervals[intervals.len() / 2] * 1e-3 * log.stretch;
+    let nominal = median(&mut intervals) * 1e-3 * log.stretch;
     for w in rs.windows(2) {
         let dt = (w[1].2 - w[0].2) as f64 * 1e-3 * log.stretch;
-        if dt > 3.0 * nominal {
-            log.gaps.push(format!("line {}: {dt:.3} s", w[1].0));
-        }
+        log.gaps.extend(gap(w[1].0, dt, nominal));
         let v = w[1].1;
         let deg = std::f64::consts::PI / 180.0;
         log.samples.push(ImuSample::from_rates(

@@ -66,10 +66,7 @@ struct Shot {
 
 /// Where `x` lands in the image (metres), when inside the format 50 px from the edges.
 fn seen(cam: &Camera, pose: &Pose, x: &Vector3<f64>) -> Option<Vector2<f64>> {
-    let xy = cam.project(pose, x)?;
-    let px = cam.image_to_pixel(xy);
-    let inside = |v: f64, n: usize| (50.0..n as f64 - 50.0).contains(&v);
-    (inside(px.x, WIDTH_PX) && inside(px.y, HEIGHT_PX)).then_some(xy)
+    crate::block::nav_images::seen_inside(cam, pose, x, 50.0)
 }
 
 /// The lever arm antenna − camera in the true camera frame, m.

@@ -16,7 +16,7 @@ use crate::SimError;
 use common::frame::{enu_rotation, Ecef, Geodetic};
 use gnss::solution::{write_pos, PosFormat, PosRecord, Quality};
 use hifitime::{Duration, Epoch, TimeScale};
-use ins::inverse::{ideal_imu, Motion};
+use ins::inverse::{ideal_imu, Kinematics, Motion};
 use ins::mech::NavState;
 use ins::output::{state_columns, STATE_HEADER};
 use ins::spec::{Grade, ImuSpec, G0};
@@ -168,27 +168,35 @@ fn write_imu(out: &Path, start: Epoch, imu: &[ins::imu::ImuSample]) -> Result<()
     Ok(())
 }
 
+/// A fixed GNSS antenna position of a body at `k` with the antenna `lever` from it (body,
+/// m): the truth plus noise of 2 cm horizontally and 4 cm vertically drawn from `rng`, and
+/// that covariance (ECEF).
+pub fn noisy_antenna(k: &Kinematics, lever: &Vector3<f64>, rng: &mut Rng) -> (Ecef, Matrix3<f64>) {
+    let rot = enu_rotation(&k.position.to_geodetic()).transpose();
+    let sd = Vector3::new(0.02, 0.02, 0.04);
+    let noise = rot
+        * Vector3::new(
+            sd.x * rng.normal(),
+            sd.y * rng.normal(),
+            sd.z * rng.normal(),
+        );
+    let cov = rot * Matrix3::from_diagonal(&sd.component_mul(&sd)) * rot.transpose();
+    (Ecef(k.position.0 + k.attitude * lever + noise), cov)
+}
+
 /// GNSS antenna positions at 1 Hz with 2 cm / 4 cm noise, fixed.
 fn write_gnss(out: &Path, m: &Survey, start: Epoch, seed: u64) -> Result<usize, SimError> {
     let mut rng = Rng::new(seed).fork(91);
     let lever = Vector3::from(LEVER);
     let recs: Vec<PosRecord> = (0..=SPAN as usize)
         .map(|s| {
-            let k = m.at(s as f64);
-            let rot = enu_rotation(&k.position.to_geodetic()).transpose();
-            let sd = Vector3::new(0.02, 0.02, 0.04);
-            let noise = rot
-                * Vector3::new(
-                    sd.x * rng.normal(),
-                    sd.y * rng.normal(),
-                    sd.z * rng.normal(),
-                );
+            let (pos, cov) = noisy_antenna(&m.at(s as f64), &lever, &mut rng);
             PosRecord {
                 time: start + Duration::from_seconds(s as f64),
-                pos: Ecef(k.position.0 + k.attitude * lever + noise),
+                pos,
                 quality: Quality::Fixed,
                 nsat: 12,
-                cov: rot * Matrix3::from_diagonal(&sd.component_mul(&sd)) * rot.transpose(),
+                cov,
                 age: 0.0,
                 ratio: 0.0,
             }

@@ -18,7 +18,7 @@
 
 mod files;
 pub mod nav;
-mod nav_images;
+pub(crate) mod nav_images;
 mod sparse;
 mod spec;
 pub mod textured;

@@ -21,10 +21,21 @@ pub type NavImage = (String, usize, Pose, f64, Vector3<f64>);
 
 /// Where `x` lands in the image, when inside the format 100 px from the edges.
 pub(super) fn seen(cam: &Camera, pose: &Pose, x: &Vector3<f64>) -> Option<Vector2<f64>> {
+    seen_inside(cam, pose, x, 100.0)
+}
+
+/// Where `x` lands in the image (metres), when inside the camera's format `margin` pixels
+/// from its edges.
+pub(crate) fn seen_inside(
+    cam: &Camera,
+    pose: &Pose,
+    x: &Vector3<f64>,
+    margin: f64,
+) -> Option<Vector2<f64>> {
     let xy = cam.project(pose, x)?;
     let px = cam.image_to_pixel(xy);
-    let inside = |v: f64, n: usize| (100.0..n as f64 - 100.0).contains(&v);
-    (inside(px.x, WIDTH_PX) && inside(px.y, HEIGHT_PX)).then_some(xy)
+    let inside = |v: f64, n: usize| (margin..n as f64 - margin).contains(&v);
+    (inside(px.x, cam.width_px) && inside(px.y, cam.height_px)).then_some(xy)
 }
 
 /// An image measurement: image index, point index, image coordinates (m).
