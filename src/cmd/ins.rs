@@ -210,7 +210,7 @@ pub fn run(args: Args) -> Result<()> {
         done.levelled.0.to_degrees(),
         done.levelled.1.to_degrees(),
         r.nis.len(),
-        r.unused_fixes + done.gnss.iter().filter(|g| integration::ins::job::withheld(&job, done.gnss[0].time, g.time)).count(),
+        r.unused_fixes + (done.gnss.len() - used.len()),
         r.noise_scale,
         done.bridge_scale.1,
         done.bridge_scale.0
