@@ -158,6 +158,7 @@ fn run_flight(grade: Grade, seed: u64, shaken: f64) -> (Figures, Figures) {
         every: 20,
         no_side_slip: None,
         still: Vec::new(),
+        marks: Vec::new(),
     };
     let r = run(&imu, &fixes, (est, p0), &spec, &o);
     assert_eq!(r.unused_fixes, 0);

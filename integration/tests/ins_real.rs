@@ -148,10 +148,13 @@ fn car_job(dir: &Path) -> InsJob {
 /// second later), RTK positions at 4 Hz (2 cm / 4 cm fixed, 0.3 m / 0.6 m float; the file's
 /// σ are nominal), no side slip within 0.3 m/s, zero velocity and angular rate at its stops,
 /// the IMU's noise following the innovations and, rerun, raised until the outages' ends
-/// agree with their σ. Measured over the 663 withheld RTK fixes: forward 1.85 m RMS, 7.57 m
-/// worst (the data's own filter forward without velocity matching: 3.09 / 12.8 m; with it
-/// 0.30 / 0.69 m); smoothed 0.224 m RMS, 0.573 m worst — the goal, 0.15 / 0.40 m, is
-/// not reached; NEES 2.94 forward, 2.49 smoothed (before the outages checked their σ: 1.32 /
+/// agree with their σ, then again until the smoothed σ hold in eight trial gaps of 15.5 s
+/// cut between the outages (there NEES per axis 6.5 at the bridges' noise, 1.15 at ×2.55).
+/// Measured over the 663 withheld RTK fixes: forward 1.88 m RMS, 8.92 m worst (the data's
+/// own filter forward without velocity matching: 3.09 / 12.8 m; with it 0.30 / 0.69 m);
+/// smoothed 0.261 m RMS, 0.767 m worst — the goal, 0.15 / 0.40 m, is not reached;
+/// NEES 1.24 forward, 1.26 smoothed (without the trial gaps: 0.224 / 0.573 m smoothed but
+/// NEES 2.49, forward 1.85 / 7.57 m, NEES 2.94; before the outages checked their σ: 1.32 /
 /// 4.33 m forward, 0.253 / 0.565 m smoothed, NEES 5.1 and 12.0). Without the side-slip constraint the filter diverges after the first outage (its
 /// heading, 10° uncertain at the start, is not known well enough when the outage begins).
 #[test]
@@ -192,23 +195,29 @@ fn the_car_drive_bridges_fifteen_second_outages() {
         r.unused_fixes, 0,
         "every fix after the start is used, whatever the IMU's intervals"
     );
+    eprintln!("trial gaps: {:?}", done.trial);
     let (scale, gaps) = done.bridge_scale;
     assert!(gaps == 11 && scale > 1.5, "{gaps} gaps, noise ×{scale}");
+    let (trial, k) = done.trial.clone().expect("the gaps ask for a trial");
+    assert!(
+        trial.gaps == 8 && trial.length == 15.5 && trial.ratio <= 1.5 && k > 2.0,
+        "{trial:?} ×{k}"
+    );
     assert!(f.n > 600, "{} withheld fixes compared", f.n);
     assert!(
-        f.rms < 2.2 && f.worst < 8.0,
+        f.rms < 2.2 && f.worst < 10.0,
         "forward {} {}",
         f.rms,
         f.worst
     );
     assert!(
-        s.rms < 0.28 && s.worst < 0.7,
+        s.rms < 0.29 && s.worst < 0.85,
         "smoothed {} {}",
         s.rms,
         s.worst
     );
     assert!(
-        (0.3..=3.0).contains(&f.nees) && (0.3..=3.0).contains(&s.nees),
+        (0.5..=2.0).contains(&f.nees) && (0.5..=2.0).contains(&s.nees),
         "NEES {} {}",
         f.nees,
         s.nees
@@ -218,11 +227,14 @@ fn the_car_drive_bridges_fifteen_second_outages() {
 /// The walk end to end, as the source's walk_config.py mounts it (IMU axes 180°, 0°, −90°,
 /// its times as tagged, the antenna 5 cm left of the IMU, no side-slip constraint: a walker
 /// steps sideways), three 10 s windows of the receiver's fixed RTK withheld (20–30, 50–60,
-/// 75–85 s after the first epoch). Measured: smoothed 0.128 m RMS, 0.242 m worst, NEES 8.5
-/// per horizontal axis (the σ still too small, mostly in the first window, 4 s after the
-/// alignment); forward 1.31 m RMS, 4.00 m worst, NEES 3.9; the data sheet's random walks
-/// ×1.3 from the windows' ends. Before every fix was used and the run restarted from its
-/// smoothed start: smoothed 0.26 / 0.51 m, forward 4.9 / 12.3 m, NEES 97 and 34.
+/// 75–85 s after the first epoch). Measured: smoothed 0.094 m RMS, 0.191 m worst, NEES 2.12
+/// per horizontal axis (1.90, 2.45, 1.99 in the three windows); forward 0.52 m RMS, 1.52 m
+/// worst, NEES 1.07; the data sheet's random walks ×1.3 from the windows' ends and ×8.2
+/// more from the trial gaps (their NEES 9.8 at ×1: a walker's steps shake a MEMS far more
+/// than its data sheet says). Before the trial gaps: smoothed 0.128 / 0.242 m with NEES 8.5
+/// (18.7 in the first window: 2 cm σ against 8 cm errors), forward 1.31 / 4.00 m; before
+/// every fix was used and the run restarted from its smoothed start: smoothed 0.26 /
+/// 0.51 m, forward 4.9 / 12.3 m, NEES 97 and 34.
 #[test]
 fn the_walk_bridges_ten_second_windows() {
     let Some(dir) = testkit::shared_data(&format!("{SET}/walk_0827")) else {
@@ -270,18 +282,31 @@ fn the_walk_bridges_ten_second_windows() {
         s.worst,
         s.nees
     );
+    for w in &job.withhold {
+        let f1 = outages(&pos, &done.run.forward, &job.lever_arm, &[*w]);
+        let s1 = outages(&pos, &sm, &job.lever_arm, &[*w]);
+        eprintln!(
+            "  window {:.0}–{:.0} s: forward RMS {:.3} m NEES {:.2}; smoothed RMS {:.3} m NEES {:.2}",
+            w.0, w.1, f1.rms, f1.nees, s1.rms, s1.nees
+        );
+    }
     assert_eq!(s.n, 123, "the windows hold 123 fixed epochs");
     assert!(
-        s.rms < 0.16 && s.worst < 0.3,
+        s.rms < 0.12 && s.worst < 0.25,
         "smoothed {} {}",
         s.rms,
         s.worst
     );
     assert!(
-        f.rms < 2.0 && f.worst < 6.0,
+        f.rms < 1.0 && f.worst < 2.5,
         "forward {} {}",
         f.rms,
         f.worst
     );
-    assert!(f.nees < 5.0 && s.nees < 10.0, "NEES {} {}", f.nees, s.nees);
+    assert!(
+        (0.3..=3.0).contains(&f.nees) && (0.3..=3.0).contains(&s.nees),
+        "NEES {} {}",
+        f.nees,
+        s.nees
+    );
 }

@@ -215,6 +215,21 @@ pub fn run(args: Args) -> Result<()> {
         done.bridge_scale.1,
         done.bridge_scale.0
     );
+    let summary = match &done.trial {
+        Some((t, k)) => format!(
+            "{summary}; the smoothed σ inside gaps checked in {} trial gaps of {:.1} s cut where the GNSS is continuous ({} fixes withheld and compared): NEES per axis {:.2}{}",
+            t.gaps,
+            t.length,
+            t.fixes,
+            t.ratio,
+            if *k > 1.0 {
+                format!(", the noise raised ×{k:.1} more for them")
+            } else {
+                String::new()
+            }
+        ),
+        None => summary,
+    };
     let summary = if args.rover.is_some() {
         let nis = r.phase_nis.iter().sum::<f64>() / r.phase_nis.len().max(1) as f64;
         format!(

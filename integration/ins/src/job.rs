@@ -9,6 +9,7 @@
 
 use crate::align::{course, level};
 use crate::attitude::{ned_to_ecef, Euler};
+use crate::crossval::{self, TrialCheck};
 use crate::errstate::{idx, Mat};
 use crate::filter::{Estimate, PositionFix};
 use crate::gnss_pos::{read_pos, GnssEpoch};
@@ -101,6 +102,9 @@ pub struct InsRun {
     /// The factor on the IMU's noise the GNSS gaps' ends asked for (1: the data sheet held),
     /// and the gaps checked.
     pub bridge_scale: (f64, usize),
+    /// The smoothed σ checked in trial gaps ([`crossval`]): the last check, and the factor
+    /// on the noise (beyond the bridges') it asked for; None without real gaps.
+    pub trial: Option<(TrialCheck, f64)>,
     /// IMU rows skipped and gaps, named.
     pub imu_notes: Vec<String>,
     /// What was assumed in reading the IMU log (a week for seconds of week).
@@ -189,12 +193,13 @@ pub fn run_job(job: &InsJob) -> Result<InsRun> {
         every: job.every,
         no_side_slip: job.no_side_slip,
         still: still_spans(job, &gnss),
+        marks: Vec::new(),
     };
     let phases = match &job.phases {
         Some(p) => phase_epochs(job, p, &gnss)?,
         None => Phases::default(),
     };
-    let (run, bridge_scale) = checked_run(
+    let (run, bridge_scale, trial) = checked_run(
         &samples[start + 1..],
         (&fixes, &phases),
         start_estimate,
@@ -204,6 +209,7 @@ pub fn run_job(job: &InsJob) -> Result<InsRun> {
     Ok(InsRun {
         run,
         bridge_scale,
+        trial,
         gnss,
         levelled: (lv.roll, lv.pitch, samples[start].time),
         heading,
@@ -264,15 +270,16 @@ const BRIDGE_RERUNS: usize = 5;
 /// further off than their σ said (mean NIS/3 beyond [`BRIDGE_LIMIT`]), the data sheet's noise
 /// was too kind for this IMU or this motion, and the run is repeated with the angle and
 /// velocity random walks raised by √(NIS/3) (the position σ a gap adds grow with them), so
-/// that the bridged σ hold. Returns the run and the factor used with the number of
-/// gaps checked.
+/// that the bridged σ hold. Last the smoothed σ inside the gaps, which the ends cannot
+/// test, in trial gaps ([`checked_smoothing`]). Returns the run, the bridges' factor with
+/// the number of gaps checked, and the trial gaps' last check with their further factor.
 pub fn checked_run(
     samples: &[ImuSample],
     (fixes, phases): (&[(Epoch, PositionFix)], &Phases),
     start: (Estimate, Mat),
     spec: &ImuSpec,
     o: &LooseOptions,
-) -> (LooseRun, (f64, usize)) {
+) -> (LooseRun, (f64, usize), Option<(TrialCheck, f64)>) {
     let head = samples.partition_point(|s| (s.time - start.0.nav.time).to_seconds() < FIRST_PASS);
     let first = run_with_phases(&samples[..head], fixes, phases, start, spec, o);
     let start = match (first.forward.first(), first.smoothed.first()) {
@@ -296,7 +303,48 @@ pub fn checked_run(
         r = run_with_phases(samples, fixes, phases, start, &spec.scaled(k), o);
     }
     let n = r.bridge_nis.len();
-    (r, (k, n))
+    let (trial, k_trial) = checked_smoothing(samples, (fixes, phases), start, &spec.scaled(k), o);
+    if k_trial > 1.0 {
+        let spec = spec.scaled(k * k_trial);
+        r = run_with_phases(samples, fixes, phases, start, &spec, o);
+    }
+    (r, (k, n), trial.map(|t| (t, k_trial)))
+}
+
+/// Trial checks of the smoothed σ inside gaps ([`crossval`]) at most.
+const TRIAL_RERUNS: usize = 3;
+
+/// The smoothed σ in gaps checked in trial gaps ([`crossval`]) and, where the errors
+/// there exceed them (mean NEES per axis beyond [`BRIDGE_LIMIT`]), the IMU's random walks
+/// raised by √ratio and checked again: the last check and the factor found (1 when the σ
+/// held, or no real gap asked for a check).
+fn checked_smoothing(
+    samples: &[ImuSample],
+    (fixes, phases): (&[(Epoch, PositionFix)], &Phases),
+    start: (Estimate, Mat),
+    spec: &ImuSpec,
+    o: &LooseOptions,
+) -> (Option<TrialCheck>, f64) {
+    let times: Vec<Epoch> = fixes.iter().map(|(t, _)| *t).collect();
+    let (length, gaps) = crossval::trial_gaps(&times);
+    let (mut k, mut last) = (1.0, None);
+    if gaps.is_empty() {
+        return (None, k);
+    }
+    for _ in 0..TRIAL_RERUNS {
+        let spec = spec.scaled(k);
+        let Some(c) = crossval::check(samples, (fixes, phases), start, &spec, o, (length, &gaps))
+        else {
+            break;
+        };
+        let ratio = c.ratio;
+        last = Some(c);
+        if ratio <= BRIDGE_LIMIT {
+            break;
+        }
+        k *= ratio.sqrt();
+    }
+    (last, k)
 }
 
 /// The start: levelled roll and pitch, the course's heading, the antenna's position less

@@ -18,6 +18,8 @@
 //!   the innovations, and checkpoints for the smoother.
 //! - [`smoother`]: Rauch–Tung–Striebel over the checkpoints.
 //! - [`loose`]: loosely coupled runs: IMU forward with GNSS positions, then smoothed.
+//! - [`crossval`]: the smoothed σ inside GNSS gaps checked in trial gaps cut where the GNSS
+//!   is continuous.
 //! - [`align`]: roll, pitch and gyro biases from a still stretch; heading from the course.
 //! - [`rtklib_imu`]: the RTKLIB-style raw IMU CSV and its time-tag file.
 //! - [`job`]: a whole loosely coupled run from files, as `ppkat ins` makes it.
@@ -28,6 +30,7 @@
 
 pub mod align;
 pub mod attitude;
+pub mod crossval;
 pub mod earth;
 mod error;
 pub mod errstate;

@@ -35,6 +35,10 @@ pub struct LooseOptions {
     /// Spans where the body stands still (from the GNSS velocities used): zero velocity and
     /// angular rate at every checkpoint there ([`Forward::update_still`]).
     pub still: Vec<(Epoch, Epoch)>,
+    /// Times (in order) that each want a checkpoint at the IMU sample nearest them, besides
+    /// the updates and every `every` samples: where a check compares the run with data it
+    /// was not given ([`crate::crossval`]).
+    pub marks: Vec<Epoch>,
 }
 
 /// A run's results.
@@ -94,6 +98,7 @@ pub fn run_with_phases(
     let mut last_update: Option<Epoch> = None;
     let (mut next_phase, mut known) = (0, Integers::default());
     let (mut turned, mut since) = (Vector3::zeros(), 0.0);
+    let mut next_mark = 0;
     for (k, s) in samples.iter().enumerate() {
         f.predict(s);
         turned += s.dtheta;
@@ -139,7 +144,12 @@ pub fn run_with_phases(
                 updated = true;
             }
         }
-        if updated || (k + 1) % o.every.max(1) == 0 {
+        let mut marked = false;
+        while next_mark < o.marks.len() && (o.marks[next_mark] - s.time).to_seconds() <= after {
+            marked |= (o.marks[next_mark] - s.time).to_seconds() >= -before;
+            next_mark += 1;
+        }
+        if updated || marked || (k + 1) % o.every.max(1) == 0 {
             if let Some(sigma) = o.no_side_slip {
                 if f.estimate().nav.velocity.norm() > 1.0 {
                     f.update_no_side_slip(sigma);
