@@ -228,6 +228,8 @@ pub enum Outcome {
     Skipped,
     /// Failed: nothing usable, or no trajectory.
     Failed,
+    /// Its task left no result (never ran, killed, still running): from a merge.
+    NotRun,
 }
 
 /// One line of the summary table.
@@ -303,6 +305,7 @@ pub fn outcome_word(o: Outcome) -> &'static str {
         Outcome::Done => "done",
         Outcome::Skipped => "skipped inputs",
         Outcome::Failed => "FAILED",
+        Outcome::NotRun => "NOT RUN",
     }
 }
 

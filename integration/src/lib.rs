@@ -30,9 +30,11 @@
 //! progress, frames, transverse Mercator). Times are GPST, angles radians unless a file says degrees, lengths metres.
 
 pub mod batch;
+pub mod batch_plan;
 pub mod bench;
 pub mod bench_ins;
 pub mod bench_match;
+pub mod cluster;
 pub mod demo;
 pub mod hard_sky;
 pub mod observations;

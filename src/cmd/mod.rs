@@ -5,6 +5,7 @@
 pub mod adjust;
 pub mod bal;
 pub mod batch;
+pub mod batch_cluster;
 pub mod bench;
 pub mod config;
 pub mod convert;

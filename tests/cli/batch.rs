@@ -65,9 +65,14 @@ fn a_folder_of_flights_gives_each_flights_outputs_and_a_summary() {
     let r = rows(&out.join("summary.csv"));
     assert_eq!(r.len(), 3, "{r:?}");
     assert_eq!(r[0][..2], ["broken", "FAILED"]);
-    assert!(
-        !out.join("broken").exists(),
-        "no folder for a flight that never ran"
+    let left: Vec<_> = std::fs::read_dir(out.join("broken"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(
+        left,
+        ["result.json"],
+        "a flight that never ran has only its result (the error, for --merge and --status)"
     );
     // GEONET: all 120 epochs fixed, as `ppkat ppk` alone fixes them.
     assert_eq!(r[1][..6], ["geonet", "done", "120", "120", "120", "100.0"]);
@@ -164,4 +169,114 @@ fn a_folder_without_flights_fails() {
     std::fs::create_dir_all(d.join("notes")).unwrap();
     let o = ppkat(&["batch", p(&d), "-o", p(&tmp("batch-empty-out"))]);
     fails_with(&o, &["batch-empty", "no flight subfolders"]);
+}
+
+/// `--plan`, `--only-index`/`--only`, `--status` and `--merge` on a run where one flight is
+/// done, one failed, one is running (its status file names a live process) and one never
+/// started: each is said as it is, the merge names the ones without a result (exit 3) and
+/// gives the same summary however often it runs.
+#[test]
+fn status_and_merge_name_failed_running_and_missing_tasks() {
+    let root = tmp("batch-plan");
+    let _ = std::fs::remove_dir_all(&root);
+    let input = root.join("in");
+    let a = input.join("a");
+    succeeds(&ppkat(&[
+        "simulate",
+        "--scenario",
+        p(&fixture("scenario_small.toml")),
+        "-o",
+        p(&a),
+    ]));
+    for extra in ["ground_points.csv", "image_observations.csv", "camera.toml"] {
+        let _ = std::fs::remove_file(a.join(extra));
+    }
+    for (dir, files) in [
+        ("b", &["rover.obs", "base.obs", "nav.rnx"][..]),
+        ("c", &["rover.obs", "base.obs", "nav.rnx"]),
+        ("broken", &["rover.obs"]),
+    ] {
+        std::fs::create_dir_all(input.join(dir)).unwrap();
+        for f in files {
+            std::fs::copy(a.join(f), input.join(dir).join(f)).unwrap();
+        }
+    }
+    let out = root.join("out");
+    let batch = |extra: &[&str]| {
+        let mut args = vec!["batch", p(&input), "-o", p(&out)];
+        args.extend_from_slice(extra);
+        ppkat(&args)
+    };
+    let o = batch(&["--plan"]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(3), "{t}");
+    assert!(
+        t.contains("4 flights, 3 can run, 1 cannot") && t.contains("flight broken"),
+        "{t}"
+    );
+    let plan = std::fs::read_to_string(out.join("plan.tsv")).unwrap();
+    let names: Vec<&str> = plan
+        .lines()
+        .skip(2)
+        .map(|l| l.split('\t').nth(1).unwrap())
+        .collect();
+    assert_eq!(names, ["a", "b", "broken", "c"]);
+    assert!(plan.contains("--only-index 3\t"), "{plan}");
+
+    succeeds(&batch(&["--only-index", "0"]));
+    fails_with(&batch(&["--only", "broken"]), &["flight broken", "no base"]);
+    fails_with(
+        &batch(&["--only-index", "9"]),
+        &["the plan has flights 0 to 3"],
+    );
+    let host = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap();
+    std::fs::write(
+        out.join("status/b.json"),
+        format!(
+            "{{\"flight\":\"b\",\"index\":1,\"host\":\"{}\",\"pid\":{},\"started_unix_s\":1.0,\"finished_unix_s\":null,\"exit_code\":null,\"wall_s\":null,\"peak_rss_kib\":null}}",
+            host.trim(),
+            std::process::id()
+        ),
+    )
+    .unwrap();
+    let st = succeeds(&batch(&["--status"]));
+    assert!(
+        st.contains("4 flights: 1 done, 1 failed, 1 not started, 1 running"),
+        "{st}"
+    );
+    assert!(
+        st.contains("broken") && st.contains("no base"),
+        "the failure's error: {st}"
+    );
+
+    let m = batch(&["--merge"]);
+    let t = text(&m);
+    assert_eq!(m.status.code(), Some(3), "{t}");
+    for needle in [
+        "flight b: NOT RUN",
+        "flight c: NOT RUN: never ran",
+        "flight broken: FAILED",
+    ] {
+        assert!(t.contains(needle), "{needle}: {t}");
+    }
+    let first = std::fs::read(out.join("summary.csv")).unwrap();
+    let m2 = batch(&["--merge"]);
+    assert_eq!(m2.status.code(), Some(3));
+    assert_eq!(
+        first,
+        std::fs::read(out.join("summary.csv")).unwrap(),
+        "merged twice alike"
+    );
+    let r = rows(&out.join("summary.csv"));
+    assert_eq!(r.len(), 4, "a row per flight, none twice");
+    assert_eq!((r[0][1].as_str(), r[3][1].as_str()), ("done", "NOT RUN"));
+
+    // The missing task run, the merge again: only the broken flight is left.
+    succeeds(&batch(&["--only-index", "3"]));
+    let t = text(&batch(&["--merge"]));
+    assert!(
+        t.contains("flight c") && !t.contains("flight c: NOT RUN"),
+        "{t}"
+    );
+    assert_eq!(rows(&out.join("summary.csv"))[3][1], "done");
 }

@@ -23,6 +23,7 @@ mod outputs;
 mod precise;
 mod raw;
 mod reliability;
+mod slurm;
 mod threads;
 mod tiepoints;
 
