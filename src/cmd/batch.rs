@@ -27,7 +27,9 @@ use std::path::{Path, PathBuf};
 /// Writes OUT/FLIGHT/FLIGHT.pos, FLIGHT.html (the PPK report) and exposures.csv (or the
 /// exposures.toml format's file) per flight, and OUT/summary.csv: per flight the outcome,
 /// epochs, solved, fixed and fix %, the median 3D σ, exposures, warnings and the error or
-/// first warning. Prints each flight's report (in name order) and the table. Exit code 0 when
+/// first warning; also OUT/plan.tsv and each flight's OUT/FLIGHT/result.json (its row and
+/// report), as a cluster's tasks leave them. Prints each flight's report (in name order) and
+/// the table. Exit code 0 when
 /// every flight did all it was asked; 3 when some flight failed or skipped inputs (each named);
 /// 1 when none gave a trajectory.
 ///
