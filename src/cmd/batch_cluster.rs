@@ -2,7 +2,7 @@
 //! status view, and the Slurm and Kubernetes files ([`integration::batch_plan`],
 //! [`integration::cluster`]).
 
-use super::batch::{self as b, Args};
+use super::batch_flight as b;
 use anyhow::{bail, Context, Result};
 use integration::batch::{self, find_flight, find_flights, Outcome};
 use integration::batch_plan::{self as bp, FlightResult, Plan, PlanEntry, TaskState, TaskStatus};
@@ -99,9 +99,37 @@ pub fn make_plan(dir: &Path, out: &Path) -> Result<(Plan, Vec<batch::Flight>)> {
     Ok((Plan { root, out, entries }, flights))
 }
 
+/// What `--plan`, `--slurm` and `--k8s` were given.
+pub struct Scheduler<'a> {
+    /// The folder of flights.
+    pub dir: &'a Path,
+    /// The output folder.
+    pub out: &'a Path,
+    /// Write the Slurm scripts.
+    pub slurm: bool,
+    /// Submit them.
+    pub submit: bool,
+    /// Write the Kubernetes manifests.
+    pub k8s: bool,
+    /// Tasks at once.
+    pub max_parallel: Option<u16>,
+    /// CPUs per task.
+    pub cpus_per_task: Option<u16>,
+    /// Memory per task, MB.
+    pub mem_per_task: Option<u32>,
+    /// More `#SBATCH` options.
+    pub sbatch_option: &'a [String],
+    /// The container image.
+    pub image: &'a str,
+    /// The volume claim.
+    pub claim: &'a str,
+    /// The local folder the claim holds.
+    pub mount: Option<&'a Path>,
+}
+
 /// `--plan`, `--slurm`, `--k8s`: the plan, then the scheduler's files.
-pub fn plan_and_scripts(args: &Args) -> Result<()> {
-    let (plan, flights) = make_plan(&args.dir, &args.out)?;
+pub fn plan_and_scripts(args: &Scheduler) -> Result<()> {
+    let (plan, flights) = make_plan(args.dir, args.out)?;
     let path = plan.write()?;
     let bad: Vec<String> = plan
         .entries
@@ -145,12 +173,12 @@ fn write(path: &Path, text: &str) -> Result<()> {
 }
 
 /// The Slurm scripts, and their submission with `--submit`.
-fn slurm(plan: &Plan, args: &Args, resources: TaskResources, parallel: u16) -> Result<()> {
+fn slurm(plan: &Plan, args: &Scheduler, resources: TaskResources, parallel: u16) -> Result<()> {
     let o = SlurmOptions {
         ppkat: std::env::current_exe().context("cannot tell where this ppkat binary is")?,
         max_parallel: parallel,
         resources,
-        extra: args.sbatch_option.clone(),
+        extra: args.sbatch_option.to_vec(),
     };
     let (array, merge) = cluster::slurm_scripts(plan, &o);
     let dir = plan.out.join("slurm");
@@ -209,8 +237,8 @@ fn sbatch(args: &[&std::ffi::OsStr]) -> Result<String> {
 }
 
 /// The Kubernetes manifests, and the commands that would submit them.
-fn k8s(plan: &Plan, args: &Args, resources: TaskResources, parallel: u16) -> Result<()> {
-    let mount = match &args.mount {
+fn k8s(plan: &Plan, args: &Scheduler, resources: TaskResources, parallel: u16) -> Result<()> {
+    let mount = match args.mount {
         Some(m) => absolute(m)?,
         None => plan
             .root
@@ -219,8 +247,8 @@ fn k8s(plan: &Plan, args: &Args, resources: TaskResources, parallel: u16) -> Res
             .unwrap_or_else(|| plan.root.clone()),
     };
     let o = K8sOptions {
-        image: args.image.clone(),
-        claim: args.claim.clone(),
+        image: args.image.to_string(),
+        claim: args.claim.to_string(),
         mount,
         max_parallel: parallel,
         resources,
@@ -251,14 +279,14 @@ fn k8s(plan: &Plan, args: &Args, resources: TaskResources, parallel: u16) -> Res
     Ok(())
 }
 
-/// The plan of the output folder, checked against the folder of flights given.
-fn read_plan(args: &Args) -> Result<Plan> {
-    let plan = Plan::read(&args.out)?;
-    let root = absolute(&args.dir)?;
+/// The plan of the output folder `out`, checked against the folder of flights `dir`.
+fn read_plan(dir: &Path, out: &Path) -> Result<Plan> {
+    let plan = Plan::read(out)?;
+    let root = absolute(dir)?;
     if plan.root != root {
         bail!(
             "{}: the plan there was made for the flights of {}, not {}: give that folder, or write a new plan with --plan",
-            args.out.join(bp::PLAN).display(),
+            out.join(bp::PLAN).display(),
             plan.root.display(),
             root.display()
         );
@@ -267,10 +295,10 @@ fn read_plan(args: &Args) -> Result<Plan> {
 }
 
 /// `--only-index` / `--only`: one flight as a scheduler's task.
-pub fn task(args: &Args) -> Result<()> {
+pub fn task(dir: &Path, out: &Path, only_index: Option<usize>, only: Option<&str>) -> Result<()> {
     let t0 = Instant::now();
-    let plan = read_plan(args)?;
-    let entry = match (&args.only_index, &args.only) {
+    let plan = read_plan(dir, out)?;
+    let entry = match (&only_index, &only) {
         (Some(i), _) => plan.entries.get(*i).with_context(|| {
             format!(
                 "--only-index {i}: the plan has flights 0 to {}",
@@ -343,9 +371,9 @@ fn failed(flight: &str, why: &str) -> b::Done {
 }
 
 /// `--merge`: the summary from the results, the flights without one named.
-pub fn merge(args: &Args) -> Result<()> {
+pub fn merge(dir: &Path, out: &Path) -> Result<()> {
     let t0 = Instant::now();
-    let plan = read_plan(args)?;
+    let plan = read_plan(dir, out)?;
     let merged = bp::merge_rows(&plan)?;
     for (_, report) in &merged {
         if let Some(r) = report {
@@ -360,8 +388,8 @@ pub fn merge(args: &Args) -> Result<()> {
 }
 
 /// `--status`: where every flight stands.
-pub fn status(args: &Args) -> Result<()> {
-    let plan = read_plan(args)?;
+pub fn status(dir: &Path, out: &Path) -> Result<()> {
+    let plan = read_plan(dir, out)?;
     let t = now();
     let mut lines = Vec::new();
     let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
@@ -403,7 +431,7 @@ pub fn status(args: &Args) -> Result<()> {
         "batch status: {} flights: {} ({})",
         plan.entries.len(),
         summary.join(", "),
-        args.out.join(bp::PLAN).display()
+        out.join(bp::PLAN).display()
     );
     for l in lines {
         println!("{}", l.trim_end());

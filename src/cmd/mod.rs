@@ -6,6 +6,7 @@ pub mod adjust;
 pub mod bal;
 pub mod batch;
 pub mod batch_cluster;
+pub mod batch_flight;
 pub mod bench;
 pub mod config;
 pub mod convert;
