@@ -19,6 +19,9 @@ fn check(spec: &TexturedSpec, name: &str) -> (usize, usize, f64, usize) {
     job.exposures = Some(dir.join("antennas.csv"));
     job.camera = Some(dir.join("camera.toml"));
     job.pairs = PairMode::Auto;
+    // Features shared with the other tests of these photos (the same bytes as extracted).
+    job.shared_cache =
+        Some(std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("feature-cache"));
     let r = check_job(spec, &dir, &job).0;
     let _ = std::fs::remove_dir_all(&dir);
     r

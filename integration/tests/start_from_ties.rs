@@ -51,6 +51,9 @@ fn textured_block_from_tie_points_and_four_corners_checks_like_gnss() {
     textured_block(&TexturedSpec::builtin(), &dir).unwrap();
     let mut job = MatchJob::new(dir.join("photos"));
     job.camera = Some(dir.join("camera.toml"));
+    // Features shared with the other tests of these photos (the same bytes as extracted).
+    job.shared_cache =
+        Some(std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("feature-cache"));
     let m = tiepoints::run(&job, &|_, _, _| {}).unwrap();
     let mut w = project::build(&job, &m).unwrap();
     assert!(w.project.free_datum && w.project.gnss.is_empty());
@@ -116,6 +119,9 @@ fn a_longer_block_from_its_ties_alone_keeps_its_shape() {
     textured_block(&spec, &dir).unwrap();
     let mut job = MatchJob::new(dir.join("photos"));
     job.camera = Some(dir.join("camera.toml"));
+    // Features shared with the other tests of these photos (the same bytes as extracted).
+    job.shared_cache =
+        Some(std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("feature-cache"));
     let m = tiepoints::run(&job, &|_, _, _| {}).unwrap();
     let w = project::build(&job, &m).unwrap();
     let free = dir.join("free");

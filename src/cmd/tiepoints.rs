@@ -63,6 +63,13 @@ pub struct Args {
     /// points are added.
     #[arg(long)]
     ignore_gps: bool,
+    /// Also keep every photo's features in DIR, a folder several projects share: a photo
+    /// whose image data and extraction settings it already holds is not extracted again
+    /// (its metadata may differ: a photo geotagged or retagged since keeps its features).
+    /// Files are named by that key and written whole; the results are the same bytes as
+    /// without.
+    #[arg(long, value_name = "DIR")]
+    feature_cache: Option<PathBuf>,
     /// Output project folder (written whole, or not at all). Its features/ subfolder caches
     /// every photo's features and every pair's matches: a rerun into the same folder extracts
     /// and matches only photos that are new or changed (the summary says how many came from
@@ -123,6 +130,7 @@ pub fn run(args: Args) -> Result<()> {
     // those of an earlier run read from the old one.
     let staged = common::atomic::StagedDir::new(&args.out, &OUTPUTS)?;
     job.cache = Some((args.out.join("features"), staged.path().join("features")));
+    job.shared_cache = args.feature_cache.clone();
     let bar = indicatif::ProgressBar::new(0);
     if super::quiet() {
         bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());

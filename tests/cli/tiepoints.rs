@@ -9,7 +9,17 @@ fn brighton_beach_photos_match_into_one_block_that_adjusts() {
         return;
     };
     let out = tmp("match-brighton");
-    let t = succeeds(&ppkat(&["match", "--photos", p(&dir), "-o", p(&out)]));
+    // Features shared with the other tests of these photos (the same bytes as extracted).
+    let cache = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("feature-cache");
+    let t = succeeds(&ppkat(&[
+        "match",
+        "--photos",
+        p(&dir),
+        "--feature-cache",
+        p(&cache),
+        "-o",
+        p(&out),
+    ]));
     eprintln!("{t}");
     let j: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("match.json")).unwrap()).unwrap();

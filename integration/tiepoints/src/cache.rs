@@ -2,12 +2,16 @@
 //! the same folder, or on a folder with photos added, extracts only what it has not seen.
 //!
 //! A file holds one photo's keypoints and descriptors with the key they were made under: a
-//! hash of the photo's bytes, the settings that shape extraction (largest image side, features
-//! per photo, grid) and the format's version. A file whose key differs (the photo or the
-//! settings changed) or that does not read back whole is extracted again and replaced. Values
-//! are stored as their exact bits, so a run from the cache writes the same bytes as one
-//! without. Files are written whole (`common::atomic::write_atomic`); a cache that cannot be
-//! written costs the next run time, never this run's result.
+//! hash of the photo's image data (a JPEG's bytes but its metadata segments — EXIF, XMP,
+//! ICC, comments — so that a photo geotagged or retagged since keeps its key; any other file
+//! whole), the settings that shape extraction (largest image side, features per photo, grid)
+//! and the format's version and code (a hash of the extraction's sources and the lock file,
+//! made by `build.rs`). Besides the project's own folder a cache may be shared by several
+//! projects ([`shared_path`]: files named by their key). A file whose key differs (the photo,
+//! the settings or the code changed) or that does not read back whole is extracted again and
+//! replaced. Values are stored as their exact bits, so a run from the cache writes the same
+//! bytes as one without. Files are written whole (`common::atomic::write_atomic`); a cache
+//! that cannot be written costs the next run time, never this run's result.
 
 use photo::features::{Descriptor, FeatureOptions, Features, Keypoint, DESCRIPTOR_LEN};
 use std::io::Read;
@@ -16,8 +20,12 @@ use std::path::{Path, PathBuf};
 /// First bytes of a feature file.
 const MAGIC: &[u8; 8] = b"PPKFEAT1";
 
-/// Bumped whenever extraction changes what it returns for the same photo.
-const EXTRACTION_VERSION: u64 = 1;
+/// Bumped whenever extraction changes what it returns for the same photo (or the key's
+/// meaning changes: 2 leaves a JPEG's metadata out).
+const EXTRACTION_VERSION: u64 = 2;
+
+/// A hash of the code extraction runs and of the crate versions it uses (`build.rs`).
+const EXTRACTION_SOURCE: u64 = include!(concat!(env!("OUT_DIR"), "/extraction_source.rs"));
 
 /// Most keypoints a feature file may declare (a guard against a damaged file).
 const MAX_KEYPOINTS: u64 = 1_000_000;
@@ -42,20 +50,50 @@ pub(crate) fn fnv(mut h: u64, bytes: &[u8]) -> u64 {
     h
 }
 
-/// The key of a photo's features: its bytes and the settings of extraction.
-pub fn key(photo: &Path, max_image_size: u32, opts: &FeatureOptions) -> std::io::Result<u64> {
-    let mut f = std::fs::File::open(photo)?;
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
-    let mut buf = vec![0u8; 1 << 16];
-    loop {
-        let n = f.read(&mut buf)?;
-        if n == 0 {
+/// The hash of a file's image data, continued from `h`: a JPEG's bytes to the end of its
+/// image but its APP0–APP13 and COM segments (metadata: EXIF, XMP, ICC, Photoshop, comments;
+/// APP14, Adobe's colour transform, and APP15 stay) and what follows the image (a preview
+/// appended); any other file — or a JPEG whose segments do not add up — whole.
+fn image_data_hash(h: u64, b: &[u8]) -> u64 {
+    if !b.starts_with(&[0xFF, 0xD8]) {
+        return fnv(h, b);
+    }
+    let mut out = fnv(h, &b[..2]);
+    let mut i = 2;
+    while i + 4 <= b.len() && b[i] == 0xFF {
+        let marker = b[i + 1];
+        if marker == 0xDA {
+            // Start of scan: the entropy-coded data to the end of the image (the first
+            // EOI: inside the scan a 0xFF byte is followed by 0x00 or a restart marker);
+            // what a camera or a tagger appends after it (a preview image) is not decoded.
+            let end = b[i..]
+                .windows(2)
+                .position(|w| w == [0xFF, 0xD9])
+                .map_or(b.len(), |k| i + k + 2);
+            return fnv(out, &b[i..end]);
+        }
+        let end = i + 2 + u16::from_be_bytes([b[i + 2], b[i + 3]]) as usize;
+        if end > b.len() {
             break;
         }
-        h = fnv(h, &buf[..n]);
+        let metadata = (0xE0..=0xED).contains(&marker) || marker == 0xFE;
+        if !metadata {
+            out = fnv(out, &b[i..end]);
+        }
+        i = end;
     }
+    fnv(h, b)
+}
+
+/// The key of a photo's features: its image data ([`image_data_hash`]) and the settings of
+/// extraction.
+pub fn key(photo: &Path, max_image_size: u32, opts: &FeatureOptions) -> std::io::Result<u64> {
+    let mut bytes = Vec::new();
+    std::fs::File::open(photo)?.read_to_end(&mut bytes)?;
+    let mut h = image_data_hash(0xcbf2_9ce4_8422_2325u64, &bytes);
     for v in [
         EXTRACTION_VERSION,
+        EXTRACTION_SOURCE,
         max_image_size as u64,
         opts.max_features as u64,
         opts.grid as u64,
@@ -63,6 +101,11 @@ pub fn key(photo: &Path, max_image_size: u32, opts: &FeatureOptions) -> std::io:
         h = fnv(h, &v.to_le_bytes());
     }
     Ok(h)
+}
+
+/// The file of a photo's features under `key` in a cache shared by several projects.
+pub fn shared_path(dir: &Path, key: u64) -> PathBuf {
+    dir.join(format!("{key:016x}.feat"))
 }
 
 /// The cache file of a photo.
@@ -175,6 +218,57 @@ impl<'a> Reader<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A JPEG's segments: SOI, the given (marker, payload) pairs, SOS and its data, EOI.
+    fn jpeg(segments: &[(u8, &[u8])], scan: &[u8]) -> Vec<u8> {
+        let mut b = vec![0xFF, 0xD8];
+        for (m, payload) in segments {
+            b.extend_from_slice(&[0xFF, *m]);
+            b.extend_from_slice(&((payload.len() + 2) as u16).to_be_bytes());
+            b.extend_from_slice(payload);
+        }
+        b.extend_from_slice(&[0xFF, 0xDA, 0x00, 0x02]);
+        b.extend_from_slice(scan);
+        b.extend_from_slice(&[0xFF, 0xD9]);
+        b
+    }
+
+    #[test]
+    fn a_photos_key_ignores_its_metadata_but_not_its_image_data() {
+        let h = |b: &[u8]| image_data_hash(0xcbf2_9ce4_8422_2325, b);
+        let tables: (u8, &[u8]) = (0xDB, b"quantisation");
+        let a = jpeg(&[(0xE1, b"Exif model A"), tables], b"scan");
+        // Another EXIF, an XMP packet and a comment added: the same key.
+        let b = jpeg(
+            &[
+                (0xE1, b"Exif model B, geotagged"),
+                (0xE1, b"xmp"),
+                (0xFE, b"note"),
+                tables,
+            ],
+            b"scan",
+        );
+        assert_eq!(h(&a), h(&b));
+        // A preview appended after the image: the same key.
+        let mut c = a.clone();
+        c.extend_from_slice(&[0xFF, 0xD8, 1, 2, 3, 0xFF, 0xD9]);
+        assert_eq!(h(&a), h(&c));
+        // Other pixels, other tables or another colour transform (APP14): another key.
+        assert_ne!(h(&a), h(&jpeg(&[(0xE1, b"Exif model A"), tables], b"scam")));
+        assert_ne!(
+            h(&a),
+            h(&jpeg(&[(0xE1, b"Exif model A"), (0xDB, b"other")], b"scan"))
+        );
+        let adobe = jpeg(
+            &[(0xE1, b"Exif model A"), (0xEE, b"Adobe"), tables],
+            b"scan",
+        );
+        assert_ne!(h(&a), h(&adobe));
+        // Not a JPEG, or segments that run past the end: the whole file.
+        assert_eq!(h(b"PNG data"), fnv(0xcbf2_9ce4_8422_2325, b"PNG data"));
+        let cut = &a[..8];
+        assert_eq!(h(cut), fnv(0xcbf2_9ce4_8422_2325, cut));
+    }
 
     #[test]
     fn features_come_back_bit_for_bit_and_a_changed_key_or_damage_is_refused() {

@@ -55,6 +55,10 @@ pub struct MatchJob {
     /// Feature cache: the folder read from (a previous run's) and the folder written to
     /// (this run's; every photo's features end up there). None: no cache.
     pub cache: Option<(PathBuf, PathBuf)>,
+    /// A feature cache shared by several projects (files named by their key: the photo's
+    /// image data and the extraction settings), read before extracting and written after.
+    /// None: none.
+    pub shared_cache: Option<PathBuf>,
 }
 
 impl MatchJob {
@@ -77,6 +81,7 @@ impl MatchJob {
             refine: true,
             ignore_gps: false,
             cache: None,
+            shared_cache: None,
         }
     }
 }

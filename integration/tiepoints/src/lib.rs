@@ -89,6 +89,21 @@ fn features_of(
         let key = cache::key(path, job.max_image_size, opts).ok()?;
         Some((cache::path(old, path), cache::path(new, path), key))
     });
+    let shared = job.shared_cache.as_ref().and_then(|dir| {
+        let key = match &slot {
+            Some(s) => s.2,
+            None => cache::key(path, job.max_image_size, opts).ok()?,
+        };
+        Some((cache::shared_path(dir, key), key))
+    });
+    if let Some((file, key)) = &shared {
+        if let Some(c) = cache::load(file, *key) {
+            if let Some((_, new, _)) = &slot {
+                let _ = cache::store(new, *key, &c);
+            }
+            return Ok((c, Source::Cache, Some(*key)));
+        }
+    }
     if let Some((old, new, key)) = &slot {
         if let Some(c) = cache::load(old, *key) {
             if old != new {
@@ -107,8 +122,11 @@ fn features_of(
         scale: d.scale,
         features: extract(&d.gray, d.scale, opts),
     };
-    let key = slot.as_ref().map(|s| s.2);
+    let key = slot.as_ref().map(|s| s.2).or(shared.as_ref().map(|s| s.1));
     let cached = slot.is_some_and(|(_, new, key)| cache::store(&new, key, &c).is_ok());
+    if let Some((file, key)) = &shared {
+        let _ = cache::store(file, *key, &c);
+    }
     Ok((c, Source::Extracted { cached }, key))
 }
 
