@@ -108,6 +108,24 @@ fn geonet() -> Option<[PathBuf; 3]> {
     shared_all([GEONET_ROVER, GEONET_BASE, GEONET_NAV])
 }
 
+/// The files under `dir`, recursively, by their path inside it, sorted.
+fn files_under(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut todo = vec![dir.to_path_buf()];
+    while let Some(d) = todo.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let path = e.unwrap().path();
+            if path.is_dir() {
+                todo.push(path);
+            } else {
+                out.push(path.strip_prefix(dir).unwrap().to_path_buf());
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
 /// The data rows of a `.pos` file (header lines start with '%'), split at blanks.
 fn pos_rows(path: &Path) -> Vec<Vec<String>> {
     std::fs::read_to_string(path)

@@ -85,27 +85,14 @@ impl Drop for Cluster {
 
 /// Every file under `dir` (relative paths, sorted), but the scheduler's own folders.
 fn files(dir: &Path) -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            let rel = p.strip_prefix(dir).unwrap().to_path_buf();
-            if ["status", "logs", "slurm"]
+    files_under(dir)
+        .into_iter()
+        .filter(|rel| {
+            !["status", "logs", "slurm"]
                 .iter()
                 .any(|s| rel.starts_with(s))
-            {
-                continue;
-            }
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                out.push(rel);
-            }
-        }
-    }
-    out.sort();
-    out
+        })
+        .collect()
 }
 
 /// A flight's result without its report (which holds the run's duration).
