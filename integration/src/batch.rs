@@ -256,6 +256,21 @@ pub struct SummaryRow {
 }
 
 impl SummaryRow {
+    /// The row of a flight that solved nothing (yet): `outcome` with `message`, no counts.
+    pub fn empty(flight: &str, outcome: Outcome, message: String) -> SummaryRow {
+        SummaryRow {
+            flight: flight.to_string(),
+            outcome,
+            epochs: 0,
+            solved: 0,
+            fixed: 0,
+            sigma_3d: f64::NAN,
+            exposures: None,
+            warnings: 0,
+            message,
+        }
+    }
+
     /// Fixed epochs, percent of solved.
     pub fn fix_percent(&self) -> f64 {
         100.0 * self.fixed as f64 / self.solved.max(1) as f64

@@ -362,20 +362,7 @@ pub fn merge_rows(plan: &Plan) -> Result<Vec<(SummaryRow, Option<String>)>> {
                     ))
             ),
         };
-        rows.push((
-            SummaryRow {
-                flight: e.flight.clone(),
-                outcome: Outcome::NotRun,
-                epochs: 0,
-                solved: 0,
-                fixed: 0,
-                sigma_3d: f64::NAN,
-                exposures: None,
-                warnings: 0,
-                message: why,
-            },
-            None,
-        ));
+        rows.push((SummaryRow::empty(&e.flight, Outcome::NotRun, why), None));
     }
     Ok(rows)
 }

@@ -355,17 +355,7 @@ pub fn task(dir: &Path, out: &Path, only_index: Option<usize>, only: Option<&str
 /// A flight that cannot run, as its task reports it.
 fn failed(flight: &str, why: &str) -> b::Done {
     b::Done {
-        row: batch::SummaryRow {
-            flight: flight.to_string(),
-            outcome: Outcome::Failed,
-            epochs: 0,
-            solved: 0,
-            fixed: 0,
-            sigma_3d: f64::NAN,
-            exposures: None,
-            warnings: 0,
-            message: why.to_string(),
-        },
+        row: batch::SummaryRow::empty(flight, Outcome::Failed, why.to_string()),
         text: format!("── flight {flight} ──\nerror: {why}\n"),
     }
 }

@@ -80,17 +80,7 @@ pub fn print_table(rows: &[SummaryRow], seconds: f64, path: &Path) {
 
 /// One flight: PPK, then the exposures when it has exposure times.
 pub fn run_flight(f: &Flight, out: &Path) -> Done {
-    let mut row = SummaryRow {
-        flight: f.name.clone(),
-        outcome: Outcome::Failed,
-        epochs: 0,
-        solved: 0,
-        fixed: 0,
-        sigma_3d: f64::NAN,
-        exposures: None,
-        warnings: 0,
-        message: String::new(),
-    };
+    let mut row = SummaryRow::empty(&f.name, Outcome::Failed, String::new());
     let mut text = format!("── flight {} ──\n", f.name);
     if let Err(e) = flight_steps(f, out, &mut row, &mut text) {
         row.outcome = Outcome::Failed;
