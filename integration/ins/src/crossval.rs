@@ -112,10 +112,7 @@ pub fn check(
             .into_iter()
             .flatten()
             .filter_map(|i| r.smoothed.get(i))
-            .min_by(|a, b| {
-                let da = (a.0 - *t).abs();
-                da.partial_cmp(&(b.0 - *t).abs()).expect("durations order")
-            });
+            .min_by_key(|(c, _)| (*c - *t).abs());
         let Some((c, s)) = near else { continue };
         let dt = (*t - *c).to_seconds();
         if dt.abs() > 0.5 {

@@ -68,15 +68,6 @@ pub struct ImuSpec {
 }
 
 impl ImuSpec {
-    /// The figures with the velocity random walk alone multiplied by `k`, named so.
-    pub fn vrw_scaled(&self, k: f64) -> ImuSpec {
-        ImuSpec {
-            name: format!("{} (velocity random walk ×{k:.1})", self.name),
-            vrw: self.vrw * k,
-            ..self.clone()
-        }
-    }
-
     /// The figures with the angle and velocity random walks multiplied by `k` (the biases'
     /// figures kept: raising them too let the biases wander and bridged the car's outages
     /// worse), named so.
