@@ -85,25 +85,16 @@ fn features_of(
     job: &MatchJob,
     opts: &FeatureOptions,
 ) -> Result<(cache::Cached, Source, Option<u64>), String> {
-    let slot = job.cache.as_ref().and_then(|(old, new)| {
-        let key = cache::key(path, job.max_image_size, opts).ok()?;
-        Some((cache::path(old, path), cache::path(new, path), key))
-    });
-    let shared = job.shared_cache.as_ref().and_then(|dir| {
-        let key = match &slot {
-            Some(s) => s.2,
-            None => cache::key(path, job.max_image_size, opts).ok()?,
-        };
-        Some((cache::shared_path(dir, key), key))
-    });
-    if let Some((file, key)) = &shared {
-        if let Some(c) = cache::load(file, *key) {
-            if let Some((_, new, _)) = &slot {
-                let _ = cache::store(new, *key, &c);
-            }
-            return Ok((c, Source::Cache, Some(*key)));
-        }
-    }
+    let key = (job.cache.is_some() || job.shared_cache.is_some())
+        .then(|| cache::key(path, job.max_image_size, opts).ok())
+        .flatten();
+    let slot = job
+        .cache
+        .as_ref()
+        .zip(key)
+        .map(|((old, new), key)| (cache::path(old, path), cache::path(new, path), key));
+    let shared = job.shared_cache.as_ref().zip(key);
+    // The project's own cache first: a rerun links its files instead of writing them.
     if let Some((old, new, key)) = &slot {
         if let Some(c) = cache::load(old, *key) {
             if old != new {
@@ -116,16 +107,23 @@ fn features_of(
             return Ok((c, Source::Cache, Some(*key)));
         }
     }
+    if let Some((dir, key)) = shared {
+        if let Some(c) = cache::load(&cache::shared_path(dir, key), key) {
+            if let Some((_, new, _)) = &slot {
+                let _ = cache::store(new, key, &c);
+            }
+            return Ok((c, Source::Cache, Some(key)));
+        }
+    }
     let d = decode::decode(path, job.max_image_size)?;
     let c = cache::Cached {
         size: d.full,
         scale: d.scale,
         features: extract(&d.gray, d.scale, opts),
     };
-    let key = slot.as_ref().map(|s| s.2).or(shared.as_ref().map(|s| s.1));
     let cached = slot.is_some_and(|(_, new, key)| cache::store(&new, key, &c).is_ok());
-    if let Some((file, key)) = &shared {
-        let _ = cache::store(file, *key, &c);
+    if let Some((dir, key)) = shared {
+        let _ = cache::store(&cache::shared_path(dir, key), key, &c);
     }
     Ok((c, Source::Extracted { cached }, key))
 }
