@@ -48,6 +48,18 @@ pub struct Plan {
 
 const HEADER: &str = "index\tflight\tproblem\tcommand\toutputs…";
 
+/// Write `text` to `path` whole or not at all, its folder made first.
+pub fn write_text(path: &Path, text: &str) -> Result<()> {
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).map_err(|cause| Error::Write {
+            path: dir.to_path_buf(),
+            cause,
+        })?;
+    }
+    common::atomic::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+    Ok(())
+}
+
 /// A field of the plan: no tab nor line break inside.
 fn field(s: &str, what: &str) -> Result<String> {
     if s.contains(['\t', '\n', '\r']) {
@@ -85,8 +97,7 @@ impl Plan {
     /// Write the plan into its output folder (whole or not at all).
     pub fn write(&self) -> Result<PathBuf> {
         let path = self.out.join(PLAN);
-        let text = self.to_tsv()?;
-        common::atomic::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
+        write_text(&path, &self.to_tsv()?)?;
         Ok(path)
     }
 
@@ -217,14 +228,8 @@ impl FlightResult {
 
     /// Write it as `out/FLIGHT/result.json` (whole or not at all).
     pub fn write(&self, out: &Path) -> Result<()> {
-        let dir = out.join(&self.flight);
-        std::fs::create_dir_all(&dir).map_err(|cause| Error::Write {
-            path: dir.clone(),
-            cause,
-        })?;
         let text = serde_json::to_string_pretty(self).expect("a result serialises");
-        common::atomic::write_atomic(&dir.join(RESULT), |w| w.write_all(text.as_bytes()))?;
-        Ok(())
+        write_text(&out.join(&self.flight).join(RESULT), &text)
     }
 
     /// The result of `flight` in `out`, None when its task has not finished.
@@ -274,14 +279,8 @@ impl TaskStatus {
 
     /// Write it (whole or not at all).
     pub fn write(&self, out: &Path) -> Result<()> {
-        let path = TaskStatus::path(out, &self.flight);
-        std::fs::create_dir_all(out.join(STATUS_DIR)).map_err(|cause| Error::Write {
-            path: out.join(STATUS_DIR),
-            cause,
-        })?;
         let text = serde_json::to_string_pretty(self).expect("a status serialises");
-        common::atomic::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
-        Ok(())
+        write_text(&TaskStatus::path(out, &self.flight), &text)
     }
 
     /// The status of `flight` in `out`, None when its task never started (or the file is

@@ -163,15 +163,6 @@ pub fn plan_and_scripts(args: &Scheduler) -> Result<()> {
     super::complete(bad)
 }
 
-/// Write a file whole, creating its folder.
-fn write(path: &Path, text: &str) -> Result<()> {
-    if let Some(d) = path.parent() {
-        std::fs::create_dir_all(d).with_context(|| format!("{}: cannot create", d.display()))?;
-    }
-    common::atomic::write_atomic(path, |w| w.write_all(text.as_bytes()))
-        .with_context(|| format!("{}: cannot write", path.display()))
-}
-
 /// The Slurm scripts, and their submission with `--submit`.
 fn slurm(plan: &Plan, args: &Scheduler, resources: TaskResources, parallel: u16) -> Result<()> {
     let o = SlurmOptions {
@@ -183,8 +174,8 @@ fn slurm(plan: &Plan, args: &Scheduler, resources: TaskResources, parallel: u16)
     let (array, merge) = cluster::slurm_scripts(plan, &o);
     let dir = plan.out.join("slurm");
     let (a, m) = (dir.join("batch.sbatch"), dir.join("merge.sbatch"));
-    write(&a, &array)?;
-    write(&m, &merge)?;
+    bp::write_text(&a, &array)?;
+    bp::write_text(&m, &merge)?;
     std::fs::create_dir_all(plan.out.join("logs"))
         .with_context(|| format!("{}: cannot create", plan.out.join("logs").display()))?;
     println!(
@@ -256,8 +247,8 @@ fn k8s(plan: &Plan, args: &Scheduler, resources: TaskResources, parallel: u16) -
     let (batch_job, merge_job) = cluster::k8s_manifests(plan, &o)?;
     let dir = plan.out.join("k8s");
     let (a, m) = (dir.join("batch-job.json"), dir.join("merge-job.json"));
-    write(&a, &cluster::manifest_text(&batch_job))?;
-    write(&m, &cluster::manifest_text(&merge_job))?;
+    bp::write_text(&a, &cluster::manifest_text(&batch_job))?;
+    bp::write_text(&m, &cluster::manifest_text(&merge_job))?;
     println!(
         "k8s: an Indexed Job of {} pods ({} CPU, {} Mi each, {} at once; image {}, claim {} at {} holding {}) → {}; the merge Job → {}",
         plan.entries.len(),
