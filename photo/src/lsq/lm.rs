@@ -58,7 +58,13 @@ impl Problem {
         // The candidate is linearised at once: an accepted step (most of them) then needs no
         // second evaluation of its factors.
         let (mut cand, mut cand_lin) = (Vec::new(), Linearisation::default());
-        let (mut radius, mut nu) = (self.options.initial_radius, 2.0);
+        // Warm: where the last solve of this problem ended, when nothing but its observations
+        // changed since.
+        let warm = self.caches.radius.lock().ok().and_then(|r| *r);
+        let start = warm.map_or(self.options.initial_radius, |r| {
+            r.clamp(self.options.initial_radius, 1e16)
+        });
+        let (mut radius, mut nu) = (start, 2.0);
         let mut t_it = std::time::Instant::now();
         while s.iterations < self.options.max_iterations {
             if s.iterations > 0 {
@@ -118,6 +124,9 @@ impl Problem {
         }
         if s.iterations > 0 {
             self.time("iteration", t_it);
+        }
+        if let Ok(mut r) = self.caches.radius.lock() {
+            *r = Some(radius);
         }
         let m = st.nres;
         if m < st.n {
