@@ -6,7 +6,7 @@
 //! bit where it was, so its statistics can be reused), or after `max_iterations`.
 
 use super::error::SolveError;
-use super::lin::Linearisation;
+use super::lin::{regular, Linearisation};
 use super::linear::Linear;
 use super::model::Model;
 use super::problem::Problem;
@@ -210,22 +210,6 @@ impl Problem {
     }
 }
 
-/// Whether a diagonal block of the normals is regular, independently of the units of its
-/// parameters (radians and metres, pixels and metres): the block is scaled by its diagonal
-/// (Jacobi, D^-1/2·M·D^-1/2, a correlation-like matrix of eigenvalues in [0, dim]) before its
-/// eigenvalues are compared. A parameter with no weight at all is undetermined.
-fn regular(m: DMatrix<f64>) -> bool {
-    let d: Vec<f64> = m.diagonal().iter().copied().collect();
-    if d.iter().any(|&x| !(x.is_finite() && x > 0.0)) {
-        return false;
-    }
-    let s = DMatrix::from_fn(m.nrows(), m.ncols(), |i, j| {
-        m[(i, j)] / (d[i] * d[j]).sqrt()
-    });
-    let e = s.symmetric_eigenvalues();
-    e.min() > 1e-10 * e.max().max(1.0)
-}
-
 impl Model {
     /// The free blocks not determined by their own observations (a point seen by one ray, a
     /// camera without points): their diagonal block of the normals is singular after
@@ -271,7 +255,7 @@ impl Model {
 
 #[cfg(test)]
 mod tests {
-    use super::regular;
+    use super::super::lin::regular;
     use nalgebra::DMatrix;
 
     /// Units do not decide: a pose whose angles weigh 10¹² (image rays) and whose centre

@@ -85,7 +85,7 @@ impl Problem {
         self.model.entries[k.0].removed = true;
         removed.push((k, w));
         self.drop_undetermined(k, removed);
-        if !self.undetermined()?.is_empty() {
+        if !self.still_determined(&removed[mark..])? {
             for (f, _) in removed.drain(mark..) {
                 self.model.entries[f.0].removed = false;
             }
@@ -96,6 +96,29 @@ impl Problem {
             e.noise = e.noise.scaled(KEPT_SIGMA_FACTOR, e.factor.dim());
             self.model.kept.push((k, w));
             return Ok(false);
+        }
+        Ok(true)
+    }
+
+    /// Whether every free block is still determined by its own observations once `gone` are
+    /// removed. Only the blocks those factors touch can have changed: each is tested alone
+    /// when the problem asks for a unique solution (every block was determined at the last
+    /// solve, and each removal since kept them so); otherwise the whole problem is.
+    fn still_determined(&mut self, gone: &[(FactorId, f64)]) -> Result<bool, SolveError> {
+        if !self.options.unique {
+            return Ok(self.undetermined()?.is_empty());
+        }
+        let mut blocks: Vec<usize> = gone
+            .iter()
+            .flat_map(|(f, _)| self.model.entries[f.0].blocks.iter().copied())
+            .filter(|&b| !self.model.fixed[b])
+            .collect();
+        blocks.sort_unstable();
+        blocks.dedup();
+        for b in blocks {
+            if !self.model.determined(b)? {
+                return Ok(false);
+            }
         }
         Ok(true)
     }
