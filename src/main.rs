@@ -79,6 +79,7 @@ fn main() {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
+    common::memory::keep_large_buffers();
     let expanded = match cmd::config::expand(&Cli::command(), std::env::args_os().collect()) {
         Ok(e) => e,
         Err(e) => {
