@@ -3,23 +3,56 @@
 
 use super::*;
 
+/// The Brighton Beach photos matched once for this test binary (features read from and
+/// written to the cache the other tests of these photos share), with what `match` printed;
+/// `None` without the shared data.
+fn brighton_matched() -> Option<&'static (PathBuf, String)> {
+    static MATCHED: std::sync::OnceLock<Option<(PathBuf, String)>> = std::sync::OnceLock::new();
+    MATCHED
+        .get_or_init(|| {
+            let dir = shared("photo/brighton-beach")?;
+            let out = tmp("match-brighton");
+            // Features shared with the other tests of these photos (the same bytes as
+            // extracted).
+            let cache = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("feature-cache");
+            let t = succeeds(&ppkat(&[
+                "match",
+                "--photos",
+                p(&dir),
+                "--feature-cache",
+                p(&cache),
+                "-o",
+                p(&out),
+            ]));
+            Some((out, t))
+        })
+        .as_ref()
+}
+
+/// The matched block adjusted once with its EXIF positions (`brighton_matched`): its folder.
+fn brighton_adjusted() -> Option<&'static PathBuf> {
+    static ADJUSTED: std::sync::OnceLock<Option<PathBuf>> = std::sync::OnceLock::new();
+    ADJUSTED
+        .get_or_init(|| {
+            let (out, _) = brighton_matched()?;
+            let adj = tmp("match-brighton-adjusted");
+            succeeds(&ppkat(&[
+                "adjust",
+                "--project",
+                p(&out.join("project.toml")),
+                "-o",
+                p(&adj),
+            ]));
+            Some(adj)
+        })
+        .as_ref()
+}
+
 #[test]
-fn brighton_beach_photos_match_into_one_block_that_adjusts() {
-    let Some(dir) = shared("photo/brighton-beach") else {
+fn brighton_beach_photos_match_into_one_block() {
+    let Some((out, t)) = brighton_matched() else {
         return;
     };
-    let out = tmp("match-brighton");
-    // Features shared with the other tests of these photos (the same bytes as extracted).
-    let cache = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("feature-cache");
-    let t = succeeds(&ppkat(&[
-        "match",
-        "--photos",
-        p(&dir),
-        "--feature-cache",
-        p(&cache),
-        "-o",
-        p(&out),
-    ]));
     eprintln!("{t}");
     let j: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("match.json")).unwrap()).unwrap();
@@ -51,8 +84,23 @@ fn brighton_beach_photos_match_into_one_block_that_adjusts() {
     assert!(refined >= 20000, "{refined} measurements refined");
     // Six photos of the strip flown back carry a gimbal yaw turned by 180°: the overlaps win.
     assert_eq!(t.matches("the gimbal yaw differs").count(), 6, "{t}");
-    // A rerun on the same folder reads every photo's features and every pair's matches from
-    // the cache beside the project and writes the same bytes.
+}
+
+/// A rerun on the same folder reads every photo's features and every pair's matches from the
+/// cache beside the project and writes the same bytes (into a copy of the matched folder, so
+/// that the tests reading the first run's outputs are not disturbed).
+#[test]
+fn brighton_beach_rematched_from_the_cache_writes_the_same_bytes() {
+    let (Some(dir), Some((first, _))) = (shared("photo/brighton-beach"), brighton_matched()) else {
+        return;
+    };
+    let out = tmp("match-brighton-again");
+    let _ = std::fs::remove_dir_all(&out);
+    for f in files_under(first) {
+        let to = out.join(&f);
+        std::fs::create_dir_all(to.parent().unwrap()).unwrap();
+        std::fs::copy(first.join(&f), &to).unwrap();
+    }
     let before: Vec<Vec<u8>> = ["image_observations.csv", "match.json", "project.toml"]
         .iter()
         .map(|f| std::fs::read(out.join(f)).unwrap())
@@ -75,14 +123,14 @@ fn brighton_beach_photos_match_into_one_block_that_adjusts() {
             "{f} differs after a rerun"
         );
     }
-    let adj = out.join("adjusted");
-    succeeds(&ppkat(&[
-        "adjust",
-        "--project",
-        p(&out.join("project.toml")),
-        "-o",
-        p(&adj),
-    ]));
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn brighton_beach_block_adjusts_within_a_pixel() {
+    let Some(adj) = brighton_adjusted() else {
+        return;
+    };
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(adj.join("report.json")).unwrap()).unwrap();
     let s0 = r["sigma0"].as_f64().unwrap();
@@ -105,26 +153,36 @@ fn brighton_beach_photos_match_into_one_block_that_adjusts() {
     assert!(rms <= 0.8, "image-point RMS {rms} px");
     assert!(mean <= 0.6, "mean reprojection error {mean} px");
     assert!((0.7..1.3).contains(&s0), "σ0 {s0}");
-    free_and_tie_started(&out, &adj);
 }
 
-/// The matched block without its positions (issue 48): as a free network started from its
-/// tie points alone it adjusts within 1 px; with the EXIF positions given back to that
-/// tie-started block (each image its own strip, so no image starts from GNSS and a strip
-/// direction) it reaches the GNSS-started result within its σ.
-fn free_and_tie_started(matched: &Path, gnss_run: &Path) {
+/// The matched project's `project.toml` without its `[gnss]` section and start file, and the
+/// section (issue 48's runs without positions, or with them given back).
+fn without_positions(matched: &Path) -> (String, String) {
     let toml = std::fs::read_to_string(matched.join("project.toml")).unwrap();
     let gnss_at = toml.find("\n[gnss]").unwrap();
     let base = toml[..gnss_at].replace("start = \"start.csv\"\n", "");
-    let copy = |dir: &Path, files: &[&str]| {
-        std::fs::create_dir_all(dir).unwrap();
-        for f in files {
-            std::fs::copy(matched.join(f), dir.join(f)).unwrap();
-        }
+    (base, toml[gnss_at..].to_string())
+}
+
+/// Copy `files` of the matched folder into `dir` (made).
+fn copy_matched(matched: &Path, dir: &Path, files: &[&str]) {
+    std::fs::create_dir_all(dir).unwrap();
+    for f in files {
+        std::fs::copy(matched.join(f), dir.join(f)).unwrap();
+    }
+}
+
+/// The matched block without its positions (issue 48): as a free network started from its
+/// tie points alone (no positions, no control) it adjusts within 1 px.
+#[test]
+fn brighton_beach_block_adjusts_as_a_free_network_from_its_ties() {
+    let Some((matched, _)) = brighton_matched() else {
+        return;
     };
-    // Free network: no positions, no control.
-    let free = matched.join("free");
-    copy(&free, &["images.csv", "image_observations.csv"]);
+    let (base, _) = without_positions(matched);
+    let free = tmp("match-brighton-free");
+    let _ = std::fs::remove_dir_all(&free);
+    copy_matched(matched, &free, &["images.csv", "image_observations.csv"]);
     std::fs::write(
         free.join("project.toml"),
         format!("{base}\n[datum]\nfree = true\n"),
@@ -146,9 +204,20 @@ fn free_and_tie_started(matched: &Path, gnss_run: &Path) {
         .map(|x| x.parse().unwrap())
         .collect();
     assert!(rms.len() == 18 && rms.iter().all(|r| *r <= 1.0), "{rms:?}");
-    // Tie-started, the EXIF positions given back.
-    let tied = matched.join("tied");
-    copy(&tied, &["image_observations.csv", "antennas.csv"]);
+}
+
+/// With the EXIF positions given back to the block started from its ties (each image its
+/// own strip, so no image starts from GNSS and a strip direction) it reaches the
+/// GNSS-started result within its σ.
+#[test]
+fn brighton_beach_block_started_from_its_ties_reaches_the_gnss_started_result() {
+    let (Some((matched, _)), Some(gnss_run)) = (brighton_matched(), brighton_adjusted()) else {
+        return;
+    };
+    let (base, gnss) = without_positions(matched);
+    let tied = tmp("match-brighton-tied");
+    let _ = std::fs::remove_dir_all(&tied);
+    copy_matched(matched, &tied, &["image_observations.csv", "antennas.csv"]);
     let images: Vec<String> = column(&matched.join("images.csv"), "image");
     let cams = column(&matched.join("images.csv"), "camera");
     let mut list = String::from("image,camera,strip\n");
@@ -156,11 +225,7 @@ fn free_and_tie_started(matched: &Path, gnss_run: &Path) {
         list.push_str(&format!("{i},{c},{k}\n"));
     }
     std::fs::write(tied.join("images.csv"), list).unwrap();
-    std::fs::write(
-        tied.join("project.toml"),
-        format!("{base}{}", &toml[gnss_at..]),
-    )
-    .unwrap();
+    std::fs::write(tied.join("project.toml"), format!("{base}{gnss}")).unwrap();
     let t = succeeds(&ppkat(&[
         "adjust",
         "--project",
