@@ -161,49 +161,59 @@ impl Model {
 }
 
 impl Model {
-    /// Whether free block `b` is determined by its own active factors at the current values:
-    /// the test [`Model::undetermined_blocks`] makes of every block, made for one block from
-    /// the factors that touch it alone (data snooping asks it after each removal, where
-    /// linearising the whole problem each time cost 30 s of a 40 s adjustment).
-    pub(crate) fn determined(&self, b: usize) -> Result<bool, SolveError> {
+    /// The diagonal block of the normals of free block `b` from its own active factors at
+    /// the current values (whitened, without robust weights): what
+    /// [`Model::undetermined_blocks`] tests for every block, here for one block from the
+    /// factors that touch it alone (data snooping asks after each removal, where linearising
+    /// the whole problem each time cost 30 s of a 40 s adjustment).
+    pub(crate) fn block_normals(&self, b: usize) -> Result<nalgebra::DMatrix<f64>, SolveError> {
         let dim = self.values[b].dim();
         let mut n = nalgebra::DMatrix::<f64>::zeros(dim, dim);
-        let (mut r, mut j, mut slots) = (Vec::new(), Vec::new(), Vec::new());
         for (i, e) in self.entries.iter().enumerate() {
-            if e.removed || !e.blocks.contains(&b) {
-                continue;
+            if !e.removed && e.blocks.contains(&b) {
+                self.add_factor_normals(i, b, &mut n)?;
             }
-            let m = e.factor.dim();
-            slots.clear();
-            let (mut len, mut at) = (0, 0);
-            for &x in &e.blocks {
-                let d = self.values[x].dim();
-                let joff = (!self.fixed[x]).then_some(len);
-                if x == b {
-                    at = len;
-                }
-                if joff.is_some() {
-                    len += m * d;
-                }
-                slots.push(Slot {
-                    dim: d,
-                    joff,
-                    c: None,
-                    e: None,
-                });
-            }
-            r.clear();
-            r.resize(m, 0.0);
-            j.clear();
-            j.resize(len, 0.0);
-            let scale = self.group_scale[e.group.0];
-            if !evaluate(e, scale, &self.values, &slots, &mut r, Some(&mut j)) {
-                return Err(SolveError::Evaluation(FactorId(i)));
-            }
-            let jb = &j[at..at + m * dim];
-            add_atb(1.0, jb, jb, m, n.as_mut_slice(), dim);
         }
-        Ok(regular(n))
+        Ok(n)
+    }
+
+    /// Add factor `i`'s part of block `b`'s normals to `n` (`b` must be one of its blocks,
+    /// free; whether the factor is removed is not asked).
+    pub(crate) fn add_factor_normals(
+        &self,
+        i: usize,
+        b: usize,
+        n: &mut nalgebra::DMatrix<f64>,
+    ) -> Result<(), SolveError> {
+        let e = &self.entries[i];
+        let (m, dim) = (e.factor.dim(), self.values[b].dim());
+        let mut slots: [Option<Slot>; MAX_FACTOR_KEYS] = Default::default();
+        let (mut len, mut at) = (0, 0);
+        for (s, &x) in slots.iter_mut().zip(&e.blocks) {
+            let d = self.values[x].dim();
+            let joff = (!self.fixed[x]).then_some(len);
+            if x == b {
+                at = len;
+            }
+            if joff.is_some() {
+                len += m * d;
+            }
+            *s = Some(Slot {
+                dim: d,
+                joff,
+                c: None,
+                e: None,
+            });
+        }
+        let slots: Vec<Slot> = slots.into_iter().flatten().collect();
+        let (mut r, mut j) = (vec![0.0; m], vec![0.0; len]);
+        let scale = self.group_scale[e.group.0];
+        if !evaluate(e, scale, &self.values, &slots, &mut r, Some(&mut j)) {
+            return Err(SolveError::Evaluation(FactorId(i)));
+        }
+        let jb = &j[at..at + m * dim];
+        add_atb(1.0, jb, jb, m, n.as_mut_slice(), dim);
+        Ok(())
     }
 }
 

@@ -60,9 +60,12 @@ impl Problem {
                 self.time("snooping", t0);
                 return Ok((summary, removed));
             }
+            // The normals of the blocks with many observations, kept up to date through the
+            // round's removals (the values change only with the next solve).
+            let mut normals = Normals::new();
             for (k, w) in batch {
                 // A suspect that must be kept is weighted down: the others' tests change.
-                if !self.remove_or_keep(k, w, &mut removed)? {
+                if !self.remove_or_keep(k, w, &mut removed, &mut normals)? {
                     break;
                 }
             }
@@ -76,6 +79,7 @@ impl Problem {
         k: FactorId,
         w: f64,
         removed: &mut Vec<(FactorId, f64)>,
+        normals: &mut Normals,
     ) -> Result<bool, SolveError> {
         if self.model.entries[k.0].removed {
             return Ok(true);
@@ -85,11 +89,15 @@ impl Problem {
         self.model.entries[k.0].removed = true;
         removed.push((k, w));
         self.drop_undetermined(k, removed);
-        if !self.still_determined(&removed[mark..])? {
+        if !self.still_determined(&removed[mark..], normals)? {
             for (f, _) in removed.drain(mark..) {
                 self.model.entries[f.0].removed = false;
             }
             self.model.fixed = fixed_before;
+            // Its weight changes below: the normals of its blocks with it.
+            for b in &self.model.entries[k.0].blocks {
+                normals.remove(b);
+            }
             // Kept, but weighted down so that its blunder does not spread into the
             // observations around it (which would then be removed instead).
             let e = &mut self.model.entries[k.0];
@@ -103,8 +111,14 @@ impl Problem {
     /// Whether every free block is still determined by its own observations once `gone` are
     /// removed. Only the blocks those factors touch can have changed: each is tested alone
     /// when the problem asks for a unique solution (every block was determined at the last
-    /// solve, and each removal since kept them so); otherwise the whole problem is.
-    fn still_determined(&mut self, gone: &[(FactorId, f64)]) -> Result<bool, SolveError> {
+    /// solve, and each removal since kept them so); otherwise the whole problem is. A block
+    /// with more than [`KEEP_NORMALS`] observations (an image's pose) keeps its normals in
+    /// `normals`, the removed factors' parts subtracted, instead of summing thousands again.
+    fn still_determined(
+        &mut self,
+        gone: &[(FactorId, f64)],
+        normals: &mut Normals,
+    ) -> Result<bool, SolveError> {
         if !self.options.unique {
             return Ok(self.undetermined()?.is_empty());
         }
@@ -115,9 +129,32 @@ impl Problem {
             .collect();
         blocks.sort_unstable();
         blocks.dedup();
+        let mut updated = Vec::new();
         for b in blocks {
-            if !self.model.determined(b)? {
+            let n = match normals.get(&b) {
+                Some(before) => {
+                    let mut part = nalgebra::DMatrix::zeros(before.nrows(), before.ncols());
+                    for (f, _) in gone {
+                        if self.model.entries[f.0].blocks.contains(&b) {
+                            self.model.add_factor_normals(f.0, b, &mut part)?;
+                        }
+                    }
+                    before - part
+                }
+                None => self.model.block_normals(b)?,
+            };
+            if !super::lin::regular(n.clone()) {
                 return Ok(false);
+            }
+            updated.push((b, n));
+        }
+        for (b, n) in updated {
+            let many = (self.model.entries.iter())
+                .filter(|e| !e.removed && e.blocks.contains(&b))
+                .nth(KEEP_NORMALS)
+                .is_some();
+            if many || normals.contains_key(&b) {
+                normals.insert(b, n);
             }
         }
         Ok(true)
@@ -328,6 +365,13 @@ pub fn normal_quantile(p: f64) -> f64 {
 pub fn snooping_critical(alpha: f64, tests: usize) -> f64 {
     normal_quantile(1.0 - alpha / (2.0 * tests.max(1) as f64))
 }
+
+/// Blocks with more observations than this keep their normals through a round of data
+/// snooping (see `still_determined`).
+const KEEP_NORMALS: usize = 64;
+
+/// Normals of blocks kept through a round of data snooping, by block.
+type Normals = std::collections::HashMap<usize, nalgebra::DMatrix<f64>>;
 
 #[cfg(test)]
 mod tests {
