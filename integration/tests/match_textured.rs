@@ -13,6 +13,8 @@ use testkit::scratch_path as tmp;
 /// (tracks, tracks with every measurement within 2 px, RMS of the measurements' errors in px,
 /// images in the block).
 fn check(spec: &TexturedSpec, name: &str) -> (usize, usize, f64, usize) {
+    // The allocator as the ppkat binary sets it (large buffers reused, not mapped each time).
+    common::memory::keep_large_buffers();
     let dir = tmp(name);
     textured_block(spec, &dir).unwrap();
     let mut job = MatchJob::new(dir.join("photos"));

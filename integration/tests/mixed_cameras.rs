@@ -29,6 +29,8 @@ fn two_cameras_in_one_folder_are_two_cameras_that_calibrate_alike() {
     let Some(src) = shared_data("photo/brighton-beach") else {
         return;
     };
+    // The allocator as the ppkat binary sets it (large buffers reused, not mapped each time).
+    common::memory::keep_large_buffers();
     let dir = tmp("mixed-cameras");
     let photos = dir.join("photos");
     std::fs::create_dir_all(&photos).unwrap();

@@ -49,6 +49,8 @@ fn project(sim: &Path, matched: &project::Written, out: &Path, gnss: bool) {
 fn textured_block_from_tie_points_and_four_corners_checks_like_gnss() {
     let dir = tmp("start-from-ties");
     textured_block(&TexturedSpec::builtin(), &dir).unwrap();
+    // The allocator as the ppkat binary sets it (large buffers reused, not mapped each time).
+    common::memory::keep_large_buffers();
     let mut job = MatchJob::new(dir.join("photos"));
     job.camera = Some(dir.join("camera.toml"));
     // Features shared with the other tests of these photos (the same bytes as extracted).
@@ -117,6 +119,8 @@ fn a_longer_block_from_its_ties_alone_keeps_its_shape() {
         ..TexturedSpec::builtin()
     };
     textured_block(&spec, &dir).unwrap();
+    // The allocator as the ppkat binary sets it (large buffers reused, not mapped each time).
+    common::memory::keep_large_buffers();
     let mut job = MatchJob::new(dir.join("photos"));
     job.camera = Some(dir.join("camera.toml"));
     // Features shared with the other tests of these photos (the same bytes as extracted).
