@@ -378,6 +378,17 @@ impl Selected {
             .or_else(|| self.solved(ca, cb, da, db))
     }
 
+    /// The entry at permuted row `r` and column `c` (r ≥ c: the lower triangle) when the
+    /// pattern holds it (what a 1 × 1 `stored` block gives, without allocating one).
+    fn element(&self, r: usize, c: usize) -> Option<f64> {
+        let sym = self.factor.supernodal().ok()?;
+        let t = self.sn[c];
+        let ft = sym.supernode_begin()[t];
+        let ld = sym.supernode_end()[t] - ft + sym.supernode(t).pattern().len();
+        let p = row_pos(sym, t, r)?;
+        Some(self.z[sym.col_ptr_for_val()[t] + (c - ft) * ld + p])
+    }
+
     /// The block at permuted offsets (`pa`, `pb`) when the pattern holds it.
     fn stored(&self, pa: usize, pb: usize, da: usize, db: usize) -> Option<DMatrix<f64>> {
         if pa < pb {
@@ -396,7 +407,7 @@ impl Selected {
             for i in 0..da {
                 // The upper triangle of a diagonal block: its mirror image.
                 if pa + i < c {
-                    m[(i, j)] = self.stored(c, pa + i, 1, 1)?[(0, 0)];
+                    m[(i, j)] = self.element(c, pa + i)?;
                     continue;
                 }
                 let next = pos.map(|p: usize| p + 1);
