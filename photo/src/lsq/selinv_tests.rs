@@ -296,7 +296,7 @@ fn one_block_determinedness_agrees_with_the_whole_problem() {
     let whole: Vec<Key> = p.undetermined().unwrap();
     let one: Vec<Key> = (0..p.model.keys.len())
         .filter(|&b| {
-            !p.model.fixed[b] && !crate::lsq::lin::regular(p.model.block_normals(b).unwrap())
+            !p.model.fixed[b] && !crate::lsq::lin::regular(p.model.block_normals(b).unwrap().0)
         })
         .map(|b| p.model.keys[b])
         .collect();

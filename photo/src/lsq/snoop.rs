@@ -131,7 +131,8 @@ impl Problem {
         blocks.dedup();
         let mut updated = Vec::new();
         for b in blocks {
-            let n = match normals.get(&b) {
+            // The normals after the removal, and whether to keep them for the round's next.
+            let (n, keep) = match normals.get(&b) {
                 Some(before) => {
                     let mut part = nalgebra::DMatrix::zeros(before.nrows(), before.ncols());
                     for (f, _) in gone {
@@ -139,24 +140,21 @@ impl Problem {
                             self.model.add_factor_normals(f.0, b, &mut part)?;
                         }
                     }
-                    before - part
+                    (before - part, true)
                 }
-                None => self.model.block_normals(b)?,
+                None => {
+                    let (n, count) = self.model.block_normals(b)?;
+                    (n, count > KEEP_NORMALS)
+                }
             };
             if !super::lin::regular(n.clone()) {
                 return Ok(false);
             }
-            updated.push((b, n));
-        }
-        for (b, n) in updated {
-            let many = (self.model.entries.iter())
-                .filter(|e| !e.removed && e.blocks.contains(&b))
-                .nth(KEEP_NORMALS)
-                .is_some();
-            if many || normals.contains_key(&b) {
-                normals.insert(b, n);
+            if keep {
+                updated.push((b, n));
             }
         }
+        normals.extend(updated);
         Ok(true)
     }
 
